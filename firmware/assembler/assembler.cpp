@@ -1,0 +1,553 @@
+#include "firmware/assembler/assembler.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace pp5 {
+
+namespace {
+
+// A field operand before layout: which declared field, and which of its bits.
+struct FieldUse {
+  int field = -1;
+  int offset = 0;
+  int width = 0;
+  bool whole = true;
+};
+
+struct ParsedInstruction {
+  Instruction ins;
+  std::array<FieldUse, 3> uses{};
+};
+
+std::string trim(const std::string& s) {
+  std::size_t b = 0;
+  std::size_t e = s.size();
+  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
+  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
+  return s.substr(b, e - b);
+}
+
+std::vector<std::string> split_words(const std::string& s) {
+  std::istringstream in(s);
+  std::vector<std::string> out;
+  std::string w;
+  while (in >> w) out.push_back(w);
+  return out;
+}
+
+bool is_identifier(const std::string& s) {
+  if (s.empty() || !(std::isalpha(static_cast<unsigned char>(s[0])) || s[0] == '_')) return false;
+  return std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  });
+}
+
+bool parse_integer(const std::string& s, std::int64_t& out) {
+  if (s.empty()) return false;
+  try {
+    std::size_t used = 0;
+    const bool neg = s[0] == '-';
+    const std::string body = neg ? s.substr(1) : s;
+    if (body.empty() || !std::isdigit(static_cast<unsigned char>(body[0]))) return false;
+    const unsigned long long v = std::stoull(body, &used, 0);
+    if (used != body.size()) return false;
+    if (v > static_cast<unsigned long long>(INT64_MAX)) return false;
+    out = neg ? -static_cast<std::int64_t>(v) : static_cast<std::int64_t>(v);
+    return true;
+  } catch (...) {
+    return false;
+  }
+}
+
+class Assembler {
+ public:
+  Assembler(const std::string& name, const AssemblerOptions& options)
+      : options_(options) {
+    program_.name = name;
+    program_.memory_bits = options.memory_bits;
+  }
+
+  Program run(const std::string& source) {
+    std::istringstream in(source);
+    std::string raw;
+    int line = 0;
+    while (std::getline(in, raw)) {
+      ++line;
+      line_ = line;
+      const auto cut = raw.find_first_of(";#");
+      const std::string text = trim(cut == std::string::npos ? raw : raw.substr(0, cut));
+      if (!text.empty()) statement(text);
+    }
+    line_ = line;
+    if (current_ >= 0) fail("procedure '{}' has no 'end'", kProcedureNames[current_]);
+    finish();
+    return program_;
+  }
+
+ private:
+  template <typename... Args>
+  [[noreturn]] void fail(fmt::format_string<Args...> f, Args&&... args) {
+    throw AssemblyError(fmt::format("{}:{}: {}", program_.name, line_,
+                                    fmt::format(f, std::forward<Args>(args)...)));
+  }
+
+  void statement(const std::string& text) {
+    const auto words = split_words(text);
+    const std::string& head = words[0];
+    if (head == "field") return declare_field(words);
+    if (head == "output") return declare_output(words);
+    if (head == "option") return declare_option(words);
+    if (head == "proc") return begin_procedure(words);
+    if (head == "end") {
+      if (current_ < 0) fail("'end' outside a procedure");
+      if (depth_ != 0) fail("procedure '{}' ends with {} unmatched epush", kProcedureNames[current_],
+                            depth_);
+      current_ = -1;
+      return;
+    }
+    if (current_ < 0) {
+      fail("'{}' outside a procedure: expected field, output, option or proc", head);
+    }
+    instruction(text);
+  }
+
+  void declare_field(const std::vector<std::string>& w) {
+    if (current_ >= 0) fail("field declarations belong before the procedures");
+    if (w.size() < 3 || w.size() > 4) fail("expected 'field NAME WIDTH [signed]'");
+    const std::string& name = w[1];
+    if (!is_identifier(name)) fail("'{}' is not a valid field name", name);
+    if (field_index(name) >= 0) fail("field '{}' is declared twice", name);
+    if (parameter_index(name) >= 0) {
+      // A 'V' operand could be either; expressions are told apart by operand position.
+      fail("field name '{}' is a frame parameter's name", name);
+    }
+    std::int64_t width = 0;
+    if (!parse_integer(w[2], width) || width < 1 || width > Bits::kMaxBits) {
+      fail("field width must be an integer from 1 to {} (got '{}')", Bits::kMaxBits, w[2]);
+    }
+    bool is_signed = false;
+    if (w.size() == 4) {
+      if (w[3] != "signed") fail("expected 'signed' after the width, got '{}'", w[3]);
+      is_signed = true;
+    }
+    program_.fields.push_back({name, static_cast<int>(width), is_signed, line_});
+  }
+
+  void declare_output(const std::vector<std::string>& w) {
+    if (have_output_) fail("'output' given twice");
+    if (w.size() != 4) fail("expected 'output RED GREEN BLUE' (three 8-bit fields)");
+    for (int k = 0; k < 3; ++k) {
+      const int f = field_index(w[k + 1]);
+      if (f < 0) fail("output field '{}' is not declared", w[k + 1]);
+      if (program_.fields[f].width != 8) {
+        fail("output field '{}' must be 8 bits wide (it is {})", w[k + 1], program_.fields[f].width);
+      }
+      output_fields_[k] = f;
+    }
+    have_output_ = true;
+  }
+
+  void declare_option(const std::vector<std::string>& w) {
+    if (w.size() != 2 || w[1] != "spill") fail("unknown option: expected 'option spill'");
+    program_.spill_allowed = true;
+  }
+
+  void begin_procedure(const std::vector<std::string>& w) {
+    if (current_ >= 0) fail("'proc' inside procedure '{}': missing 'end'", kProcedureNames[current_]);
+    if (w.size() != 2) fail("expected 'proc NAME'");
+    const int p = procedure_index(w[1]);
+    if (p < 0) fail("unknown procedure '{}': expected clear, triangle or shade", w[1]);
+    if (program_.procedures[p].defined) fail("procedure '{}' is defined twice", w[1]);
+    program_.procedures[p].defined = true;
+    program_.procedures[p].line = line_;
+    current_ = p;
+    depth_ = 0;
+  }
+
+  int field_index(const std::string& name) const {
+    for (std::size_t k = 0; k < program_.fields.size(); ++k) {
+      if (program_.fields[k].name == name) return static_cast<int>(k);
+    }
+    return -1;
+  }
+
+  // NAME, NAME[hi:lo] or NAME[bit].
+  bool parse_field(const std::string& text, FieldUse& use) {
+    const auto bracket = text.find('[');
+    const std::string name = text.substr(0, bracket);
+    const int f = field_index(name);
+    if (f < 0) return false;
+    const FieldDecl& decl = program_.fields[f];
+    use = {f, 0, decl.width, true};
+    if (bracket == std::string::npos) return true;
+    if (text.back() != ']') fail("bad slice '{}': expected NAME[hi:lo]", text);
+    const std::string inner = text.substr(bracket + 1, text.size() - bracket - 2);
+    const auto colon = inner.find(':');
+    std::int64_t hi = 0;
+    std::int64_t lo = 0;
+    if (!parse_integer(trim(inner.substr(0, colon)), hi) ||
+        (colon != std::string::npos && !parse_integer(trim(inner.substr(colon + 1)), lo))) {
+      fail("bad slice '{}': expected NAME[hi:lo] with integer bounds", text);
+    }
+    if (colon == std::string::npos) lo = hi;
+    if (lo < 0 || hi < lo || hi >= decl.width) {
+      fail("slice '{}' is outside field '{}' of {} bits", text, name, decl.width);
+    }
+    use = {f, static_cast<int>(lo), static_cast<int>(hi - lo + 1), false};
+    return true;
+  }
+
+  void instruction(const std::string& text) {
+    const auto space = text.find_first_of(" \t");
+    std::string mnemonic = text.substr(0, space);
+    const std::string rest = space == std::string::npos ? "" : trim(text.substr(space));
+    std::string cond;
+    if (const auto dot = mnemonic.find('.'); dot != std::string::npos) {
+      cond = mnemonic.substr(dot + 1);
+      mnemonic = mnemonic.substr(0, dot);
+    }
+    const InstructionInfo* info = find_instruction(mnemonic);
+    if (!info) fail("unknown instruction '{}' (pp5sim isa lists them)", mnemonic);
+    ParsedInstruction p;
+    p.ins.op = info->op;
+    p.ins.line = line_;
+    if (info->conditional) {
+      if (cond.empty()) fail("'{}' needs a condition: {}.lt, .le, .eq, .ne, .ge or .gt", mnemonic,
+                             mnemonic);
+      if (!parse_condition(cond, p.ins.condition)) {
+        fail("unknown condition '.{}': expected lt, le, eq, ne, ge or gt", cond);
+      }
+    } else if (!cond.empty()) {
+      fail("'{}' takes no condition", mnemonic);
+    }
+    std::vector<std::string> ops;
+    if (!rest.empty()) {
+      std::string item;
+      std::istringstream in(rest);
+      while (std::getline(in, item, ',')) ops.push_back(trim(item));
+    }
+    const std::string kinds = info->operands;
+    if (ops.size() != kinds.size()) {
+      fail("'{}' takes {} operand{} ({}), got {}", mnemonic, kinds.size(),
+           kinds.size() == 1 ? "" : "s", info->syntax, ops.size());
+    }
+    ProcedureCode& proc = program_.procedures[current_];
+    for (std::size_t k = 0; k < ops.size(); ++k) {
+      operand(ops[k], kinds[k], p, static_cast<int>(k), proc, mnemonic);
+    }
+    check_aliasing(p, *info);
+    check_enable_nesting(info->op);
+    parsed_[current_].push_back(p);
+  }
+
+  void operand(const std::string& text, char kind, ParsedInstruction& p, int k,
+               ProcedureCode& proc, const std::string& mnemonic) {
+    Operand& o = p.ins.operands[k];
+    o.text = text;
+    if (text.empty()) fail("'{}': operand {} is empty", mnemonic, k + 1);
+    FieldUse use;
+    std::int64_t literal = 0;
+    if (kind == 'F' || kind == 'R' || kind == 'V') {
+      if (parse_field(text, use)) {
+        o.kind = Operand::Kind::field;
+        p.uses[k] = use;
+        return;
+      }
+      if (kind != 'V') fail("'{}': operand {} must be a declared field, got '{}'", mnemonic, k + 1, text);
+    }
+    if (kind == 'V' || kind == 'K') {
+      if (parse_integer(text, literal)) {
+        o.kind = Operand::Kind::literal;
+        o.literal = literal;
+        return;
+      }
+      if (const int i = parameter_index(text); i >= 0) {
+        o.kind = Operand::Kind::parameter;
+        o.index = i;
+        proc.parameters.set(i);
+        return;
+      }
+      fail("'{}': operand {} must be {}an integer or a frame parameter, got '{}'", mnemonic, k + 1,
+           kind == 'V' ? "a field, " : "", text);
+    }
+    if (kind == 'E') {
+      const int i = expression_index(text);
+      if (i < 0) fail("'{}': '{}' is not an expression the GP supplies (pp5sim isa lists them)",
+                      mnemonic, text);
+      if (current_ != static_cast<int>(Procedure::triangle)) {
+        fail("expression '{}' is only available in procedure 'triangle'", text);
+      }
+      o.kind = Operand::Kind::expression;
+      o.index = i;
+      proc.expressions.set(i);
+      return;
+    }
+    if (kind == 'B') {
+      if (!parse_integer(text, literal) || literal < 0) {
+        fail("'{}': operand {} must be a backing-store block number, got '{}'", mnemonic, k + 1,
+             text);
+      }
+      const int blocks = options_.backing_store_bits / options_.block_bits;
+      if (literal >= blocks) {
+        fail("backing-store block {} is past the end of the store ({} blocks)", literal, blocks);
+      }
+      o.kind = Operand::Kind::literal;
+      o.literal = literal;
+      explicit_blocks_.push_back({static_cast<int>(literal), line_});
+      return;
+    }
+    fail("internal: unknown operand kind");
+  }
+
+  void check_aliasing(const ParsedInstruction& p, const InstructionInfo& info) {
+    const FieldUse& dst = p.uses[0];
+    if (dst.field < 0) return;
+    const bool strict = info.op == Opcode::mul || info.op == Opcode::mac;
+    for (int k = 1; k < 3; ++k) {
+      const FieldUse& src = p.uses[k];
+      if (src.field != dst.field) continue;
+      const bool overlap =
+          src.offset < dst.offset + dst.width && dst.offset < src.offset + src.width;
+      if (!overlap) continue;
+      if (strict) fail("'{}': the destination must not overlap a source", info.mnemonic);
+      if (src.offset != dst.offset) {
+        fail("'{}': a source overlapping the destination must start at the same bit",
+             info.mnemonic);
+      }
+    }
+  }
+
+  void check_enable_nesting(Opcode op) {
+    if (op == Opcode::epush) {
+      if (++depth_ > options_.enable_stack_depth) {
+        fail("epush nests {} deep; the enable stack holds {}", depth_, options_.enable_stack_depth);
+      }
+    } else if (op == Opcode::epop) {
+      if (--depth_ < 0) fail("epop without a matching epush");
+    } else if (op == Opcode::eelse && depth_ == 0) {
+      fail("eelse outside an epush/epop pair");
+    }
+  }
+
+  // Distinct spilled fields one instruction uses, and the staging bits they need.
+  int staging_need(const ParsedInstruction& p, const std::vector<bool>& spilled) const {
+    int need = 0;
+    std::vector<int> seen;
+    for (const FieldUse& u : p.uses) {
+      if (u.field < 0 || !spilled[u.field]) continue;
+      if (std::find(seen.begin(), seen.end(), u.field) != seen.end()) continue;
+      seen.push_back(u.field);
+      need += round_to_block(program_.fields[u.field].width);
+    }
+    return need;
+  }
+
+  int round_to_block(int bits) const {
+    return (bits + options_.block_bits - 1) / options_.block_bits * options_.block_bits;
+  }
+
+  void finish() {
+    line_ = 0;
+    if (!program_.procedure(Procedure::triangle).defined) {
+      throw AssemblyError(program_.name + ": the program defines no 'proc triangle'");
+    }
+    if (!have_output_) {
+      throw AssemblyError(program_.name + ": the program has no 'output RED GREEN BLUE' line");
+    }
+    layout();
+    for (int p = 0; p < static_cast<int>(Procedure::count); ++p) emit(p);
+    for (int k = 0; k < 3; ++k) {
+      const FieldDecl& f = program_.fields[output_fields_[k]];
+      if (f.spilled) {
+        throw AssemblyError(fmt::format("{}:{}: output field '{}' was spilled to the backing store; "
+                                        "declare it earlier so it stays in pixel memory",
+                                        program_.name, f.line, f.name));
+      }
+      program_.outputs[k] = Field{f.lo, f.width, false};
+    }
+  }
+
+  void layout() {
+    auto& fields = program_.fields;
+    std::vector<bool> spilled(fields.size(), false);
+    int resident = 0;
+    for (const auto& f : fields) resident += f.width;
+    int staging = 0;
+    for (int next = static_cast<int>(fields.size()) - 1;; --next) {
+      staging = 0;
+      for (const auto& code : parsed_) {
+        for (const auto& p : code) staging = std::max(staging, staging_need(p, spilled));
+      }
+      if (resident + staging <= options_.memory_bits) break;
+      if (!program_.spill_allowed) {
+        std::string table;
+        for (const auto& f : fields) table += fmt::format("\n  {:<12} {:>3} bits", f.name, f.width);
+        throw AssemblyError(fmt::format(
+            "{}: the fields need {} bits but pixel memory has {} (renderer.memory_bits);{}\n"
+            "add 'option spill' to move fields to the backing store, or shrink them",
+            program_.name, resident, options_.memory_bits, table));
+      }
+      if (next < 0) {
+        throw AssemblyError(fmt::format(
+            "{}: even with every field spilled, one instruction needs {} staging bits and pixel "
+            "memory has {}",
+            program_.name, staging, options_.memory_bits));
+      }
+      spilled[next] = true;
+      resident -= fields[next].width;
+    }
+    int lo = 0;
+    int block = 0;
+    for (const auto& [b, line] : explicit_blocks_) block = std::max(block, b + 2);
+    const int blocks = options_.backing_store_bits / options_.block_bits;
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      fields[k].spilled = spilled[k];
+      if (spilled[k]) {
+        fields[k].block = block;
+        block += round_to_block(fields[k].width) / options_.block_bits;
+        if (block > blocks) {
+          throw AssemblyError(fmt::format("{}: spilled fields need {} backing-store blocks; the "
+                                          "store has {}",
+                                          program_.name, block, blocks));
+        }
+      } else {
+        fields[k].lo = lo;
+        lo += fields[k].width;
+      }
+    }
+    program_.resident_bits = resident;
+    program_.staging_bits = staging;
+  }
+
+  Operand resolve(const Operand& o, const FieldUse& use, int staging_lo) const {
+    Operand r = o;
+    if (use.field < 0) return r;
+    const FieldDecl& f = program_.fields[use.field];
+    const int base = f.spilled ? staging_lo : f.lo;
+    r.field = Field{base + use.offset, use.width, use.whole && f.is_signed};
+    return r;
+  }
+
+  void emit(int proc) {
+    ProcedureCode& code = program_.procedures[proc];
+    const InstructionInfo* info = nullptr;
+    for (const ParsedInstruction& p : parsed_[proc]) {
+      info = &instruction_info(p.ins.op);
+      // Staging slots for this instruction's spilled fields, in order of first use.
+      std::vector<std::pair<int, int>> slots;  // field, staging lo
+      int next = program_.resident_bits;
+      for (const FieldUse& u : p.uses) {
+        if (u.field < 0 || !program_.fields[u.field].spilled) continue;
+        bool known = false;
+        for (const auto& s : slots) known = known || s.first == u.field;
+        if (known) continue;
+        slots.push_back({u.field, next});
+        next += round_to_block(program_.fields[u.field].width);
+      }
+      auto slot_of = [&](int field) {
+        for (const auto& s : slots) {
+          if (s.first == field) return s.second;
+        }
+        return -1;
+      };
+      for (const auto& [field, lo] : slots) {
+        code.code.push_back(transfer(Opcode::bsld, field, lo));
+        ++code.spill_transfers;
+      }
+      Instruction ins = p.ins;
+      for (int k = 0; k < 3; ++k) ins.operands[k] = resolve(p.ins.operands[k], p.uses[k], slot_of(p.uses[k].field));
+      code.code.push_back(ins);
+      if (info->operands[0] == 'F' && p.uses[0].field >= 0 &&
+          program_.fields[p.uses[0].field].spilled) {
+        const int field = p.uses[0].field;
+        code.code.push_back(transfer(Opcode::bsst, field, slot_of(field)));
+        ++code.spill_transfers;
+      }
+    }
+  }
+
+  Instruction transfer(Opcode op, int field, int staging_lo) const {
+    const FieldDecl& f = program_.fields[field];
+    Instruction ins;
+    ins.op = op;
+    ins.operands[0].kind = Operand::Kind::field;
+    ins.operands[0].field = Field{staging_lo, f.width, f.is_signed};
+    ins.operands[0].text = f.name;
+    ins.operands[1].kind = Operand::Kind::literal;
+    ins.operands[1].literal = f.block;
+    ins.operands[1].text = std::to_string(f.block);
+    return ins;
+  }
+
+  AssemblerOptions options_;
+  Program program_;
+  int line_ = 0;
+  int current_ = -1;
+  int depth_ = 0;
+  bool have_output_ = false;
+  std::array<int, 3> output_fields_{};
+  std::array<std::vector<ParsedInstruction>, static_cast<int>(Procedure::count)> parsed_;
+  std::vector<std::pair<int, int>> explicit_blocks_;  // block, line
+};
+
+}  // namespace
+
+const FieldDecl* Program::find_field(const std::string& name) const {
+  for (const auto& f : fields) {
+    if (f.name == name) return &f;
+  }
+  return nullptr;
+}
+
+Program assemble(const std::string& source, const std::string& name,
+                 const AssemblerOptions& options) {
+  return Assembler(name, options).run(source);
+}
+
+Program assemble_file(const std::string& path, const AssemblerOptions& options) {
+  std::ifstream in(path);
+  if (!in) throw AssemblyError(path + ": cannot open the firmware program");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return assemble(buffer.str(), path, options);
+}
+
+std::string listing(const Program& program, const TimingParams& timing) {
+  std::string out = fmt::format("program {}\n\nfield map ({} of {} bits used", program.name,
+                                program.bits_used(), program.memory_bits);
+  if (program.staging_bits) out += fmt::format(", {} of them spill staging", program.staging_bits);
+  out += ")\n";
+  for (const auto& f : program.fields) {
+    if (f.spilled) {
+      out += fmt::format("  {:<14} {:>3} bits{}  backing store block {}\n", f.name, f.width,
+                         f.is_signed ? " signed" : "       ", f.block);
+    } else {
+      out += fmt::format("  {:<14} {:>3} bits{}  pixel memory [{}:{}]\n", f.name, f.width,
+                         f.is_signed ? " signed" : "       ", f.lo + f.width - 1, f.lo);
+    }
+  }
+  const PacketValues values{};
+  for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
+    const ProcedureCode& code = program.procedures[p];
+    if (!code.defined) continue;
+    std::uint64_t total = 0;
+    out += fmt::format("\nproc {}\n", kProcedureNames[p]);
+    for (const auto& ins : code.code) {
+      const auto cycles = instruction_cost(ins, timing, values).count;
+      total += cycles;
+      out += fmt::format("  {:>5}  {:<36} ; {:>4} cycles{}\n",
+                         ins.line ? std::to_string(ins.line) : "", disassemble(ins), cycles,
+                         ins.line ? "" : " (spill)");
+    }
+    out += fmt::format("  total {} cycles (mac costs shown for a zero constant)\n", total);
+  }
+  return out;
+}
+
+}  // namespace pp5

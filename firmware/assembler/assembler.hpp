@@ -1,0 +1,76 @@
+#pragma once
+// The firmware assembler: turns a text program (see firmware/README.md) into the
+// instruction streams the Renderer executes, and lays its fields out in pixel memory.
+//
+// Contract: a program that assembles fits the machine. Fields are placed in declaration
+// order from bit 0. If they do not fit in renderer.memory_bits the program is rejected,
+// unless it says `option spill`: then fields are moved to the backing store from the end of
+// the declaration list until the rest, plus a staging area for the spilled fields that one
+// instruction uses, fit; every use of a spilled field is bracketed by real bsld/bsst
+// instructions, whose cost the Renderer charges like any other. Errors are AssemblyError
+// with the message "FILE:LINE: what was expected".
+#include <array>
+#include <bitset>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "firmware/isa/isa.hpp"
+
+namespace pp5 {
+
+struct AssemblyError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct AssemblerOptions {
+  int memory_bits = 208;
+  int backing_store_bits = 4096;
+  int block_bits = 32;
+  int enable_stack_depth = 8;
+};
+
+struct FieldDecl {
+  std::string name;
+  int width = 0;
+  bool is_signed = false;
+  int line = 0;
+  bool spilled = false;  // lives in the backing store
+  int lo = -1;           // first bit in pixel memory (resident fields)
+  int block = -1;        // first backing-store block (spilled fields)
+};
+
+struct ProcedureCode {
+  bool defined = false;
+  int line = 0;
+  std::vector<Instruction> code;
+  std::bitset<static_cast<int>(Expression::count)> expressions;  // what the GP must send
+  std::bitset<static_cast<int>(Parameter::count)> parameters;
+  int spill_transfers = 0;  // bsld/bsst the assembler inserted
+};
+
+struct Program {
+  std::string name;  // file name or label, for messages and reports
+  std::vector<FieldDecl> fields;
+  std::array<ProcedureCode, static_cast<int>(Procedure::count)> procedures;
+  std::array<Field, 3> outputs{};  // red, green, blue sent to the frame buffer
+  bool spill_allowed = false;
+  int memory_bits = 0;    // the budget
+  int resident_bits = 0;  // bits of the fields kept in pixel memory
+  int staging_bits = 0;   // bits reserved for spilled fields while an instruction uses them
+
+  int bits_used() const { return resident_bits + staging_bits; }
+  const ProcedureCode& procedure(Procedure p) const {
+    return procedures[static_cast<int>(p)];
+  }
+  const FieldDecl* find_field(const std::string& name) const;
+};
+
+Program assemble(const std::string& source, const std::string& name,
+                 const AssemblerOptions& options);
+Program assemble_file(const std::string& path, const AssemblerOptions& options);
+
+// A human-readable listing: the field map and every procedure's instructions with costs.
+std::string listing(const Program& program, const TimingParams& timing);
+
+}  // namespace pp5

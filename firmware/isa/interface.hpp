@@ -1,0 +1,99 @@
+#pragma once
+// The contract between the Graphics Processors and Renderer firmware: which procedures a
+// program may define, which per-primitive expressions the GP can compute for it, and which
+// per-frame constants it sends. The assembler accepts only these names; the GP computes
+// only the expressions that a program's procedures use.
+#include <string_view>
+
+namespace pp5 {
+
+// Procedures the Renderer runs, in this order, for every region it renders.
+enum class Procedure { clear, triangle, shade, count };
+inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "shade"};
+inline constexpr const char* kProcedureMeaning[] = {
+    "once per region, before any primitive (initialise every pixel)",
+    "once per triangle binned to the region, with the triangle's expressions",
+    "once per region, after all primitives (deferred shading)",
+};
+
+// Expressions the GP can supply with a triangle packet. All are fixed point with
+// evaluator.fraction_bits fraction bits and are evaluated at pixel centres.
+enum class Expression {
+  edge0, edge1, edge2,
+  depth,
+  red, green, blue,
+  nx, ny, nz,
+  flat_red, flat_green, flat_blue,
+  base_red, base_green, base_blue,
+  count
+};
+struct ExpressionInfo {
+  const char* name;
+  const char* meaning;
+};
+inline constexpr ExpressionInfo kExpressions[] = {
+    {"edge0", "first edge function: >= 0 inside the triangle (top-left rule folded in)"},
+    {"edge1", "second edge function"},
+    {"edge2", "third edge function"},
+    {"depth", "depth, 0 at the near plane to 2^gp.depth_bits - 1 at the far plane"},
+    {"red", "vertex-lit red, 0..255, interpolated (Gouraud)"},
+    {"green", "vertex-lit green, 0..255, interpolated"},
+    {"blue", "vertex-lit blue, 0..255, interpolated"},
+    {"nx", "eye-space normal x times 127, interpolated (Phong)"},
+    {"ny", "eye-space normal y times 127, interpolated"},
+    {"nz", "eye-space normal z times 127, interpolated"},
+    {"flat_red", "red of the triangle lit with its face normal, 0..255, constant"},
+    {"flat_green", "face-lit green, 0..255, constant"},
+    {"flat_blue", "face-lit blue, 0..255, constant"},
+    {"base_red", "unlit material red, 0..255, interpolated (for deferred shading)"},
+    {"base_green", "unlit material green, 0..255, interpolated"},
+    {"base_blue", "unlit material blue, 0..255, interpolated"},
+};
+
+// Constants of the frame, sent with every packet's procedure and usable as an operand.
+enum class Parameter {
+  light_x, light_y, light_z,
+  half_x, half_y, half_z,
+  ambient, diffuse, specular,
+  background_red, background_green, background_blue,
+  count
+};
+struct FrameParameterInfo {
+  const char* name;
+  const char* meaning;
+};
+inline constexpr FrameParameterInfo kParameters[] = {
+    {"light_x", "eye-space unit vector toward the light, x times 127"},
+    {"light_y", "light direction y times 127"},
+    {"light_z", "light direction z times 127"},
+    {"half_x", "eye-space half vector (light + view, normalised), x times 127"},
+    {"half_y", "half vector y times 127"},
+    {"half_z", "half vector z times 127"},
+    {"ambient", "ambient reflection, 0..255 (255 = 1.0)"},
+    {"diffuse", "diffuse reflection, 0..255"},
+    {"specular", "specular reflection, 0..255"},
+    {"background_red", "background red, 0..255"},
+    {"background_green", "background green, 0..255"},
+    {"background_blue", "background blue, 0..255"},
+};
+
+inline int expression_index(std::string_view name) {
+  for (int i = 0; i < static_cast<int>(Expression::count); ++i) {
+    if (name == kExpressions[i].name) return i;
+  }
+  return -1;
+}
+inline int parameter_index(std::string_view name) {
+  for (int i = 0; i < static_cast<int>(Parameter::count); ++i) {
+    if (name == kParameters[i].name) return i;
+  }
+  return -1;
+}
+inline int procedure_index(std::string_view name) {
+  for (int i = 0; i < static_cast<int>(Procedure::count); ++i) {
+    if (name == kProcedureNames[i]) return i;
+  }
+  return -1;
+}
+
+}  // namespace pp5

@@ -1,0 +1,96 @@
+#pragma once
+// The Renderer's micro-instruction set: one table that gives every instruction its
+// mnemonic, operands, effect, cycle cost and executor. The assembler parses with it, the
+// disassembler prints with it, the Renderer times and executes with it, and
+// `pp5sim isa` documents it; nothing about an instruction is written anywhere else.
+//
+// Every instruction is bit-serial: it runs over its operands LSB first, one array cycle per
+// bit, on all pixel processors at once; memory writes happen only where Enable = 1.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "firmware/isa/interface.hpp"
+#include "models/common/units.hpp"
+#include "models/evaluator/evaluator.hpp"
+#include "models/pixel_array/pixel_array.hpp"
+
+namespace pp5 {
+
+enum class Opcode {
+  eall, epush, epop, eelse,
+  qtest, qload, qcmp,
+  mov, add, sub, cmp, and_, or_, xor_, not_, mul, mac,
+  bsld, bsst,
+  count
+};
+
+struct Operand {
+  enum class Kind { none, field, expression, literal, parameter };
+  Kind kind = Kind::none;
+  Field field;            // Kind::field: bits of pixel memory
+  int index = -1;         // Kind::expression / Kind::parameter: index in firmware/isa/interface.hpp
+  std::int64_t literal = 0;
+  std::string text;       // the operand as written, for listings and messages
+};
+
+struct Instruction {
+  Opcode op = Opcode::eall;
+  Compare condition = Compare::eq;  // for the conditional instructions (qtest, qcmp, cmp)
+  std::array<Operand, 3> operands{};
+  int line = 0;                     // source line; 0 for instructions the assembler inserted
+};
+
+// Machine timing the cost formulas depend on (from the machine configuration).
+struct TimingParams {
+  int fraction_bits = 12;
+  int result_bits = 40;
+  int evaluator_latency = 8;
+  int block_bits = 32;
+  int backing_store_cycles_per_block = 64;
+};
+
+// The values a packet binds to a procedure's expression and parameter operands.
+struct PacketValues {
+  std::array<QuadraticCoefficients, static_cast<int>(Expression::count)> expressions{};
+  std::array<std::int64_t, static_cast<int>(Parameter::count)> parameters{};
+};
+
+struct ExecutionContext {
+  PixelArray& array;
+  ExpressionEvaluator& evaluator;
+  const PacketValues& values;
+  int fraction_bits;
+  std::vector<Word>& scratch;  // at least 64 planes of the array's words
+};
+
+struct InstructionInfo {
+  Opcode op;
+  const char* mnemonic;
+  bool conditional;      // takes a .lt/.le/.eq/.ne/.ge/.gt suffix
+  const char* operands;  // one letter per operand: F field (written), R field (read),
+                         // V field or constant, K constant, E expression, B block number
+  const char* syntax;
+  const char* effect;
+  const char* cycles;    // the cost formula in words
+  ArrayCycles (*cost)(const Instruction&, const TimingParams&, const PacketValues&);
+  void (*execute)(const Instruction&, ExecutionContext&);
+};
+
+const std::vector<InstructionInfo>& instruction_table();
+const InstructionInfo& instruction_info(Opcode op);
+const InstructionInfo* find_instruction(const std::string& mnemonic);
+
+const char* condition_name(Compare c);
+bool parse_condition(const std::string& text, Compare& out);
+
+// The constant an operand stands for in a packet (a literal or a frame parameter).
+std::int64_t constant_value(const Operand& operand, const PacketValues& values);
+
+ArrayCycles instruction_cost(const Instruction& ins, const TimingParams& timing,
+                             const PacketValues& values);
+// One line of assembly for an instruction, e.g. "qcmp.lt z, depth".
+std::string disassemble(const Instruction& ins);
+
+}  // namespace pp5

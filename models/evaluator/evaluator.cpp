@@ -1,0 +1,415 @@
+#include "models/evaluator/evaluator.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <climits>
+#include <stdexcept>
+#include <string>
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
+
+namespace pp5 {
+
+namespace {
+
+using i128 = __int128;
+using u64 = std::uint64_t;
+
+// The value at the first pixel (x, y) of a word and its forward differences along the row, all
+// modulo 2^64. Unsigned arithmetic is exact modulo 2^64, hence modulo 2^result_bits, whatever
+// overflows on the way: f(x + i) = f + i d + i (i - 1) A, so the first difference starts at d
+// and the second is the constant 2A.
+struct RowSeed {
+  u64 f, d, A;
+};
+
+RowSeed seed(const QuadraticCoefficients& c, std::int64_t x, std::int64_t y) {
+  const u64 X = static_cast<u64>(x), Y = static_cast<u64>(y);
+  const u64 A = u64(c.A), B = u64(c.B), C = u64(c.C), D = u64(c.D), E = u64(c.E), F = u64(c.F);
+  return {A * X * X + B * X * Y + C * Y * Y + D * X + E * Y + F, A * (2 * X + 1) + B * Y + D, A};
+}
+
+// Bits [a, b) set, 0 <= a <= b <= 64.
+Word bit_span(int a, int b) {
+  const Word below_b = b >= 64 ? kAllOnes : (Word{1} << b) - 1;
+  const Word below_a = a >= 64 ? kAllOnes : (Word{1} << a) - 1;
+  return below_b & ~below_a;
+}
+
+// The test_plane answer from the planes "value < 0" and "value == 0".
+Word select_condition(Condition cond, Word lt, Word eq) {
+  switch (cond) {
+    case Condition::lt:
+      return lt;
+    case Condition::le:
+      return lt | eq;
+    case Condition::eq:
+      return eq;
+    case Condition::ne:
+      return ~eq;
+    case Condition::ge:
+      return ~lt;
+    case Condition::gt:
+      return ~(lt | eq);
+  }
+  return 0;
+}
+
+// (-v) <cond> 0  <=>  v <mirror(cond)> 0
+Condition mirror(Condition cond) {
+  switch (cond) {
+    case Condition::lt:
+      return Condition::gt;
+    case Condition::le:
+      return Condition::ge;
+    case Condition::ge:
+      return Condition::le;
+    case Condition::gt:
+      return Condition::lt;
+    default:
+      return cond;
+  }
+}
+
+template <class T>
+T floor_div(T n, T d) {  // d > 0
+  T q = n / d;
+  if (n % d != 0 && n < 0) --q;
+  return q;
+}
+
+template <class T>
+T ceil_div(T n, T d) {  // d > 0
+  T q = n / d;
+  if (n % d != 0 && n > 0) ++q;
+  return q;
+}
+
+int clamp_to(i128 v, int hi) { return v < 0 ? 0 : v > hi ? hi : static_cast<int>(v); }
+
+// Columns i in [0, width) with slope * i + offset < 0 end at lt_end; those with <= 0 end at
+// le_end. slope > 0.
+void linear_row_bounds(i128 slope, i128 offset, int width, int* lt_end, int* le_end) {
+  const i128 n = -offset;
+  i128 lt, le;
+  if (slope <= INT64_MAX && n >= -INT64_MAX && n <= INT64_MAX) {  // 64-bit division is far cheaper
+    const auto s = static_cast<std::int64_t>(slope), m = static_cast<std::int64_t>(n);
+    lt = ceil_div(m, s);
+    le = floor_div(m, s) + 1;
+  } else {
+    lt = ceil_div(n, slope);
+    le = floor_div(n, slope) + 1;
+  }
+  *lt_end = clamp_to(lt, width);
+  *le_end = clamp_to(le, width);
+}
+
+#if defined(__AVX2__)
+
+// Vector forward differences with stride 4: lane l holds f(x + 4q + l) at step q. Stepping by
+// four pixels, the first difference is f(x+l+4) - f(x+l) = 4d + (8l + 12) A and grows by 32A.
+struct Lanes {
+  __m256i f, g, h;
+  explicit Lanes(const RowSeed& s) {
+    alignas(32) u64 f0[4], g0[4];
+    for (int l = 0; l < 4; ++l) {
+      const u64 L = static_cast<u64>(l);
+      f0[l] = s.f + L * s.d + L * (L - 1) * s.A;
+      g0[l] = 4 * s.d + (8 * L + 12) * s.A;
+    }
+    f = _mm256_load_si256(reinterpret_cast<const __m256i*>(f0));
+    g = _mm256_load_si256(reinterpret_cast<const __m256i*>(g0));
+    h = _mm256_set1_epi64x(static_cast<long long>(32 * s.A));
+  }
+  __m256i next() {
+    const __m256i v = f;
+    f = _mm256_add_epi64(f, g);
+    g = _mm256_add_epi64(g, h);
+    return v;
+  }
+};
+
+// A transpose stage between registers: rows k and k + J live in registers J / 4 apart.
+template <int J>
+inline void stage_across(__m256i* r, __m256i mask) {
+  constexpr int kApart = J / 4;
+  for (int g = 0; g < 16; ++g) {
+    if (g & kApart) continue;
+    const __m256i t =
+        _mm256_and_si256(_mm256_xor_si256(_mm256_srli_epi64(r[g], J), r[g + kApart]), mask);
+    r[g] = _mm256_xor_si256(r[g], _mm256_slli_epi64(t, J));
+    r[g + kApart] = _mm256_xor_si256(r[g + kApart], t);
+  }
+}
+
+template <int J>
+inline void stage_pair(__m256i& lo, __m256i& hi, __m256i mask) {
+  const __m256i t = _mm256_and_si256(_mm256_xor_si256(_mm256_srli_epi64(lo, J), hi), mask);
+  lo = _mm256_xor_si256(lo, _mm256_slli_epi64(t, J));
+  hi = _mm256_xor_si256(hi, t);
+}
+
+// In-place 64x64 bit transpose of r[16], row 4q + l being lane l of r[q]. The stages for
+// J = 2 and J = 1 pair lanes of one register, so they regroup two registers so that partners
+// share a lane, apply the stage, and regroup back.
+void transpose64(__m256i* r) {
+  stage_across<32>(r, _mm256_set1_epi64x(0x00000000FFFFFFFFll));
+  stage_across<16>(r, _mm256_set1_epi64x(0x0000FFFF0000FFFFll));
+  stage_across<8>(r, _mm256_set1_epi64x(0x00FF00FF00FF00FFll));
+  stage_across<4>(r, _mm256_set1_epi64x(0x0F0F0F0F0F0F0F0Fll));
+  const __m256i m2 = _mm256_set1_epi64x(0x3333333333333333ll);
+  const __m256i m1 = _mm256_set1_epi64x(0x5555555555555555ll);
+  for (int g = 0; g < 16; g += 2) {
+    __m256i lo = _mm256_permute2x128_si256(r[g], r[g + 1], 0x20);  // rows 0 1 4 5 of the pair
+    __m256i hi = _mm256_permute2x128_si256(r[g], r[g + 1], 0x31);  // rows 2 3 6 7
+    stage_pair<2>(lo, hi, m2);
+    __m256i even = _mm256_unpacklo_epi64(lo, hi);  // rows 0 2 4 6
+    __m256i odd = _mm256_unpackhi_epi64(lo, hi);   // rows 1 3 5 7
+    stage_pair<1>(even, odd, m1);
+    lo = _mm256_unpacklo_epi64(even, odd);
+    hi = _mm256_unpackhi_epi64(even, odd);
+    r[g] = _mm256_permute2x128_si256(lo, hi, 0x20);
+    r[g + 1] = _mm256_permute2x128_si256(lo, hi, 0x31);
+  }
+}
+
+// Sign-extended values of the 64 pixels of a word, as the rows of a bit matrix, transposed so
+// that t[b] is the plane of bit b.
+void word_planes(const RowSeed& s, int result_bits, Word* t) {
+  const u64 field = result_bits == 64 ? kAllOnes : (u64{1} << result_bits) - 1;
+  const __m256i mask = _mm256_set1_epi64x(static_cast<long long>(field));
+  const __m256i sign = _mm256_set1_epi64x(static_cast<long long>(u64{1} << (result_bits - 1)));
+  Lanes lanes(s);
+  __m256i r[16];
+  for (auto& v : r)
+    v = _mm256_sub_epi64(_mm256_xor_si256(_mm256_and_si256(lanes.next(), mask), sign), sign);
+  transpose64(r);
+  for (int q = 0; q < 16; ++q) _mm256_storeu_si256(reinterpret_cast<__m256i*>(t + 4 * q), r[q]);
+}
+
+// Planes "wrapped value < 0" and "wrapped value == 0" of one word. Shifting the result field to
+// the top puts its sign in bit 63, and it is zero exactly when the shifted word is.
+void word_sign_zero(const RowSeed& s, int result_bits, Word* lt, Word* eq) {
+  const __m128i shift = _mm_cvtsi32_si128(64 - result_bits);
+  const __m256i zero = _mm256_setzero_si256();
+  Lanes lanes(s);
+  Word neg = 0, nil = 0;
+  for (int q = 0; q < 16; ++q) {
+    const __m256i v = _mm256_sll_epi64(lanes.next(), shift);
+    neg |= static_cast<Word>(_mm256_movemask_pd(_mm256_castsi256_pd(v))) << (4 * q);
+    nil |= static_cast<Word>(_mm256_movemask_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(v, zero))))
+           << (4 * q);
+  }
+  *lt = neg;
+  *eq = nil;
+}
+
+#else
+
+// Portable versions of the two kernels above: serial forward differences and a six-stage
+// transpose in which stage J swaps, within every (2J x 2J) diagonal block, the upper-right and
+// lower-left J x J blocks.
+template <int J>
+inline void transpose_stage(Word* a, Word mask) {
+  for (int base = 0; base < 64; base += 2 * J) {
+    for (int k = base; k < base + J; ++k) {
+      const Word t = ((a[k] >> J) ^ a[k + J]) & mask;
+      a[k] ^= t << J;
+      a[k + J] ^= t;
+    }
+  }
+}
+
+void word_planes(const RowSeed& s, int result_bits, Word* t) {
+  const int shift = 64 - result_bits;
+  u64 f = s.f, d = s.d;
+  const u64 d2 = 2 * s.A;
+  for (int i = 0; i < kWordBits; ++i) {
+    t[i] = static_cast<Word>(static_cast<std::int64_t>(f << shift) >> shift);
+    f += d;
+    d += d2;
+  }
+  transpose_stage<32>(t, 0x00000000FFFFFFFFull);
+  transpose_stage<16>(t, 0x0000FFFF0000FFFFull);
+  transpose_stage<8>(t, 0x00FF00FF00FF00FFull);
+  transpose_stage<4>(t, 0x0F0F0F0F0F0F0F0Full);
+  transpose_stage<2>(t, 0x3333333333333333ull);
+  transpose_stage<1>(t, 0x5555555555555555ull);
+}
+
+void word_sign_zero(const RowSeed& s, int result_bits, Word* lt, Word* eq) {
+  const int shift = 64 - result_bits;
+  u64 f = s.f, d = s.d;
+  const u64 d2 = 2 * s.A;
+  Word neg = 0, nil = 0;
+  for (int i = 0; i < kWordBits; ++i) {
+    const u64 v = f << shift;
+    neg |= (v >> 63) << i;
+    nil |= static_cast<Word>(v == 0) << i;
+    f += d;
+    d += d2;
+  }
+  *lt = neg;
+  *eq = nil;
+}
+
+#endif
+
+}  // namespace
+
+QuadraticCoefficients QuadraticCoefficients::linear(std::int64_t a, std::int64_t b,
+                                                    std::int64_t c) {
+  QuadraticCoefficients q;
+  q.D = a;
+  q.E = b;
+  q.F = c;
+  return q;
+}
+
+QuadraticCoefficients QuadraticCoefficients::constant(std::int64_t c) {
+  QuadraticCoefficients q;
+  q.F = c;
+  return q;
+}
+
+ExpressionEvaluator::ExpressionEvaluator(EvaluatorParams params, int region_width,
+                                         int region_height)
+    : params_(params), width_(region_width), height_(region_height) {
+  if (params.coefficient_bits < 2 || params.coefficient_bits > 62)
+    throw std::invalid_argument("evaluator: coefficient_bits must be in 2..62, got " +
+                                std::to_string(params.coefficient_bits));
+  if (params.result_bits < 2 || params.result_bits > 64)
+    throw std::invalid_argument("evaluator: result_bits must be in 2..64, got " +
+                                std::to_string(params.result_bits));
+  if (region_width <= 0 || region_width % kWordBits != 0)
+    throw std::invalid_argument("evaluator: region width must be a positive multiple of 64, got " +
+                                std::to_string(region_width));
+  if (region_height <= 0)
+    throw std::invalid_argument("evaluator: region height must be positive, got " +
+                                std::to_string(region_height));
+  if (static_cast<std::int64_t>(region_width) * region_height > INT_MAX)
+    throw std::invalid_argument("evaluator: region too large");
+  words_per_row_ = words_per_row(region_width);
+  words_ = words_per_row_ * region_height;
+}
+
+void ExpressionEvaluator::set_origin(int x0, int y0) {
+  x0_ = x0;
+  y0_ = y0;
+}
+
+bool ExpressionEvaluator::fits(const QuadraticCoefficients& c) const {
+  const std::int64_t hi = (std::int64_t{1} << (params_.coefficient_bits - 1)) - 1;
+  const std::int64_t lo = -hi - 1;
+  for (std::int64_t v : {c.A, c.B, c.C, c.D, c.E, c.F})
+    if (v < lo || v > hi) return false;
+  return true;
+}
+
+std::int64_t ExpressionEvaluator::wrap(u64 v) const {
+  const int shift = 64 - params_.result_bits;
+  return static_cast<std::int64_t>(v << shift) >> shift;
+}
+
+std::int64_t ExpressionEvaluator::value_at(const QuadraticCoefficients& c, int x, int y) const {
+  return wrap(seed(c, x0_ + x, y0_ + y).f);
+}
+
+void ExpressionEvaluator::planes(const QuadraticCoefficients& c, int first_bit, int count,
+                                 WordRange range, Word* out) const {
+  assert(first_bit >= 0 && count >= 1 && count <= 64);
+  assert(range.begin >= 0 && range.end <= words_);
+  alignas(32) Word t[kWordBits];
+  for (int w = range.begin; w < range.end; ++w) {
+    word_planes(seed(c, word_x(w), word_y(w)), params_.result_bits, t);
+    // Values are sign-extended to 64 bits, so plane 63 stands for every bit above.
+    for (int k = 0; k < count; ++k)
+      out[static_cast<std::size_t>(k) * words_ + w] = t[std::min(first_bit + k, 63)];
+  }
+}
+
+bool ExpressionEvaluator::linear_fast_path(const QuadraticCoefficients& c, WordRange range) const {
+  if (!c.is_linear() || range.empty()) return false;
+  const std::int64_t row_first = range.begin / words_per_row_;
+  const std::int64_t row_last = (range.end - 1) / words_per_row_;
+  // A linear function over a rectangle takes its extremes at the corners, so if every corner
+  // lies within the result range no pixel between them wraps.
+  const i128 limit = i128{1} << (params_.result_bits - 1);
+  for (std::int64_t x : {x0_, x0_ + width_ - 1}) {
+    for (std::int64_t y : {y0_ + row_first, y0_ + row_last}) {
+      const i128 v = i128{c.D} * x + i128{c.E} * y + c.F;
+      if (v < -limit || v >= limit) return false;
+    }
+  }
+  return true;
+}
+
+void ExpressionEvaluator::test_plane(const QuadraticCoefficients& c, Condition cond,
+                                     WordRange range, Word* out) const {
+  assert(range.begin >= 0 && range.end <= words_);
+  if (range.empty()) return;
+  if (!linear_fast_path(c, range)) {
+    for (int w = range.begin; w < range.end; ++w) {
+      Word lt, eq;
+      word_sign_zero(seed(c, word_x(w), word_y(w)), params_.result_bits, &lt, &eq);
+      out[w] = select_condition(cond, lt, eq);
+    }
+    return;
+  }
+  // No wrap, so the wrapped value is the exact D x + E y + F. Within a row it is monotone in x,
+  // so the pixels satisfying cond form an interval [lo, hi) of region columns or, for gt, ge and
+  // ne, the complement of one.
+  const int row_first = range.begin / words_per_row_;
+  const int row_last = (range.end - 1) / words_per_row_;
+  for (int row = row_first; row <= row_last; ++row) {
+    i128 slope = c.D;
+    i128 offset = i128{c.D} * x0_ + i128{c.E} * (y0_ + row) + c.F;  // value at column 0
+    Condition k = cond;
+    int lo = 0, hi = 0;
+    bool invert = false;
+    if (slope == 0) {
+      hi = select_condition(cond, offset < 0 ? kAllOnes : 0, offset == 0 ? kAllOnes : 0) != 0
+               ? width_
+               : 0;
+    } else {
+      if (slope < 0) {
+        slope = -slope;
+        offset = -offset;
+        k = mirror(cond);
+      }
+      int lt_end, le_end;
+      linear_row_bounds(slope, offset, width_, &lt_end, &le_end);
+      switch (k) {
+        case Condition::lt:
+        case Condition::ge:
+          hi = lt_end;
+          invert = k == Condition::ge;
+          break;
+        case Condition::le:
+        case Condition::gt:
+          hi = le_end;
+          invert = k == Condition::gt;
+          break;
+        case Condition::eq:
+        case Condition::ne:
+          lo = lt_end;
+          hi = le_end;
+          invert = k == Condition::ne;
+          break;
+      }
+    }
+    const int row_base = row * words_per_row_;
+    const int w_begin = std::max(range.begin, row_base);
+    const int w_end = std::min(range.end, row_base + words_per_row_);
+    for (int w = w_begin; w < w_end; ++w) {
+      const int col = (w - row_base) * kWordBits;
+      const Word m =
+          bit_span(std::clamp(lo - col, 0, kWordBits), std::clamp(hi - col, 0, kWordBits));
+      out[w] = invert ? ~m : m;
+    }
+  }
+}
+
+}  // namespace pp5

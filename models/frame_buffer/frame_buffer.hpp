@@ -1,0 +1,36 @@
+#pragma once
+// The conventional frame buffer: a ring stop that receives finished regions and assembles
+// the frame.
+#include <vector>
+
+#include <systemc>
+
+#include "sim/image/png_writer.hpp"
+
+namespace pp5 {
+
+class FrameBuffer : public sc_core::sc_module {
+ public:
+  FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions);
+
+  // A region's pixels have arrived over the ring (timing).
+  void region_arrived(int region);
+  // A region's pixel values (function): rgb is region_width x region_height, row-major;
+  // the part inside the screen is copied to the frame.
+  void store_region(int x0, int y0, int region_width, int region_height,
+                    const std::vector<std::uint8_t>& rgb);
+
+  const RgbImage& image() const { return image_; }
+  // Simulated time at which the last region arrived: the frame time.
+  sc_core::sc_time frame_complete() const { return last_; }
+  int regions_received() const { return received_; }
+  const std::vector<sc_core::sc_time>& arrivals() const { return arrival_; }
+
+ private:
+  RgbImage image_;
+  std::vector<sc_core::sc_time> arrival_;
+  sc_core::sc_time last_;
+  int received_ = 0;
+};
+
+}  // namespace pp5

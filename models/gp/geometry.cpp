@@ -1,0 +1,289 @@
+#include "models/gp/geometry.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pp5 {
+
+namespace {
+
+struct ClipVertex {
+  glm::dvec4 clip;
+  glm::dvec3 lit;
+  glm::dvec3 base;
+  glm::dvec3 normal;
+};
+
+ClipVertex mix(const ClipVertex& a, const ClipVertex& b, double t) {
+  return {a.clip + (b.clip - a.clip) * t, a.lit + (b.lit - a.lit) * t,
+          a.base + (b.base - a.base) * t, a.normal + (b.normal - a.normal) * t};
+}
+
+// Signed distance to clip plane k of the view volume -w <= x, y, z <= w.
+double plane_distance(const glm::dvec4& c, int k) {
+  switch (k) {
+    case 0: return c.w + c.x;
+    case 1: return c.w - c.x;
+    case 2: return c.w + c.y;
+    case 3: return c.w - c.y;
+    case 4: return c.w + c.z;
+    default: return c.w - c.z;
+  }
+}
+
+std::int64_t floor_div(std::int64_t a, std::int64_t b) {
+  std::int64_t q = a / b;
+  if ((a % b != 0) && ((a < 0) != (b < 0))) --q;
+  return q;
+}
+
+std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b); }
+
+bool fits(std::int64_t v, int bits) {
+  const std::int64_t limit = std::int64_t{1} << (bits - 1);
+  return v >= -limit && v < limit;
+}
+
+}  // namespace
+
+GeometryEngine::GeometryEngine(const GeometryParams& params, const Scene& scene)
+    : params_(params), scene_(scene) {
+  const float aspect =
+      static_cast<float>(params.screen_width) / static_cast<float>(params.screen_height);
+  view_ = glm::dmat4(view_matrix(scene.camera));
+  projection_ = glm::dmat4(projection_matrix(scene.camera, aspect));
+  normal_matrix_ = glm::transpose(glm::inverse(glm::dmat3(view_)));
+  light_eye_ = glm::normalize(glm::dmat3(view_) * glm::dvec3(scene.light.direction));
+  half_eye_ = glm::normalize(light_eye_ + glm::dvec3(0, 0, 1));
+}
+
+glm::dvec3 GeometryEngine::light_vertex(const glm::dvec3& color, const glm::dvec3& n) const {
+  const Light& l = scene_.light;
+  const double diffuse = std::max(0.0, glm::dot(n, light_eye_));
+  const double specular = std::pow(std::max(0.0, glm::dot(n, half_eye_)), l.shininess);
+  const glm::dvec3 c = color * (l.ambient + l.diffuse * diffuse) + glm::dvec3(l.specular * specular);
+  return glm::clamp(c, 0.0, 1.0);
+}
+
+void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
+                               SetupCounts& counts) const {
+  const Mesh& mesh = scene_.mesh;
+  const glm::uvec3 tri = mesh.triangles[index];
+  std::array<glm::dvec3, 3> eye;
+  std::array<ClipVertex, 3> v;
+  for (int k = 0; k < 3; ++k) {
+    const Vertex& src = mesh.vertices[tri[k]];
+    const glm::dvec4 e = view_ * glm::dvec4(glm::dvec3(src.position), 1.0);
+    eye[k] = glm::dvec3(e);
+    v[k].clip = projection_ * e;
+    v[k].base = glm::dvec3(src.color);
+    v[k].normal = glm::normalize(normal_matrix_ * glm::dvec3(src.normal));
+  }
+  // Two-sided lighting: the surfaces of interest (the self-intersecting torus) show both
+  // sides, so normals are turned toward the viewer.
+  glm::dvec3 face = glm::cross(eye[1] - eye[0], eye[2] - eye[0]);
+  const double face_length = glm::length(face);
+  face = face_length > 0 ? face / face_length : glm::dvec3(0, 0, 1);
+  if (glm::dot(face, -eye[0]) < 0) {
+    face = -face;
+    for (auto& x : v) x.normal = -x.normal;
+  }
+  const glm::dvec3 centroid_base = (v[0].base + v[1].base + v[2].base) / 3.0;
+  const glm::dvec3 flat = light_vertex(centroid_base, face);
+  for (auto& x : v) x.lit = light_vertex(x.base, x.normal);
+
+  std::vector<ClipVertex> poly(v.begin(), v.end());
+  bool inside = true;
+  for (const auto& x : v) {
+    for (int k = 0; k < 6; ++k) inside = inside && plane_distance(x.clip, k) >= 0;
+  }
+  if (!inside) {
+    for (int k = 0; k < 6 && !poly.empty(); ++k) {
+      std::vector<ClipVertex> next;
+      for (std::size_t i = 0; i < poly.size(); ++i) {
+        const ClipVertex& a = poly[i];
+        const ClipVertex& b = poly[(i + 1) % poly.size()];
+        const double da = plane_distance(a.clip, k);
+        const double db = plane_distance(b.clip, k);
+        if (da >= 0) next.push_back(a);
+        if ((da >= 0) != (db >= 0)) next.push_back(mix(a, b, da / (da - db)));
+      }
+      poly.swap(next);
+    }
+    if (poly.size() < 3) {
+      ++counts.clipped_away;
+      return;
+    }
+    counts.clip_splits += poly.size() - 3;
+  }
+  std::vector<ScreenVertex> screen(poly.size());
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const glm::dvec3 ndc = glm::dvec3(poly[i].clip) / poly[i].clip.w;
+    ScreenVertex& s = screen[i];
+    s.position = {(ndc.x * 0.5 + 0.5) * params_.screen_width,
+                  (0.5 - ndc.y * 0.5) * params_.screen_height};
+    s.depth = std::clamp(ndc.z * 0.5 + 0.5, 0.0, 1.0);
+    s.lit_color = poly[i].lit;
+    s.base_color = poly[i].base;
+    const double n = glm::length(poly[i].normal);
+    s.normal = n > 0 ? poly[i].normal / n : face;
+  }
+  for (std::size_t i = 1; i + 1 < screen.size(); ++i) {
+    out.push_back({{screen[0], screen[i], screen[i + 1]}, flat, index});
+  }
+}
+
+bool GeometryEngine::setup(const ScreenTriangle& t,
+                           const std::bitset<static_cast<int>(Expression::count)>& needed,
+                           SetupResult& out, SetupCounts& counts) const {
+  const int s = params_.subpixel_bits;
+  const std::int64_t scale = std::int64_t{1} << s;
+  const std::int64_t half = scale / 2;
+  std::array<std::int64_t, 3> xs{};
+  std::array<std::int64_t, 3> ys{};
+  for (int k = 0; k < 3; ++k) {
+    xs[k] = std::llround(t.v[k].position.x * static_cast<double>(scale));
+    ys[k] = std::llround(t.v[k].position.y * static_cast<double>(scale));
+  }
+  const std::int64_t area2 = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (xs[2] - xs[0]) * (ys[1] - ys[0]);
+  if (area2 == 0) {
+    ++counts.degenerate;
+    return false;
+  }
+  // Pixel X is covered only if its centre X * scale + half lies within the triangle's span.
+  const std::int64_t x_lo = *std::min_element(xs.begin(), xs.end());
+  const std::int64_t x_hi = *std::max_element(xs.begin(), xs.end());
+  const std::int64_t y_lo = *std::min_element(ys.begin(), ys.end());
+  const std::int64_t y_hi = *std::max_element(ys.begin(), ys.end());
+  out.x_min = static_cast<int>(std::max<std::int64_t>(0, ceil_div(x_lo - half, scale)));
+  out.x_max = static_cast<int>(
+      std::min<std::int64_t>(params_.screen_width - 1, floor_div(x_hi - half, scale)));
+  out.y_min = static_cast<int>(std::max<std::int64_t>(0, ceil_div(y_lo - half, scale)));
+  out.y_max = static_cast<int>(
+      std::min<std::int64_t>(params_.screen_height - 1, floor_div(y_hi - half, scale)));
+  if (out.x_min > out.x_max || out.y_min > out.y_max) {
+    ++counts.no_pixels;
+    return false;
+  }
+
+  PacketValues& pv = out.values;
+  const int cb = params_.coefficient_bits;
+  const std::int64_t sigma = area2 > 0 ? 1 : -1;
+  for (int e = 0; e < 3; ++e) {
+    if (!needed.test(static_cast<int>(Expression::edge0) + e)) continue;
+    const int a = e;
+    const int b = (e + 1) % 3;
+    const std::int64_t dx = xs[b] - xs[a];
+    const std::int64_t dy = ys[b] - ys[a];
+    const std::int64_t A = -sigma * dy * scale;
+    const std::int64_t B = sigma * dx * scale;
+    std::int64_t C = sigma * (dx * (half - ys[a]) - dy * (half - xs[a]));
+    // Top-left rule: a pixel centre exactly on the edge belongs to this triangle only if
+    // the edge is a left edge (inside lies to its right) or a top edge.
+    if (!(A > 0 || (A == 0 && B > 0))) C -= 1;
+    if (!fits(A, cb) || !fits(B, cb) || !fits(C, cb)) {
+      ++counts.overflow;
+      return false;
+    }
+    pv.expressions[static_cast<int>(Expression::edge0) + e] = QuadraticCoefficients::linear(A, B, C);
+  }
+
+  // Attribute planes through the snapped vertices, in pixel-index coordinates (the centre of
+  // pixel X is at X + 0.5, so a vertex at x sits at index coordinate x - 0.5).
+  const double f_scale = std::ldexp(1.0, params_.fraction_bits);
+  std::array<double, 3> u{};
+  std::array<double, 3> w{};
+  for (int k = 0; k < 3; ++k) {
+    u[k] = static_cast<double>(xs[k] - half) / static_cast<double>(scale);
+    w[k] = static_cast<double>(ys[k] - half) / static_cast<double>(scale);
+  }
+  const double det = (u[1] - u[0]) * (w[2] - w[0]) - (u[2] - u[0]) * (w[1] - w[0]);
+  bool overflow = false;
+  auto plane = [&](std::array<double, 3> f) {
+    const double a = ((f[1] - f[0]) * (w[2] - w[0]) - (f[2] - f[0]) * (w[1] - w[0])) / det;
+    const double b = ((f[2] - f[0]) * (u[1] - u[0]) - (f[1] - f[0]) * (u[2] - u[0])) / det;
+    const double A = std::nearbyint(a * f_scale);
+    const double B = std::nearbyint(b * f_scale);
+    const double limit = std::ldexp(1.0, cb - 1);
+    if (!(std::fabs(A) < limit && std::fabs(B) < limit)) {
+      overflow = true;
+      return QuadraticCoefficients{};
+    }
+    const auto Ai = static_cast<std::int64_t>(A);
+    const auto Bi = static_cast<std::int64_t>(B);
+    // C makes the value exact (to rounding) at the first vertex: C = f0 - A u0 - B v0, with
+    // the products formed exactly in integers.
+    const __int128 f0 = static_cast<__int128>(std::llround(f[0] * f_scale)) * scale;
+    const __int128 num = f0 - static_cast<__int128>(Ai) * (xs[0] - half) -
+                         static_cast<__int128>(Bi) * (ys[0] - half);
+    const __int128 C = (num >= 0 ? num + scale / 2 : num - scale / 2) / scale;
+    if (C >= (static_cast<__int128>(1) << (cb - 1)) || C < -(static_cast<__int128>(1) << (cb - 1))) {
+      overflow = true;
+      return QuadraticCoefficients{};
+    }
+    return QuadraticCoefficients::linear(Ai, Bi, static_cast<std::int64_t>(C));
+  };
+  auto set = [&](Expression e, std::array<double, 3> f) {
+    if (needed.test(static_cast<int>(e))) pv.expressions[static_cast<int>(e)] = plane(f);
+  };
+  auto constant = [&](Expression e, double value) {
+    if (needed.test(static_cast<int>(e))) {
+      pv.expressions[static_cast<int>(e)] =
+          QuadraticCoefficients::constant(std::llround(value) << params_.fraction_bits);
+    }
+  };
+  const double depth_max = std::ldexp(1.0, params_.depth_bits) - 1.0;
+  auto depth = [&](int k) { return std::clamp(t.v[k].depth * depth_max, 0.5, depth_max - 1.5); };
+  auto colour = [&](double c) { return std::clamp(c * 255.0, 0.5, 255.49); };
+  set(Expression::depth, {depth(0), depth(1), depth(2)});
+  for (int c = 0; c < 3; ++c) {
+    set(static_cast<Expression>(static_cast<int>(Expression::red) + c),
+        {colour(t.v[0].lit_color[c]), colour(t.v[1].lit_color[c]), colour(t.v[2].lit_color[c])});
+    set(static_cast<Expression>(static_cast<int>(Expression::base_red) + c),
+        {colour(t.v[0].base_color[c]), colour(t.v[1].base_color[c]),
+         colour(t.v[2].base_color[c])});
+    set(static_cast<Expression>(static_cast<int>(Expression::nx) + c),
+        {127.0 * t.v[0].normal[c], 127.0 * t.v[1].normal[c], 127.0 * t.v[2].normal[c]});
+    constant(static_cast<Expression>(static_cast<int>(Expression::flat_red) + c),
+             std::clamp(t.flat_color[c], 0.0, 1.0) * 255.0);
+  }
+  if (overflow) {
+    ++counts.overflow;
+    return false;
+  }
+  return true;
+}
+
+void GeometryEngine::bin(const SetupResult& r, std::vector<int>& regions) const {
+  const int rx0 = r.x_min / params_.region_width;
+  const int rx1 = r.x_max / params_.region_width;
+  const int ry0 = r.y_min / params_.region_height;
+  const int ry1 = r.y_max / params_.region_height;
+  const int across = (params_.screen_width + params_.region_width - 1) / params_.region_width;
+  for (int ry = ry0; ry <= ry1; ++ry) {
+    for (int rx = rx0; rx <= rx1; ++rx) regions.push_back(ry * across + rx);
+  }
+}
+
+std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::frame_parameters()
+    const {
+  std::array<std::int64_t, static_cast<int>(Parameter::count)> p{};
+  auto at = [&](Parameter k) -> std::int64_t& { return p[static_cast<int>(k)]; };
+  at(Parameter::light_x) = std::llround(127.0 * light_eye_.x);
+  at(Parameter::light_y) = std::llround(127.0 * light_eye_.y);
+  at(Parameter::light_z) = std::llround(127.0 * light_eye_.z);
+  at(Parameter::half_x) = std::llround(127.0 * half_eye_.x);
+  at(Parameter::half_y) = std::llround(127.0 * half_eye_.y);
+  at(Parameter::half_z) = std::llround(127.0 * half_eye_.z);
+  const Light& l = scene_.light;
+  auto unit = [](double v) { return std::llround(std::clamp(v, 0.0, 1.0) * 255.0); };
+  at(Parameter::ambient) = unit(l.ambient);
+  at(Parameter::diffuse) = unit(l.diffuse);
+  at(Parameter::specular) = unit(l.specular);
+  at(Parameter::background_red) = unit(scene_.background.r);
+  at(Parameter::background_green) = unit(scene_.background.g);
+  at(Parameter::background_blue) = unit(scene_.background.b);
+  return p;
+}
+
+}  // namespace pp5

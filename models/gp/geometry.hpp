@@ -1,0 +1,97 @@
+#pragma once
+// The Graphics Processor's per-primitive work, as plain C++: transform, clip, light, and
+// compute the fixed-point coefficients of every expression the firmware asks for, then bin
+// the result by screen region. The GraphicsProcessor module (graphics_processor.hpp) runs
+// this and charges its time; tests use it directly.
+//
+// Contract:
+//  - Vertices are snapped to 1/2^subpixel_bits of a pixel. Edge coefficients are then exact
+//    integers, so two triangles sharing an edge give exactly opposite edge functions and
+//    every pixel centre on the edge belongs to exactly one of them (the top-left rule).
+//  - Attribute expressions carry fraction_bits fraction bits, are anchored at the first
+//    vertex (so rounding error grows with distance from it), and are clamped at the
+//    vertices to half a unit inside their range, so that floor() of the value never wraps
+//    inside the triangle.
+//  - Pixels are sampled at their centres: screen pixel (X, Y) is the point (X + 0.5, Y + 0.5)
+//    with Y growing downward; the evaluator is fed integer X, Y.
+#include <array>
+#include <bitset>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "firmware/isa/isa.hpp"
+#include "sim/scene/scene.hpp"
+
+namespace pp5 {
+
+struct GeometryParams {
+  int screen_width = 1280;
+  int screen_height = 1024;
+  int region_width = 128;
+  int region_height = 128;
+  int subpixel_bits = 4;
+  int depth_bits = 24;
+  int fraction_bits = 12;
+  int coefficient_bits = 40;
+};
+
+// A triangle after projection: screen position (pixels, y down), depth in [0, 1], and the
+// attributes the expressions interpolate.
+struct ScreenVertex {
+  glm::dvec2 position;
+  double depth = 0;
+  glm::dvec3 lit_color;   // 0..1, lit at the vertex
+  glm::dvec3 base_color;  // 0..1, unlit material
+  glm::dvec3 normal;      // eye space, unit, facing the viewer
+};
+struct ScreenTriangle {
+  std::array<ScreenVertex, 3> v;
+  glm::dvec3 flat_color;  // lit with the face normal
+  int source = 0;         // index of the scene triangle
+};
+
+// Why a triangle produced no packet.
+struct SetupCounts {
+  std::uint64_t clipped_away = 0;   // wholly outside the view volume
+  std::uint64_t degenerate = 0;     // zero area after snapping
+  std::uint64_t no_pixels = 0;      // covers no pixel centre
+  std::uint64_t overflow = 0;       // a coefficient did not fit evaluator.coefficient_bits
+  std::uint64_t clip_splits = 0;    // extra triangles made by clipping
+};
+
+struct SetupResult {
+  PacketValues values;
+  int x_min = 0, x_max = -1, y_min = 0, y_max = -1;  // pixel-centre bounding box, inclusive
+};
+
+class GeometryEngine {
+ public:
+  GeometryEngine(const GeometryParams& params, const Scene& scene);
+
+  // Transform, clip and light scene triangle `index`; appends 0 or more screen triangles.
+  void transform(int index, std::vector<ScreenTriangle>& out, SetupCounts& counts) const;
+  // Coefficients of the expressions in `needed`; false (and counted) if the triangle has no
+  // pixels or a coefficient does not fit.
+  bool setup(const ScreenTriangle& t, const std::bitset<static_cast<int>(Expression::count)>& needed,
+             SetupResult& out, SetupCounts& counts) const;
+  // Regions the bounding box touches, as region indices (row-major).
+  void bin(const SetupResult& r, std::vector<int>& regions) const;
+  // The frame parameters (light, reflection coefficients, background).
+  std::array<std::int64_t, static_cast<int>(Parameter::count)> frame_parameters() const;
+
+  const GeometryParams& params() const { return params_; }
+
+ private:
+  glm::dvec3 light_vertex(const glm::dvec3& color, const glm::dvec3& normal) const;
+
+  GeometryParams params_;
+  const Scene& scene_;
+  glm::dmat4 view_;
+  glm::dmat4 projection_;
+  glm::dmat3 normal_matrix_;
+  glm::dvec3 light_eye_;
+  glm::dvec3 half_eye_;
+};
+
+}  // namespace pp5

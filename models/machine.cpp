@@ -1,0 +1,131 @@
+#include "models/machine.hpp"
+
+#include <atomic>
+#include <thread>
+
+#include "models/frame_buffer/frame_buffer.hpp"
+#include "models/gp/graphics_processor.hpp"
+#include "models/renderer/renderer.hpp"
+#include "models/ring/ring.hpp"
+
+namespace pp5 {
+
+namespace {
+
+GeometryParams geometry_params(const MachineConfig& c) {
+  GeometryParams g;
+  g.screen_width = c.screen.width;
+  g.screen_height = c.screen.height;
+  g.region_width = c.renderer.region_width;
+  g.region_height = c.renderer.region_height;
+  g.subpixel_bits = c.gp.subpixel_bits;
+  g.depth_bits = c.gp.depth_bits;
+  g.fraction_bits = c.evaluator.fraction_bits;
+  g.coefficient_bits = c.evaluator.coefficient_bits;
+  return g;
+}
+
+}  // namespace
+
+TimingParams timing_params(const MachineConfig& c) {
+  TimingParams t;
+  t.fraction_bits = c.evaluator.fraction_bits;
+  t.result_bits = c.evaluator.result_bits;
+  t.evaluator_latency = c.evaluator.latency_cycles;
+  t.block_bits = c.renderer.block_bits;
+  t.backing_store_cycles_per_block = c.renderer.backing_store_cycles_per_block;
+  return t;
+}
+
+RendererBoardParams board_params(const MachineConfig& c) {
+  RendererBoardParams p;
+  p.array.width = c.renderer.region_width;
+  p.array.height = c.renderer.region_height;
+  p.array.memory_bits = c.renderer.memory_bits;
+  p.array.enable_stack_depth = c.renderer.enable_stack_depth;
+  p.array.backing_store_bits = c.renderer.backing_store_bits;
+  p.array.block_bits = c.renderer.block_bits;
+  p.evaluator.coefficient_bits = c.evaluator.coefficient_bits;
+  p.evaluator.result_bits = c.evaluator.result_bits;
+  p.timing = timing_params(c);
+  return p;
+}
+
+AssemblerOptions assembler_options(const MachineConfig& c) {
+  AssemblerOptions o;
+  o.memory_bits = c.renderer.memory_bits;
+  o.backing_store_bits = c.renderer.backing_store_bits;
+  o.block_bits = c.renderer.block_bits;
+  o.enable_stack_depth = c.renderer.enable_stack_depth;
+  return o;
+}
+
+Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, const Scene& scene,
+                 const Program& program)
+    : sc_module(name),
+      config_(config),
+      scene_(scene),
+      program_(program),
+      geometry_(geometry_params(config), scene),
+      timing_(timing_params(config)),
+      frame_parameters_(geometry_.frame_parameters()) {
+  const int gps = config.gp.count;
+  const int renderers = config.renderer.count;
+  RingParams rp;
+  rp.channels = config.ring.channels;
+  rp.word_bits = config.ring.word_bits;
+  rp.clock_hz = config.ring.clock_hz;
+  rp.hop_latency_cycles = config.ring.hop_latency_cycles;
+  ring_ = std::make_unique<Ring>("ring", rp, gps + renderers + 1);
+  frame_buffer_ = std::make_unique<FrameBuffer>("frame_buffer", config.screen.width,
+                                                config.screen.height, config.regions());
+  for (int k = 0; k < renderers; ++k) {
+    renderers_.push_back(std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, *this));
+  }
+  // The host spreads the display list over the GPs in contiguous blocks, so that the
+  // concatenation of the GPs' bins is in display-list order.
+  const auto n = static_cast<long long>(scene.mesh.triangles.size());
+  for (int k = 0; k < gps; ++k) {
+    const int first = static_cast<int>(n * k / gps);
+    const int last = static_cast<int>(n * (k + 1) / gps);
+    gps_.push_back(
+        std::make_unique<GraphicsProcessor>(fmt_name("gp", k).c_str(), k, first, last, *this));
+  }
+}
+
+Machine::~Machine() = default;
+
+std::string Machine::fmt_name(const char* base, int k) { return std::string(base) + std::to_string(k); }
+
+std::uint64_t Machine::packet_words(int expressions) const {
+  const int per_coefficient = (config_.evaluator.coefficient_bits + config_.ring.word_bits - 1) /
+                              config_.ring.word_bits;
+  // A header word naming the procedure, then three coefficients per linear expression.
+  return 1 + static_cast<std::uint64_t>(expressions) * 3 * per_coefficient;
+}
+
+std::uint64_t Machine::region_words() const {
+  const std::uint64_t bits = static_cast<std::uint64_t>(config_.renderer.region_width) *
+                             config_.renderer.region_height * config_.frame_buffer.bits_per_pixel;
+  return (bits + config_.ring.word_bits - 1) / config_.ring.word_bits;
+}
+
+void Machine::execute_pixels(int threads) {
+  const RendererBoardParams params = board_params(config_);
+  PacketValues frame_values;
+  frame_values.parameters = frame_parameters_;
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int k = next++; k < renderer_count(); k = next++) {
+      RendererBoard board(params);
+      renderers_[k]->execute(board, program_, *frame_buffer_, frame_values);
+    }
+  };
+  const int n = std::max(1, std::min(threads, renderer_count()));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < n; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace pp5

@@ -1,0 +1,346 @@
+#include "models/pixel_array/pixel_array.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace pp5 {
+
+namespace {
+
+Word majority(Word a, Word b, Word c) { return (a & b) | (c & (a ^ b)); }
+
+void check_field(const Field& f, int memory_bits, const char* what) {
+  if (f.width < 1 || f.width > Bits::kMaxBits || f.lo < 0 || f.lo + f.width > memory_bits) {
+    throw std::out_of_range(std::string(what) + ": field [" + std::to_string(f.lo) + ", " +
+                            std::to_string(f.lo + f.width) + ") outside pixel memory of " +
+                            std::to_string(memory_bits) + " bits");
+  }
+}
+
+}  // namespace
+
+PixelArray::PixelArray(const PixelArrayGeometry& geometry) : geometry_(geometry) {
+  if (geometry.width <= 0 || geometry.width % kWordBits != 0 || geometry.height <= 0) {
+    throw std::invalid_argument("pixel array: width must be a positive multiple of 64, height > 0");
+  }
+  if (geometry.memory_bits < 1 || geometry.enable_stack_depth < 0 ||
+      geometry.backing_store_bits < 0 || geometry.block_bits < 1) {
+    throw std::invalid_argument("pixel array: bad memory geometry");
+  }
+  words_ = geometry.width * geometry.height / kWordBits;
+  memory_.assign(static_cast<std::size_t>(geometry.memory_bits) * words_, 0);
+  enable_.assign(words_, kAllOnes);
+  carry_.assign(words_, 0);
+  stack_.assign(static_cast<std::size_t>(geometry.enable_stack_depth) * words_, 0);
+  zeros_.assign(words_, 0);
+  ones_.assign(words_, kAllOnes);
+}
+
+Bits PixelArray::bits_of(const Field& field) const {
+  check_field(field, geometry_.memory_bits, "operand");
+  Bits b;
+  b.width = field.width;
+  for (int i = 0; i < field.width; ++i) b.plane[i] = plane(field.lo + i);
+  b.extension = field.is_signed ? b.plane[field.width - 1] : zeros();
+  return b;
+}
+
+Bits PixelArray::bits_of_constant(std::int64_t value) const {
+  Bits b;
+  b.width = Bits::kMaxBits;
+  const auto u = static_cast<std::uint64_t>(value);
+  for (int i = 0; i < Bits::kMaxBits; ++i) b.plane[i] = ((u >> i) & 1) ? ones() : zeros();
+  b.extension = value < 0 ? ones() : zeros();
+  return b;
+}
+
+Bits PixelArray::bits_of_planes(const Word* planes, int count, bool is_signed) const {
+  if (count < 1 || count > Bits::kMaxBits) throw std::out_of_range("operand: bad plane count");
+  Bits b;
+  b.width = count;
+  for (int i = 0; i < count; ++i) b.plane[i] = planes + static_cast<std::size_t>(i) * words_;
+  b.extension = is_signed ? b.plane[count - 1] : zeros();
+  return b;
+}
+
+void PixelArray::enable_all() {
+  std::fill(enable_.begin(), enable_.end(), kAllOnes);
+  mark_enable_changed();
+}
+
+void PixelArray::and_enable(const Word* mask) {
+  const WordRange r = active_words();
+  for (int w = r.begin; w < r.end; ++w) enable_[w] &= mask[w];
+  mark_enable_changed();
+}
+
+void PixelArray::push_enable() {
+  if (stack_top_ >= geometry_.enable_stack_depth) {
+    throw std::overflow_error("enable stack overflow: depth " +
+                              std::to_string(geometry_.enable_stack_depth));
+  }
+  std::copy(enable_.begin(), enable_.end(),
+            stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * words_);
+  ++stack_top_;
+}
+
+void PixelArray::pop_enable() {
+  if (stack_top_ == 0) throw std::underflow_error("enable stack underflow");
+  --stack_top_;
+  auto saved = stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * words_;
+  std::copy(saved, saved + words_, enable_.begin());
+  mark_enable_changed();
+}
+
+void PixelArray::else_enable() {
+  if (stack_top_ == 0) throw std::underflow_error("else without a saved enable");
+  const Word* saved = &stack_[static_cast<std::size_t>(stack_top_ - 1) * words_];
+  for (int w = 0; w < words_; ++w) enable_[w] = saved[w] & ~enable_[w];
+  mark_enable_changed();
+}
+
+int PixelArray::count_enabled() const {
+  int n = 0;
+  for (Word w : enable_) n += __builtin_popcountll(w);
+  return n;
+}
+
+WordRange PixelArray::active_words() const {
+  if (!active_valid_) {
+    int b = 0;
+    while (b < words_ && enable_[b] == 0) ++b;
+    int e = words_;
+    while (e > b && enable_[e - 1] == 0) --e;
+    active_ = {b, e};
+    active_valid_ = true;
+  }
+  return active_;
+}
+
+void PixelArray::assign(const Field& dst, const Bits& src) {
+  check_field(dst, geometry_.memory_bits, "assign");
+  const WordRange r = active_words();
+  for (int w = r.begin; w < r.end; ++w) {
+    const Word e = enable_[w];
+    for (int i = 0; i < dst.width; ++i) {
+      Word* d = plane(dst.lo + i) + w;
+      *d = (src.bit(i)[w] & e) | (*d & ~e);
+    }
+  }
+}
+
+void PixelArray::add(const Field& dst, const Bits& a, const Bits& b) {
+  check_field(dst, geometry_.memory_bits, "add");
+  const WordRange r = active_words();
+  for (int w = r.begin; w < r.end; ++w) {
+    const Word e = enable_[w];
+    Word c = 0;
+    for (int i = 0; i < dst.width; ++i) {
+      const Word x = a.bit(i)[w];
+      const Word y = b.bit(i)[w];
+      Word* d = plane(dst.lo + i) + w;
+      const Word s = x ^ y ^ c;
+      c = majority(x, y, c);
+      *d = (s & e) | (*d & ~e);
+    }
+    carry_[w] = c;
+  }
+}
+
+void PixelArray::sub(const Field& dst, const Bits& a, const Bits& b) {
+  check_field(dst, geometry_.memory_bits, "sub");
+  const WordRange r = active_words();
+  for (int w = r.begin; w < r.end; ++w) {
+    const Word e = enable_[w];
+    Word c = kAllOnes;  // a + ~b + 1
+    for (int i = 0; i < dst.width; ++i) {
+      const Word x = a.bit(i)[w];
+      const Word y = ~b.bit(i)[w];
+      Word* d = plane(dst.lo + i) + w;
+      const Word s = x ^ y ^ c;
+      c = majority(x, y, c);
+      *d = (s & e) | (*d & ~e);
+    }
+    carry_[w] = c;
+  }
+}
+
+void PixelArray::logic(const Field& dst, const Bits& a, const Bits& b, Logic op) {
+  check_field(dst, geometry_.memory_bits, "logic");
+  const WordRange r = active_words();
+  for (int w = r.begin; w < r.end; ++w) {
+    const Word e = enable_[w];
+    for (int i = 0; i < dst.width; ++i) {
+      const Word x = a.bit(i)[w];
+      const Word y = b.bit(i)[w];
+      const Word s = op == Logic::and_ ? (x & y) : op == Logic::or_ ? (x | y) : (x ^ y);
+      Word* d = plane(dst.lo + i) + w;
+      *d = (s & e) | (*d & ~e);
+    }
+  }
+}
+
+void PixelArray::invert(const Field& dst) {
+  check_field(dst, geometry_.memory_bits, "not");
+  const WordRange r = active_words();
+  for (int w = r.begin; w < r.end; ++w) {
+    const Word e = enable_[w];
+    for (int i = 0; i < dst.width; ++i) plane(dst.lo + i)[w] ^= e;
+  }
+}
+
+void PixelArray::check_no_overlap(const Field& dst, const Bits& src, const char* what) const {
+  const Word* first = plane(dst.lo);
+  const Word* last = plane(dst.lo + dst.width - 1);
+  for (int k = 0; k < src.width; ++k) {
+    if (src.plane[k] >= first && src.plane[k] <= last) {
+      throw std::invalid_argument(std::string(what) + ": destination overlaps a source");
+    }
+  }
+}
+
+void PixelArray::multiply(const Field& dst, const Bits& a, const Bits& b) {
+  check_field(dst, geometry_.memory_bits, "mul");
+  check_no_overlap(dst, a, "mul");
+  check_no_overlap(dst, b, "mul");
+  const WordRange r = active_words();
+  for (int w = r.begin; w < r.end; ++w) {
+    const Word e = enable_[w];
+    for (int i = 0; i < dst.width; ++i) {
+      Word* d = plane(dst.lo + i) + w;
+      *d &= ~e;
+    }
+    Word c = 0;
+    for (int j = 0; j < dst.width; ++j) {
+      const Word bj = b.bit(j)[w];
+      c = 0;
+      for (int i = j; i < dst.width; ++i) {
+        const Word x = a.bit(i - j)[w] & bj;
+        Word* d = plane(dst.lo + i) + w;
+        const Word s = *d ^ x ^ c;
+        c = majority(*d, x, c);
+        *d = (s & e) | (*d & ~e);
+      }
+    }
+    carry_[w] = c;
+  }
+}
+
+void PixelArray::multiply_accumulate(const Field& dst, const Bits& a, std::int64_t k) {
+  check_field(dst, geometry_.memory_bits, "mac");
+  check_no_overlap(dst, a, "mac");
+  const bool negative = k < 0;
+  const std::uint64_t magnitude =
+      negative ? std::uint64_t{0} - static_cast<std::uint64_t>(k) : static_cast<std::uint64_t>(k);
+  const WordRange r = active_words();
+  for (int j = 0; j < dst.width && j < 64; ++j) {
+    if (((magnitude >> j) & 1) == 0) continue;
+    for (int w = r.begin; w < r.end; ++w) {
+      const Word e = enable_[w];
+      Word c = negative ? kAllOnes : 0;
+      for (int i = j; i < dst.width; ++i) {
+        const Word x = negative ? ~a.bit(i - j)[w] : a.bit(i - j)[w];
+        Word* d = plane(dst.lo + i) + w;
+        const Word s = *d ^ x ^ c;
+        c = majority(*d, x, c);
+        *d = (s & e) | (*d & ~e);
+      }
+      carry_[w] = c;
+    }
+  }
+}
+
+void PixelArray::compare(const Bits& a, const Bits& b, Compare cmp) {
+  const int n = std::max(a.width, b.width) + 2;
+  const WordRange r = active_words();
+  for (int w = r.begin; w < r.end; ++w) {
+    Word c = kAllOnes;  // a - b = a + ~b + 1
+    Word nonzero = 0;
+    Word s = 0;
+    for (int i = 0; i < n; ++i) {
+      const Word x = a.bit(i)[w];
+      const Word y = ~b.bit(i)[w];
+      s = x ^ y ^ c;
+      c = majority(x, y, c);
+      nonzero |= s;
+    }
+    carry_[w] = c;
+    const Word lt = s;  // sign of the exact difference
+    Word result = 0;
+    switch (cmp) {
+      case Compare::lt: result = lt; break;
+      case Compare::le: result = lt | ~nonzero; break;
+      case Compare::eq: result = ~nonzero; break;
+      case Compare::ne: result = nonzero; break;
+      case Compare::ge: result = ~lt; break;
+      case Compare::gt: result = ~lt & nonzero; break;
+    }
+    enable_[w] &= result;
+  }
+  mark_enable_changed();
+}
+
+Word* PixelArray::backing_plane(int bit) {
+  if (backing_.empty()) {
+    backing_.assign(static_cast<std::size_t>(geometry_.backing_store_bits) * words_, 0);
+  }
+  return &backing_[static_cast<std::size_t>(bit) * words_];
+}
+
+void PixelArray::store_to_backing(const Field& field, int block) {
+  check_field(field, geometry_.memory_bits, "backing-store transfer");
+  const int first = block * geometry_.block_bits;
+  if (block < 0 || first + field.width > geometry_.backing_store_bits) {
+    throw std::out_of_range("backing store: block " + std::to_string(block) + " out of range");
+  }
+  for (int i = 0; i < field.width; ++i) {
+    std::copy_n(plane(field.lo + i), words_, backing_plane(first + i));
+  }
+}
+
+void PixelArray::load_from_backing(const Field& field, int block) {
+  check_field(field, geometry_.memory_bits, "backing-store transfer");
+  const int first = block * geometry_.block_bits;
+  if (block < 0 || first + field.width > geometry_.backing_store_bits) {
+    throw std::out_of_range("backing store: block " + std::to_string(block) + " out of range");
+  }
+  for (int i = 0; i < field.width; ++i) {
+    std::copy_n(backing_plane(first + i), words_, plane(field.lo + i));
+  }
+}
+
+std::uint64_t PixelArray::read(int pixel, const Field& field) const {
+  std::uint64_t v = 0;
+  const int w = pixel / kWordBits;
+  const int b = pixel % kWordBits;
+  for (int i = 0; i < field.width; ++i) v |= ((plane(field.lo + i)[w] >> b) & 1) << i;
+  return v;
+}
+
+std::int64_t PixelArray::read_signed(int pixel, const Field& field) const {
+  const std::uint64_t v = read(pixel, field);
+  if (!field.is_signed || field.width >= 64) return static_cast<std::int64_t>(v);
+  const std::uint64_t sign = std::uint64_t{1} << (field.width - 1);
+  return static_cast<std::int64_t>((v ^ sign) - sign);
+}
+
+void PixelArray::write(int pixel, const Field& field, std::uint64_t value) {
+  check_field(field, geometry_.memory_bits, "write");
+  const int w = pixel / kWordBits;
+  const Word m = Word{1} << (pixel % kWordBits);
+  for (int i = 0; i < field.width; ++i) {
+    Word* d = plane(field.lo + i) + w;
+    *d = ((value >> i) & 1) ? (*d | m) : (*d & ~m);
+  }
+}
+
+bool PixelArray::enabled(int pixel) const {
+  return (enable_[pixel / kWordBits] >> (pixel % kWordBits)) & 1;
+}
+
+std::uint64_t PixelArray::carry_bit(int pixel) const {
+  return (carry_[pixel / kWordBits] >> (pixel % kWordBits)) & 1;
+}
+
+}  // namespace pp5

@@ -1,0 +1,299 @@
+#include "sim/config/machine_config.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <variant>
+
+namespace pp5 {
+
+namespace {
+
+using Ref = std::variant<int*, double*>;
+
+struct Parameter {
+  const char* key;
+  const char* unit;
+  const char* confidence;
+  double default_value;
+  double min;
+  double max;
+  const char* description;
+  Ref (*ref)(MachineConfig&);
+};
+
+// The single declaration of every machine parameter. Confidence: P = the 1989 SIGGRAPH
+// paper, S = a secondary source, A = an assumption of this simulator (see
+// ../shared/design/pixel-planes-5.md for the sources).
+const std::vector<Parameter>& parameter_table() {
+  static const std::vector<Parameter> table = {
+      {"screen.width", "pixels", "P", 1280, 64, 8192,
+       "Width of the frame; the paper's frame buffer is 1280 x 1024.",
+       [](MachineConfig& c) -> Ref { return &c.screen.width; }},
+      {"screen.height", "pixels", "P", 1024, 1, 8192, "Height of the frame.",
+       [](MachineConfig& c) -> Ref { return &c.screen.height; }},
+
+      {"gp.count", "processors", "P", 32, 1, 64,
+       "Graphics Processors (Intel i860); the paper's machine has up to 32.",
+       [](MachineConfig& c) -> Ref { return &c.gp.count; }},
+      {"gp.clock_hz", "Hz", "S", 40e6, 1e6, 1e9, "i860 clock.",
+       [](MachineConfig& c) -> Ref { return &c.gp.clock_hz; }},
+      {"gp.subpixel_bits", "bits", "A", 4, 0, 8,
+       "Vertex positions are snapped to 1/2^n pixel before edge set-up, so that edge "
+       "coefficients are exact integers and shared edges own each pixel exactly once.",
+       [](MachineConfig& c) -> Ref { return &c.gp.subpixel_bits; }},
+      {"gp.depth_bits", "bits", "A", 24, 8, 32,
+       "Range of the depth expression: 0 at the near plane to 2^n - 1 at the far plane.",
+       [](MachineConfig& c) -> Ref { return &c.gp.depth_bits; }},
+      {"gp.clocks_per_triangle", "i860 clocks", "A", 600, 0, 1000000,
+       "Transform, clip test, vertex lighting and binning of one triangle (hand-coded "
+       "assembly; a first-order figure until the i860 cost model replaces it).",
+       [](MachineConfig& c) -> Ref { return &c.gp.clocks_per_triangle; }},
+      {"gp.clocks_per_expression", "i860 clocks", "A", 30, 0, 100000,
+       "Computing and packing the coefficients of one expression the firmware asks for.",
+       [](MachineConfig& c) -> Ref { return &c.gp.clocks_per_expression; }},
+      {"gp.clocks_per_bin", "i860 clocks", "A", 50, 0, 100000,
+       "Starting the transmission of one region's bin.",
+       [](MachineConfig& c) -> Ref { return &c.gp.clocks_per_bin; }},
+
+      {"ring.channels", "channels", "A", 8, 1, 64,
+       "Parallel channels of the ring; 8 x 32 bits x 20 MHz = 5.12 Gb/s matches the paper's "
+       "5 Gb/s, but 4 x 40 MHz fits as well.",
+       [](MachineConfig& c) -> Ref { return &c.ring.channels; }},
+      {"ring.word_bits", "bits", "A", 32, 8, 128, "Width of one channel.",
+       [](MachineConfig& c) -> Ref { return &c.ring.word_bits; }},
+      {"ring.clock_hz", "Hz", "A", 20e6, 1e6, 1e9, "Ring clock: one word per channel per cycle.",
+       [](MachineConfig& c) -> Ref { return &c.ring.clock_hz; }},
+      {"ring.hop_latency_cycles", "ring cycles", "A", 1, 0, 1000,
+       "Latency of one hop from a ring stop to the next.",
+       [](MachineConfig& c) -> Ref { return &c.ring.hop_latency_cycles; }},
+
+      {"renderer.count", "boards", "P", 16, 1, 32, "Renderer boards; the paper's machine has up to 16.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.count; }},
+      {"renderer.clock_hz", "Hz", "P", 40e6, 1e6, 1e9,
+       "Array clock: one micro-instruction cycle every 25 ns.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.clock_hz; }},
+      {"renderer.region_width", "pixels", "P", 128, 64, 1024,
+       "Width of the SIMD array and so of a screen region (a multiple of 64).",
+       [](MachineConfig& c) -> Ref { return &c.renderer.region_width; }},
+      {"renderer.region_height", "pixels", "P", 128, 1, 1024, "Height of the SIMD array.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.region_height; }},
+      {"renderer.memory_bits", "bits", "P", 208, 16, 1024,
+       "Local memory of each pixel processor (ask 'what if' with 256).",
+       [](MachineConfig& c) -> Ref { return &c.renderer.memory_bits; }},
+      {"renderer.enable_stack_depth", "levels", "A", 8, 1, 64,
+       "Saved Enable values per pixel for nested conditionals.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.enable_stack_depth; }},
+      {"renderer.backing_store_bits", "bits", "P", 4096, 0, 65536,
+       "Off-chip backing store per pixel (video RAM).",
+       [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_bits; }},
+      {"renderer.block_bits", "bits", "S", 32, 1, 64, "Backing-store transfer unit.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.block_bits; }},
+      {"renderer.backing_store_cycles_per_block", "array cycles", "A", 64, 1, 100000,
+       "Time to move one block between pixel memory and backing store; 'much slower than "
+       "local memory' is all the sources say. Charged in full (no overlap yet).",
+       [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_cycles_per_block; }},
+      {"renderer.packet_overhead_cycles", "array cycles", "A", 8, 0, 100000,
+       "Controller cycles to decode one instruction packet and start its procedure.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.packet_overhead_cycles; }},
+
+      {"evaluator.coefficient_bits", "bits", "A", 40, 8, 62,
+       "Signed width of each coefficient the expression evaluator accepts.",
+       [](MachineConfig& c) -> Ref { return &c.evaluator.coefficient_bits; }},
+      {"evaluator.result_bits", "bits", "A", 40, 8, 64,
+       "Width of the value the evaluator delivers; values wrap modulo 2^n.",
+       [](MachineConfig& c) -> Ref { return &c.evaluator.result_bits; }},
+      {"evaluator.fraction_bits", "bits", "A", 12, 0, 24,
+       "Fraction bits of interpolated attributes (depth, colour, normal); they stream out of "
+       "the evaluator first, LSB first, before the integer bits a field loads.",
+       [](MachineConfig& c) -> Ref { return &c.evaluator.fraction_bits; }},
+      {"evaluator.latency_cycles", "array cycles", "A", 8, 0, 1000,
+       "Pipeline latency of the evaluator tree (about log2 of 128 levels plus input stages).",
+       [](MachineConfig& c) -> Ref { return &c.evaluator.latency_cycles; }},
+
+      {"frame_buffer.bits_per_pixel", "bits", "A", 32, 8, 64,
+       "Bits per pixel sent from a Renderer to the frame buffer (24-bit colour in a word).",
+       [](MachineConfig& c) -> Ref { return &c.frame_buffer.bits_per_pixel; }},
+  };
+  return table;
+}
+
+const Parameter* find_parameter(const std::string& key) {
+  for (const auto& p : parameter_table()) {
+    if (key == p.key) return &p;
+  }
+  return nullptr;
+}
+
+std::string format_value(double v, bool is_int) {
+  if (is_int) return fmt::format("{}", static_cast<long long>(v));
+  return fmt::format("{:g}", v);
+}
+
+void assign(MachineConfig& config, const Parameter& p, const nlohmann::json& value,
+            const std::string& origin) {
+  const Ref ref = p.ref(config);
+  const bool is_int = std::holds_alternative<int*>(ref);
+  if (!value.is_number() || (is_int && !value.is_number_integer())) {
+    throw ConfigError(fmt::format("{}: key '{}' must be {} (got {})", origin, p.key,
+                                  is_int ? "an integer" : "a number", value.dump()));
+  }
+  const double v = value.get<double>();
+  if (!(v >= p.min && v <= p.max)) {
+    throw ConfigError(fmt::format("{}: key '{}' = {} is out of range [{}, {}] {}", origin, p.key,
+                                  value.dump(), format_value(p.min, is_int),
+                                  format_value(p.max, is_int), p.unit));
+  }
+  if (is_int) {
+    *std::get<int*>(ref) = value.get<int>();
+  } else {
+    *std::get<double*>(ref) = v;
+  }
+}
+
+void apply(MachineConfig& config, const nlohmann::json& node, const std::string& prefix,
+           const std::string& origin) {
+  if (!node.is_object()) {
+    throw ConfigError(fmt::format("{}: '{}' must be an object of parameters", origin,
+                                  prefix.empty() ? "<top level>" : prefix));
+  }
+  for (const auto& [name, value] : node.items()) {
+    const std::string key = prefix.empty() ? name : prefix + "." + name;
+    if (const Parameter* p = find_parameter(key)) {
+      assign(config, *p, value, origin);
+      continue;
+    }
+    bool is_section = false;
+    for (const auto& p : parameter_table()) {
+      if (std::string(p.key).rfind(key + ".", 0) == 0) is_section = true;
+    }
+    if (!is_section) {
+      std::string known;
+      const std::string parent = prefix.empty() ? "" : prefix + ".";
+      for (const auto& p : parameter_table()) {
+        const std::string k = p.key;
+        if (k.rfind(parent, 0) != 0) continue;
+        const std::string rest = k.substr(parent.size());
+        const std::string head = rest.substr(0, rest.find('.'));
+        if (known.find("'" + head + "'") == std::string::npos) {
+          known += (known.empty() ? "" : ", ") + ("'" + head + "'");
+        }
+      }
+      throw ConfigError(fmt::format("{}: unknown key '{}' (expected one of {})", origin, key,
+                                    known));
+    }
+    apply(config, value, key, origin);
+  }
+}
+
+void validate(const MachineConfig& c, const std::string& origin) {
+  auto fail = [&](const std::string& what) {
+    throw ConfigError(fmt::format("{}: {}", origin, what));
+  };
+  if (c.renderer.region_width % 64 != 0) {
+    fail("key 'renderer.region_width' must be a multiple of 64 (the array is stored 64 pixels "
+         "to a host word)");
+  }
+  if (c.evaluator.result_bits < c.evaluator.coefficient_bits) {
+    fail("key 'evaluator.result_bits' must be at least 'evaluator.coefficient_bits'");
+  }
+  if (c.gp.depth_bits + c.evaluator.fraction_bits + 2 > c.evaluator.coefficient_bits) {
+    fail(fmt::format("keys 'gp.depth_bits' ({}) + 'evaluator.fraction_bits' ({}) + 2 must not "
+                     "exceed 'evaluator.coefficient_bits' ({}): depth would not fit a coefficient",
+                     c.gp.depth_bits, c.evaluator.fraction_bits, c.evaluator.coefficient_bits));
+  }
+  if (c.renderer.backing_store_bits % c.renderer.block_bits != 0) {
+    fail("key 'renderer.backing_store_bits' must be a multiple of 'renderer.block_bits'");
+  }
+}
+
+}  // namespace
+
+MachineConfig MachineConfig::defaults() {
+  MachineConfig c;
+  for (const auto& p : parameter_table()) {
+    const Ref ref = p.ref(c);
+    if (auto* i = std::get_if<int*>(&ref)) {
+      **i = static_cast<int>(p.default_value);
+    } else {
+      *std::get<double*>(ref) = p.default_value;
+    }
+  }
+  return c;
+}
+
+MachineConfig MachineConfig::from_json(const nlohmann::json& doc, const std::string& origin) {
+  MachineConfig c = defaults();
+  apply(c, doc, "", origin);
+  validate(c, origin);
+  return c;
+}
+
+MachineConfig MachineConfig::from_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(fmt::format("{}: cannot open the machine configuration", path));
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw ConfigError(fmt::format("{}: not valid JSON: {}", path, e.what()));
+  }
+  return from_json(doc, path);
+}
+
+void MachineConfig::set(const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  const std::string origin = fmt::format("--set {}", assignment);
+  if (eq == std::string::npos || eq == 0) {
+    throw ConfigError(fmt::format("{}: expected KEY=VALUE, e.g. renderer.count=8", origin));
+  }
+  const std::string key = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  const Parameter* p = find_parameter(key);
+  if (!p) {
+    throw ConfigError(fmt::format("{}: unknown key '{}' (pp5sim config --describe lists them)",
+                                  origin, key));
+  }
+  nlohmann::json value;
+  try {
+    value = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error&) {
+    throw ConfigError(fmt::format("{}: value '{}' of key '{}' is not a number", origin, text, key));
+  }
+  assign(*this, *p, value, origin);
+  validate(*this, origin);
+}
+
+nlohmann::json MachineConfig::to_json() const {
+  nlohmann::json doc = nlohmann::json::object();
+  MachineConfig copy = *this;
+  for (const auto& p : parameter_table()) {
+    const std::string key = p.key;
+    const auto dot = key.find('.');
+    const Ref ref = p.ref(copy);
+    auto& slot = doc[key.substr(0, dot)][key.substr(dot + 1)];
+    if (auto* i = std::get_if<int*>(&ref)) {
+      slot = **i;
+    } else {
+      slot = *std::get<double*>(ref);
+    }
+  }
+  return doc;
+}
+
+std::vector<ParameterInfo> describe_parameters() {
+  std::vector<ParameterInfo> rows;
+  MachineConfig scratch;
+  for (const auto& p : parameter_table()) {
+    const bool is_int = std::holds_alternative<int*>(p.ref(scratch));
+    rows.push_back({p.key, p.unit, p.confidence, p.description,
+                    format_value(p.default_value, is_int),
+                    format_value(p.min, is_int) + " .. " + format_value(p.max, is_int)});
+  }
+  return rows;
+}
+
+}  // namespace pp5

@@ -1,0 +1,26 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace pp5 {
+
+// An 8-bit-per-channel RGB image: row-major, top row first, 3 bytes per pixel, no padding, so
+// rgb.size() == width * height * 3 for any image that write_png accepts.
+struct RgbImage {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+};
+
+// Writes `image` as an 8-bit RGB PNG. The data go to `path + ".tmp"` first, which is then renamed
+// onto `path`, so a reader never sees a half-written file. On any failure (bad image dimensions,
+// unwritable directory, libpng error, failed rename) the temporary file is removed, `path` is left
+// as it was, and std::runtime_error is thrown with the path and the reason in its message.
+void write_png(const std::string& path, const RgbImage& image);
+
+// Reads any PNG libpng understands and converts it to 8-bit RGB (alpha is composed onto black).
+// Throws std::runtime_error naming the path and the reason on error.
+RgbImage read_png(const std::string& path);
+
+}  // namespace pp5

@@ -1,0 +1,188 @@
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sim/scene/scene.hpp"
+
+namespace pp5 {
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+constexpr float kFovYDegrees = 40.0f;
+constexpr float kFrameMargin = 1.05f;
+const glm::vec3 kBackground(0.05f, 0.05f, 0.08f);
+
+constexpr int kMaxSegments = 2048;
+
+int segments(int requested, int default_value, int min_value, const char* scene, const char* what) {
+  if (requested == 0) return default_value;
+  if (requested < min_value || requested > kMaxSegments) {
+    throw std::invalid_argument(
+        fmt::format("scene '{}': {} must be 0 (default) or in [{}, {}], got {}", scene, what,
+                    min_value, kMaxSegments, requested));
+  }
+  return requested;
+}
+
+// A smooth, periodic hue ramp (period 1) with every channel in [0.15, 0.95], so the colour
+// wraps around a closed parameter without a seam.
+glm::vec3 hue_ramp(double s) {
+  const double phase = kTwoPi * s;
+  return glm::vec3(static_cast<float>(0.55 + 0.4 * std::cos(phase)),
+                   static_cast<float>(0.55 + 0.4 * std::cos(phase - kTwoPi / 3.0)),
+                   static_cast<float>(0.55 + 0.4 * std::cos(phase - 2.0 * kTwoPi / 3.0)));
+}
+
+Scene finish_scene(std::string name, std::string description, Mesh mesh, glm::vec3 view_dir) {
+  Scene scene;
+  scene.name = std::move(name);
+  scene.description = std::move(description);
+  scene.mesh = std::move(mesh);
+  scene.camera = frame_mesh(scene.mesh, view_dir, kFovYDegrees, kFrameMargin);
+  scene.light = default_light(scene.camera);
+  scene.background = kBackground;
+  return scene;
+}
+
+// The surface point at knot parameter s and revolution angle t (both radians, period 2*pi).
+//
+// The knot is the trefoil (sin s + 2 sin 2s, cos s - 2 cos 2s, -sin 3s) with its over/under
+// coordinate (-sin 3s) placed on the x axis, scaled by 0.4 and shifted by 0.8 so that the knot
+// lies in 0.4 <= x <= 1.2; its planar diagram lies in y and z. Spinning (x, y, z) through the
+// xw-plane gives the torus (x cos t, y, z, x sin t), embedded in 4-space because x > 0 keeps
+// the circles apart. A perspective projection from the eye (0, 0, 0, kEyeW) onto w = 0 turns it
+// into a knotted tube that passes through itself at the three crossings (kEyeW exceeds
+// |w| <= 1.2, so every scale factor is positive and bounded). The final cyclic permutation of
+// the axes, a rotation, puts the knot diagram in the xy-plane, facing a camera on +z.
+glm::dvec3 torus_point(double s, double t) {
+  constexpr double kEyeW = 3.0;
+  const double x = 0.8 - 0.4 * std::sin(3.0 * s);
+  const double y = std::sin(s) + 2.0 * std::sin(2.0 * s);
+  const double z = std::cos(s) - 2.0 * std::cos(2.0 * s);
+  const double w = x * std::sin(t);
+  const double scale = kEyeW / (kEyeW - w);
+  const glm::dvec3 p(x * std::cos(t) * scale, y * scale, z * scale);
+  return glm::dvec3(p.y, p.z, p.x);
+}
+
+Scene make_torus(const SceneOptions& options) {
+  const int nu = segments(options.tessellation_u, 128, 3, "torus", "tessellation_u");
+  const int nv = segments(options.tessellation_v, 32, 3, "torus", "tessellation_v");
+  Mesh mesh;
+  mesh.vertices.reserve(static_cast<std::size_t>(nu) * nv);
+  mesh.triangles.reserve(2 * static_cast<std::size_t>(nu) * nv);
+  for (int i = 0; i < nu; ++i) {
+    const double u = static_cast<double>(i) / nu;
+    const glm::vec3 color = hue_ramp(u);
+    for (int j = 0; j < nv; ++j) {
+      const double v = static_cast<double>(j) / nv;
+      mesh.vertices.push_back(
+          {glm::vec3(torus_point(kTwoPi * u, kTwoPi * v)), glm::vec3(0.0f), color});
+    }
+  }
+  // Vertex (i, j) has index i * nv + j; both directions wrap, so the seams share vertices and
+  // the surface is closed. Both triangles of every quad are wound so that their normals point
+  // along dP/dv x dP/du, which is away from the tube's core curve: outward.
+  auto index = [nu, nv](int i, int j) { return static_cast<unsigned>((i % nu) * nv + (j % nv)); };
+  for (int i = 0; i < nu; ++i) {
+    for (int j = 0; j < nv; ++j) {
+      const unsigned a = index(i, j), b = index(i + 1, j), c = index(i + 1, j + 1),
+                     d = index(i, j + 1);
+      mesh.triangles.emplace_back(a, d, c);
+      mesh.triangles.emplace_back(a, c, b);
+    }
+  }
+  compute_smooth_normals(mesh);
+  return finish_scene("torus",
+                      "Banks' self-intersecting torus: a trefoil knot spun through the xw-plane of "
+                      "4-space and projected to 3-D in perspective",
+                      std::move(mesh), glm::vec3(0.3f, 0.5f, 1.0f));
+}
+
+Scene make_two_triangles() {
+  // Both triangles contain the segment of the y axis between y = -0.8 and 0.8, so each pierces
+  // the other along it. The red one points up, the blue one down, in vertical planes turned -30
+  // and +30 degrees about y from facing +z: 60 degrees apart and both lit from the front.
+  const glm::vec3 view_dir(0.15f, 0.3f, 1.0f);
+  auto across = [](float degrees) {
+    const float a = glm::radians(degrees);
+    return glm::vec3(std::cos(a), 0.0f, -std::sin(a));
+  };
+  const glm::vec3 red_across = across(-30.0f), blue_across = across(30.0f);
+  const glm::vec3 red(0.9f, 0.2f, 0.15f), blue(0.2f, 0.35f, 0.95f);
+  const glm::vec3 low(0.0f, -0.8f, 0.0f), high(0.0f, 0.8f, 0.0f);
+  const glm::vec3 red_corners[3] = {low - red_across, low + red_across, {0.0f, 0.9f, 0.0f}};
+  const glm::vec3 blue_corners[3] = {high - blue_across, high + blue_across, {0.0f, -0.9f, 0.0f}};
+  Mesh mesh;
+  auto add = [&mesh, view_dir](const glm::vec3(&p)[3], glm::vec3 color) {
+    glm::vec3 normal = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
+    const auto base = static_cast<unsigned>(mesh.vertices.size());
+    // Wind each triangle counter-clockwise as seen from the camera, so its front faces the eye.
+    const bool flip = glm::dot(normal, view_dir) < 0.0f;
+    if (flip) normal = -normal;
+    for (const glm::vec3& corner : p) mesh.vertices.push_back({corner, normal, color});
+    mesh.triangles.push_back(flip ? glm::uvec3(base, base + 2, base + 1)
+                                  : glm::uvec3(base, base + 1, base + 2));
+  };
+  add(red_corners, red);
+  add(blue_corners, blue);
+  return finish_scene("two-triangles",
+                      "Two interpenetrating triangles, red and blue, crossing at 60 degrees",
+                      std::move(mesh), view_dir);
+}
+
+Scene make_sphere(const SceneOptions& options) {
+  const int nu = segments(options.tessellation_u, 64, 3, "sphere", "tessellation_u");
+  const int nv = segments(options.tessellation_v, 32, 2, "sphere", "tessellation_v");
+  const glm::vec3 color(0.9f, 0.55f, 0.25f);
+  // Vertex 0 is the north pole (+y), then nv - 1 rings of nu vertices from north to south, then
+  // the south pole. Position and outward normal coincide on the unit sphere; the surface point
+  // at polar angle theta and azimuth phi is (sin theta sin phi, cos theta, sin theta cos phi),
+  // for which d/dtheta x d/dphi points outward.
+  Mesh mesh;
+  mesh.vertices.push_back({{0.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, color});
+  for (int k = 1; k < nv; ++k) {
+    const double theta = 0.5 * kTwoPi * k / nv;
+    for (int i = 0; i < nu; ++i) {
+      const double phi = kTwoPi * i / nu;
+      const glm::vec3 p(glm::dvec3(std::sin(theta) * std::sin(phi), std::cos(theta),
+                                   std::sin(theta) * std::cos(phi)));
+      mesh.vertices.push_back({p, glm::normalize(p), color});
+    }
+  }
+  const auto south = static_cast<unsigned>(mesh.vertices.size());
+  mesh.vertices.push_back({{0.0f, -1.0f, 0.0f}, {0.0f, -1.0f, 0.0f}, color});
+  auto ring = [nu](int k, int i) { return static_cast<unsigned>(1 + (k - 1) * nu + i % nu); };
+  for (int i = 0; i < nu; ++i) mesh.triangles.emplace_back(0u, ring(1, i), ring(1, i + 1));
+  for (int k = 1; k + 1 < nv; ++k) {
+    for (int i = 0; i < nu; ++i) {
+      const unsigned a = ring(k, i), b = ring(k + 1, i), c = ring(k + 1, i + 1), d = ring(k, i + 1);
+      mesh.triangles.emplace_back(a, b, c);
+      mesh.triangles.emplace_back(a, c, d);
+    }
+  }
+  for (int i = 0; i < nu; ++i)
+    mesh.triangles.emplace_back(ring(nv - 1, i), south, ring(nv - 1, i + 1));
+  return finish_scene("sphere", "A UV sphere of one colour", std::move(mesh),
+                      glm::vec3(0.3f, 0.4f, 1.0f));
+}
+
+}  // namespace
+
+std::vector<std::string> builtin_scene_names() { return {"torus", "two-triangles", "sphere"}; }
+
+Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
+  if (name == "torus") return make_torus(options);
+  if (name == "two-triangles") return make_two_triangles();
+  if (name == "sphere") return make_sphere(options);
+  std::string valid;
+  for (const std::string& n : builtin_scene_names()) valid += (valid.empty() ? "" : ", ") + n;
+  throw std::invalid_argument(fmt::format("unknown scene '{}'; valid scenes: {}", name, valid));
+}
+
+}  // namespace pp5

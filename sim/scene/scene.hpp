@@ -1,0 +1,96 @@
+#pragma once
+
+#include <glm/glm.hpp>
+#include <string>
+#include <vector>
+
+namespace pp5 {
+
+// One mesh vertex in world space. `normal` is unit length; `color` is RGB in [0,1].
+struct Vertex {
+  glm::vec3 position;
+  glm::vec3 normal;
+  glm::vec3 color;
+};
+
+// An indexed triangle mesh. Every index in `triangles` is < vertices.size(). Triangles are wound
+// counter-clockwise around their front side, consistently across each connected surface.
+struct Mesh {
+  std::vector<Vertex> vertices;
+  std::vector<glm::uvec3> triangles;
+};
+
+struct Camera {
+  glm::vec3 eye, target, up;
+  float fov_y_degrees;
+  float near_plane, far_plane;
+};
+
+struct Light {
+  // Unit vector from the surface toward the light, in world space (a directional light).
+  glm::vec3 direction;
+  float ambient;
+  float diffuse;
+  float specular;
+  float shininess;
+};
+
+struct Scene {
+  std::string name;
+  std::string description;
+  Mesh mesh;
+  Camera camera;
+  Light light;
+  glm::vec3 background;  // RGB in [0,1]
+};
+
+// Tessellation overrides; 0 keeps the scene's default. For the torus, u runs along the knot and v
+// around the revolution; for the sphere, u runs around the equator and v from pole to pole. The
+// two-triangles scene ignores both.
+struct SceneOptions {
+  int tessellation_u = 0;
+  int tessellation_v = 0;
+};
+
+// The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere"}.
+std::vector<std::string> builtin_scene_names();
+
+// Builds a scene deterministically from its arguments alone. Throws std::invalid_argument for an
+// unknown name (the message lists the valid names) or a tessellation outside the scene's range.
+//   torus:  2*u*v triangles, default u=128, v=32 (8,192); u and v in [3, 2048].
+//   sphere: 2*u*(v-1) triangles, default u=64, v=32 (3,968); u in [3, 2048], v in [2, 2048].
+//   two-triangles: 2 triangles, 6 vertices.
+Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
+
+// Right-handed view and OpenGL-convention projection (clip z in [-w,w]), as glm::lookAt and
+// glm::perspective build them.
+glm::mat4 view_matrix(const Camera& camera);
+glm::mat4 projection_matrix(const Camera& camera, float aspect);
+
+struct BoundingSphere {
+  glm::vec3 center;
+  float radius;
+};
+
+// A sphere containing every vertex: centred on the bounding box, radius to the farthest vertex.
+BoundingSphere bounding_sphere(const Mesh& mesh);
+
+// A camera looking along -view_direction (view_direction points from the object toward the eye
+// and need not be unit) with world +y as up, fitted to the mesh: the view is shifted sideways to
+// centre the mesh's image and moved as close as possible while every vertex stays inside the
+// central 1/margin of the frame at aspect ratio 1 (and so at any wider aspect). The near and far
+// planes bracket the mesh's depth range with 10% slack to keep depth precision. view_direction
+// must not be parallel to +y.
+Camera frame_mesh(const Mesh& mesh, glm::vec3 view_direction, float fov_y_degrees,
+                  float margin = 1.05f);
+
+// The project's standard key light, from the upper left in front of `camera`: ambient 0.15,
+// diffuse 0.8, specular 0.3, shininess 16.
+Light default_light(const Camera& camera);
+
+// Sets every vertex normal to the normalised area-weighted sum of the normals of the triangles
+// that use it. A vertex whose sum vanishes (or that no triangle uses) gets the normal of its
+// largest adjacent triangle, or +z if it has none, so every normal stays unit length.
+void compute_smooth_normals(Mesh& mesh);
+
+}  // namespace pp5

@@ -1,0 +1,33 @@
+#pragma once
+// Runs one frame through the whole machine and gathers what it produced: the image, the
+// statistics and the human-readable summary. A library entry point, so that tests, the
+// command-line program and (later) sweeps share it; each call gets a fresh SystemC kernel.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "firmware/assembler/assembler.hpp"
+#include "sim/config/machine_config.hpp"
+#include "sim/image/png_writer.hpp"
+#include "sim/scene/scene.hpp"
+
+namespace pp5 {
+
+struct FrameResult {
+  RgbImage image;
+  nlohmann::json stats;
+  double frame_seconds = 0;          // simulated
+  double triangles_per_second = 0;   // projected for the real machine
+};
+
+FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
+                           int threads);
+
+// The bit-budget table and the headline figures, as printed after a run.
+std::string bit_budget_table(const Program& program);
+std::string summary(const FrameResult& result, const Program& program);
+
+// Writes `text` to `path` through a temporary file and a rename.
+void write_file_atomically(const std::string& path, const std::string& text);
+
+}  // namespace pp5

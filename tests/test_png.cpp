@@ -1,0 +1,116 @@
+#include <stdlib.h>
+
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include "sim/image/png_writer.hpp"
+
+namespace fs = std::filesystem;
+using pp5::read_png;
+using pp5::RgbImage;
+using pp5::write_png;
+
+namespace {
+
+// A fresh directory under the system temp directory, removed with everything in it at scope exit.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "pp5_png_test_XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+RgbImage pattern_image(int width, int height) {
+  RgbImage image;
+  image.width = width;
+  image.height = height;
+  image.rgb.resize(static_cast<std::size_t>(width) * height * 3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      for (int c = 0; c < 3; ++c) {
+        image.rgb[(static_cast<std::size_t>(y) * width + x) * 3 + c] =
+            static_cast<std::uint8_t>((x * 37 + y * 11 + c * 101 + x * y) & 0xff);
+      }
+    }
+  }
+  return image;
+}
+
+}  // namespace
+
+TEST_CASE("write_png and read_png round-trip the exact bytes", "[png]") {
+  TempDir dir;
+  for (auto [w, h] : {std::pair{1, 1}, std::pair{7, 5}, std::pair{64, 3}, std::pair{3, 64}}) {
+    CAPTURE(w, h);
+    const RgbImage image = pattern_image(w, h);
+    const std::string path = dir.file("pattern.png");
+    write_png(path, image);
+    const RgbImage back = read_png(path);
+    CHECK(back.width == w);
+    CHECK(back.height == h);
+    CHECK(back.rgb == image.rgb);
+    CHECK_FALSE(fs::exists(path + ".tmp"));
+  }
+}
+
+TEST_CASE("write_png replaces an existing file", "[png]") {
+  TempDir dir;
+  const std::string path = dir.file("out.png");
+  write_png(path, pattern_image(4, 4));
+  const RgbImage second = pattern_image(9, 2);
+  write_png(path, second);
+  CHECK(read_png(path).rgb == second.rgb);
+  CHECK_FALSE(fs::exists(path + ".tmp"));
+}
+
+TEST_CASE("write_png into a missing directory throws and leaves no file", "[png]") {
+  TempDir dir;
+  const std::string path = dir.file("no/such/dir/out.png");
+  REQUIRE_THROWS_AS(write_png(path, pattern_image(3, 3)), std::runtime_error);
+  REQUIRE_THROWS_WITH(write_png(path, pattern_image(3, 3)), Catch::Contains(path));
+  CHECK_FALSE(fs::exists(path));
+  CHECK_FALSE(fs::exists(path + ".tmp"));
+  CHECK(fs::is_empty(dir.path()));
+}
+
+TEST_CASE("write_png rejects inconsistent images without touching the file system", "[png]") {
+  TempDir dir;
+  const std::string path = dir.file("bad.png");
+  RgbImage short_buffer = pattern_image(4, 4);
+  short_buffer.rgb.pop_back();
+  CHECK_THROWS_WITH(write_png(path, short_buffer), Catch::Contains(path));
+  RgbImage empty;
+  CHECK_THROWS_AS(write_png(path, empty), std::runtime_error);
+  RgbImage negative;
+  negative.width = -2;
+  negative.height = 3;
+  CHECK_THROWS_AS(write_png(path, negative), std::runtime_error);
+  CHECK(fs::is_empty(dir.path()));
+}
+
+TEST_CASE("read_png names the path when the file is missing or not a PNG", "[png]") {
+  TempDir dir;
+  const std::string missing = dir.file("missing.png");
+  CHECK_THROWS_WITH(read_png(missing), Catch::Contains(missing));
+  const std::string text = dir.file("text.png");
+  std::ofstream(text) << "this is not a PNG file\n";
+  CHECK_THROWS_AS(read_png(text), std::runtime_error);
+  CHECK_THROWS_WITH(read_png(text), Catch::Contains(text));
+}
