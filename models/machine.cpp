@@ -95,11 +95,13 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
 
 Machine::~Machine() = default;
 
-std::string Machine::fmt_name(const char* base, int k) { return std::string(base) + std::to_string(k); }
+std::string Machine::fmt_name(const char* base, int k) {
+  return std::string(base) + std::to_string(k);
+}
 
 std::uint64_t Machine::packet_words(int expressions) const {
-  const int per_coefficient = (config_.evaluator.coefficient_bits + config_.ring.word_bits - 1) /
-                              config_.ring.word_bits;
+  const int per_coefficient =
+      (config_.evaluator.coefficient_bits + config_.ring.word_bits - 1) / config_.ring.word_bits;
   // A header word naming the procedure, then three coefficients per linear expression.
   return 1 + static_cast<std::uint64_t>(expressions) * 3 * per_coefficient;
 }

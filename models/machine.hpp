@@ -14,9 +14,8 @@
 // region's packets; after the simulation each Renderer's board executes its regions'
 // instruction streams on its pixel array (execute_pixels), in parallel across boards.
 #include <memory>
-#include <vector>
-
 #include <systemc>
+#include <vector>
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"

@@ -163,10 +163,10 @@ std::string bit_budget_table(const Program& program) {
 std::string summary(const FrameResult& r, const Program& program) {
   const auto& s = r.stats;
   std::string out = bit_budget_table(program);
-  out += fmt::format(
-      "\nframe: {} triangles, {} packets, simulated {:.3f} ms ({} array cycles)\n",
-      s["frame"]["triangles"].get<std::uint64_t>(), s["setup"]["packets"].get<std::uint64_t>(),
-      r.frame_seconds * 1e3, s["frame"]["array_cycles"].get<std::uint64_t>());
+  out += fmt::format("\nframe: {} triangles, {} packets, simulated {:.3f} ms ({} array cycles)\n",
+                     s["frame"]["triangles"].get<std::uint64_t>(),
+                     s["setup"]["packets"].get<std::uint64_t>(), r.frame_seconds * 1e3,
+                     s["frame"]["array_cycles"].get<std::uint64_t>());
   out += fmt::format("projected throughput: {:.0f} triangles/s, {:.1f} frames/s\n",
                      r.triangles_per_second, r.frame_seconds > 0 ? 1.0 / r.frame_seconds : 0.0);
   out += fmt::format("host: {:.2f} s ({:.2f} s timing, {:.2f} s pixels), {:.3g} array cycles/s\n",

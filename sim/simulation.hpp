@@ -2,9 +2,8 @@
 // Runs one frame through the whole machine and gathers what it produced: the image, the
 // statistics and the human-readable summary. A library entry point, so that tests, the
 // command-line program and (later) sweeps share it; each call gets a fresh SystemC kernel.
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "firmware/assembler/assembler.hpp"
 #include "sim/config/machine_config.hpp"
@@ -16,8 +15,8 @@ namespace pp5 {
 struct FrameResult {
   RgbImage image;
   nlohmann::json stats;
-  double frame_seconds = 0;          // simulated
-  double triangles_per_second = 0;   // projected for the real machine
+  double frame_seconds = 0;         // simulated
+  double triangles_per_second = 0;  // projected for the real machine
 };
 
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,

@@ -67,8 +67,7 @@ bool parse_integer(const std::string& s, std::int64_t& out) {
 
 class Assembler {
  public:
-  Assembler(const std::string& name, const AssemblerOptions& options)
-      : options_(options) {
+  Assembler(const std::string& name, const AssemblerOptions& options) : options_(options) {
     program_.name = name;
     program_.memory_bits = options.memory_bits;
   }
@@ -106,8 +105,8 @@ class Assembler {
     if (head == "proc") return begin_procedure(words);
     if (head == "end") {
       if (current_ < 0) fail("'end' outside a procedure");
-      if (depth_ != 0) fail("procedure '{}' ends with {} unmatched epush", kProcedureNames[current_],
-                            depth_);
+      if (depth_ != 0)
+        fail("procedure '{}' ends with {} unmatched epush", kProcedureNames[current_], depth_);
       current_ = -1;
       return;
     }
@@ -146,7 +145,8 @@ class Assembler {
       const int f = field_index(w[k + 1]);
       if (f < 0) fail("output field '{}' is not declared", w[k + 1]);
       if (program_.fields[f].width != 8) {
-        fail("output field '{}' must be 8 bits wide (it is {})", w[k + 1], program_.fields[f].width);
+        fail("output field '{}' must be 8 bits wide (it is {})", w[k + 1],
+             program_.fields[f].width);
       }
       output_fields_[k] = f;
     }
@@ -159,7 +159,8 @@ class Assembler {
   }
 
   void begin_procedure(const std::vector<std::string>& w) {
-    if (current_ >= 0) fail("'proc' inside procedure '{}': missing 'end'", kProcedureNames[current_]);
+    if (current_ >= 0)
+      fail("'proc' inside procedure '{}': missing 'end'", kProcedureNames[current_]);
     if (w.size() != 2) fail("expected 'proc NAME'");
     const int p = procedure_index(w[1]);
     if (p < 0) fail("unknown procedure '{}': expected clear, triangle or shade", w[1]);
@@ -218,8 +219,8 @@ class Assembler {
     p.ins.op = info->op;
     p.ins.line = line_;
     if (info->conditional) {
-      if (cond.empty()) fail("'{}' needs a condition: {}.lt, .le, .eq, .ne, .ge or .gt", mnemonic,
-                             mnemonic);
+      if (cond.empty())
+        fail("'{}' needs a condition: {}.lt, .le, .eq, .ne, .ge or .gt", mnemonic, mnemonic);
       if (!parse_condition(cond, p.ins.condition)) {
         fail("unknown condition '.{}': expected lt, le, eq, ne, ge or gt", cond);
       }
@@ -246,8 +247,8 @@ class Assembler {
     parsed_[current_].push_back(p);
   }
 
-  void operand(const std::string& text, char kind, ParsedInstruction& p, int k,
-               ProcedureCode& proc, const std::string& mnemonic) {
+  void operand(const std::string& text, char kind, ParsedInstruction& p, int k, ProcedureCode& proc,
+               const std::string& mnemonic) {
     Operand& o = p.ins.operands[k];
     o.text = text;
     if (text.empty()) fail("'{}': operand {} is empty", mnemonic, k + 1);
@@ -259,7 +260,8 @@ class Assembler {
         p.uses[k] = use;
         return;
       }
-      if (kind != 'V') fail("'{}': operand {} must be a declared field, got '{}'", mnemonic, k + 1, text);
+      if (kind != 'V')
+        fail("'{}': operand {} must be a declared field, got '{}'", mnemonic, k + 1, text);
     }
     if (kind == 'V' || kind == 'K') {
       if (parse_integer(text, literal)) {
@@ -278,8 +280,9 @@ class Assembler {
     }
     if (kind == 'E') {
       const int i = expression_index(text);
-      if (i < 0) fail("'{}': '{}' is not an expression the GP supplies (pp5sim isa lists them)",
-                      mnemonic, text);
+      if (i < 0)
+        fail("'{}': '{}' is not an expression the GP supplies (pp5sim isa lists them)", mnemonic,
+             text);
       if (current_ != static_cast<int>(Procedure::triangle)) {
         fail("expression '{}' is only available in procedure 'triangle'", text);
       }
@@ -365,9 +368,10 @@ class Assembler {
     for (int k = 0; k < 3; ++k) {
       const FieldDecl& f = program_.fields[output_fields_[k]];
       if (f.spilled) {
-        throw AssemblyError(fmt::format("{}:{}: output field '{}' was spilled to the backing store; "
-                                        "declare it earlier so it stays in pixel memory",
-                                        program_.name, f.line, f.name));
+        throw AssemblyError(
+            fmt::format("{}:{}: output field '{}' was spilled to the backing store; "
+                        "declare it earlier so it stays in pixel memory",
+                        program_.name, f.line, f.name));
       }
       program_.outputs[k] = Field{f.lo, f.width, false};
     }
@@ -412,9 +416,10 @@ class Assembler {
         fields[k].block = block;
         block += round_to_block(fields[k].width) / options_.block_bits;
         if (block > blocks) {
-          throw AssemblyError(fmt::format("{}: spilled fields need {} backing-store blocks; the "
-                                          "store has {}",
-                                          program_.name, block, blocks));
+          throw AssemblyError(
+              fmt::format("{}: spilled fields need {} backing-store blocks; the "
+                          "store has {}",
+                          program_.name, block, blocks));
         }
       } else {
         fields[k].lo = lo;
@@ -461,7 +466,8 @@ class Assembler {
         ++code.spill_transfers;
       }
       Instruction ins = p.ins;
-      for (int k = 0; k < 3; ++k) ins.operands[k] = resolve(p.ins.operands[k], p.uses[k], slot_of(p.uses[k].field));
+      for (int k = 0; k < 3; ++k)
+        ins.operands[k] = resolve(p.ins.operands[k], p.uses[k], slot_of(p.uses[k].field));
       code.code.push_back(ins);
       if (info->operands[0] == 'F' && p.uses[0].field >= 0 &&
           program_.fields[p.uses[0].field].spilled) {

@@ -60,9 +60,7 @@ struct Program {
   int staging_bits = 0;   // bits reserved for spilled fields while an instruction uses them
 
   int bits_used() const { return resident_bits + staging_bits; }
-  const ProcedureCode& procedure(Procedure p) const {
-    return procedures[static_cast<int>(p)];
-  }
+  const ProcedureCode& procedure(Procedure p) const { return procedures[static_cast<int>(p)]; }
   const FieldDecl* find_field(const std::string& name) const;
 };
 

@@ -19,12 +19,22 @@ inline constexpr const char* kProcedureMeaning[] = {
 // Expressions the GP can supply with a triangle packet. All are fixed point with
 // evaluator.fraction_bits fraction bits and are evaluated at pixel centres.
 enum class Expression {
-  edge0, edge1, edge2,
+  edge0,
+  edge1,
+  edge2,
   depth,
-  red, green, blue,
-  nx, ny, nz,
-  flat_red, flat_green, flat_blue,
-  base_red, base_green, base_blue,
+  red,
+  green,
+  blue,
+  nx,
+  ny,
+  nz,
+  flat_red,
+  flat_green,
+  flat_blue,
+  base_red,
+  base_green,
+  base_blue,
   count
 };
 struct ExpressionInfo {
@@ -52,10 +62,18 @@ inline constexpr ExpressionInfo kExpressions[] = {
 
 // Constants of the frame, sent with every packet's procedure and usable as an operand.
 enum class Parameter {
-  light_x, light_y, light_z,
-  half_x, half_y, half_z,
-  ambient, diffuse, specular,
-  background_red, background_green, background_blue,
+  light_x,
+  light_y,
+  light_z,
+  half_x,
+  half_y,
+  half_z,
+  ambient,
+  diffuse,
+  specular,
+  background_red,
+  background_green,
+  background_blue,
   count
 };
 struct FrameParameterInfo {

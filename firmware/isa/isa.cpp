@@ -49,8 +49,8 @@ std::vector<InstructionInfo> make_table() {
       {Opcode::epop, "epop", false, "", "epop", "E <- pop (end of a conditional)", "1", one,
        [](const I&, X& c) { c.array.pop_enable(); }},
       {Opcode::eelse, "eelse", false, "", "eelse",
-       "E <- top & ~E: the pixels of the enclosing condition that the current one excluded",
-       "1", one, [](const I&, X& c) { c.array.else_enable(); }},
+       "E <- top & ~E: the pixels of the enclosing condition that the current one excluded", "1",
+       one, [](const I&, X& c) { c.array.else_enable(); }},
 
       {Opcode::qtest, "qtest", true, "E", "qtest.cond expr",
        "E <- E & (expr cond 0); every result bit streams through the comparator",
@@ -88,7 +88,9 @@ std::vector<InstructionInfo> make_table() {
        }},
 
       {Opcode::mov, "mov", false, "FV", "mov dst, src", "dst <- src", "width(dst)", dst_width,
-       [](const I& i, X& c) { c.array.assign(i.operands[0].field, source_bits(i.operands[1], c)); }},
+       [](const I& i, X& c) {
+         c.array.assign(i.operands[0].field, source_bits(i.operands[1], c));
+       }},
       {Opcode::add, "add", false, "FV", "add dst, src", "dst <- dst + src modulo 2^width(dst)",
        "width(dst)", dst_width,
        [](const I& i, X& c) {

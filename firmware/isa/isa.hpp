@@ -19,27 +19,42 @@
 namespace pp5 {
 
 enum class Opcode {
-  eall, epush, epop, eelse,
-  qtest, qload, qcmp,
-  mov, add, sub, cmp, and_, or_, xor_, not_, mul, mac,
-  bsld, bsst,
+  eall,
+  epush,
+  epop,
+  eelse,
+  qtest,
+  qload,
+  qcmp,
+  mov,
+  add,
+  sub,
+  cmp,
+  and_,
+  or_,
+  xor_,
+  not_,
+  mul,
+  mac,
+  bsld,
+  bsst,
   count
 };
 
 struct Operand {
   enum class Kind { none, field, expression, literal, parameter };
   Kind kind = Kind::none;
-  Field field;            // Kind::field: bits of pixel memory
-  int index = -1;         // Kind::expression / Kind::parameter: index in firmware/isa/interface.hpp
+  Field field;     // Kind::field: bits of pixel memory
+  int index = -1;  // Kind::expression / Kind::parameter: index in firmware/isa/interface.hpp
   std::int64_t literal = 0;
-  std::string text;       // the operand as written, for listings and messages
+  std::string text;  // the operand as written, for listings and messages
 };
 
 struct Instruction {
   Opcode op = Opcode::eall;
   Compare condition = Compare::eq;  // for the conditional instructions (qtest, qcmp, cmp)
   std::array<Operand, 3> operands{};
-  int line = 0;                     // source line; 0 for instructions the assembler inserted
+  int line = 0;  // source line; 0 for instructions the assembler inserted
 };
 
 // Machine timing the cost formulas depend on (from the machine configuration).
@@ -73,7 +88,7 @@ struct InstructionInfo {
                          // V field or constant, K constant, E expression, B block number
   const char* syntax;
   const char* effect;
-  const char* cycles;    // the cost formula in words
+  const char* cycles;  // the cost formula in words
   ArrayCycles (*cost)(const Instruction&, const TimingParams&, const PacketValues&);
   void (*execute)(const Instruction&, ExecutionContext&);
 };

@@ -24,7 +24,8 @@ void FrameBuffer::store_region(int x0, int y0, int region_width, int region_heig
   const int h = std::min(region_height, image_.height - y0);
   for (int y = 0; y < h; ++y) {
     std::memcpy(&image_.rgb[(static_cast<std::size_t>(y0 + y) * image_.width + x0) * 3],
-                &rgb[static_cast<std::size_t>(y) * region_width * 3], static_cast<std::size_t>(w) * 3);
+                &rgb[static_cast<std::size_t>(y) * region_width * 3],
+                static_cast<std::size_t>(w) * 3);
   }
 }
 

@@ -1,9 +1,8 @@
 #pragma once
 // The conventional frame buffer: a ring stop that receives finished regions and assembles
 // the frame.
-#include <vector>
-
 #include <systemc>
+#include <vector>
 
 #include "sim/image/png_writer.hpp"
 

@@ -22,12 +22,18 @@ ClipVertex mix(const ClipVertex& a, const ClipVertex& b, double t) {
 // Signed distance to clip plane k of the view volume -w <= x, y, z <= w.
 double plane_distance(const glm::dvec4& c, int k) {
   switch (k) {
-    case 0: return c.w + c.x;
-    case 1: return c.w - c.x;
-    case 2: return c.w + c.y;
-    case 3: return c.w - c.y;
-    case 4: return c.w + c.z;
-    default: return c.w - c.z;
+    case 0:
+      return c.w + c.x;
+    case 1:
+      return c.w - c.x;
+    case 2:
+      return c.w + c.y;
+    case 3:
+      return c.w - c.y;
+    case 4:
+      return c.w + c.z;
+    default:
+      return c.w - c.z;
   }
 }
 
@@ -61,7 +67,8 @@ glm::dvec3 GeometryEngine::light_vertex(const glm::dvec3& color, const glm::dvec
   const Light& l = scene_.light;
   const double diffuse = std::max(0.0, glm::dot(n, light_eye_));
   const double specular = std::pow(std::max(0.0, glm::dot(n, half_eye_)), l.shininess);
-  const glm::dvec3 c = color * (l.ambient + l.diffuse * diffuse) + glm::dvec3(l.specular * specular);
+  const glm::dvec3 c =
+      color * (l.ambient + l.diffuse * diffuse) + glm::dvec3(l.specular * specular);
   return glm::clamp(c, 0.0, 1.0);
 }
 
@@ -185,7 +192,8 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
       ++counts.overflow;
       return false;
     }
-    pv.expressions[static_cast<int>(Expression::edge0) + e] = QuadraticCoefficients::linear(A, B, C);
+    pv.expressions[static_cast<int>(Expression::edge0) + e] =
+        QuadraticCoefficients::linear(A, B, C);
   }
 
   // Attribute planes through the snapped vertices, in pixel-index coordinates (the centre of
@@ -217,7 +225,8 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
     const __int128 num = f0 - static_cast<__int128>(Ai) * (xs[0] - half) -
                          static_cast<__int128>(Bi) * (ys[0] - half);
     const __int128 C = (num >= 0 ? num + scale / 2 : num - scale / 2) / scale;
-    if (C >= (static_cast<__int128>(1) << (cb - 1)) || C < -(static_cast<__int128>(1) << (cb - 1))) {
+    if (C >= (static_cast<__int128>(1) << (cb - 1)) ||
+        C < -(static_cast<__int128>(1) << (cb - 1))) {
       overflow = true;
       return QuadraticCoefficients{};
     }
@@ -240,8 +249,7 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
     set(static_cast<Expression>(static_cast<int>(Expression::red) + c),
         {colour(t.v[0].lit_color[c]), colour(t.v[1].lit_color[c]), colour(t.v[2].lit_color[c])});
     set(static_cast<Expression>(static_cast<int>(Expression::base_red) + c),
-        {colour(t.v[0].base_color[c]), colour(t.v[1].base_color[c]),
-         colour(t.v[2].base_color[c])});
+        {colour(t.v[0].base_color[c]), colour(t.v[1].base_color[c]), colour(t.v[2].base_color[c])});
     set(static_cast<Expression>(static_cast<int>(Expression::nx) + c),
         {127.0 * t.v[0].normal[c], 127.0 * t.v[1].normal[c], 127.0 * t.v[2].normal[c]});
     constant(static_cast<Expression>(static_cast<int>(Expression::flat_red) + c),

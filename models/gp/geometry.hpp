@@ -16,9 +16,8 @@
 //    with Y growing downward; the evaluator is fed integer X, Y.
 #include <array>
 #include <bitset>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "firmware/isa/isa.hpp"
 #include "sim/scene/scene.hpp"
@@ -53,11 +52,11 @@ struct ScreenTriangle {
 
 // Why a triangle produced no packet.
 struct SetupCounts {
-  std::uint64_t clipped_away = 0;   // wholly outside the view volume
-  std::uint64_t degenerate = 0;     // zero area after snapping
-  std::uint64_t no_pixels = 0;      // covers no pixel centre
-  std::uint64_t overflow = 0;       // a coefficient did not fit evaluator.coefficient_bits
-  std::uint64_t clip_splits = 0;    // extra triangles made by clipping
+  std::uint64_t clipped_away = 0;  // wholly outside the view volume
+  std::uint64_t degenerate = 0;    // zero area after snapping
+  std::uint64_t no_pixels = 0;     // covers no pixel centre
+  std::uint64_t overflow = 0;      // a coefficient did not fit evaluator.coefficient_bits
+  std::uint64_t clip_splits = 0;   // extra triangles made by clipping
 };
 
 struct SetupResult {
@@ -73,8 +72,9 @@ class GeometryEngine {
   void transform(int index, std::vector<ScreenTriangle>& out, SetupCounts& counts) const;
   // Coefficients of the expressions in `needed`; false (and counted) if the triangle has no
   // pixels or a coefficient does not fit.
-  bool setup(const ScreenTriangle& t, const std::bitset<static_cast<int>(Expression::count)>& needed,
-             SetupResult& out, SetupCounts& counts) const;
+  bool setup(const ScreenTriangle& t,
+             const std::bitset<static_cast<int>(Expression::count)>& needed, SetupResult& out,
+             SetupCounts& counts) const;
   // Regions the bounding box touches, as region indices (row-major).
   void bin(const SetupResult& r, std::vector<int>& regions) const;
   // The frame parameters (light, reflection coefficients, background).

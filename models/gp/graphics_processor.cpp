@@ -28,7 +28,8 @@ void GraphicsProcessor::run() {
   const int expressions = static_cast<int>(triangle.expressions.count());
   const std::uint64_t words = machine_.packet_words(expressions);
   const GpClocks per_triangle(config.gp.clocks_per_triangle);
-  const GpClocks per_setup(static_cast<std::uint64_t>(config.gp.clocks_per_expression) * expressions);
+  const GpClocks per_setup(static_cast<std::uint64_t>(config.gp.clocks_per_expression) *
+                           expressions);
 
   std::vector<std::shared_ptr<Bin>> bins(config.regions());
   for (int r = 0; r < config.regions(); ++r) {

@@ -4,9 +4,8 @@
 // bin over the ring to the Renderer that owns the region. The arithmetic is
 // GeometryEngine's; this module charges its time in i860 clocks.
 #include <memory>
-#include <vector>
-
 #include <systemc>
+#include <vector>
 
 #include "models/common/units.hpp"
 #include "models/machine.hpp"
@@ -15,9 +14,9 @@ namespace pp5 {
 
 struct GpStats {
   GpClocks busy{};
-  std::uint64_t triangles_in = 0;     // scene triangles it transformed
-  std::uint64_t packets = 0;          // triangle packets it sent (one per region touched)
-  std::uint64_t screen_triangles = 0; // triangles after clipping that reached set-up
+  std::uint64_t triangles_in = 0;      // scene triangles it transformed
+  std::uint64_t packets = 0;           // triangle packets it sent (one per region touched)
+  std::uint64_t screen_triangles = 0;  // triangles after clipping that reached set-up
   SetupCounts setup;
   sc_core::sc_time finished;
 };
@@ -25,8 +24,7 @@ struct GpStats {
 class GraphicsProcessor : public sc_core::sc_module {
  public:
   SC_HAS_PROCESS(GraphicsProcessor);
-  GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last,
-                    Machine& machine);
+  GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last, Machine& machine);
 
   const GpStats& stats() const { return stats_; }
 

@@ -269,12 +269,24 @@ void PixelArray::compare(const Bits& a, const Bits& b, Compare cmp) {
     const Word lt = s;  // sign of the exact difference
     Word result = 0;
     switch (cmp) {
-      case Compare::lt: result = lt; break;
-      case Compare::le: result = lt | ~nonzero; break;
-      case Compare::eq: result = ~nonzero; break;
-      case Compare::ne: result = nonzero; break;
-      case Compare::ge: result = ~lt; break;
-      case Compare::gt: result = ~lt & nonzero; break;
+      case Compare::lt:
+        result = lt;
+        break;
+      case Compare::le:
+        result = lt | ~nonzero;
+        break;
+      case Compare::eq:
+        result = ~nonzero;
+        break;
+      case Compare::ne:
+        result = nonzero;
+        break;
+      case Compare::ge:
+        result = ~lt;
+        break;
+      case Compare::gt:
+        result = ~lt & nonzero;
+        break;
     }
     enable_[w] &= result;
   }

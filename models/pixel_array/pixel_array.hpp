@@ -24,12 +24,12 @@
 namespace pp5 {
 
 struct PixelArrayGeometry {
-  int width = 128;               // pixel processors per row; a multiple of 64
-  int height = 128;              // rows
-  int memory_bits = 208;         // local memory per pixel processor
-  int enable_stack_depth = 8;    // saved Enable values for nested conditionals
-  int backing_store_bits = 4096; // slow memory per pixel processor; 0 = none
-  int block_bits = 32;           // backing-store transfer unit
+  int width = 128;                // pixel processors per row; a multiple of 64
+  int height = 128;               // rows
+  int memory_bits = 208;          // local memory per pixel processor
+  int enable_stack_depth = 8;     // saved Enable values for nested conditionals
+  int backing_store_bits = 4096;  // slow memory per pixel processor; 0 = none
+  int block_bits = 32;            // backing-store transfer unit
 };
 
 // Bits [lo, lo + width) of every pixel's local memory.

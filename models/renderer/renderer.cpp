@@ -73,7 +73,8 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
   for (const RegionWork& w : work_) {
     board.begin_region(w.x0, w.y0);
     board.run(program.procedure(Procedure::clear), frame_values);
-    for (const auto& packet : w.triangles) board.run(program.procedure(Procedure::triangle), packet->values);
+    for (const auto& packet : w.triangles)
+      board.run(program.procedure(Procedure::triangle), packet->values);
     board.run(program.procedure(Procedure::shade), frame_values);
     board.read_outputs(program, rgb);
     frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);

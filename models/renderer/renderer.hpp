@@ -5,9 +5,8 @@
 // the same streams on the pixel array; see models/machine.hpp for how the two meet.
 #include <map>
 #include <memory>
-#include <vector>
-
 #include <systemc>
+#include <vector>
 
 #include "models/common/units.hpp"
 #include "models/machine.hpp"
@@ -24,11 +23,11 @@ struct RegionWork {
 };
 
 struct RendererStats {
-  ArrayCycles busy{};            // cycles executing micro-instructions and decoding packets
+  ArrayCycles busy{};  // cycles executing micro-instructions and decoding packets
   std::uint64_t regions = 0;
   std::uint64_t packets = 0;
   std::uint64_t instructions = 0;  // micro-instructions issued to the array
-  sc_core::sc_time finished;     // when its last region left for the frame buffer
+  sc_core::sc_time finished;       // when its last region left for the frame buffer
 };
 
 class Renderer : public sc_core::sc_module {

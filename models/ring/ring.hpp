@@ -8,9 +8,8 @@
 // SystemC thread until arrival. Channel choice breaks ties by the lowest index, so runs
 // are deterministic.
 #include <cstdint>
-#include <vector>
-
 #include <systemc>
+#include <vector>
 
 #include "models/common/units.hpp"
 

@@ -1,7 +1,7 @@
 // pp5sim: the command-line program.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
 #include <thread>
@@ -27,9 +27,9 @@ std::string resolve_firmware(const std::string& name) {
   for (const auto& entry : fs::directory_iterator(builtin.parent_path())) {
     if (entry.path().extension() == ".pp5") names += " " + entry.path().stem().string();
   }
-  throw std::runtime_error(fmt::format(
-      "--firmware {}: no such file, and no built-in program of that name (built-in:{})", name,
-      names));
+  throw std::runtime_error(
+      fmt::format("--firmware {}: no such file, and no built-in program of that name (built-in:{})",
+                  name, names));
 }
 
 MachineConfig load_config(const std::string& path, const std::vector<std::string>& sets) {
@@ -38,21 +38,29 @@ MachineConfig load_config(const std::string& path, const std::vector<std::string
   return config;
 }
 
+// Markdown table cells must not contain a bare '|'.
+std::string cell(const std::string& text) {
+  std::string out;
+  for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+  return out;
+}
+
 std::string isa_reference() {
   std::string out = "| instruction | operands | effect | cycles |\n|---|---|---|---|\n";
   for (const auto& i : instruction_table()) {
     out += fmt::format("| `{}` | {} | {} | {} |\n", i.syntax, i.operands[0] ? i.operands : "-",
-                       i.effect, i.cycles);
+                       cell(i.effect), cell(i.cycles));
   }
-  out += "\nOperand letters: F field (written), R field (read), V field or constant, K constant "
-         "(integer or frame parameter), E expression, B backing-store block.\n"
-         "Conditions: lt le eq ne ge gt.\n\nExpressions (procedure triangle only):\n";
-  for (const auto& e : kExpressions) out += fmt::format("  {:<12} {}\n", e.name, e.meaning);
-  out += "\nFrame parameters (any procedure):\n";
-  for (const auto& p : kParameters) out += fmt::format("  {:<17} {}\n", p.name, p.meaning);
-  out += "\nProcedures:\n";
+  out +=
+      "\nOperand letters: F field (written), R field (read), V field or constant, K constant "
+      "(integer or frame parameter), E expression, B backing-store block.\n"
+      "Conditions: lt le eq ne ge gt.\n\nExpressions (procedure triangle only):\n\n";
+  for (const auto& e : kExpressions) out += fmt::format("- `{}`: {}\n", e.name, e.meaning);
+  out += "\nFrame parameters (any procedure):\n\n";
+  for (const auto& p : kParameters) out += fmt::format("- `{}`: {}\n", p.name, p.meaning);
+  out += "\nProcedures:\n\n";
   for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
-    out += fmt::format("  {:<9} {}\n", kProcedureNames[k], kProcedureMeaning[k]);
+    out += fmt::format("- `{}`: {}\n", kProcedureNames[k], kProcedureMeaning[k]);
   }
   return out;
 }
@@ -76,25 +84,30 @@ int main(int argc, char** argv) {
   auto* render = app.add_subcommand("render", "Render one frame of a scene and write its reports");
   render->add_option("-s,--scene", scene_name, "Built-in scene: torus, two-triangles, sphere")
       ->capture_default_str();
-  render->add_option("-f,--firmware", firmware,
-                     "Firmware program: a .pp5 file, or a name in firmware/programs "
-                     "(flat, gouraud, phong)")
+  render
+      ->add_option("-f,--firmware", firmware,
+                   "Firmware program: a .pp5 file, or a name in firmware/programs "
+                   "(flat, gouraud, phong)")
       ->capture_default_str();
   render->add_option("-c,--config", config_path,
                      "Machine configuration (JSON); unspecified keys take their defaults");
-  render->add_option("--set", sets, "Override one parameter, KEY=VALUE (repeatable), e.g. "
-                                    "--set renderer.count=8");
+  render->add_option("--set", sets,
+                     "Override one parameter, KEY=VALUE (repeatable), e.g. "
+                     "--set renderer.count=8");
   render->add_option("-o,--out", out_dir,
                      "Output folder for frame.png, config.json and stats.json [out/SCENE]");
-  render->add_option("-j,--threads", threads,
-                     "Host threads for the pixel arrays (results are identical for any number)")
+  render
+      ->add_option("-j,--threads", threads,
+                   "Host threads for the pixel arrays (results are identical for any number)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
-  render->add_option("--tessellation", tessellation,
-                     "Tessellation U V of the torus or sphere (default 128 32 and 64 32)")
+  render
+      ->add_option("--tessellation", tessellation,
+                   "Tessellation U V of the torus or sphere (default 128 32 and 64 32)")
       ->expected(2);
 
-  auto* isa = app.add_subcommand("isa", "Print the micro-instruction set and the firmware interface");
+  auto* isa =
+      app.add_subcommand("isa", "Print the micro-instruction set and the firmware interface");
   std::string asm_file;
   auto* assemble_cmd =
       app.add_subcommand("asm", "Assemble a firmware program and print its field map and listing");
@@ -126,12 +139,14 @@ int main(int argc, char** argv) {
     }
     if (*config_cmd) {
       if (describe) {
-        std::cout << "| key | default | range | unit | conf. | meaning |\n|---|---|---|---|---|---|\n";
+        std::cout
+            << "| key | default | range | unit | conf. | meaning |\n|---|---|---|---|---|---|\n";
         for (const auto& p : describe_parameters()) {
           std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", p.key, p.default_value,
-                                   p.range, p.unit, p.confidence, p.description);
+                                   p.range, p.unit, p.confidence, cell(p.description));
         }
-        std::cout << "\nConfidence: P published (SIGGRAPH 1989), S secondary source, A assumption.\n";
+        std::cout
+            << "\nConfidence: P published (SIGGRAPH 1989), S secondary source, A assumption.\n";
       } else {
         std::cout << load_config(config_path, sets).to_json().dump(2) << "\n";
       }

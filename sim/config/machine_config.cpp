@@ -71,7 +71,8 @@ const std::vector<Parameter>& parameter_table() {
        "Latency of one hop from a ring stop to the next.",
        [](MachineConfig& c) -> Ref { return &c.ring.hop_latency_cycles; }},
 
-      {"renderer.count", "boards", "P", 16, 1, 32, "Renderer boards; the paper's machine has up to 16.",
+      {"renderer.count", "boards", "P", 16, 1, 32,
+       "Renderer boards; the paper's machine has up to 16.",
        [](MachineConfig& c) -> Ref { return &c.renderer.count; }},
       {"renderer.clock_hz", "Hz", "P", 40e6, 1e6, 1e9,
        "Array clock: one micro-instruction cycle every 25 ns.",
@@ -182,8 +183,8 @@ void apply(MachineConfig& config, const nlohmann::json& node, const std::string&
           known += (known.empty() ? "" : ", ") + ("'" + head + "'");
         }
       }
-      throw ConfigError(fmt::format("{}: unknown key '{}' (expected one of {})", origin, key,
-                                    known));
+      throw ConfigError(
+          fmt::format("{}: unknown key '{}' (expected one of {})", origin, key, known));
     }
     apply(config, value, key, origin);
   }
@@ -194,16 +195,18 @@ void validate(const MachineConfig& c, const std::string& origin) {
     throw ConfigError(fmt::format("{}: {}", origin, what));
   };
   if (c.renderer.region_width % 64 != 0) {
-    fail("key 'renderer.region_width' must be a multiple of 64 (the array is stored 64 pixels "
-         "to a host word)");
+    fail(
+        "key 'renderer.region_width' must be a multiple of 64 (the array is stored 64 pixels "
+        "to a host word)");
   }
   if (c.evaluator.result_bits < c.evaluator.coefficient_bits) {
     fail("key 'evaluator.result_bits' must be at least 'evaluator.coefficient_bits'");
   }
   if (c.gp.depth_bits + c.evaluator.fraction_bits + 2 > c.evaluator.coefficient_bits) {
-    fail(fmt::format("keys 'gp.depth_bits' ({}) + 'evaluator.fraction_bits' ({}) + 2 must not "
-                     "exceed 'evaluator.coefficient_bits' ({}): depth would not fit a coefficient",
-                     c.gp.depth_bits, c.evaluator.fraction_bits, c.evaluator.coefficient_bits));
+    fail(
+        fmt::format("keys 'gp.depth_bits' ({}) + 'evaluator.fraction_bits' ({}) + 2 must not "
+                    "exceed 'evaluator.coefficient_bits' ({}): depth would not fit a coefficient",
+                    c.gp.depth_bits, c.evaluator.fraction_bits, c.evaluator.coefficient_bits));
   }
   if (c.renderer.backing_store_bits % c.renderer.block_bits != 0) {
     fail("key 'renderer.backing_store_bits' must be a multiple of 'renderer.block_bits'");
@@ -254,8 +257,8 @@ void MachineConfig::set(const std::string& assignment) {
   const std::string text = assignment.substr(eq + 1);
   const Parameter* p = find_parameter(key);
   if (!p) {
-    throw ConfigError(fmt::format("{}: unknown key '{}' (pp5sim config --describe lists them)",
-                                  origin, key));
+    throw ConfigError(
+        fmt::format("{}: unknown key '{}' (pp5sim config --describe lists them)", origin, key));
   }
   nlohmann::json value;
   try {

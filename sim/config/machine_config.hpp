@@ -6,10 +6,9 @@
 // gives its default, range, unit and explanation. Loading a JSON file checks every key
 // against that table (unknown keys, wrong types and out-of-range values are errors naming
 // the file and the key's path); writing it back gives the fully resolved configuration.
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace pp5 {
 
@@ -65,7 +64,9 @@ struct MachineConfig {
 
   nlohmann::json to_json() const;
 
-  int regions_x() const { return (screen.width + renderer.region_width - 1) / renderer.region_width; }
+  int regions_x() const {
+    return (screen.width + renderer.region_width - 1) / renderer.region_width;
+  }
   int regions_y() const {
     return (screen.height + renderer.region_height - 1) / renderer.region_height;
   }

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The command-line program as a user meets it: bad input gives a clear message, a non-zero
+# exit and no output files; good input writes the frame and both reports.
+set -u
+bin="$1"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+expect_error() {  # expect_error PATTERN ARGS...
+  local pattern="$1"; shift
+  local out
+  out=$("$bin" "$@" 2>&1) && fail "'$*' exited 0"
+  echo "$out" | grep -q -- "$pattern" || fail "'$*' said: $out (expected: $pattern)"
+}
+
+expect_error "unknown scene 'nope'" render --scene nope --out "$tmp/a"
+expect_error "no such file" render --firmware /nonexistent.pp5 --out "$tmp/b"
+printf '{"renderer": {"cont": 4}}' > "$tmp/bad.json"
+expect_error "unknown key 'renderer.cont'" render --config "$tmp/bad.json" --out "$tmp/c"
+printf '{"gp": {"count": "many"}}' > "$tmp/bad2.json"
+expect_error "'gp.count' must be an integer" render --config "$tmp/bad2.json" --out "$tmp/c"
+expect_error "out of range" render --set renderer.count=99 --out "$tmp/c"
+printf 'field z 24\nproc triangle\n  qload z, nowhere\nend\n' > "$tmp/bad.pp5"
+expect_error "bad.pp5:3:" render --firmware "$tmp/bad.pp5" --out "$tmp/d"
+for d in a b c d; do [ -e "$tmp/$d/frame.png" ] && fail "partial output in $tmp/$d"; done
+
+"$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \
+  --out "$tmp/ok" >"$tmp/ok.log" 2>&1 || fail "render failed: $(cat "$tmp/ok.log")"
+for f in frame.png config.json stats.json; do [ -s "$tmp/ok/$f" ] || fail "missing $f"; done
+grep -q "of 208 bits" "$tmp/ok.log" || fail "no bit-budget table"
+grep -q "projected throughput" "$tmp/ok.log" || fail "no throughput"
+ls "$tmp/ok" | grep -q tmp && fail "temporary file left behind"
+"$bin" --help | grep -q render || fail "--help does not list render"
+echo "1 passed, 0 failed"

@@ -1,0 +1,114 @@
+// Whole-machine behaviour: determinism across runs and host threads, and the timing of
+// each unit at its earliest legal cycle.
+#include <catch2/catch.hpp>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/machine.hpp"
+#include "models/renderer/renderer_board.hpp"
+#include "sim/simulation.hpp"
+
+using namespace pp5;
+
+namespace {
+
+Program load(const std::string& name, const MachineConfig& c) {
+  return assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5",
+                       assembler_options(c));
+}
+
+nlohmann::json without_host(nlohmann::json stats) {
+  stats.erase("host");
+  return stats;
+}
+
+}  // namespace
+
+TEST_CASE("frames and statistics are identical across runs and host thread counts", "[machine]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 384;
+  config.screen.height = 256;
+  config.gp.count = 5;
+  config.renderer.count = 3;
+  const Scene scene = make_builtin_scene("torus", {64, 16});
+  const Program program = load("phong", config);
+  const FrameResult one = simulate_frame(config, scene, program, 1);
+  const FrameResult four = simulate_frame(config, scene, program, 4);
+  const FrameResult again = simulate_frame(config, scene, program, 1);
+  CHECK(one.image.rgb == four.image.rgb);
+  CHECK(one.image.rgb == again.image.rgb);
+  CHECK(without_host(one.stats) == without_host(four.stats));
+  CHECK(without_host(one.stats) == without_host(again.stats));
+  CHECK(one.stats["frame"]["array_cycles"].get<std::uint64_t>() > 0);
+}
+
+TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[machine]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 512;
+  config.screen.height = 256;
+  config.gp.count = 4;
+  config.renderer.count = 3;
+  const Scene scene = make_builtin_scene("sphere");
+  const Program program = load("flat", config);  // no data-dependent costs
+  const FrameResult r = simulate_frame(config, scene, program, 2);
+  const TimingParams timing = timing_params(config);
+  const PacketValues none{};
+  const std::uint64_t overhead = config.renderer.packet_overhead_cycles;
+  const std::uint64_t clear =
+      procedure_cost(program.procedure(Procedure::clear), timing, none).count;
+  const std::uint64_t tri =
+      procedure_cost(program.procedure(Procedure::triangle), timing, none).count;
+  const auto per_region = r.stats["primitives_per_region"].get<std::vector<std::uint64_t>>();
+  std::vector<std::uint64_t> expected(config.renderer.count, 0);
+  std::uint64_t packets = 0;
+  for (std::size_t region = 0; region < per_region.size(); ++region) {
+    expected[region % config.renderer.count] +=
+        overhead + clear + per_region[region] * (overhead + tri);
+    packets += per_region[region];
+  }
+  CHECK(packets == r.stats["setup"]["packets"].get<std::uint64_t>());
+  for (int k = 0; k < config.renderer.count; ++k) {
+    CHECK(r.stats["renderer"][k]["busy_cycles"].get<std::uint64_t>() == expected[k]);
+    // A Renderer cannot finish before it has spent its cycles.
+    CHECK(r.frame_seconds >= static_cast<double>(expected[k]) / config.renderer.clock_hz);
+  }
+}
+
+TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[machine]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 128;
+  config.screen.height = 128;
+  config.gp.count = 1;
+  config.renderer.count = 1;
+  const Scene scene = make_builtin_scene("two-triangles");
+  const Program program = load("flat", config);
+  const FrameResult r = simulate_frame(config, scene, program, 1);
+  REQUIRE(r.stats["setup"]["packets"].get<std::uint64_t>() == 2);
+
+  // The critical path, unit by unit: the GP transforms and sets up both triangles and
+  // starts its one bin; the ring carries the bin one hop; the Renderer runs clear and two
+  // triangle packets; the ring carries the region one hop to the frame buffer.
+  const int expressions =
+      static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
+  const double gp_clocks = 2.0 * config.gp.clocks_per_triangle +
+                           2.0 * expressions * config.gp.clocks_per_expression +
+                           config.gp.clocks_per_bin;
+  const int per_coefficient =
+      (config.evaluator.coefficient_bits + config.ring.word_bits - 1) / config.ring.word_bits;
+  const double packet_words = 1 + expressions * 3 * per_coefficient;
+  const double bin_words = 1 + 2 * packet_words;
+  const TimingParams timing = timing_params(config);
+  const PacketValues none{};
+  const double renderer_cycles =
+      3.0 * config.renderer.packet_overhead_cycles +
+      procedure_cost(program.procedure(Procedure::clear), timing, none).count +
+      2.0 * procedure_cost(program.procedure(Procedure::triangle), timing, none).count;
+  const double region_words =
+      128.0 * 128 * config.frame_buffer.bits_per_pixel / config.ring.word_bits;
+  const double hop = config.ring.hop_latency_cycles;
+  const double expected =
+      gp_clocks / config.gp.clock_hz + (bin_words + hop) / config.ring.clock_hz +
+      renderer_cycles / config.renderer.clock_hz + (region_words + hop) / config.ring.clock_hz;
+  // Not one array cycle early, and on time (to SystemC's picosecond resolution).
+  CHECK(r.frame_seconds == Approx(expected).margin(1e-11));
+  CHECK(r.frame_seconds > expected - 1.0 / config.renderer.clock_hz);
+}
