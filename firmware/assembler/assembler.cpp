@@ -55,7 +55,9 @@ bool parse_integer(const std::string& s, std::int64_t& out) {
     const bool neg = s[0] == '-';
     const std::string body = neg ? s.substr(1) : s;
     if (body.empty() || !std::isdigit(static_cast<unsigned char>(body[0]))) return false;
-    const unsigned long long v = std::stoull(body, &used, 0);
+    // Decimal, or hexadecimal after 0x; a leading zero does not mean octal.
+    const bool hex = body.size() > 2 && body[0] == '0' && (body[1] == 'x' || body[1] == 'X');
+    const unsigned long long v = std::stoull(body, &used, hex ? 16 : 10);
     if (used != body.size()) return false;
     if (v > static_cast<unsigned long long>(INT64_MAX)) return false;
     out = neg ? -static_cast<std::int64_t>(v) : static_cast<std::int64_t>(v);
@@ -243,6 +245,7 @@ class Assembler {
       operand(ops[k], kinds[k], p, static_cast<int>(k), proc, mnemonic);
     }
     check_aliasing(p, *info);
+    check_literal_fits(p, *info);
     check_enable_nesting(info->op);
     parsed_[current_].push_back(p);
   }
@@ -296,13 +299,16 @@ class Assembler {
         fail("'{}': operand {} must be a backing-store block number, got '{}'", mnemonic, k + 1,
              text);
       }
+      // The transfer moves the whole first operand: every block it covers must exist.
       const int blocks = options_.backing_store_bits / options_.block_bits;
-      if (literal >= blocks) {
-        fail("backing-store block {} is past the end of the store ({} blocks)", literal, blocks);
+      const int used = (p.uses[0].width + options_.block_bits - 1) / options_.block_bits;
+      if (literal + used > blocks) {
+        fail("backing-store blocks {}..{} are past the end of the store ({} blocks)", literal,
+             literal + used - 1, blocks);
       }
       o.kind = Operand::Kind::literal;
       o.literal = literal;
-      explicit_blocks_.push_back({static_cast<int>(literal), line_});
+      explicit_end_block_ = std::max(explicit_end_block_, static_cast<int>(literal) + used);
       return;
     }
     fail("internal: unknown operand kind");
@@ -310,7 +316,7 @@ class Assembler {
 
   void check_aliasing(const ParsedInstruction& p, const InstructionInfo& info) {
     const FieldUse& dst = p.uses[0];
-    if (dst.field < 0) return;
+    if (dst.field < 0 || info.operands[0] != 'F') return;  // only a written operand can clash
     const bool strict = info.op == Opcode::mul || info.op == Opcode::mac;
     for (int k = 1; k < 3; ++k) {
       const FieldUse& src = p.uses[k];
@@ -323,6 +329,20 @@ class Assembler {
         fail("'{}': a source overlapping the destination must start at the same bit",
              info.mnemonic);
       }
+    }
+  }
+
+  // A literal written into (or combined with) a field must be representable in its width,
+  // read as unsigned or as two's complement; anything else would be silently truncated.
+  void check_literal_fits(const ParsedInstruction& p, const InstructionInfo& info) {
+    if (info.operands[0] != 'F' || std::string(info.operands).size() != 2) return;
+    const Operand& o = p.ins.operands[1];
+    if (o.kind != Operand::Kind::literal || p.uses[0].field < 0) return;
+    const int w = p.uses[0].width;
+    const __int128 lo = -(static_cast<__int128>(1) << (w - 1));
+    const __int128 hi = (static_cast<__int128>(1) << w) - 1;
+    if (o.literal < lo || o.literal > hi) {
+      fail("'{}': constant {} does not fit the {}-bit destination", info.mnemonic, o.literal, w);
     }
   }
 
@@ -407,8 +427,7 @@ class Assembler {
       resident -= fields[next].width;
     }
     int lo = 0;
-    int block = 0;
-    for (const auto& [b, line] : explicit_blocks_) block = std::max(block, b + 2);
+    int block = explicit_end_block_;  // spilled fields go after blocks the program uses itself
     const int blocks = options_.backing_store_bits / options_.block_bits;
     for (std::size_t k = 0; k < fields.size(); ++k) {
       fields[k].spilled = spilled[k];
@@ -499,7 +518,7 @@ class Assembler {
   bool have_output_ = false;
   std::array<int, 3> output_fields_{};
   std::array<std::vector<ParsedInstruction>, static_cast<int>(Procedure::count)> parsed_;
-  std::vector<std::pair<int, int>> explicit_blocks_;  // block, line
+  int explicit_end_block_ = 0;  // one past the last block that explicit bsld/bsst use
 };
 
 }  // namespace

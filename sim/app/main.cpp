@@ -34,7 +34,7 @@ std::string resolve_firmware(const std::string& name) {
 
 MachineConfig load_config(const std::string& path, const std::vector<std::string>& sets) {
   MachineConfig config = path.empty() ? MachineConfig::defaults() : MachineConfig::from_file(path);
-  for (const auto& s : sets) config.set(s);
+  config.set(sets);
   return config;
 }
 

@@ -247,27 +247,33 @@ MachineConfig MachineConfig::from_file(const std::string& path) {
   return from_json(doc, path);
 }
 
-void MachineConfig::set(const std::string& assignment) {
-  const auto eq = assignment.find('=');
-  const std::string origin = fmt::format("--set {}", assignment);
-  if (eq == std::string::npos || eq == 0) {
-    throw ConfigError(fmt::format("{}: expected KEY=VALUE, e.g. renderer.count=8", origin));
+void MachineConfig::set(const std::vector<std::string>& assignments) {
+  MachineConfig result = *this;
+  std::string origin = "--set";
+  for (const std::string& assignment : assignments) {
+    const auto eq = assignment.find('=');
+    origin = fmt::format("--set {}", assignment);
+    if (eq == std::string::npos || eq == 0) {
+      throw ConfigError(fmt::format("{}: expected KEY=VALUE, e.g. renderer.count=8", origin));
+    }
+    const std::string key = assignment.substr(0, eq);
+    const std::string text = assignment.substr(eq + 1);
+    const Parameter* p = find_parameter(key);
+    if (!p) {
+      throw ConfigError(
+          fmt::format("{}: unknown key '{}' (pp5sim config --describe lists them)", origin, key));
+    }
+    nlohmann::json value;
+    try {
+      value = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error&) {
+      throw ConfigError(
+          fmt::format("{}: value '{}' of key '{}' is not a number", origin, text, key));
+    }
+    assign(result, *p, value, origin);
   }
-  const std::string key = assignment.substr(0, eq);
-  const std::string text = assignment.substr(eq + 1);
-  const Parameter* p = find_parameter(key);
-  if (!p) {
-    throw ConfigError(
-        fmt::format("{}: unknown key '{}' (pp5sim config --describe lists them)", origin, key));
-  }
-  nlohmann::json value;
-  try {
-    value = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error&) {
-    throw ConfigError(fmt::format("{}: value '{}' of key '{}' is not a number", origin, text, key));
-  }
-  assign(*this, *p, value, origin);
-  validate(*this, origin);
+  validate(result, assignments.size() == 1 ? origin : "--set");
+  *this = result;
 }
 
 nlohmann::json MachineConfig::to_json() const {

@@ -59,8 +59,11 @@ struct MachineConfig {
   // Defaults overridden by a JSON document; `origin` names it in error messages.
   static MachineConfig from_json(const nlohmann::json& doc, const std::string& origin);
   static MachineConfig from_file(const std::string& path);
-  // Applies one `key=value` override (the command line's --set).
-  void set(const std::string& assignment);
+  // Applies `key=value` overrides (the command line's --set) all at once: the result is
+  // checked after the last one, so linked values can change together; on error the
+  // configuration is left unchanged.
+  void set(const std::vector<std::string>& assignments);
+  void set(const std::string& assignment) { set(std::vector<std::string>{assignment}); }
 
   nlohmann::json to_json() const;
 

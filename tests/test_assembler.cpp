@@ -1,0 +1,651 @@
+// The firmware assembler: the shipped programs, field layout, error messages (file, line,
+// what was expected), and spilling, which must be invisible in the pixels a program computes.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/renderer/renderer_board.hpp"
+
+using namespace pp5;
+
+namespace {
+
+const std::string kPrograms = PP5_SOURCE_DIR "/firmware/programs/";
+const std::string kSpillProgram = PP5_SOURCE_DIR "/tests/data/firmware/spill.pp5";
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  REQUIRE(in.good());
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+AssemblerOptions options_with_memory(int memory_bits) {
+  AssemblerOptions o;
+  o.memory_bits = memory_bits;
+  return o;
+}
+
+// The 1-based line of the first line of `source` containing `marker`.
+int line_of(const std::string& source, const std::string& marker) {
+  std::istringstream in(source);
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (line.find(marker) != std::string::npos) return n;
+  }
+  FAIL("marker '" << marker << "' not in the source");
+  return -1;
+}
+
+int line_count(const std::string& source) {
+  std::istringstream in(source);
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) ++n;
+  return n;
+}
+
+std::string assembly_error(const std::string& source, const AssemblerOptions& options = {}) {
+  try {
+    assemble(source, "bad.pp5", options);
+  } catch (const AssemblyError& e) {
+    return e.what();
+  }
+  FAIL("the program assembled:\n" << source);
+  return "";
+}
+
+// Asserts that `source` is rejected at line `line` with a message containing `expected`.
+void check_error_at(const std::string& source, int line, const std::string& expected,
+                    const AssemblerOptions& options = {}) {
+  const std::string message = assembly_error(source, options);
+  INFO("message: " << message);
+  CHECK(message.rfind("bad.pp5:" + std::to_string(line) + ": ", 0) == 0);
+  CHECK(message.find(expected) != std::string::npos);
+}
+
+// A valid program around `body`, the triangle procedure's code; the bad line of a test
+// carries the comment "; HERE".
+std::string with_triangle(const std::string& body, const std::string& extra_procs = "") {
+  return "field z 24\n"
+         "field red 8\n"
+         "field green 8\n"
+         "field blue 8\n"
+         "field s 16 signed\n"
+         "output red green blue\n" +
+         extra_procs +
+         "proc triangle\n"
+         "  eall\n" +
+         body + "end\n";
+}
+
+void check_error_here(const std::string& source, const std::string& expected,
+                      const AssemblerOptions& options = {}) {
+  check_error_at(source, line_of(source, "; HERE"), expected, options);
+}
+
+std::set<std::string> expression_names(const std::bitset<static_cast<int>(Expression::count)>& b) {
+  std::set<std::string> names;
+  for (int i = 0; i < static_cast<int>(Expression::count); ++i) {
+    if (b[i]) names.insert(kExpressions[i].name);
+  }
+  return names;
+}
+
+std::set<std::string> parameter_names(const std::bitset<static_cast<int>(Parameter::count)>& b) {
+  std::set<std::string> names;
+  for (int i = 0; i < static_cast<int>(Parameter::count); ++i) {
+    if (b[i]) names.insert(kParameters[i].name);
+  }
+  return names;
+}
+
+// The expressions and parameters a procedure's instructions actually name.
+void used_operands(const ProcedureCode& code, std::set<std::string>& expressions,
+                   std::set<std::string>& parameters) {
+  for (const Instruction& ins : code.code) {
+    for (const Operand& o : ins.operands) {
+      if (o.kind == Operand::Kind::expression) expressions.insert(kExpressions[o.index].name);
+      if (o.kind == Operand::Kind::parameter) parameters.insert(kParameters[o.index].name);
+    }
+  }
+}
+
+std::string field_name_of(const Operand& o) { return o.text.substr(0, o.text.find('[')); }
+
+RendererBoardParams board_params(int memory_bits) {
+  RendererBoardParams p;
+  p.array.width = 64;
+  p.array.height = 16;
+  p.array.memory_bits = memory_bits;
+  return p;
+}
+
+PacketValues spill_test_values(int variant) {
+  PacketValues v;
+  const std::int64_t one = std::int64_t{1} << TimingParams{}.fraction_bits;
+  v.expressions[static_cast<int>(Expression::red)] =
+      QuadraticCoefficients::linear(one * (1 + variant), 3 * one, 0);
+  v.expressions[static_cast<int>(Expression::green)] =
+      QuadraticCoefficients::linear(5 * one, -one, (100 + 37 * variant) * one);
+  v.parameters[static_cast<int>(Parameter::background_red)] = 10;
+  v.parameters[static_cast<int>(Parameter::background_green)] = 20;
+  v.parameters[static_cast<int>(Parameter::background_blue)] = 30;
+  v.parameters[static_cast<int>(Parameter::ambient)] = 40;
+  v.parameters[static_cast<int>(Parameter::diffuse)] = 3;
+  return v;
+}
+
+// Runs clear, two triangles and shade; returns the output pixels and adds up the cycles.
+std::vector<std::uint8_t> run_spill_test(const Program& program, int memory_bits,
+                                         std::uint64_t& cycles) {
+  RendererBoard board(board_params(memory_bits));
+  board.begin_region(0, 0);
+  cycles = 0;
+  cycles += board.run(program.procedure(Procedure::clear), spill_test_values(0)).count;
+  cycles += board.run(program.procedure(Procedure::triangle), spill_test_values(0)).count;
+  cycles += board.run(program.procedure(Procedure::triangle), spill_test_values(1)).count;
+  cycles += board.run(program.procedure(Procedure::shade), spill_test_values(0)).count;
+  std::vector<std::uint8_t> rgb;
+  board.read_outputs(program, rgb);
+  return rgb;
+}
+
+}  // namespace
+
+TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
+  struct Expected {
+    const char* file;
+    std::set<std::string> triangle_expressions;
+    std::set<std::string> parameters;  // over all procedures
+    int bits;
+  };
+  const std::vector<Expected> programs = {
+      {"flat.pp5",
+       {"edge0", "edge1", "edge2", "depth", "flat_red", "flat_green", "flat_blue"},
+       {"background_red", "background_green", "background_blue"},
+       48},
+      {"gouraud.pp5",
+       {"edge0", "edge1", "edge2", "depth", "red", "green", "blue"},
+       {"background_red", "background_green", "background_blue"},
+       48},
+      {"phong.pp5",
+       {"edge0", "edge1", "edge2", "depth", "base_red", "base_green", "base_blue", "nx", "ny",
+        "nz"},
+       {"background_red", "background_green", "background_blue", "light_x", "light_y", "light_z",
+        "half_x", "half_y", "half_z", "ambient", "diffuse", "specular"},
+       154},
+  };
+  for (const Expected& e : programs) {
+    SECTION(e.file) {
+      const Program p = assemble_file(kPrograms + e.file, AssemblerOptions{});
+      CHECK(p.name == kPrograms + e.file);
+      CHECK(p.memory_bits == 208);
+      CHECK_FALSE(p.spill_allowed);
+
+      int lo = 0;
+      for (const FieldDecl& f : p.fields) {
+        INFO("field " << f.name);
+        CHECK_FALSE(f.spilled);
+        CHECK(f.lo == lo);
+        CHECK(f.block == -1);
+        CHECK(p.find_field(f.name) == &f);
+        lo += f.width;
+      }
+      CHECK(lo == e.bits);
+      CHECK(p.resident_bits == lo);
+      CHECK(p.staging_bits == 0);
+      CHECK(p.bits_used() == lo);
+      CHECK(p.find_field("no_such_field") == nullptr);
+
+      const char* output_names[] = {"red", "green", "blue"};
+      for (int k = 0; k < 3; ++k) {
+        const FieldDecl* f = p.find_field(output_names[k]);
+        REQUIRE(f);
+        CHECK(p.outputs[k].lo == f->lo);
+        CHECK(p.outputs[k].width == 8);
+        CHECK_FALSE(p.outputs[k].is_signed);
+      }
+
+      std::set<std::string> all_parameters;
+      for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
+        const ProcedureCode& code = p.procedures[proc];
+        INFO("proc " << kProcedureNames[proc]);
+        CHECK(code.spill_transfers == 0);
+        std::set<std::string> expressions;
+        std::set<std::string> parameters;
+        used_operands(code, expressions, parameters);
+        CHECK(expression_names(code.expressions) == expressions);
+        CHECK(parameter_names(code.parameters) == parameters);
+        all_parameters.insert(parameters.begin(), parameters.end());
+        if (proc == static_cast<int>(Procedure::triangle)) {
+          CHECK(expressions == e.triangle_expressions);
+        } else {
+          CHECK(expressions.empty());
+        }
+        for (const Instruction& ins : code.code) {
+          CHECK(ins.line > 0);
+          CHECK(ins.op != Opcode::bsld);
+          CHECK(ins.op != Opcode::bsst);
+        }
+      }
+      CHECK(all_parameters == e.parameters);
+      CHECK(p.procedure(Procedure::clear).defined);
+      CHECK(p.procedure(Procedure::triangle).defined);
+      CHECK(p.procedure(Procedure::shade).defined == (std::string(e.file) == "phong.pp5"));
+    }
+  }
+}
+
+TEST_CASE("operands resolve to their declared bits", "[assembler]") {
+  const Program p = assemble(with_triangle("  mov s[11:4], z[7]\n"
+                                           "  add s, -3\n"
+                                           "  mov red, 0x1F\n"
+                                           "  mov green, ambient\n"),
+                             "ops.pp5", AssemblerOptions{});
+  const auto& code = p.procedure(Procedure::triangle).code;
+  REQUIRE(code.size() == 5);
+  const int s_lo = p.find_field("s")->lo;
+  // A slice is unsigned even of a signed field; the whole field keeps its signedness.
+  CHECK(code[1].operands[0].field.lo == s_lo + 4);
+  CHECK(code[1].operands[0].field.width == 8);
+  CHECK_FALSE(code[1].operands[0].field.is_signed);
+  CHECK(code[1].operands[1].field.lo == 7);
+  CHECK(code[1].operands[1].field.width == 1);
+  CHECK(code[2].operands[0].field.is_signed);
+  CHECK(code[2].operands[1].kind == Operand::Kind::literal);
+  CHECK(code[2].operands[1].literal == -3);
+  CHECK(code[3].operands[1].literal == 31);
+  CHECK(code[4].operands[1].kind == Operand::Kind::parameter);
+  CHECK(code[4].operands[1].index == static_cast<int>(Parameter::ambient));
+  CHECK(code[4].line == 12);
+}
+
+TEST_CASE("errors name the file, the line and what was expected", "[assembler]") {
+  SECTION("unknown instruction") {
+    check_error_here(with_triangle("  frob z ; HERE\n"), "unknown instruction 'frob'");
+  }
+  SECTION("wrong operand count") {
+    check_error_here(with_triangle("  mov z ; HERE\n"), "'mov' takes 2 operands");
+    check_error_here(with_triangle("  add z, 1, 2 ; HERE\n"), "got 3");
+    check_error_here(with_triangle("  eall z ; HERE\n"), "'eall' takes 0 operands");
+    check_error_here(with_triangle("  mov z, ; HERE\n"), "'mov' takes 2 operands");
+    check_error_here(with_triangle("  mov , z ; HERE\n"), "operand 1 is empty");
+  }
+  SECTION("undeclared field") {
+    check_error_here(with_triangle("  mov q, 1 ; HERE\n"), "must be a declared field, got 'q'");
+    check_error_here(with_triangle("  mov z, q ; HERE\n"),
+                     "must be a field, an integer or a frame parameter, got 'q'");
+    check_error_here(with_triangle("  mul z, s, 3 ; HERE\n"), "must be a declared field, got '3'");
+    check_error_here(with_triangle("  mac z, s, red ; HERE\n"),
+                     "must be an integer or a frame parameter, got 'red'");
+  }
+  SECTION("bad slice") {
+    check_error_here(with_triangle("  mov z[24:0], 1 ; HERE\n"), "outside field 'z' of 24 bits");
+    check_error_here(with_triangle("  mov z[24], 1 ; HERE\n"), "outside field 'z' of 24 bits");
+    check_error_here(with_triangle("  mov z[3:5], 1 ; HERE\n"), "outside field 'z'");
+    check_error_here(with_triangle("  mov z[a:0], 1 ; HERE\n"), "integer bounds");
+    check_error_here(with_triangle("  mov z[3:], 1 ; HERE\n"), "integer bounds");
+    check_error_here(with_triangle("  mov z[3:0, 1 ; HERE\n"), "expected NAME[hi:lo]");
+  }
+  SECTION("expression outside proc triangle") {
+    const std::string clear = "proc clear\n  qload z, depth ; HERE\nend\n";
+    check_error_here(with_triangle("", clear),
+                     "expression 'depth' is only available in procedure 'triangle'");
+    check_error_here(with_triangle("  qload z, bogus ; HERE\n"),
+                     "'bogus' is not an expression the GP supplies");
+  }
+  SECTION("conditions") {
+    check_error_here(with_triangle("  qtest edge0 ; HERE\n"), "'qtest' needs a condition");
+    check_error_here(with_triangle("  cmp z, 1 ; HERE\n"), "'cmp' needs a condition");
+    check_error_here(with_triangle("  qtest.xx edge0 ; HERE\n"), "unknown condition '.xx'");
+    check_error_here(with_triangle("  mov.eq z, 1 ; HERE\n"), "'mov' takes no condition");
+  }
+  SECTION("enable stack") {
+    check_error_here(with_triangle("  epop ; HERE\n"), "epop without a matching epush");
+    check_error_here(with_triangle("  eelse ; HERE\n"), "eelse outside an epush/epop pair");
+    check_error_here(with_triangle("  epush\n  epop\n  eelse ; HERE\n"), "eelse outside");
+    const std::string unclosed = with_triangle("  epush\n  epush\n  epop\n");
+    check_error_at(unclosed, line_count(unclosed), "ends with 1 unmatched epush");
+
+    AssemblerOptions shallow;
+    shallow.enable_stack_depth = 2;
+    check_error_here(with_triangle("  epush\n  epush\n  epush ; HERE\n  epop\n  epop\n  epop\n"),
+                     "epush nests 3 deep; the enable stack holds 2", shallow);
+    std::string deepest;
+    for (int k = 0; k < 8; ++k) deepest += "  epush\n";
+    for (int k = 0; k < 8; ++k) deepest += "  epop\n";
+    CHECK_NOTHROW(assemble(with_triangle(deepest), "ok.pp5", AssemblerOptions{}));
+    std::string too_deep;
+    for (int k = 0; k < 8; ++k) too_deep += "  epush\n";
+    too_deep += "  epush ; HERE\n";
+    for (int k = 0; k < 9; ++k) too_deep += "  epop\n";
+    check_error_here(with_triangle(too_deep), "epush nests 9 deep; the enable stack holds 8");
+  }
+  SECTION("duplicates") {
+    check_error_here("field a 8\nfield a 4 ; HERE\n" + with_triangle(""),
+                     "field 'a' is declared twice");
+    check_error_here(with_triangle("", "proc shade\nend\nproc shade ; HERE\nend\n"),
+                     "procedure 'shade' is defined twice");
+    check_error_here("output red red red ; HERE\n" + with_triangle(""), "not declared");
+    check_error_here(with_triangle("") + "output red green blue ; HERE\n", "'output' given twice");
+  }
+  SECTION("declarations") {
+    check_error_here("field a ; HERE\n" + with_triangle(""),
+                     "expected 'field NAME WIDTH [signed]'");
+    check_error_here("field a 0 ; HERE\n" + with_triangle(""), "from 1 to 64");
+    check_error_here("field a 65 ; HERE\n" + with_triangle(""), "from 1 to 64");
+    check_error_here("field a 8 unsigned ; HERE\n" + with_triangle(""), "expected 'signed'");
+    check_error_here("field 9a 8 ; HERE\n" + with_triangle(""), "not a valid field name");
+    check_error_here("field ambient 8 ; HERE\n" + with_triangle(""), "frame parameter");
+    check_error_here("option fast ; HERE\n" + with_triangle(""), "expected 'option spill'");
+    check_error_here(with_triangle("", "proc draw ; HERE\nend\n"), "unknown procedure 'draw'");
+    check_error_here(with_triangle("  field t 8 ; HERE\n"), "before the procedures");
+    check_error_here("end ; HERE\n" + with_triangle(""), "'end' outside a procedure");
+    check_error_here("mov z, 1 ; HERE\n" + with_triangle(""), "outside a procedure");
+  }
+  SECTION("missing 'end'") {
+    check_error_here(with_triangle("", "proc clear\n  eall\nproc shade ; HERE\nend\n"),
+                     "'proc' inside procedure 'clear': missing 'end'");
+    const std::string unterminated =
+        "field red 8\nfield green 8\nfield blue 8\n"
+        "output red green blue\nproc triangle\n  eall\n\n";
+    check_error_at(unterminated, 7, "procedure 'triangle' has no 'end'");
+  }
+  SECTION("missing triangle or output") {
+    const std::string no_triangle =
+        "field red 8\nfield green 8\nfield blue 8\noutput red green blue\nproc clear\nend\n";
+    const std::string message = assembly_error(no_triangle);
+    CHECK(message.rfind("bad.pp5:", 0) == 0);
+    CHECK(message.find("no 'proc triangle'") != std::string::npos);
+    const std::string no_output = "field red 8\nfield green 8\nfield blue 8\nproc triangle\nend\n";
+    const std::string message2 = assembly_error(no_output);
+    CHECK(message2.rfind("bad.pp5:", 0) == 0);
+    CHECK(message2.find("no 'output RED GREEN BLUE'") != std::string::npos);
+  }
+  SECTION("output field not 8 bits") {
+    check_error_here(
+        "field red 8\nfield green 9\nfield blue 8\noutput red green blue ; HERE\n"
+        "proc triangle\nend\n",
+        "output field 'green' must be 8 bits wide (it is 9)");
+  }
+  SECTION("mul and mac destinations must not overlap a source") {
+    check_error_here(with_triangle("  mul s, s[7:0], z[7:0] ; HERE\n"),
+                     "'mul': the destination must not overlap a source");
+    check_error_here(with_triangle("  mul z[15:8], red, z[8:1] ; HERE\n"),
+                     "'mul': the destination must not overlap a source");
+    check_error_here(with_triangle("  mac s[15:8], s[8:1], 3 ; HERE\n"), "'mac'");
+    CHECK_NOTHROW(assemble(with_triangle("  mul z[23:16], z[7:0], z[15:8]\n"
+                                         "  mac s[15:8], s[7:0], -3\n"),
+                           "ok.pp5", AssemblerOptions{}));
+  }
+  SECTION("overlapping source at a different alignment") {
+    check_error_here(with_triangle("  add z[15:0], z[23:8] ; HERE\n"),
+                     "'add': a source overlapping the destination must start at the same bit");
+    check_error_here(with_triangle("  mov z[7:1], z[6:0] ; HERE\n"), "'mov'");
+    CHECK_NOTHROW(assemble(with_triangle("  add z, z[7:0]\n  xor z[15:8], z[15:8]\n"
+                                         "  mov z[7:0], z[23:16]\n"),
+                           "ok.pp5", AssemblerOptions{}));
+  }
+}
+
+TEST_CASE("a program larger than pixel memory is rejected unless it may spill", "[assembler]") {
+  const std::string with_option = read_text(kSpillProgram);
+  std::string without_option = with_option;
+  const auto at = without_option.find("option spill\n");
+  REQUIRE(at != std::string::npos);
+  without_option.erase(at, std::string("option spill\n").size());
+
+  const std::string message = assembly_error(without_option);
+  INFO(message);
+  CHECK(message.rfind("bad.pp5: the fields need 225 bits but pixel memory has 208", 0) == 0);
+  for (const char* name :
+       {"red", "green", "blue", "seed", "acc", "prod", "k", "s1", "s2", "s3", "flag"}) {
+    CHECK(message.find(std::string("\n  ") + name + " ") != std::string::npos);
+  }
+  CHECK(message.find("option spill") != std::string::npos);
+
+  // Without the option, more memory is the only way; then nothing moves.
+  const Program roomy = assemble(without_option, "roomy", options_with_memory(225));
+  CHECK(roomy.bits_used() == 225);
+  CHECK(roomy.staging_bits == 0);
+}
+
+TEST_CASE("spilled fields are bracketed by backing-store transfers", "[assembler]") {
+  const std::string source = read_text(kSpillProgram);
+  const Program p = assemble(source, "spill.pp5", AssemblerOptions{});
+  CHECK(p.spill_allowed);
+
+  // Spilled fields are a suffix of the declaration list; the rest keep contiguous bits.
+  int first_spilled = -1;
+  int lo = 0;
+  int resident = 0;
+  std::set<std::pair<int, int>> blocks;  // [first, end) of every spilled field
+  for (std::size_t k = 0; k < p.fields.size(); ++k) {
+    const FieldDecl& f = p.fields[k];
+    INFO("field " << f.name);
+    if (f.spilled) {
+      if (first_spilled < 0) first_spilled = static_cast<int>(k);
+      CHECK(f.block >= 0);
+      const int n = (f.width + 31) / 32;
+      CHECK((f.block + n) * 32 <= 4096);
+      for (const auto& [b, e] : blocks) CHECK((f.block >= e || f.block + n <= b));
+      blocks.insert({f.block, f.block + n});
+    } else {
+      CHECK(first_spilled < 0);
+      CHECK(f.lo == lo);
+      lo += f.width;
+      resident += f.width;
+    }
+  }
+  REQUIRE(first_spilled > 0);
+  CHECK(p.fields.size() - first_spilled >= 3);
+  CHECK(p.resident_bits == resident);
+  CHECK(p.staging_bits > 0);
+  CHECK(p.bits_used() == p.resident_bits + p.staging_bits);
+  CHECK(p.bits_used() <= p.memory_bits);
+  // Spilling stops as soon as the rest fits: this program needs the last five fields moved
+  // (its instructions use at most two spilled fields, 64 staging bits).
+  CHECK(first_spilled == 6);
+  CHECK(p.resident_bits == 120);
+  CHECK(p.staging_bits == 64);
+
+  int total_transfers = 0;
+  for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
+    const ProcedureCode& code = p.procedures[proc];
+    INFO("proc " << kProcedureNames[proc]);
+    int inserted = 0;
+    for (const Instruction& ins : code.code) inserted += ins.line == 0;
+    CHECK(code.spill_transfers == inserted);
+    total_transfers += inserted;
+
+    for (std::size_t at = 0; at < code.code.size(); ++at) {
+      const Instruction& ins = code.code[at];
+      if (ins.line == 0) continue;
+      INFO("line " << ins.line << ": " << disassemble(ins));
+      const InstructionInfo& info = instruction_info(ins.op);
+      // The distinct spilled fields this instruction names, in operand order.
+      std::vector<const FieldDecl*> spilled;
+      for (int k = 0; info.operands[k]; ++k) {
+        if (ins.operands[k].kind != Operand::Kind::field) continue;
+        const FieldDecl* f = p.find_field(field_name_of(ins.operands[k]));
+        REQUIRE(f);
+        if (!f->spilled) {
+          CHECK(ins.operands[k].field.lo >= f->lo);
+          CHECK(ins.operands[k].field.lo + ins.operands[k].field.width <= f->lo + f->width);
+          continue;
+        }
+        if (std::find(spilled.begin(), spilled.end(), f) == spilled.end()) spilled.push_back(f);
+      }
+      // bsld of each, immediately before, into a staging slot past the resident fields.
+      REQUIRE(at >= spilled.size());
+      for (std::size_t j = 0; j < spilled.size(); ++j) {
+        const Instruction& load = code.code[at - spilled.size() + j];
+        const FieldDecl* f = spilled[j];
+        CHECK(load.line == 0);
+        CHECK(load.op == Opcode::bsld);
+        CHECK(load.operands[0].text == f->name);
+        CHECK(load.operands[0].field.width == f->width);
+        CHECK(load.operands[0].field.lo >= p.resident_bits);
+        CHECK(load.operands[0].field.lo + f->width <= p.bits_used());
+        CHECK(load.operands[1].literal == f->block);
+        // The instruction's operands of this field point into its slot.
+        for (int k = 0; info.operands[k]; ++k) {
+          if (ins.operands[k].kind != Operand::Kind::field ||
+              field_name_of(ins.operands[k]) != f->name) {
+            continue;
+          }
+          CHECK(ins.operands[k].field.lo >= load.operands[0].field.lo);
+          CHECK(ins.operands[k].field.lo + ins.operands[k].field.width <=
+                load.operands[0].field.lo + f->width);
+        }
+      }
+      if (at > spilled.size()) CHECK(code.code[at - spilled.size() - 1].op != Opcode::bsld);
+      // bsst after it exactly when it writes a spilled field.
+      const bool writes_spilled = info.operands[0] == 'F' &&
+                                  ins.operands[0].kind == Operand::Kind::field &&
+                                  p.find_field(field_name_of(ins.operands[0]))->spilled;
+      const bool next_is_store = at + 1 < code.code.size() && code.code[at + 1].line == 0 &&
+                                 code.code[at + 1].op == Opcode::bsst;
+      CHECK(next_is_store == writes_spilled);
+      if (writes_spilled) {
+        const Instruction& store = code.code[at + 1];
+        const FieldDecl* f = p.find_field(field_name_of(ins.operands[0]));
+        CHECK(store.operands[0].text == f->name);
+        CHECK(store.operands[0].field.width == f->width);
+        CHECK(store.operands[1].literal == f->block);
+        const auto j = std::find(spilled.begin(), spilled.end(), f) - spilled.begin();
+        CHECK(store.operands[0].field.lo ==
+              code.code[at - spilled.size() + j].operands[0].field.lo);
+      }
+    }
+  }
+  CHECK(total_transfers > 10);
+}
+
+TEST_CASE("a spilled program computes the same pixels as a resident one", "[assembler]") {
+  const std::string source = read_text(kSpillProgram);
+  const Program spilled = assemble(source, "spill.pp5", AssemblerOptions{});
+  const Program resident = assemble(source, "spill.pp5", options_with_memory(512));
+  REQUIRE(spilled.staging_bits > 0);
+  REQUIRE(resident.staging_bits == 0);
+  for (const FieldDecl& f : resident.fields) CHECK_FALSE(f.spilled);
+
+  std::uint64_t spilled_cycles = 0;
+  std::uint64_t resident_cycles = 0;
+  const auto a = run_spill_test(spilled, 208, spilled_cycles);
+  const auto b = run_spill_test(resident, 512, resident_cycles);
+  REQUIRE(a.size() == b.size());
+  CHECK(a == b);
+
+  // The test means something only if the pixels differ from each other.
+  std::set<std::uint32_t> colours;
+  for (std::size_t i = 0; i < b.size(); i += 3) {
+    colours.insert(b[i] | (b[i + 1] << 8) | (b[i + 2] << 16));
+  }
+  CHECK(colours.size() > 100);
+
+  // Spilling costs exactly its transfers (triangle runs twice).
+  const TimingParams timing;
+  const PacketValues values = spill_test_values(0);
+  std::uint64_t transfer_cycles = 0;
+  for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
+    const int runs = proc == static_cast<int>(Procedure::triangle) ? 2 : 1;
+    for (const Instruction& ins : spilled.procedures[proc].code) {
+      if (ins.line == 0) transfer_cycles += runs * instruction_cost(ins, timing, values).count;
+    }
+  }
+  CHECK(transfer_cycles > 0);
+  CHECK(spilled_cycles == resident_cycles + transfer_cycles);
+}
+
+TEST_CASE("spilling fails cleanly when even spilling cannot fit", "[assembler]") {
+  const std::string source = read_text(kSpillProgram);
+  // Two spilled fields of one 32-bit block each need 64 staging bits: more than 40.
+  const std::string tiny = assembly_error(source, options_with_memory(40));
+  CHECK(tiny.rfind("bad.pp5: even with every field spilled, one instruction needs", 0) == 0);
+  AssemblerOptions no_store;
+  no_store.backing_store_bits = 64;
+  const std::string full = assembly_error(source, no_store);
+  CHECK(full.find("backing-store blocks; the store has 2") != std::string::npos);
+}
+
+TEST_CASE("an output field may not be spilled", "[assembler]") {
+  // Spilling starts at the end of the declarations, where this program declares its outputs.
+  const std::string source =
+      "option spill\nfield a 64\nfield b 64\nfield c 64\nfield red 8\nfield green 8\n"
+      "field blue 8 ; HERE\noutput red green blue\nproc triangle\n  mov a, 1\nend\n";
+  check_error_here(source, "output field 'blue' was spilled to the backing store");
+}
+
+TEST_CASE("cmp may compare overlapping slices of one field", "[assembler]") {
+  // cmp writes no field, so the alignment rule for a destination and its sources does not
+  // apply to it.
+  CHECK_NOTHROW(assemble(with_triangle("  cmp.eq z[7:0], z[8:1]\n"), "ok", AssemblerOptions{}));
+}
+
+TEST_CASE("backing-store block numbers past the end are rejected", "[assembler]") {
+  // 4096 bits of 32-bit blocks: blocks 0..127.
+  CHECK_NOTHROW(assemble(with_triangle("  bsst z, 127\n  bsld z, 127\n"), "ok", {}));
+  check_error_here(with_triangle("  bsst z, 128 ; HERE\n"),
+                   "past the end of the store (128 blocks)");
+  check_error_here(with_triangle("  bsld z, 4000 ; HERE\n"), "past the end");
+  check_error_here(with_triangle("  bsld z, -1 ; HERE\n"), "must be a backing-store block number");
+  check_error_here(with_triangle("  bsld z, light_x ; HERE\n"),
+                   "must be a backing-store block number");
+}
+
+TEST_CASE("a multi-block transfer must fit before the end of the store", "[assembler]") {
+  // A 40-bit field takes two 32-bit blocks, so it cannot start at the last block 127.
+  const std::string source = "field w 40\n" + with_triangle("  bsst w, 127 ; HERE\n");
+  check_error_here(source, "past the end");
+}
+
+TEST_CASE("spilled fields do not share blocks with explicit transfers", "[assembler]") {
+  // With 8-bit blocks, `bsst acc, 0` of the 48-bit acc occupies blocks 0..5; the spilled
+  // fields must start after them.
+  std::string source = read_text(kSpillProgram);
+  const std::string anchor = "  qload seed, red";
+  const auto at = source.find(anchor);
+  REQUIRE(at != std::string::npos);
+  source.insert(at, "  bsst acc, 0\n");
+  AssemblerOptions small_blocks;
+  small_blocks.block_bits = 8;
+  const Program p = assemble(source, "spill.pp5", small_blocks);
+  int spilled = 0;
+  for (const FieldDecl& f : p.fields) {
+    if (!f.spilled) continue;
+    ++spilled;
+    INFO("field " << f.name << " at block " << f.block);
+    CHECK(f.block >= 6);
+  }
+  CHECK(spilled >= 2);
+}
+
+TEST_CASE("the listing shows every field and instruction", "[assembler]") {
+  for (const char* file : {"phong.pp5", "flat.pp5"}) {
+    const Program p = assemble_file(kPrograms + file, AssemblerOptions{});
+    const std::string text = listing(p, TimingParams{});
+    CHECK(text.find(p.name) != std::string::npos);
+    for (const FieldDecl& f : p.fields) {
+      CHECK(text.find("  " + f.name + " ") != std::string::npos);
+    }
+    for (const ProcedureCode& code : p.procedures) {
+      for (const Instruction& ins : code.code) {
+        INFO(disassemble(ins));
+        CHECK(text.find(disassemble(ins)) != std::string::npos);
+      }
+    }
+  }
+  const Program spilled = assemble(read_text(kSpillProgram), "spill.pp5", AssemblerOptions{});
+  const std::string text = listing(spilled, TimingParams{});
+  CHECK(text.find("spill staging") != std::string::npos);
+  CHECK(text.find("backing store block") != std::string::npos);
+  CHECK(text.find("(spill)") != std::string::npos);
+}
