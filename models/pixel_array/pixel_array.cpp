@@ -34,6 +34,7 @@ PixelArray::PixelArray(const PixelArrayGeometry& geometry) : geometry_(geometry)
   carry_.assign(words_, 0);
   stack_.assign(static_cast<std::size_t>(geometry.enable_stack_depth) * words_, 0);
   zeros_.assign(words_, 0);
+  sign_copy_.assign(static_cast<std::size_t>(words_) * 2, 0);
   ones_.assign(words_, kAllOnes);
 }
 
@@ -48,9 +49,12 @@ Bits PixelArray::bits_of(const Field& field) const {
 
 Bits PixelArray::bits_of_constant(std::int64_t value) const {
   Bits b;
-  b.width = Bits::kMaxBits;
   const auto u = static_cast<std::uint64_t>(value);
-  for (int i = 0; i < Bits::kMaxBits; ++i) b.plane[i] = ((u >> i) & 1) ? ones() : zeros();
+  // The fewest bits that, extended by the sign, give the value back: a compare or an add
+  // with a small constant walks no more planes than its field needs.
+  const std::uint64_t magnitude = value < 0 ? ~u : u;
+  b.width = magnitude == 0 ? 1 : std::min(Bits::kMaxBits, 65 - __builtin_clzll(magnitude));
+  for (int i = 0; i < b.width; ++i) b.plane[i] = ((u >> i) & 1) ? ones() : zeros();
   b.extension = value < 0 ? ones() : zeros();
   return b;
 }
@@ -118,65 +122,79 @@ WordRange PixelArray::active_words() const {
   return active_;
 }
 
-void PixelArray::assign(const Field& dst, const Bits& src) {
-  check_field(dst, geometry_.memory_bits, "assign");
+Bits PixelArray::stable(const Bits& src, const Field& dst, int slot) {
+  // A signed source narrower than a destination at its own alignment extends with its top
+  // plane, which the walk overwrites before it reads the extension: keep the old sign.
+  const Word* first = plane(dst.lo);
+  const Word* last = plane(dst.lo + dst.width - 1);
+  if (src.extension < first || src.extension > last) return src;
+  Word* copy = &sign_copy_[static_cast<std::size_t>(slot) * words_];
   const WordRange r = active_words();
-  for (int w = r.begin; w < r.end; ++w) {
-    const Word e = enable_[w];
-    for (int i = 0; i < dst.width; ++i) {
-      Word* d = plane(dst.lo + i) + w;
-      *d = (src.bit(i)[w] & e) | (*d & ~e);
+  std::copy(src.extension + r.begin, src.extension + r.end, copy + r.begin);
+  Bits b = src;
+  b.extension = copy;
+  return b;
+}
+
+// The ALU walks plane by plane (the bit-serial order) over the active words, keeping one
+// carry per pixel in the carry register: every inner loop is a straight pass over a few
+// contiguous rows of words.
+void PixelArray::assign(const Field& dst, const Bits& src_in) {
+  check_field(dst, geometry_.memory_bits, "assign");
+  const Bits src = stable(src_in, dst, 0);
+  const WordRange r = active_words();
+  const Word* e = enable_.data();
+  for (int i = 0; i < dst.width; ++i) {
+    const Word* x = src.bit(i);
+    Word* d = plane(dst.lo + i);
+    for (int w = r.begin; w < r.end; ++w) d[w] = (x[w] & e[w]) | (d[w] & ~e[w]);
+  }
+}
+
+void PixelArray::add_walk(const Field& dst, const Bits& a, const Bits& b, bool subtract) {
+  const WordRange r = active_words();
+  const Word* e = enable_.data();
+  Word* c = carry_.data();
+  const Word invert = subtract ? kAllOnes : 0;  // a - b = a + ~b + 1
+  for (int w = r.begin; w < r.end; ++w) c[w] = invert;
+  for (int i = 0; i < dst.width; ++i) {
+    const Word* x = a.bit(i);
+    const Word* y = b.bit(i);
+    Word* d = plane(dst.lo + i);
+    for (int w = r.begin; w < r.end; ++w) {
+      const Word yw = y[w] ^ invert;
+      const Word s = x[w] ^ yw ^ c[w];
+      c[w] = majority(x[w], yw, c[w]);
+      d[w] = (s & e[w]) | (d[w] & ~e[w]);
     }
   }
 }
 
 void PixelArray::add(const Field& dst, const Bits& a, const Bits& b) {
   check_field(dst, geometry_.memory_bits, "add");
-  const WordRange r = active_words();
-  for (int w = r.begin; w < r.end; ++w) {
-    const Word e = enable_[w];
-    Word c = 0;
-    for (int i = 0; i < dst.width; ++i) {
-      const Word x = a.bit(i)[w];
-      const Word y = b.bit(i)[w];
-      Word* d = plane(dst.lo + i) + w;
-      const Word s = x ^ y ^ c;
-      c = majority(x, y, c);
-      *d = (s & e) | (*d & ~e);
-    }
-    carry_[w] = c;
-  }
+  add_walk(dst, stable(a, dst, 0), stable(b, dst, 1), false);
 }
 
 void PixelArray::sub(const Field& dst, const Bits& a, const Bits& b) {
   check_field(dst, geometry_.memory_bits, "sub");
-  const WordRange r = active_words();
-  for (int w = r.begin; w < r.end; ++w) {
-    const Word e = enable_[w];
-    Word c = kAllOnes;  // a + ~b + 1
-    for (int i = 0; i < dst.width; ++i) {
-      const Word x = a.bit(i)[w];
-      const Word y = ~b.bit(i)[w];
-      Word* d = plane(dst.lo + i) + w;
-      const Word s = x ^ y ^ c;
-      c = majority(x, y, c);
-      *d = (s & e) | (*d & ~e);
-    }
-    carry_[w] = c;
-  }
+  add_walk(dst, stable(a, dst, 0), stable(b, dst, 1), true);
 }
 
-void PixelArray::logic(const Field& dst, const Bits& a, const Bits& b, Logic op) {
+void PixelArray::logic(const Field& dst, const Bits& a_in, const Bits& b_in, Logic op) {
   check_field(dst, geometry_.memory_bits, "logic");
+  const Bits a = stable(a_in, dst, 0);
+  const Bits b = stable(b_in, dst, 1);
   const WordRange r = active_words();
-  for (int w = r.begin; w < r.end; ++w) {
-    const Word e = enable_[w];
-    for (int i = 0; i < dst.width; ++i) {
-      const Word x = a.bit(i)[w];
-      const Word y = b.bit(i)[w];
-      const Word s = op == Logic::and_ ? (x & y) : op == Logic::or_ ? (x | y) : (x ^ y);
-      Word* d = plane(dst.lo + i) + w;
-      *d = (s & e) | (*d & ~e);
+  const Word* e = enable_.data();
+  for (int i = 0; i < dst.width; ++i) {
+    const Word* x = a.bit(i);
+    const Word* y = b.bit(i);
+    Word* d = plane(dst.lo + i);
+    for (int w = r.begin; w < r.end; ++w) {
+      const Word s = op == Logic::and_  ? (x[w] & y[w])
+                     : op == Logic::or_ ? (x[w] | y[w])
+                                        : (x[w] ^ y[w]);
+      d[w] = (s & e[w]) | (d[w] & ~e[w]);
     }
   }
 }
@@ -184,9 +202,9 @@ void PixelArray::logic(const Field& dst, const Bits& a, const Bits& b, Logic op)
 void PixelArray::invert(const Field& dst) {
   check_field(dst, geometry_.memory_bits, "not");
   const WordRange r = active_words();
-  for (int w = r.begin; w < r.end; ++w) {
-    const Word e = enable_[w];
-    for (int i = 0; i < dst.width; ++i) plane(dst.lo + i)[w] ^= e;
+  for (int i = 0; i < dst.width; ++i) {
+    Word* d = plane(dst.lo + i);
+    for (int w = r.begin; w < r.end; ++w) d[w] ^= enable_[w];
   }
 }
 
@@ -200,30 +218,41 @@ void PixelArray::check_no_overlap(const Field& dst, const Bits& src, const char*
   }
 }
 
+// dst[j..] += (a << j) masked by `gate` (per pixel), under E; the carry register holds the
+// chain. `negate` adds the two's complement instead.
+void PixelArray::shifted_add(const Field& dst, const Bits& a, int j, const Word* gate,
+                             bool negate) {
+  const WordRange r = active_words();
+  const Word* e = enable_.data();
+  Word* c = carry_.data();
+  const Word flip = negate ? kAllOnes : 0;
+  for (int w = r.begin; w < r.end; ++w) c[w] = gate ? (flip & gate[w]) : flip;
+  for (int i = j; i < dst.width; ++i) {
+    const Word* x = a.bit(i - j);
+    Word* d = plane(dst.lo + i);
+    for (int w = r.begin; w < r.end; ++w) {
+      const Word g = gate ? gate[w] : kAllOnes;
+      const Word xw = (x[w] ^ flip) & g;
+      const Word s = d[w] ^ xw ^ c[w];
+      c[w] = majority(d[w], xw, c[w]);
+      d[w] = (s & e[w]) | (d[w] & ~e[w]);
+    }
+  }
+}
+
 void PixelArray::multiply(const Field& dst, const Bits& a, const Bits& b) {
   check_field(dst, geometry_.memory_bits, "mul");
   check_no_overlap(dst, a, "mul");
   check_no_overlap(dst, b, "mul");
   const WordRange r = active_words();
-  for (int w = r.begin; w < r.end; ++w) {
-    const Word e = enable_[w];
-    for (int i = 0; i < dst.width; ++i) {
-      Word* d = plane(dst.lo + i) + w;
-      *d &= ~e;
-    }
-    Word c = 0;
-    for (int j = 0; j < dst.width; ++j) {
-      const Word bj = b.bit(j)[w];
-      c = 0;
-      for (int i = j; i < dst.width; ++i) {
-        const Word x = a.bit(i - j)[w] & bj;
-        Word* d = plane(dst.lo + i) + w;
-        const Word s = *d ^ x ^ c;
-        c = majority(*d, x, c);
-        *d = (s & e) | (*d & ~e);
-      }
-    }
-    carry_[w] = c;
+  for (int i = 0; i < dst.width; ++i) {
+    Word* d = plane(dst.lo + i);
+    for (int w = r.begin; w < r.end; ++w) d[w] &= ~enable_[w];
+  }
+  for (int j = 0; j < dst.width; ++j) {
+    const Word* bj = b.bit(j);
+    if (bj == zeros()) continue;  // a bit beyond an unsigned multiplier adds nothing
+    shifted_add(dst, a, j, bj, false);
   }
 }
 
@@ -233,59 +262,53 @@ void PixelArray::multiply_accumulate(const Field& dst, const Bits& a, std::int64
   const bool negative = k < 0;
   const std::uint64_t magnitude =
       negative ? std::uint64_t{0} - static_cast<std::uint64_t>(k) : static_cast<std::uint64_t>(k);
-  const WordRange r = active_words();
   for (int j = 0; j < dst.width && j < 64; ++j) {
-    if (((magnitude >> j) & 1) == 0) continue;
-    for (int w = r.begin; w < r.end; ++w) {
-      const Word e = enable_[w];
-      Word c = negative ? kAllOnes : 0;
-      for (int i = j; i < dst.width; ++i) {
-        const Word x = negative ? ~a.bit(i - j)[w] : a.bit(i - j)[w];
-        Word* d = plane(dst.lo + i) + w;
-        const Word s = *d ^ x ^ c;
-        c = majority(*d, x, c);
-        *d = (s & e) | (*d & ~e);
-      }
-      carry_[w] = c;
-    }
+    if (((magnitude >> j) & 1) != 0) shifted_add(dst, a, j, nullptr, negative);
   }
 }
 
 void PixelArray::compare(const Bits& a, const Bits& b, Compare cmp) {
   const int n = std::max(a.width, b.width) + 2;
   const WordRange r = active_words();
+  Word* c = carry_.data();
+  Word* nonzero = &sign_copy_[0];
+  Word* sign = &sign_copy_[static_cast<std::size_t>(words_)];
   for (int w = r.begin; w < r.end; ++w) {
-    Word c = kAllOnes;  // a - b = a + ~b + 1
-    Word nonzero = 0;
-    Word s = 0;
-    for (int i = 0; i < n; ++i) {
-      const Word x = a.bit(i)[w];
-      const Word y = ~b.bit(i)[w];
-      s = x ^ y ^ c;
-      c = majority(x, y, c);
-      nonzero |= s;
+    c[w] = kAllOnes;  // a - b = a + ~b + 1
+    nonzero[w] = 0;
+  }
+  for (int i = 0; i < n; ++i) {
+    const Word* x = a.bit(i);
+    const Word* y = b.bit(i);
+    for (int w = r.begin; w < r.end; ++w) {
+      const Word yw = ~y[w];
+      const Word s = x[w] ^ yw ^ c[w];
+      c[w] = majority(x[w], yw, c[w]);
+      nonzero[w] |= s;
+      sign[w] = s;
     }
-    carry_[w] = c;
-    const Word lt = s;  // sign of the exact difference
+  }
+  for (int w = r.begin; w < r.end; ++w) {
+    const Word lt = sign[w];  // sign of the exact difference
     Word result = 0;
     switch (cmp) {
       case Compare::lt:
         result = lt;
         break;
       case Compare::le:
-        result = lt | ~nonzero;
+        result = lt | ~nonzero[w];
         break;
       case Compare::eq:
-        result = ~nonzero;
+        result = ~nonzero[w];
         break;
       case Compare::ne:
-        result = nonzero;
+        result = nonzero[w];
         break;
       case Compare::ge:
         result = ~lt;
         break;
       case Compare::gt:
-        result = ~lt & nonzero;
+        result = ~lt & nonzero[w];
         break;
     }
     enable_[w] &= result;

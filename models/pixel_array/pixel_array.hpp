@@ -116,6 +116,10 @@ class PixelArray {
  private:
   void mark_enable_changed() { active_valid_ = false; }
   void check_no_overlap(const Field& dst, const Bits& src, const char* what) const;
+  // `src`, with its extension plane copied aside if it lies inside `dst` (slot 0 or 1).
+  Bits stable(const Bits& src, const Field& dst, int slot);
+  void add_walk(const Field& dst, const Bits& a, const Bits& b, bool subtract);
+  void shifted_add(const Field& dst, const Bits& a, int j, const Word* gate, bool negate);
   Word* backing_plane(int bit);
 
   PixelArrayGeometry geometry_;
@@ -127,7 +131,8 @@ class PixelArray {
   int stack_top_ = 0;
   std::vector<Word> zeros_;
   std::vector<Word> ones_;
-  std::vector<Word> backing_;  // allocated on first use: only programs that spill pay for it
+  std::vector<Word> sign_copy_;  // two planes: saved extension planes, or compare's state
+  std::vector<Word> backing_;    // allocated on first use: only programs that spill pay for it
   mutable WordRange active_{};
   mutable bool active_valid_ = false;
 };
