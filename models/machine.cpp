@@ -10,8 +10,6 @@
 
 namespace pp5 {
 
-namespace {
-
 GeometryParams geometry_params(const MachineConfig& c) {
   GeometryParams g;
   g.screen_width = c.screen.width;
@@ -24,8 +22,6 @@ GeometryParams geometry_params(const MachineConfig& c) {
   g.coefficient_bits = c.evaluator.coefficient_bits;
   return g;
 }
-
-}  // namespace
 
 TimingParams timing_params(const MachineConfig& c) {
   TimingParams t;

@@ -45,6 +45,8 @@ struct Bin {
   std::uint64_t words = 0;
 };
 
+// The machine configuration seen by each plain-C++ part.
+GeometryParams geometry_params(const MachineConfig& config);
 TimingParams timing_params(const MachineConfig& config);
 struct RendererBoardParams;
 RendererBoardParams board_params(const MachineConfig& config);

@@ -77,16 +77,7 @@ void shade_phong(RefPixel& p,
 
 RgbImage reference_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                          const std::string& mode) {
-  GeometryParams gp;
-  gp.screen_width = config.screen.width;
-  gp.screen_height = config.screen.height;
-  gp.region_width = config.renderer.region_width;
-  gp.region_height = config.renderer.region_height;
-  gp.subpixel_bits = config.gp.subpixel_bits;
-  gp.depth_bits = config.gp.depth_bits;
-  gp.fraction_bits = config.evaluator.fraction_bits;
-  gp.coefficient_bits = config.evaluator.coefficient_bits;
-  const GeometryEngine engine(gp, scene);
+  const GeometryEngine engine(geometry_params(config), scene);
   const auto params = engine.frame_parameters();
   const int frac = config.evaluator.fraction_bits;
   const int w = config.screen.width;
