@@ -139,7 +139,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   return result;
 }
 
-std::string bit_budget_table(const Program& program) {
+std::string bit_budget_table(const Program& program, const TimingParams& timing) {
   std::string out = fmt::format("{:<16} {:>5}  {}\n", "field", "bits", "where");
   for (const FieldDecl& f : program.fields) {
     out += fmt::format("{:<16} {:>5}  {}\n", f.name, f.width,
@@ -152,17 +152,23 @@ std::string bit_budget_table(const Program& program) {
   }
   out += fmt::format("{:<16} {:>5}  of {} bits ({:.0f}%)\n", "total", program.bits_used(),
                      program.memory_bits, 100.0 * program.bits_used() / program.memory_bits);
-  int transfers = 0;
-  for (const auto& p : program.procedures) transfers += p.spill_transfers;
-  if (transfers) {
-    out += fmt::format("spilling adds {} backing-store transfers to the procedures\n", transfers);
+  const PacketValues none{};
+  for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
+    const ProcedureCode& code = program.procedures[k];
+    if (code.spill_transfers == 0) continue;
+    std::uint64_t cycles = 0;
+    for (const Instruction& ins : code.code) {
+      if (ins.line == 0) cycles += instruction_cost(ins, timing, none).count;
+    }
+    out += fmt::format("spilling adds {} backing-store transfers, {} array cycles, to each '{}'\n",
+                       code.spill_transfers, cycles, kProcedureNames[k]);
   }
   return out;
 }
 
-std::string summary(const FrameResult& r, const Program& program) {
+std::string summary(const FrameResult& r, const Program& program, const TimingParams& timing) {
   const auto& s = r.stats;
-  std::string out = bit_budget_table(program);
+  std::string out = bit_budget_table(program, timing);
   out += fmt::format("\nframe: {} triangles, {} packets, simulated {:.3f} ms ({} array cycles)\n",
                      s["frame"]["triangles"].get<std::uint64_t>(),
                      s["setup"]["packets"].get<std::uint64_t>(), r.frame_seconds * 1e3,

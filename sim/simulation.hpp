@@ -23,8 +23,8 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
                            int threads);
 
 // The bit-budget table and the headline figures, as printed after a run.
-std::string bit_budget_table(const Program& program);
-std::string summary(const FrameResult& result, const Program& program);
+std::string bit_budget_table(const Program& program, const TimingParams& timing);
+std::string summary(const FrameResult& result, const Program& program, const TimingParams& timing);
 
 // Writes `text` to `path` through a temporary file and a rename.
 void write_file_atomically(const std::string& path, const std::string& text);

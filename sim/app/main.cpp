@@ -179,7 +179,7 @@ int main(int argc, char** argv) {
 
     std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n\n", scene.name,
                              scene.mesh.triangles.size(), program.name);
-    std::cout << summary(result, program);
+    std::cout << summary(result, program, timing_params(config));
     std::cout << fmt::format("\nwrote {}/frame.png, {}/config.json, {}/stats.json\n", out_dir,
                              out_dir, out_dir);
     return 0;
