@@ -2,7 +2,7 @@
 # Installs pp5sim's build and test dependencies from Debian 12's packages.
 set -euo pipefail
 packages=(
-  build-essential cmake ninja-build pkg-config git
+  build-essential cmake ninja-build pkg-config python3
   libsystemc-dev libglm-dev libfmt-dev catch2 nlohmann-json3-dev libcli11-dev libpng-dev
   libbenchmark-dev
 )
