@@ -1,0 +1,105 @@
+// The reference subcommands: pp5sim isa, asm, config and scenes.
+#include <fmt/format.h>
+
+#include <iostream>
+#include <memory>
+
+#include "firmware/assembler/assembler.hpp"
+#include "firmware/isa/isa.hpp"
+#include "models/machine.hpp"
+#include "sim/app/commands.hpp"
+#include "sim/scene/scene.hpp"
+
+namespace pp5 {
+
+namespace {
+
+std::string isa_reference() {
+  std::string out = "| instruction | operands | effect | cycles |\n|---|---|---|---|\n";
+  for (const auto& i : instruction_table()) {
+    out += fmt::format("| `{}` | {} | {} | {} |\n", i.syntax, i.operands[0] ? i.operands : "-",
+                       markdown_cell(i.effect), markdown_cell(i.cycles));
+  }
+  out +=
+      "\nOperand letters: F field (written), R field (read), V field or constant, K constant "
+      "(integer or frame parameter), E expression, B backing-store block.\n"
+      "Conditions: lt le eq ne ge gt.\n\nExpressions (procedure triangle only):\n\n";
+  for (const auto& e : kExpressions) out += fmt::format("- `{}`: {}\n", e.name, e.meaning);
+  out += "\nFrame parameters (any procedure):\n\n";
+  for (const auto& p : kParameters) out += fmt::format("- `{}`: {}\n", p.name, p.meaning);
+  out += "\nProcedures:\n\n";
+  for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
+    out += fmt::format("- `{}`: {}\n", kProcedureNames[k], kProcedureMeaning[k]);
+  }
+  return out;
+}
+
+struct ConfigOptions {
+  std::string path;
+  std::vector<std::string> sets;
+  bool describe = false;
+  std::string program;
+};
+
+}  // namespace
+
+Command add_isa_command(CLI::App& app) {
+  auto* isa =
+      app.add_subcommand("isa", "Print the micro-instruction set and the firmware interface");
+  return {isa, [] {
+            std::cout << isa_reference();
+            return 0;
+          }};
+}
+
+Command add_asm_command(CLI::App& app) {
+  auto o = std::make_shared<ConfigOptions>();
+  auto* cmd =
+      app.add_subcommand("asm", "Assemble a firmware program and print its field map and listing");
+  cmd->add_option("program", o->program, "A .pp5 file or a built-in program name")->required();
+  add_config_options(*cmd, o->path, o->sets);
+  return {cmd, [o] {
+            const MachineConfig config = load_config(o->path, o->sets);
+            const Program program =
+                assemble_file(resolve_firmware(o->program), assembler_options(config));
+            std::cout << listing(program, timing_params(config));
+            return 0;
+          }};
+}
+
+Command add_config_command(CLI::App& app) {
+  auto o = std::make_shared<ConfigOptions>();
+  auto* cmd = app.add_subcommand(
+      "config", "Print the resolved machine configuration as JSON, or describe every parameter");
+  add_config_options(*cmd, o->path, o->sets);
+  cmd->add_flag("--describe", o->describe,
+                "A table of every parameter: default, range, unit, source, meaning");
+  return {cmd, [o] {
+            if (!o->describe) {
+              std::cout << load_config(o->path, o->sets).to_json().dump(2) << "\n";
+              return 0;
+            }
+            std::cout << "| key | default | range | unit | conf. | meaning |\n"
+                         "|---|---|---|---|---|---|\n";
+            for (const auto& p : describe_parameters()) {
+              std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", p.key,
+                                       p.default_value, p.range, p.unit, p.confidence,
+                                       markdown_cell(p.description));
+            }
+            std::cout << "\nConfidence: P published (SIGGRAPH 1989), S secondary source, A "
+                         "assumption.\n";
+            return 0;
+          }};
+}
+
+Command add_scenes_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("scenes", "List the built-in scenes");
+  return {cmd, [] {
+            for (const auto& name : builtin_scene_names()) {
+              std::cout << fmt::format("{:<14} {}\n", name, make_builtin_scene(name).description);
+            }
+            return 0;
+          }};
+}
+
+}  // namespace pp5

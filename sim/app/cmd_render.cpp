@@ -1,0 +1,84 @@
+// pp5sim render: one frame of a scene, its image and its reports.
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/machine.hpp"
+#include "sim/app/commands.hpp"
+#include "sim/image/png_writer.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
+
+namespace fs = std::filesystem;
+
+namespace pp5 {
+
+namespace {
+
+struct RenderOptions {
+  std::string scene_name = "torus";
+  std::string firmware = "phong";
+  std::string config_path;
+  std::vector<std::string> sets;
+  std::string out_dir;
+  int threads = default_threads();
+  std::vector<int> tessellation;
+};
+
+int run_render(RenderOptions o) {
+  const MachineConfig config = load_config(o.config_path, o.sets);
+  SceneOptions scene_options;
+  if (o.tessellation.size() == 2) {
+    scene_options.tessellation_u = o.tessellation[0];
+    scene_options.tessellation_v = o.tessellation[1];
+  }
+  const Scene scene = make_builtin_scene(o.scene_name, scene_options);
+  const Program program = assemble_file(resolve_firmware(o.firmware), assembler_options(config));
+  if (o.out_dir.empty()) o.out_dir = (fs::path("out") / o.scene_name).string();
+  fs::create_directories(o.out_dir);
+
+  const FrameResult result = simulate_frame(config, scene, program, o.threads);
+  const fs::path dir(o.out_dir);
+  write_png((dir / "frame.png").string(), result.image);
+  write_file_atomically((dir / "config.json").string(), config.to_json().dump(2) + "\n");
+  write_file_atomically((dir / "stats.json").string(), result.stats.dump(2) + "\n");
+
+  std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n\n", scene.name,
+                           scene.mesh.triangles.size(), program.name);
+  std::cout << summary(result, program, timing_params(config));
+  std::cout << fmt::format("\nwrote {}/frame.png, {}/config.json, {}/stats.json\n", o.out_dir,
+                           o.out_dir, o.out_dir);
+  return 0;
+}
+
+}  // namespace
+
+Command add_render_command(CLI::App& app) {
+  auto o = std::make_shared<RenderOptions>();
+  auto* render = app.add_subcommand("render", "Render one frame of a scene and write its reports");
+  render->add_option("-s,--scene", o->scene_name, "Built-in scene: torus, two-triangles, sphere")
+      ->capture_default_str();
+  render
+      ->add_option("-f,--firmware", o->firmware,
+                   "Firmware program: a .pp5 file, or a name in firmware/programs "
+                   "(flat, gouraud, phong)")
+      ->capture_default_str();
+  add_config_options(*render, o->config_path, o->sets);
+  render->add_option("-o,--out", o->out_dir,
+                     "Output folder for frame.png, config.json and stats.json [out/SCENE]");
+  render
+      ->add_option("-j,--threads", o->threads,
+                   "Host threads for the pixel arrays (results are identical for any number)")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  render
+      ->add_option("--tessellation", o->tessellation,
+                   "Tessellation U V of the torus or sphere (default 128 32 and 64 32)")
+      ->expected(2);
+  return {render, [o] { return run_render(*o); }};
+}
+
+}  // namespace pp5

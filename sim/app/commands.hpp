@@ -1,0 +1,42 @@
+#pragma once
+// The subcommands of pp5sim. Each lives in its own file, sim/app/cmd_NAME.cpp, and is added to
+// the program by one line in main.cpp: add_NAME_command registers its options on the CLI11 app
+// and returns the function that runs it once the command line has been parsed.
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "sim/config/machine_config.hpp"
+
+namespace pp5 {
+
+struct Command {
+  CLI::App* app = nullptr;   // the subcommand, to test whether it was given
+  std::function<int()> run;  // its action; returns the exit status
+};
+
+Command add_render_command(CLI::App& app);
+Command add_isa_command(CLI::App& app);
+Command add_asm_command(CLI::App& app);
+Command add_config_command(CLI::App& app);
+Command add_scenes_command(CLI::App& app);
+
+// Shared by the commands.
+
+// A firmware argument is a path, or the name of a program in firmware/programs.
+std::string resolve_firmware(const std::string& name);
+
+// The defaults, or a JSON file, then the --set KEY=VALUE overrides.
+MachineConfig load_config(const std::string& path, const std::vector<std::string>& sets);
+
+// The usual --config and --set options, bound to `path` and `sets`.
+void add_config_options(CLI::App& command, std::string& path, std::vector<std::string>& sets);
+
+// Markdown table cells must not contain a bare '|'.
+std::string markdown_cell(const std::string& text);
+
+// A sensible default for --threads: the host's hardware threads.
+int default_threads();
+
+}  // namespace pp5
