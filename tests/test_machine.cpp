@@ -61,8 +61,10 @@ TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[
   std::vector<std::uint64_t> expected(config.renderer.count, 0);
   std::uint64_t packets = 0;
   for (std::size_t region = 0; region < per_region.size(); ++region) {
-    expected[region % config.renderer.count] +=
-        overhead + clear + per_region[region] * (overhead + tri);
+    // Each finished region's colours are copied to the backing store (one 32-bit block).
+    expected[region % config.renderer.count] += overhead + clear +
+                                                per_region[region] * (overhead + tri) +
+                                                config.renderer.backing_store_cycles_per_block;
     packets += per_region[region];
   }
   CHECK(packets == r.stats["setup"]["packets"].get<std::uint64_t>());
@@ -84,30 +86,41 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   const FrameResult r = simulate_frame(config, scene, program, 1);
   REQUIRE(r.stats["setup"]["packets"].get<std::uint64_t>() == 2);
 
-  // The critical path, unit by unit: the GP transforms and sets up both triangles and
-  // starts its one bin; the ring carries the bin one hop; the Renderer runs clear and two
-  // triangle packets; the ring carries the region one hop to the frame buffer.
+  // The critical path, unit by unit: the GP transforms and sets up both triangles (the i860
+  // cost model's clocks) and starts its one message; the ring carries the bin one hop; the
+  // Renderer, which ran clear while it waited, runs two triangle packets, copies the colours
+  // to the backing store, and the ring carries the region one hop to the frame buffer.
   const int expressions =
       static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
-  const double gp_clocks = 2.0 * config.gp.clocks_per_triangle +
-                           2.0 * expressions * config.gp.clocks_per_expression +
-                           config.gp.clocks_per_bin;
   const int per_coefficient =
       (config.evaluator.coefficient_bits + config.ring.word_bits - 1) / config.ring.word_bits;
   const double packet_words = 1 + expressions * 3 * per_coefficient;
+  GpWorkload workload;
+  workload.expressions = program.procedure(Procedure::triangle).expressions;
+  workload.packet_words = static_cast<std::uint64_t>(packet_words);
+  const I860Model i860(i860_params(config));
+  const double gp_clocks =
+      static_cast<double>(i860.clocks(I860Work::triangle(workload, 1, 1, 1), 1).count) * 2 +
+      static_cast<double>(i860.clocks(I860Work::send_bin(), 0).count);
+  CHECK(r.stats["gp"][0]["busy_clocks"].get<double>() == gp_clocks);
   const double bin_words = 1 + 2 * packet_words;
   const TimingParams timing = timing_params(config);
   const PacketValues none{};
+  const double clear_cycles =
+      config.renderer.packet_overhead_cycles +
+      procedure_cost(program.procedure(Procedure::clear), timing, none).count;
   const double renderer_cycles =
-      3.0 * config.renderer.packet_overhead_cycles +
-      procedure_cost(program.procedure(Procedure::clear), timing, none).count +
-      2.0 * procedure_cost(program.procedure(Procedure::triangle), timing, none).count;
+      2.0 * (config.renderer.packet_overhead_cycles +
+             procedure_cost(program.procedure(Procedure::triangle), timing, none).count) +
+      config.renderer.backing_store_cycles_per_block;
   const double region_words =
       128.0 * 128 * config.frame_buffer.bits_per_pixel / config.ring.word_bits;
   const double hop = config.ring.hop_latency_cycles;
-  const double expected =
-      gp_clocks / config.gp.clock_hz + (bin_words + hop) / config.ring.clock_hz +
-      renderer_cycles / config.renderer.clock_hz + (region_words + hop) / config.ring.clock_hz;
+  const double bin_arrival =
+      gp_clocks / config.gp.clock_hz + (bin_words + hop) / config.ring.clock_hz;
+  REQUIRE(clear_cycles / config.renderer.clock_hz < bin_arrival);
+  const double expected = bin_arrival + renderer_cycles / config.renderer.clock_hz +
+                          (region_words + hop) / config.ring.clock_hz;
   // Not one array cycle early, and on time (to SystemC's picosecond resolution).
   CHECK(r.frame_seconds == Approx(expected).margin(1e-11));
   CHECK(r.frame_seconds > expected - 1.0 / config.renderer.clock_hz);

@@ -25,11 +25,8 @@ void GraphicsProcessor::run() {
   const MachineConfig& config = machine_.config();
   const GeometryEngine& geometry = machine_.geometry();
   const ProcedureCode& triangle = machine_.program().procedure(Procedure::triangle);
-  const int expressions = static_cast<int>(triangle.expressions.count());
-  const std::uint64_t words = machine_.packet_words(expressions);
-  const GpClocks per_triangle(config.gp.clocks_per_triangle);
-  const GpClocks per_setup(static_cast<std::uint64_t>(config.gp.clocks_per_expression) *
-                           expressions);
+  const GpWorkload& workload = machine_.gp_workload();
+  const std::uint64_t words = workload.packet_words;
 
   std::vector<std::shared_ptr<Bin>> bins(config.regions());
   for (int r = 0; r < config.regions(); ++r) {
@@ -43,10 +40,11 @@ void GraphicsProcessor::run() {
     screen.clear();
     geometry.transform(i, screen, stats_.setup);
     ++stats_.triangles_in;
-    GpClocks clocks = per_triangle;
+    int setups = 0;
+    int binned = 0;
     for (const ScreenTriangle& t : screen) {
       ++stats_.screen_triangles;
-      clocks += per_setup;
+      ++setups;
       SetupResult result;
       if (!geometry.setup(t, triangle.expressions, result, stats_.setup)) continue;
       auto packet = std::make_shared<Packet>();
@@ -60,27 +58,80 @@ void GraphicsProcessor::run() {
         bins[r]->packets.push_back(packet);
         bins[r]->words += words;
         ++stats_.packets;
+        ++binned;
       }
     }
-    spend(clocks);
+    const OpCounts ops =
+        I860Work::triangle(workload, static_cast<int>(screen.size()), setups, binned);
+    stats_.ops += ops;
+    stats_.geometry += machine_.i860().clocks(ops, 1);
   }
-  // One header word per bin, so an empty bin still tells its Renderer this GP is done. A
-  // multipass program gets the same packets again for every pass, after the previous pass's
-  // bins have all gone: the GP keeps its set-up packets, so only the sending repeats.
+  // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
+  stats_.busy += stats_.geometry;
+  wait(clock_ * static_cast<double>(stats_.geometry.count));
+  stats_.geometry_done = sc_core::sc_time_stamp();
+  machine_.add_slice(Unit::gp, index_, "geometry", sc_core::SC_ZERO_TIME, stats_.geometry_done);
+
+  // Bins go out as their Renderers open (pass, region) stages, lowest first. A multipass
+  // program gets the same packets again for every pass: the GP keeps its set-up packets, so
+  // only the sending repeats.
   const int passes = machine_.program().passes;
-  for (int r = 0; r < config.regions(); ++r) bins[r]->words += 1;
-  for (int pass = 0; pass < passes; ++pass) {
-    for (int r = 0; r < config.regions(); ++r) {
-      spend(GpClocks(config.gp.clocks_per_bin));
-      auto bin = pass + 1 < passes ? std::make_shared<Bin>(*bins[r]) : std::move(bins[r]);
-      bin->pass = pass;
-      const int renderer = machine_.renderer_of_region(r);
-      machine_.ring().transfer(machine_.gp_stop(index_), machine_.renderer_stop(renderer),
-                               bin->words);
-      machine_.renderer(renderer).deliver(std::move(bin));
+  const int n = config.regions();
+  std::vector<bool> sent(static_cast<std::size_t>(passes) * n, false);
+  int remaining = passes * n;
+  while (remaining > 0) {
+    int pick = -1;
+    for (int s = 0; s < passes * n && pick < 0; ++s) {
+      if (sent[s]) continue;
+      const int region = s % n;
+      const int owner = machine_.owner_of_region(region);
+      if (owner >= 0 && machine_.renderer(owner).accepts(region, s / n)) pick = s;
     }
+    if (pick < 0) {
+      const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+      wait(machine_.input_changed());
+      stats_.waiting_stage += sc_core::sc_time_stamp() - t0;
+      continue;
+    }
+    sent[pick] = true;
+    --remaining;
+    send(bins[pick % n], pick / n);
   }
   stats_.finished = sc_core::sc_time_stamp();
+}
+
+void GraphicsProcessor::send(std::shared_ptr<Bin> bin, int pass) {
+  const MachineConfig& config = machine_.config();
+  const int renderer_index = machine_.owner_of_region(bin->region);
+  Renderer& renderer = machine_.renderer(renderer_index);
+  const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
+  std::size_t next = 0;
+  // One header word per message, so an empty bin still tells its Renderer this GP is done.
+  do {
+    auto m = std::make_shared<BinMessage>();
+    m->region = bin->region;
+    m->pass = pass;
+    m->gp = index_;
+    m->words = 1;
+    while (next < bin->packets.size() && m->words + bin->packets[next]->words <= capacity) {
+      m->words += bin->packets[next]->words;
+      m->packets.push_back(bin->packets[next++]);
+    }
+    m->last = next == bin->packets.size();
+    spend(machine_.i860().clocks(I860Work::send_bin(), 0));
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    while (!renderer.has_room(m->words)) wait(machine_.input_changed());
+    stats_.waiting_queue += sc_core::sc_time_stamp() - t0;
+    m->requested = sc_core::sc_time_stamp();
+    const RingBooking b = machine_.ring().reserve(machine_.gp_stop(index_),
+                                                  machine_.renderer_stop(renderer_index), m->words);
+    m->arrival = b.arrival;
+    ++stats_.messages;
+    renderer.deliver(m);
+    // The GP's ring interface sends one message at a time.
+    stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
+    wait(b.end - sc_core::sc_time_stamp());
+  } while (next < bin->packets.size());
 }
 
 }  // namespace pp5
