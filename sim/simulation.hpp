@@ -19,8 +19,10 @@ struct FrameResult {
   double triangles_per_second = 0;  // projected for the real machine
 };
 
+// With `timeline`, the run also records every unit's activity and stores it there as a
+// Chrome trace-event document (ui.perfetto.dev and chrome://tracing open it).
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
-                           int threads);
+                           int threads, nlohmann::json* timeline = nullptr);
 
 // The bit-budget table and the headline figures, as printed after a run.
 std::string bit_budget_table(const Program& program, const TimingParams& timing);

@@ -72,66 +72,81 @@ void GraphicsProcessor::run() {
   stats_.geometry_done = sc_core::sc_time_stamp();
   machine_.add_slice(Unit::gp, index_, "geometry", sc_core::SC_ZERO_TIME, stats_.geometry_done);
 
-  // Bins go out as their Renderers open (pass, region) stages, lowest first. A multipass
-  // program gets the same packets again for every pass: the GP keeps its set-up packets, so
-  // only the sending repeats.
+  // Bins go out as their Renderers open (pass, region) stages: each message goes to the
+  // lowest open stage whose Renderer's queue has room for it, so a full queue holds up only
+  // the bins bound for it. A multipass program gets the same packets again for every pass:
+  // the GP keeps its set-up packets, so only the sending repeats.
   const int passes = machine_.program().passes;
   const int n = config.regions();
-  std::vector<bool> sent(static_cast<std::size_t>(passes) * n, false);
-  int remaining = passes * n;
+  const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
+  std::vector<std::size_t> next(static_cast<std::size_t>(passes) * n, 0);
+  std::vector<bool> done(next.size(), false);
+  std::size_t remaining = next.size();
+  auto message_for = [&](int s) {
+    const Bin& bin = *bins[s % n];
+    auto m = std::make_shared<BinMessage>();
+    m->region = bin.region;
+    m->pass = s / n;
+    m->gp = index_;
+    m->words = 1;  // a header word, so an empty bin still tells its Renderer this GP is done
+    std::size_t k = next[s];
+    while (k < bin.packets.size() && m->words + bin.packets[k]->words <= capacity) {
+      m->words += bin.packets[k]->words;
+      m->packets.push_back(bin.packets[k++]);
+    }
+    m->last = k == bin.packets.size();
+    return m;
+  };
   while (remaining > 0) {
+    std::shared_ptr<BinMessage> m;
     int pick = -1;
+    bool open = false;
     for (int s = 0; s < passes * n && pick < 0; ++s) {
-      if (sent[s]) continue;
+      if (done[s]) continue;
       const int region = s % n;
       const int owner = machine_.owner_of_region(region);
-      if (owner >= 0 && machine_.renderer(owner).accepts(region, s / n)) pick = s;
+      if (owner < 0 || !machine_.renderer(owner).accepts(region, s / n)) continue;
+      open = true;
+      m = message_for(s);
+      if (machine_.renderer(owner).has_room(m->words)) pick = s;
     }
     if (pick < 0) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();
       wait(machine_.input_changed());
-      stats_.waiting_stage += sc_core::sc_time_stamp() - t0;
+      (open ? stats_.waiting_queue : stats_.waiting_stage) += sc_core::sc_time_stamp() - t0;
       continue;
     }
-    sent[pick] = true;
-    --remaining;
-    send(bins[pick % n], pick / n);
+    next[pick] += m->packets.size();
+    if (m->last) {
+      done[pick] = true;
+      --remaining;
+    }
+    send(std::move(m));
   }
   stats_.finished = sc_core::sc_time_stamp();
 }
 
-void GraphicsProcessor::send(std::shared_ptr<Bin> bin, int pass) {
-  const MachineConfig& config = machine_.config();
-  const int renderer_index = machine_.owner_of_region(bin->region);
+void GraphicsProcessor::send(std::shared_ptr<BinMessage> m) {
+  const int renderer_index = machine_.owner_of_region(m->region);
   Renderer& renderer = machine_.renderer(renderer_index);
-  const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
-  std::size_t next = 0;
-  // One header word per message, so an empty bin still tells its Renderer this GP is done.
-  do {
-    auto m = std::make_shared<BinMessage>();
-    m->region = bin->region;
-    m->pass = pass;
-    m->gp = index_;
-    m->words = 1;
-    while (next < bin->packets.size() && m->words + bin->packets[next]->words <= capacity) {
-      m->words += bin->packets[next]->words;
-      m->packets.push_back(bin->packets[next++]);
-    }
-    m->last = next == bin->packets.size();
-    spend(machine_.i860().clocks(I860Work::send_bin(), 0));
-    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
-    while (!renderer.has_room(m->words)) wait(machine_.input_changed());
-    stats_.waiting_queue += sc_core::sc_time_stamp() - t0;
-    m->requested = sc_core::sc_time_stamp();
-    const RingBooking b = machine_.ring().reserve(machine_.gp_stop(index_),
-                                                  machine_.renderer_stop(renderer_index), m->words);
-    m->arrival = b.arrival;
-    ++stats_.messages;
-    renderer.deliver(m);
-    // The GP's ring interface sends one message at a time.
-    stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
-    wait(b.end - sc_core::sc_time_stamp());
-  } while (next < bin->packets.size());
+  // Starting the message costs i860 clocks; the queue's room was checked before, and a
+  // Renderer only ever frees room, so it is still there.
+  spend(machine_.i860().clocks(I860Work::send_bin(), 0));
+  m->requested = sc_core::sc_time_stamp();
+  const RingBooking b = machine_.ring().reserve(machine_.gp_stop(index_),
+                                                machine_.renderer_stop(renderer_index), m->words);
+  m->arrival = b.arrival;
+  ++stats_.messages;
+  if (machine_.timeline_on()) {
+    machine_.add_slice(Unit::gp, index_,
+                       "send region " + std::to_string(m->region) + " to renderer" +
+                           std::to_string(renderer_index),
+                       m->requested, b.end);
+  }
+  renderer.deliver(std::move(m));
+  // The GP's ring interface sends one message at a time.
+  stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
+  wait(b.end - sc_core::sc_time_stamp());
 }
 
 }  // namespace pp5

@@ -42,7 +42,7 @@ class GraphicsProcessor : public sc_core::sc_module {
  private:
   void run();
   void spend(GpClocks clocks);
-  void send(std::shared_ptr<Bin> bin, int pass);
+  void send(std::shared_ptr<BinMessage> message);
 
   int index_;
   int first_;  // display-list range [first_, last_)
