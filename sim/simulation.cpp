@@ -24,11 +24,10 @@ namespace {
 // fresh kernel, so that one process can simulate many frames. The old context is left
 // alive on purpose: objects of the previous run may still refer to it while they unwind.
 void fresh_kernel() {
-  static bool first = true;
-  if (first) {
-    setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0);
-    first = false;
-    return;
+  setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0);
+  if (sc_core::sc_get_status() == sc_core::SC_ELABORATION && sc_core::sc_delta_count() == 0 &&
+      sc_core::sc_get_top_level_objects().empty()) {
+    return;  // an untouched kernel: use it
   }
   sc_core::sc_curr_simcontext = new sc_core::sc_simcontext();
   sc_core::sc_default_global_context = sc_core::sc_curr_simcontext;

@@ -116,6 +116,7 @@ void GraphicsProcessor::run() {
       (open ? stats_.waiting_queue : stats_.waiting_stage) += sc_core::sc_time_stamp() - t0;
       continue;
     }
+    machine_.renderer(machine_.owner_of_region(pick % n)).reserve_room(m->words);
     next[pick] += m->packets.size();
     if (m->last) {
       done[pick] = true;
@@ -129,8 +130,7 @@ void GraphicsProcessor::run() {
 void GraphicsProcessor::send(std::shared_ptr<BinMessage> m) {
   const int renderer_index = machine_.owner_of_region(m->region);
   Renderer& renderer = machine_.renderer(renderer_index);
-  // Starting the message costs i860 clocks; the queue's room was checked before, and a
-  // Renderer only ever frees room, so it is still there.
+  // Starting the message costs i860 clocks; its room in the queue is already reserved.
   spend(machine_.i860().clocks(I860Work::send_bin(), 0));
   m->requested = sc_core::sc_time_stamp();
   const RingBooking b = machine_.ring().reserve(machine_.gp_stop(index_),

@@ -16,9 +16,12 @@ Renderer::Renderer(sc_core::sc_module_name name, int index, Machine& machine)
   SC_THREAD(run);
 }
 
-void Renderer::deliver(std::shared_ptr<const BinMessage> message) {
-  queued_words_ += message->words;
+void Renderer::reserve_room(std::uint64_t words) {
+  queued_words_ += words;
   stats_.queue_peak_words = std::max(stats_.queue_peak_words, queued_words_);
+}
+
+void Renderer::deliver(std::shared_ptr<const BinMessage> message) {
   const bool last = message->last;
   queue_.push_back(std::move(message));
   if (last && ++lasts_delivered_ == machine_.gp_count()) open_next_stage();
@@ -58,10 +61,11 @@ void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values
     cycles = ArrayCycles{};
     const sc_core::sc_time length = cycle_ * static_cast<double>(cost.count);
     if (ins.op == Opcode::bsst) {
-      // The array reads the field out bit-serially; the port writes it while the array goes on.
-      const ArrayCycles read(static_cast<std::uint64_t>(ins.operands[0].field.width));
-      cursor_ += cycle_ * static_cast<double>(read.count);
-      stats_.busy += read;
+      // The array issues the store in one cycle; the port moves the blocks while the array
+      // goes on (a later write to the field is the firmware's to order after a load).
+      const ArrayCycles issue(1);
+      cursor_ += cycle_ * static_cast<double>(issue.count);
+      stats_.busy += issue;
       port_free_ = std::max(cursor_, port_free_) + length;
     } else {
       // A load's data must be in pixel memory before the next instruction can use it.

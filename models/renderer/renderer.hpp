@@ -9,9 +9,9 @@
 //  - Busy cycles are exactly the instruction table's cycles (plus packet decoding and the
 //    copy of finished colours to the backing store); time advances once per message or
 //    procedure block, never per cycle.
-//  - With renderer.backing_store_overlap, a bsst costs the array its operand's width in
-//    cycles and then occupies the backing-store port; a bsld waits for the port, then for
-//    its own transfer. Waiting for the port counts as a stall, not as busy.
+//  - With renderer.backing_store_overlap, a bsst costs the array one issue cycle and then
+//    occupies the backing-store port for its blocks; a bsld waits for the port, then for its
+//    own transfer. Waiting for the port counts as a stall, not as busy.
 //  - Every wait is attributed: to the GPs (no message yet) or to the ring (the message was
 //    asked for but is still crossing), so the frame time splits into GP, ring and Renderer.
 #include <deque>
@@ -61,6 +61,8 @@ class Renderer : public sc_core::sc_module {
   // The stage open for input, and room in the queue.
   bool accepts(int region, int pass) const { return open_region_ == region && open_pass_ == pass; }
   bool has_room(std::uint64_t words) const { return queued_words_ + words <= capacity_; }
+  // A GP takes room for its next message (after has_room), before it starts sending.
+  void reserve_room(std::uint64_t words);
   // A GP's message has been booked on the ring; it is in the queue from its arrival on.
   void deliver(std::shared_ptr<const BinMessage> message);
 
