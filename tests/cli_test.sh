@@ -32,4 +32,26 @@ grep -q "of 208 bits" "$tmp/ok.log" || fail "no bit-budget table"
 grep -q "projected throughput" "$tmp/ok.log" || fail "no throughput"
 ls "$tmp/ok" | grep -q tmp && fail "temporary file left behind"
 "$bin" --help | grep -q render || fail "--help does not list render"
+
+# Timeline and sweeps.
+"$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \
+  --out "$tmp/tl" --timeline "$tmp/tl/timeline.json" >"$tmp/tl.log" 2>&1 || fail "timeline run failed"
+grep -q '"traceEvents"' "$tmp/tl/timeline.json" || fail "no trace events"
+grep -q "bottleneck:" "$tmp/tl.log" || fail "no bottleneck in the summary"
+expect_error "unknown key 'gp.cont'" sweep --grid gp.cont=1,2 --out "$tmp/sw0"
+expect_error "'renderer.count'" sweep --grid renderer.count=1,99 --out "$tmp/sw0"
+expect_error "expected KEY=V1,V2" sweep --grid gp.count --out "$tmp/sw0"
+expect_error "swept twice" sweep --grid gp.count=1 --grid gp.count=2 --out "$tmp/sw0"
+[ -e "$tmp/sw0" ] && fail "a bad grid wrote output"
+n=$("$bin" sweep --grid gp.count=1,2 --grid renderer.count=1,2,4 --scene two-triangles \
+  --out "$tmp/sw1" --print-commands | grep -c " render ")
+[ "$n" = 6 ] || fail "--print-commands printed $n commands, expected 6"
+"$bin" sweep --grid gp.count=1,2 --grid renderer.balancing=static,dynamic --scene two-triangles \
+  --set screen.width=256 --set screen.height=128 --out "$tmp/sw" >/dev/null 2>&1 || fail "sweep failed"
+"$bin" sweep aggregate "$tmp/sw" -o "$tmp/sw.csv" >/dev/null || fail "aggregate failed"
+[ "$(wc -l < "$tmp/sw.csv")" = 5 ] || fail "sweep.csv: expected a header and 4 rows"
+head -1 "$tmp/sw.csv" | grep -q "^gp.count,renderer.balancing,frame_seconds" || fail "bad CSV header"
+"$bin" sweep plot "$tmp/sw.csv" -o "$tmp/sw.svg" >/dev/null || fail "plot failed"
+grep -q "<polyline" "$tmp/sw.svg" || fail "no lines in the plot"
+expect_error "no column 'nope'" sweep plot "$tmp/sw.csv" -y nope -o "$tmp/bad.svg"
 echo "1 passed, 0 failed"

@@ -377,10 +377,14 @@ int run_plot(const SweepOptions& o) {
   } else if (xc != 0 && csv.header[0] != metric_columns()[0].first) {
     sc = 0;
   }
-  std::map<double, std::vector<std::pair<double, double>>> series;
+  // Lines in the order their values first appear (the CSV is in grid order).
+  std::vector<std::pair<std::string, std::vector<std::pair<double, double>>>> series;
   for (const auto& row : csv.rows) {
-    const double s = sc >= 0 ? number(row[sc], o.plot_csv, csv.header[sc]) : 0;
-    series[s].push_back(
+    const std::string s = sc >= 0 ? row[sc] : "";
+    auto it =
+        std::find_if(series.begin(), series.end(), [&](const auto& e) { return e.first == s; });
+    if (it == series.end()) it = series.insert(series.end(), {s, {}});
+    it->second.push_back(
         {number(row[xc], o.plot_csv, x_name), number(row[yc], o.plot_csv, o.plot_y)});
   }
   double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
@@ -459,8 +463,8 @@ int run_plot(const SweepOptions& o) {
           "<line x1=\"{}\" x2=\"{}\" y1=\"{}\" y2=\"{}\" stroke=\"{}\" "
           "stroke-width=\"2\"/>\n",
           W - R + 12, W - R + 36, ly, ly, colour);
-      svg += fmt::format("<text x=\"{}\" y=\"{}\">{} = {:g}</text>\n", W - R + 42, ly + 4,
-                         svg_escape(csv.header[sc]), s);
+      svg += fmt::format("<text x=\"{}\" y=\"{}\">{} = {}</text>\n", W - R + 42, ly + 4,
+                         svg_escape(csv.header[sc]), svg_escape(s));
     }
     ++k;
   }
