@@ -129,7 +129,8 @@ nlohmann::json frame_attribution(Machine& machine, double frame_seconds, const n
       critical = k;
   }
   const RendererStats& st = machine.renderer(critical).stats();
-  const double renderer = (st.busy.count + st.stall.count) / config.renderer.clock_hz;
+  const double renderer = (st.busy.count + st.stall.count) / config.renderer.clock_hz +
+                          st.waiting_renderers.to_seconds();
   const double gps = st.waiting_gp.to_seconds();
   const double ring = st.waiting_ring.to_seconds() + st.waiting_ship.to_seconds() +
                       (st.finished - st.computed).to_seconds();
@@ -259,6 +260,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
                          {"utilisation", st.busy.seconds(array_hz) / result.frame_seconds},
                          {"waiting_for_gps_seconds", st.waiting_gp.to_seconds()},
                          {"waiting_for_ring_seconds", st.waiting_ring.to_seconds()},
+                         {"waiting_for_other_renderers_seconds", st.waiting_renderers.to_seconds()},
                          {"blocked_shipping_seconds", st.waiting_ship.to_seconds()},
                          {"regions", st.regions},
                          {"packets", st.packets},

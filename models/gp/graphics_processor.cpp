@@ -1,5 +1,8 @@
 #include "models/gp/graphics_processor.hpp"
 
+#include <algorithm>
+#include <iterator>
+
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -16,7 +19,46 @@ GraphicsProcessor::GraphicsProcessor(sc_core::sc_module_name name, int index, in
   SC_THREAD(run);
 }
 
+void GraphicsProcessor::begin(GpActivity a) {
+  const sc_core::sc_time now = sc_core::sc_time_stamp();
+  if (activity_.back().second == a) return;
+  if (activity_.back().first == now) {
+    activity_.back().second = a;
+  } else {
+    activity_.push_back({now, a});
+  }
+}
+
+GpActivityTimes GraphicsProcessor::activity(sc_core::sc_time from, sc_core::sc_time to) const {
+  GpActivityTimes t;
+  if (!(from < to)) return t;
+  auto it = std::upper_bound(activity_.begin(), activity_.end(), from,
+                             [](sc_core::sc_time v, const auto& e) { return v < e.first; });
+  if (it != activity_.begin()) --it;
+  for (; it != activity_.end() && it->first < to; ++it) {
+    const sc_core::sc_time a = std::max(from, it->first);
+    const sc_core::sc_time b =
+        std::next(it) == activity_.end() ? to : std::min(to, std::next(it)->first);
+    if (!(a < b)) continue;
+    const double d = (b - a).to_seconds();
+    switch (it->second) {
+      case GpActivity::compute:
+        t.compute += d;
+        break;
+      case GpActivity::ring:
+        t.ring += d;
+        break;
+      case GpActivity::renderer:
+      case GpActivity::done:
+        t.renderer += d;
+        break;
+    }
+  }
+  return t;
+}
+
 void GraphicsProcessor::spend(GpClocks clocks) {
+  begin(GpActivity::compute);
   stats_.busy += clocks;
   wait(clock_ * static_cast<double>(clocks.count));
 }
@@ -112,6 +154,7 @@ void GraphicsProcessor::run() {
     }
     if (pick < 0) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+      begin(GpActivity::renderer);
       wait(machine_.input_changed());
       (open ? stats_.waiting_queue : stats_.waiting_stage) += sc_core::sc_time_stamp() - t0;
       continue;
@@ -124,6 +167,7 @@ void GraphicsProcessor::run() {
     }
     send(std::move(m));
   }
+  begin(GpActivity::done);
   stats_.finished = sc_core::sc_time_stamp();
 }
 
@@ -145,6 +189,7 @@ void GraphicsProcessor::send(std::shared_ptr<BinMessage> m) {
   }
   renderer.deliver(std::move(m));
   // The GP's ring interface sends one message at a time.
+  begin(GpActivity::ring);
   stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
   wait(b.end - sc_core::sc_time_stamp());
 }

@@ -32,17 +32,31 @@ struct GpStats {
   sc_core::sc_time finished;
 };
 
+// What a GP is doing: computing, sending on the ring, or waiting for a Renderer (its queue
+// full, or no stage open for the GP's remaining bins).
+enum class GpActivity { compute, ring, renderer, done };
+
+// Time spent in each activity over an interval, in seconds.
+struct GpActivityTimes {
+  double compute = 0;
+  double ring = 0;
+  double renderer = 0;
+};
+
 class GraphicsProcessor : public sc_core::sc_module {
  public:
   SC_HAS_PROCESS(GraphicsProcessor);
   GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last, Machine& machine);
 
   const GpStats& stats() const { return stats_; }
+  // How the GP spent [from, to): so that a Renderer's wait for this GP can be attributed.
+  GpActivityTimes activity(sc_core::sc_time from, sc_core::sc_time to) const;
 
  private:
   void run();
   void spend(GpClocks clocks);
   void send(std::shared_ptr<BinMessage> message);
+  void begin(GpActivity a);
 
   int index_;
   int first_;  // display-list range [first_, last_)
@@ -50,6 +64,9 @@ class GraphicsProcessor : public sc_core::sc_module {
   Machine& machine_;
   sc_core::sc_time clock_;
   GpStats stats_;
+  // When each activity began, in time order.
+  std::vector<std::pair<sc_core::sc_time, GpActivity>> activity_{
+      {sc_core::SC_ZERO_TIME, GpActivity::compute}};
 };
 
 }  // namespace pp5

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "models/frame_buffer/frame_buffer.hpp"
+#include "models/gp/graphics_processor.hpp"
 #include "models/ring/ring.hpp"
 
 namespace pp5 {
@@ -170,7 +171,13 @@ void Renderer::run() {
       const sc_core::sc_time ring_from = std::max(waiting_from, m->requested);
       const sc_core::sc_time ring_part = now > ring_from ? now - ring_from : sc_core::SC_ZERO_TIME;
       stats_.waiting_ring += ring_part;
-      stats_.waiting_gp += (now - waiting_from) - ring_part;
+      // Before that, it was whatever the sending GP was doing: computing (the GPs' time),
+      // sending earlier messages (the ring's) or waiting for other Renderers (theirs).
+      const GpActivityTimes before =
+          machine_.gp(m->gp).activity(waiting_from, std::min(m->requested, now));
+      stats_.waiting_gp += sc_core::sc_time(before.compute, sc_core::SC_SEC);
+      stats_.waiting_ring += sc_core::sc_time(before.ring, sc_core::SC_SEC);
+      stats_.waiting_renderers += sc_core::sc_time(before.renderer, sc_core::SC_SEC);
       cursor_ = now;
       const sc_core::sc_time t0 = cursor_;
       for (const auto& packet : m->packets) {

@@ -12,8 +12,9 @@
 //  - With renderer.backing_store_overlap, a bsst costs the array one issue cycle and then
 //    occupies the backing-store port for its blocks; a bsld waits for the port, then for its
 //    own transfer. Waiting for the port counts as a stall, not as busy.
-//  - Every wait is attributed: to the GPs (no message yet) or to the ring (the message was
-//    asked for but is still crossing), so the frame time splits into GP, ring and Renderer.
+//  - Every wait is attributed, from the sending GP's activity: to the GPs (it was computing),
+//    the ring (it was sending, or the message was crossing) or the Renderers (it was waiting
+//    for another Renderer), so the frame time splits into GP, ring and Renderer time.
 #include <deque>
 #include <memory>
 #include <string>
@@ -41,8 +42,12 @@ struct RegionWork {
 struct RendererStats {
   ArrayCycles busy{};   // cycles executing micro-instructions, decoding packets, copying out
   ArrayCycles stall{};  // cycles waiting for the backing-store port
-  sc_core::sc_time waiting_gp;    // idle: no message had been asked for yet
-  sc_core::sc_time waiting_ring;  // idle: a message was crossing the ring
+  // Idle, waiting for a message, while the GP that sent it was computing (waiting_gp), or was
+  // sending earlier messages or this one was crossing the ring (waiting_ring), or the GP was
+  // itself waiting for other Renderers' queues or stages (waiting_renderers).
+  sc_core::sc_time waiting_gp;
+  sc_core::sc_time waiting_ring;
+  sc_core::sc_time waiting_renderers;
   sc_core::sc_time waiting_ship;  // blocked shipping a region (no overlapped shipping)
   std::uint64_t regions = 0;
   std::uint64_t packets = 0;
