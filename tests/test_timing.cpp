@@ -301,3 +301,18 @@ TEST_CASE("the frame time is attributed to GPs, ring and Renderers, and the time
     }
   }
 }
+
+TEST_CASE("the bottleneck named is the resource that was starved", "[timing][report]") {
+  const Scene scene = make_builtin_scene("torus", {64, 16});
+  auto bottleneck = [&](const std::vector<std::string>& sets) {
+    MachineConfig config = MachineConfig::defaults();
+    config.set(std::vector<std::string>{"screen.width=512", "screen.height=256", "gp.count=4",
+                                        "renderer.count=4"});
+    config.set(sets);
+    const FrameResult r = simulate_frame(config, scene, load("phong", config), 2);
+    return r.stats["timing"]["bottleneck"].get<std::string>();
+  };
+  CHECK(bottleneck({"gp.code=compiled"}) == "GPs");
+  CHECK(bottleneck({"ring.channels=1", "ring.clock_hz=2e6"}) == "ring");
+  CHECK(bottleneck({"renderer.count=1", "gp.count=16"}) == "Renderers");
+}
