@@ -235,10 +235,12 @@ int run_aggregate(const SweepOptions& o) {
   const fs::path dir(o.aggregate_dir);
   const nlohmann::json sweep = read_json(dir / "sweep.json");
   const auto keys = sweep.at("order").get<std::vector<std::string>>();
+  // The runs the grid defines; other folders (from an earlier grid) are not this sweep's.
+  std::vector<Axis> axes;
+  for (const auto& k : keys)
+    axes.push_back({k, sweep.at("grid").at(k).get<std::vector<std::string>>()});
   std::vector<fs::path> runs;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.is_directory()) runs.push_back(entry.path());
-  }
+  for (const auto& values : combinations(axes)) runs.push_back(dir / run_name(axes, values));
   std::sort(runs.begin(), runs.end());
   std::string csv;
   std::vector<std::pair<std::vector<double>, std::string>> sorted_rows;
