@@ -46,6 +46,13 @@ expect_error "swept twice" sweep --grid gp.count=1 --grid gp.count=2 --out "$tmp
 n=$("$bin" sweep --grid gp.count=1,2 --grid renderer.count=1,2,4 --scene two-triangles \
   --out "$tmp/sw1" --print-commands | grep -c " render ")
 [ "$n" = 6 ] || fail "--print-commands printed $n commands, expected 6"
+# A printed command runs as is (as GNU parallel or a Slurm task would), and aggregate takes
+# the finished runs and names the missing ones.
+"$bin" sweep --grid gp.count=1,2 --scene two-triangles --set screen.width=256 \
+  --set screen.height=128 --out "$tmp/sw2" --print-commands | head -1 | bash >/dev/null 2>&1 \
+  || fail "a printed command failed"
+"$bin" sweep aggregate "$tmp/sw2" >"$tmp/sw2.log" 2>&1 || fail "aggregate of a partial sweep failed"
+grep -q "1 runs, 1 missing" "$tmp/sw2.log" || fail "aggregate said: $(cat "$tmp/sw2.log")"
 "$bin" sweep --grid gp.count=1,2 --grid renderer.balancing=static,dynamic --scene two-triangles \
   --set screen.width=256 --set screen.height=128 --out "$tmp/sw" >/dev/null 2>&1 || fail "sweep failed"
 "$bin" sweep aggregate "$tmp/sw" -o "$tmp/sw.csv" >/dev/null || fail "aggregate failed"
