@@ -88,7 +88,8 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
 
   // The critical path, unit by unit: the GP transforms and sets up both triangles (the i860
   // cost model's clocks) and starts its one message; the ring carries the bin one hop; the
-  // Renderer, which ran clear while it waited, runs two triangle packets, copies the colours
+  // Renderer, which ran clear while it waited, loads the first packet's coefficients, runs two
+  // triangle packets, copies the colours
   // to the backing store, and the ring carries the region one hop to the frame buffer.
   const int expressions =
       static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
@@ -109,7 +110,10 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   const double clear_cycles =
       config.renderer.packet_overhead_cycles +
       procedure_cost(program.procedure(Procedure::clear), timing, none).count;
+  // The first packet's coefficients load after the bin arrives (one word per cycle); the
+  // second's load while the first executes.
   const double renderer_cycles =
+      (packet_words - 1) / config.evaluator.coefficient_words_per_cycle +
       2.0 * (config.renderer.packet_overhead_cycles +
              procedure_cost(program.procedure(Procedure::triangle), timing, none).count) +
       config.renderer.backing_store_cycles_per_block;

@@ -316,3 +316,26 @@ TEST_CASE("the bottleneck named is the resource that was starved", "[timing][rep
   CHECK(bottleneck({"ring.channels=1", "ring.clock_hz=2e6"}) == "ring");
   CHECK(bottleneck({"renderer.count=1", "gp.count=16"}) == "Renderers");
 }
+
+TEST_CASE("coefficient loading: hidden when double-buffered, charged in full when not",
+          "[timing][renderer]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 256;
+  config.screen.height = 256;
+  config.gp.count = 3;
+  config.renderer.count = 2;
+  const Scene scene = make_builtin_scene("sphere");
+  const Program program = load("gouraud", config);
+  const FrameResult buffered = simulate_frame(config, scene, program, 1);
+  config.set("evaluator.double_buffered=0");
+  const FrameResult serial = simulate_frame(config, scene, program, 1);
+  CHECK(buffered.image.rgb == serial.image.rgb);
+  const auto packets = buffered.stats["setup"]["packets"].get<std::uint64_t>();
+  const int expressions =
+      static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
+  const std::uint64_t coefficient_words = expressions * 3 * 2;  // 40-bit coefficients: 2 words
+  CHECK(serial.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>() -
+            buffered.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>() ==
+        packets * coefficient_words);
+  CHECK(serial.frame_seconds > buffered.frame_seconds);
+}

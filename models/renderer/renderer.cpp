@@ -84,6 +84,29 @@ void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values
   stats_.busy += cycles;
 }
 
+void Renderer::load_coefficients(const Packet& packet, sc_core::sc_time arrival) {
+  const MachineConfig& config = machine_.config();
+  // The packet's words after its header are coefficients, moved from the queue into the
+  // evaluator's input registers.
+  const std::uint64_t words = packet.words > 0 ? packet.words - 1 : 0;
+  const auto per_cycle = static_cast<std::uint64_t>(config.evaluator.coefficient_words_per_cycle);
+  const ArrayCycles load((words + per_cycle - 1) / per_cycle);
+  if (!config.evaluator.double_buffered) {
+    cursor_ += cycle_ * static_cast<double>(load.count);
+    stats_.busy += load;
+    return;
+  }
+  // Double-buffered: the next packet's coefficients load while the current packet executes;
+  // the array waits only if they are not in yet.
+  const sc_core::sc_time ready =
+      std::max(arrival, coefficients_free_) + cycle_ * static_cast<double>(load.count);
+  if (ready > cursor_) {
+    stats_.stall += ArrayCycles(static_cast<std::uint64_t>((ready - cursor_) / cycle_ + 0.5));
+    cursor_ = ready;
+  }
+  coefficients_free_ = cursor_;
+}
+
 void Renderer::catch_up() {
   const sc_core::sc_time now = sc_core::sc_time_stamp();
   if (cursor_ > now) wait(cursor_ - now);
@@ -181,6 +204,7 @@ void Renderer::run() {
       cursor_ = now;
       const sc_core::sc_time t0 = cursor_;
       for (const auto& packet : m->packets) {
+        load_coefficients(*packet, m->arrival);
         charge(program.procedure(Procedure::triangle), packet->values);
         if (stage.pass == 0) by_gp[m->gp].push_back(packet);
       }

@@ -9,6 +9,9 @@
 //  - Busy cycles are exactly the instruction table's cycles (plus packet decoding and the
 //    copy of finished colours to the backing store); time advances once per message or
 //    procedure block, never per cycle.
+//  - A triangle packet's coefficients move into the evaluator at
+//    evaluator.coefficient_words_per_cycle; double-buffered (evaluator.double_buffered), the
+//    next packet's load overlaps the current packet's execution and only a shortfall stalls.
 //  - With renderer.backing_store_overlap, a bsst costs the array one issue cycle and then
 //    occupies the backing-store port for its blocks; a bsld waits for the port, then for its
 //    own transfer. Waiting for the port counts as a stall, not as busy.
@@ -86,6 +89,8 @@ class Renderer : public sc_core::sc_module {
   void open_next_stage();
   // Adds one procedure's time at the array's cursor.
   void charge(const ProcedureCode& procedure, const PacketValues& values);
+  // Loads a triangle packet's coefficients into the evaluator before it runs.
+  void load_coefficients(const Packet& packet, sc_core::sc_time arrival);
   // Advances simulated time to the cursor (one kernel event).
   void catch_up();
   void ship(int region);
@@ -101,9 +106,10 @@ class Renderer : public sc_core::sc_module {
   std::vector<std::shared_ptr<const BinMessage>> queue_;
   std::uint64_t queued_words_ = 0;
   sc_core::sc_event arrived_;
-  sc_core::sc_time cursor_;     // the array's time within a block
-  sc_core::sc_time port_free_;  // the backing-store port's
-  sc_core::sc_time ship_free_;  // the ring interface's, for outgoing regions
+  sc_core::sc_time cursor_;             // the array's time within a block
+  sc_core::sc_time port_free_;          // the backing-store port's
+  sc_core::sc_time ship_free_;          // the ring interface's, for outgoing regions
+  sc_core::sc_time coefficients_free_;  // the evaluator's spare coefficient registers
   RendererStats stats_;
   std::vector<RegionWork> work_;
 };

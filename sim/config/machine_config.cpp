@@ -174,6 +174,14 @@ const std::vector<Parameter>& parameter_table() {
        "Pipeline latency of the evaluator tree (about log2 of 128 levels plus input stages).",
        [](MachineConfig& c) -> Ref { return &c.evaluator.latency_cycles; }},
 
+      {"evaluator.coefficient_words_per_cycle", "words/cycle", "A", 1, 1, 64,
+       "Ring words of a packet's coefficients moved from the instruction queue into the "
+       "evaluator's input registers per array cycle.",
+       [](MachineConfig& c) -> Ref { return &c.evaluator.coefficient_words_per_cycle; }},
+      {"evaluator.double_buffered", "0 or 1", "A", 1, 0, 1,
+       "1: the evaluator holds a second set of coefficient registers, so the next packet's "
+       "coefficients load while the current packet executes. 0: loading stops the array.",
+       [](MachineConfig& c) -> Ref { return &c.evaluator.double_buffered; }},
       {"frame_buffer.bits_per_pixel", "bits", "A", 32, 8, 64,
        "Bits per pixel sent from a Renderer to the frame buffer (24-bit colour in a word).",
        [](MachineConfig& c) -> Ref { return &c.frame_buffer.bits_per_pixel; }},

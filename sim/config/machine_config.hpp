@@ -59,6 +59,8 @@ struct MachineConfig {
     int result_bits = 0;
     int fraction_bits = 0;
     int latency_cycles = 0;
+    int coefficient_words_per_cycle = 0;
+    int double_buffered = 0;
   } evaluator;
   struct FrameBuffer {
     int bits_per_pixel = 0;
