@@ -518,10 +518,9 @@ Command add_sweep_command(CLI::App& app) {
                    "Column whose values make the lines [the second swept parameter]");
   plot->add_option("-y", o->plot_y, "Column on the y axis")->capture_default_str();
 
-  return {sweep, [o, aggregate, plot, sweep] {
+  return {sweep, [o, aggregate, plot] {
             if (*aggregate) return run_aggregate(*o);
             if (*plot) return run_plot(*o);
-            (void)sweep;
             std::error_code ec;
             const fs::path self = fs::read_symlink("/proc/self/exe", ec);
             return run_sweep(*o, ec ? std::string("pp5sim") : self.string());
