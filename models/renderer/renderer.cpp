@@ -40,11 +40,14 @@ void Renderer::run() {
     w.region = region;
     w.x0 = (region % config.regions_x()) * config.renderer.region_width;
     w.y0 = (region / config.regions_x()) * config.renderer.region_height;
+    const auto now = [&] { return static_cast<std::uint64_t>(sc_core::sc_time_stamp() / cycle_); };
+    w.clear_start = now();
     ArrayCycles cycles = charge(program.procedure(Procedure::clear), frame_values);
     auto& bins = inbox_[region];
     for (int g = 0; g < config.gp.count; ++g) {
       while (!bins[g]) wait(arrived_);
       for (const auto& packet : bins[g]->packets) {
+        w.triangle_start.push_back(now() + cycles.count);
         cycles += charge(program.procedure(Procedure::triangle), packet->values);
         w.triangles.push_back(packet);
       }
@@ -53,6 +56,7 @@ void Renderer::run() {
       stats_.busy += cycles;
       cycles = ArrayCycles{};
     }
+    w.shade_start = now() + cycles.count;
     cycles += charge(program.procedure(Procedure::shade), frame_values);
     wait(cycle_ * static_cast<double>(cycles.count));
     stats_.busy += cycles;
@@ -72,10 +76,16 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
   std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work_) {
     board.begin_region(w.x0, w.y0);
+    board.begin_packet({Procedure::clear, -1, w.region, w.clear_start});
     board.run(program.procedure(Procedure::clear), frame_values);
-    for (const auto& packet : w.triangles)
-      board.run(program.procedure(Procedure::triangle), packet->values);
+    for (std::size_t i = 0; i < w.triangles.size(); ++i) {
+      board.begin_packet(
+          {Procedure::triangle, w.triangles[i]->primitive, w.region, w.triangle_start[i]});
+      board.run(program.procedure(Procedure::triangle), w.triangles[i]->values);
+    }
+    board.begin_packet({Procedure::shade, -1, w.region, w.shade_start});
     board.run(program.procedure(Procedure::shade), frame_values);
+    board.end_region(w.region);
     board.read_outputs(program, rgb);
     frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
   }
