@@ -1,5 +1,7 @@
 #include "models/renderer/renderer.hpp"
 
+#include <cmath>
+
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -40,7 +42,9 @@ void Renderer::run() {
     w.region = region;
     w.x0 = (region % config.regions_x()) * config.renderer.region_width;
     w.y0 = (region / config.regions_x()) * config.renderer.region_height;
-    const auto now = [&] { return static_cast<std::uint64_t>(sc_core::sc_time_stamp() / cycle_); };
+    const auto now = [&] {
+      return static_cast<std::uint64_t>(std::llround(sc_core::sc_time_stamp() / cycle_));
+    };
     w.clear_start = now();
     ArrayCycles cycles = charge(program.procedure(Procedure::clear), frame_values);
     auto& bins = inbox_[region];
