@@ -133,7 +133,7 @@ Command add_trace_command(CLI::App& app) {
   auto* rec =
       t->add_subcommand("record",
                         "Simulate a frame and record the selected pixels' fields after every "
-                        "micro-instruction that changes them");
+                        "micro-instruction that writes or changes them");
   ro->run.add(*rec);
   rec->add_option("-p,--pixel", ro->pixels, "A screen pixel X,Y (repeatable)");
   rec->add_option("--rect", ro->rects, "A screen rectangle X,Y,WIDTH,HEIGHT (repeatable)");
