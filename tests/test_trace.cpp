@@ -279,12 +279,17 @@ TEST_CASE("truncated and corrupted trace files are rejected with a message", "[t
                     Catch::Contains("not a traced field"));
   recs.clear();
   trace::append(recs, trace::InstructionRecord{});
-  trace::append(recs, trace::ValueRecord{0, 1, 1, 5});
+  trace::append(recs, trace::ValueRecord{0, 190, 140, 5});
   REQUIRE_NOTHROW(trace::parse_trace(trace::encode_trace(t.header, recs, 2), "ok.pp5t"));
   CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(t.header, recs, 3), "n.pp5t"),
                     Catch::Contains("past the record section"));
   CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(t.header, recs, 1), "m.pp5t"),
                     Catch::Contains("bytes left after the 1 records"));
+  recs.clear();
+  trace::append(recs, trace::InstructionRecord{});
+  trace::append(recs, trace::ValueRecord{0, 2, 1, 5});
+  CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(t.header, recs, 2), "p.pp5t"),
+                    Catch::Contains("pixel 2,1, which the header does not list"));
   recs[0] = 7;
   CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(t.header, recs, 2), "k.pp5t"),
                     Catch::Contains("unknown record kind 7"));
@@ -371,4 +376,25 @@ TEST_CASE("snapshots: a region's memory at a chosen point, files and images", "[
   trace::SnapshotTaker never(c, p, static_cast<int>(e.ins.region), 999999999);
   simulate_frame(c, torus(), p, 2, [&](int k) { return never.observer(k); });
   CHECK_THROWS_WITH(never.snapshot(), Catch::Contains("choose one of those"));
+}
+
+TEST_CASE("programs that spill: resident fields are traced, spilled ones refused", "[trace]") {
+  MachineConfig c = small_config();
+  const Program p = assemble_file(std::string(PP5_SOURCE_DIR) + "/tests/data/firmware/spill.pp5",
+                                  assembler_options(c));
+  std::string spilled, resident;
+  for (const FieldDecl& f : p.fields) (f.spilled ? spilled : resident) = f.name;
+  REQUIRE(!spilled.empty());
+  trace::Selection sel;
+  sel.rects.push_back({190, 140, 1, 1});
+  sel.fields = {spilled};
+  CHECK_THROWS_WITH(trace::Recorder(c, torus(), p, sel), Catch::Contains("backing store"));
+  sel.fields.clear();
+  FrameResult frame;
+  const trace::Trace t = record(c, p, sel, "spill.pp5t", 2, &frame);
+  const auto st = trace::replay(t).at({190, 140});
+  const auto i = static_cast<std::size_t>(140 * frame.image.width + 190) * 3;
+  CHECK(frame.image.rgb[i] == st.value.at(t.field_index("red")));
+  CHECK(frame.image.rgb[i + 2] == st.value.at(t.field_index("blue")));
+  CHECK_THAT(trace::bitmap_report(t), Catch::Contains("spilled to the backing store"));
 }

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <set>
 
 #include "firmware/isa/interface.hpp"
 #include "sim/simulation.hpp"
@@ -172,6 +173,7 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
     throw TraceError(fmt::format("{}: bad header at byte {}: {}", name, kPreambleBytes, e.what()));
   }
 
+  const std::set<std::pair<int, int>> selected(t.pixels.begin(), t.pixels.end());
   std::size_t at = records_at;
   for (std::uint64_t k = 0; k < record_count; ++k) {
     if (at >= checksum_at) {
@@ -223,6 +225,12 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
       if (v.field >= t.fields.size() || !t.fields[v.field].traced) {
         throw TraceError(fmt::format("{}: byte {}: value record names field {}, not a traced field",
                                      name, at, v.field));
+      }
+      if (!selected.count({v.x, v.y})) {
+        throw TraceError(
+            fmt::format("{}: byte {}: value record for pixel {},{}, which the header "
+                        "does not list as selected",
+                        name, at, v.x, v.y));
       }
       t.values.push_back({v, t.events.size() - 1});
       ++t.events.back().value_count;
