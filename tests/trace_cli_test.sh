@@ -37,6 +37,9 @@ fi
 "$bin" trace snapshot --pixel 500,400 --png z --png covered -o "$tmp/r.pp5m" >/dev/null ||
   fail "snapshot failed"
 for f in r.pp5m r-z.png r-covered.png; do [ -s "$tmp/$f" ] || fail "missing $f"; done
+rm "$tmp/r-z.png"
+"$bin" trace snapshot --from "$tmp/r.pp5m" --png z >/dev/null || fail "snapshot --from failed"
+[ -s "$tmp/r-z.png" ] || fail "snapshot --from wrote no image"
 
 head -c 3000 "$tmp/phong.pp5t" >"$tmp/cut.pp5t"
 expect_error "cut.pp5t: truncated at byte 3000" trace why "$tmp/cut.pp5t"

@@ -236,6 +236,7 @@ Command add_trace_command(CLI::App& app) {
     std::int64_t after = -1;
     std::string out;
     std::vector<std::string> png;
+    std::string from;
   };
   auto so = std::make_shared<SnapOptions>();
   auto* snap =
@@ -252,8 +253,23 @@ Command add_trace_command(CLI::App& app) {
   snap->add_option("--png", so->png,
                    "Also write FIELD as OUT-FIELD.png (repeatable): 1-bit fields as masks, wider "
                    "ones as a grey ramp from the region's minimum to its maximum");
+  snap->add_option("--from", so->from,
+                   "Read this snapshot file instead of simulating (with --png: images of it)");
   runs->push_back(
       {snap, [so] {
+         if (!so->from.empty()) {
+           const trace::Snapshot s = trace::read_snapshot(so->from);
+           for (const auto& f : so->png) trace::field_image(s, f);  // check names
+           std::cout << fmt::format("{}: region {}, {}\n", so->from, s.region,
+                                    s.header["point"].get<std::string>());
+           for (const auto& f : so->png) {
+             const std::string png =
+                 fs::path(so->from).replace_extension("").string() + "-" + f + ".png";
+             write_png(png, trace::field_image(s, f));
+             std::cout << fmt::format("wrote {}\n", png);
+           }
+           return 0;
+         }
          const MachineConfig config = load_config(so->run.config_path, so->run.sets);
          int region = so->region;
          if (const auto p = pixel_option(so->pixel)) {
