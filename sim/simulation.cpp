@@ -39,14 +39,15 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
-                           int threads) {
+                           int threads,
+                           const std::function<BoardObserver*(int renderer)>& observe) {
   const auto t0 = std::chrono::steady_clock::now();
   fresh_kernel();
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
   sc_core::sc_start();
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  machine->execute_pixels(threads);
+  machine->execute_pixels(threads, observe);
   const double pixel_seconds = seconds_since(t1);
   const double host_seconds = seconds_since(t0);
 

@@ -1,5 +1,7 @@
 #include "models/renderer/renderer.hpp"
 
+#include <cmath>
+
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -41,13 +43,21 @@ void Renderer::run() {
     w.region = region;
     w.x0 = (region % config.regions_x()) * config.renderer.region_width;
     w.y0 = (region / config.regions_x()) * config.renderer.region_height;
+    const auto now = [&] {
+      return static_cast<std::uint64_t>(std::llround(sc_core::sc_time_stamp() / cycle_));
+    };
+    w.clear_start = now();
     ArrayCycles cycles = charge(program.procedure(Procedure::clear), frame_values);
     for (int pass = 0; pass < program.passes; ++pass) {
-      if (pass > 0) cycles += charge(program.procedure(Procedure::pass), frame_values);
+      if (pass > 0) {
+        w.pass_start.push_back(now() + cycles.count);
+        cycles += charge(program.procedure(Procedure::pass), frame_values);
+      }
       auto& bins = inbox_[region][pass];
       for (int g = 0; g < config.gp.count; ++g) {
         while (!bins[g]) wait(arrived_);
         for (const auto& packet : bins[g]->packets) {
+          w.triangle_start.push_back(now() + cycles.count);
           cycles += charge(program.procedure(Procedure::triangle), packet->values);
           if (pass == 0) w.triangles.push_back(packet);
         }
@@ -57,6 +67,7 @@ void Renderer::run() {
         cycles = ArrayCycles{};
       }
     }
+    w.shade_start = now() + cycles.count;
     cycles += charge(program.procedure(Procedure::shade), frame_values);
     wait(cycle_ * static_cast<double>(cycles.count));
     stats_.busy += cycles;
@@ -76,13 +87,23 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
   std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work_) {
     board.begin_region(w.x0, w.y0);
+    board.begin_packet({Procedure::clear, -1, w.region, w.clear_start});
     board.run(program.procedure(Procedure::clear), frame_values);
+    const std::size_t n = w.triangles.size();
     for (int pass = 0; pass < program.passes; ++pass) {
-      if (pass > 0) board.run(program.procedure(Procedure::pass), frame_values);
-      for (const auto& packet : w.triangles)
-        board.run(program.procedure(Procedure::triangle), packet->values);
+      if (pass > 0) {
+        board.begin_packet({Procedure::pass, -1, w.region, w.pass_start[pass - 1]});
+        board.run(program.procedure(Procedure::pass), frame_values);
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        board.begin_packet({Procedure::triangle, w.triangles[i]->primitive, w.region,
+                            w.triangle_start[pass * n + i]});
+        board.run(program.procedure(Procedure::triangle), w.triangles[i]->values);
+      }
     }
+    board.begin_packet({Procedure::shade, -1, w.region, w.shade_start});
     board.run(program.procedure(Procedure::shade), frame_values);
+    board.end_region(w.region);
     board.read_outputs(program, rgb);
     frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
   }
