@@ -158,7 +158,8 @@ std::uint64_t Machine::region_words() const {
   return (bits + config_.ring.word_bits - 1) / config_.ring.word_bits;
 }
 
-void Machine::execute_pixels(int threads) {
+void Machine::execute_pixels(int threads,
+                             const std::function<BoardObserver*(int renderer)>& observe) {
   const RendererBoardParams params = board_params(config_);
   PacketValues frame_values;
   frame_values.parameters = frame_parameters_;
@@ -166,6 +167,7 @@ void Machine::execute_pixels(int threads) {
   auto worker = [&] {
     for (int k = next++; k < renderer_count(); k = next++) {
       RendererBoard board(params);
+      if (observe) board.set_observer(observe(k));
       renderers_[k]->execute(board, program_, *frame_buffer_, frame_values);
     }
   };

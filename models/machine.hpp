@@ -21,6 +21,7 @@
 // modules advance simulated time from the instruction table alone, and record each
 // region's packets; after the simulation each Renderer's board executes its regions'
 // instruction streams on its pixel array (execute_pixels), in parallel across boards.
+#include <functional>
 #include <memory>
 #include <systemc>
 #include <vector>
@@ -83,6 +84,7 @@ GeometryParams geometry_params(const MachineConfig& config);
 TimingParams timing_params(const MachineConfig& config);
 I860Params i860_params(const MachineConfig& config);
 struct RendererBoardParams;
+class BoardObserver;
 RendererBoardParams board_params(const MachineConfig& config);
 AssemblerOptions assembler_options(const MachineConfig& config);
 
@@ -142,7 +144,9 @@ class Machine : public sc_core::sc_module {
   // Runs every board's recorded instruction streams on its pixel array, on `threads` host
   // threads, and stores the results in the frame buffer's image. Deterministic: each
   // board executes its own regions in order, whatever the thread count.
-  void execute_pixels(int threads);
+  // `observe`, if given, returns an observer (or null) for Renderer k's board; see
+  // BoardObserver. Each board's observer is called from one host thread only.
+  void execute_pixels(int threads, const std::function<BoardObserver*(int renderer)>& observe = {});
 
  private:
   static std::string fmt_name(const char* base, int k);

@@ -158,7 +158,8 @@ nlohmann::json frame_attribution(Machine& machine, double frame_seconds, const n
 }  // namespace
 
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
-                           int threads, nlohmann::json* timeline) {
+                           int threads, const std::function<BoardObserver*(int renderer)>& observe,
+                           nlohmann::json* timeline) {
   const auto t0 = std::chrono::steady_clock::now();
   fresh_kernel();
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
@@ -167,7 +168,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   if (timeline) *timeline = timeline_document(*machine);
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  machine->execute_pixels(threads);
+  machine->execute_pixels(threads, observe);
   const double pixel_seconds = seconds_since(t1);
   const double host_seconds = seconds_since(t0);
 

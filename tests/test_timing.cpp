@@ -265,7 +265,7 @@ TEST_CASE("the frame time is attributed to GPs, ring and Renderers, and the time
   const Scene scene = make_builtin_scene("torus", {64, 16});
   const Program program = load("phong", config);
   nlohmann::json timeline;
-  const FrameResult r = simulate_frame(config, scene, program, 2, &timeline);
+  const FrameResult r = simulate_frame(config, scene, program, 2, {}, &timeline);
   const auto& t = r.stats["timing"];
   const double sum = t["gp_seconds"].get<double>() + t["ring_seconds"].get<double>() +
                      t["renderer_seconds"].get<double>();

@@ -1,6 +1,7 @@
 #include "models/renderer/renderer.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/graphics_processor.hpp"
@@ -161,15 +162,27 @@ void Renderer::run() {
   cursor_ = sc_core::SC_ZERO_TIME;
   open_next_stage();
   std::vector<std::vector<std::shared_ptr<const Packet>>> by_gp(gps);
+  // The array cycle at which each packet started, by pass and GP (for traces): a GP's
+  // packets come in the same order in every pass.
+  std::vector<std::vector<std::vector<std::uint64_t>>> starts(
+      program.passes, std::vector<std::vector<std::uint64_t>>(gps));
+  auto cycle_now = [&] { return static_cast<std::uint64_t>(std::llround(cursor_ / cycle_)); };
+  std::uint64_t clear_start = 0;
+  std::vector<std::uint64_t> pass_start;
   sc_core::sc_time region_start;
   while (!stages_.empty()) {
     const Stage stage = stages_.front();
     stages_.pop_front();
     if (stage.pass == 0) {
       for (auto& v : by_gp) v.clear();
+      for (auto& pass : starts)
+        for (auto& v : pass) v.clear();
+      pass_start.clear();
       region_start = cursor_;
+      clear_start = cycle_now();
       charge(program.procedure(Procedure::clear), frame_values);
     } else {
+      pass_start.push_back(cycle_now());
       charge(program.procedure(Procedure::pass), frame_values);
     }
     int lasts = 0;
@@ -205,6 +218,7 @@ void Renderer::run() {
       const sc_core::sc_time t0 = cursor_;
       for (const auto& packet : m->packets) {
         load_coefficients(*packet, m->arrival);
+        starts[stage.pass][m->gp].push_back(cycle_now());
         charge(program.procedure(Procedure::triangle), packet->values);
         if (stage.pass == 0) by_gp[m->gp].push_back(packet);
       }
@@ -222,6 +236,7 @@ void Renderer::run() {
       if (m->last) ++lasts;
     }
     if (stage.pass + 1 < program.passes) continue;
+    const std::uint64_t shade_start = cycle_now();
     charge(program.procedure(Procedure::shade), frame_values);
     catch_up();
     machine_.add_slice(Unit::renderer, index_, "region " + std::to_string(stage.region),
@@ -231,6 +246,12 @@ void Renderer::run() {
     w.x0 = (stage.region % config.regions_x()) * config.renderer.region_width;
     w.y0 = (stage.region / config.regions_x()) * config.renderer.region_height;
     for (auto& v : by_gp) w.triangles.insert(w.triangles.end(), v.begin(), v.end());
+    w.clear_start = clear_start;
+    w.pass_start = pass_start;
+    w.shade_start = shade_start;
+    for (const auto& pass : starts)
+      for (const auto& v : pass)
+        w.triangle_start.insert(w.triangle_start.end(), v.begin(), v.end());
     ship(stage.region);
     ++stats_.regions;
     work_.push_back(std::move(w));
@@ -246,13 +267,23 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
   std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work_) {
     board.begin_region(w.x0, w.y0);
+    board.begin_packet({Procedure::clear, -1, w.region, w.clear_start});
     board.run(program.procedure(Procedure::clear), frame_values);
+    const std::size_t n = w.triangles.size();
     for (int pass = 0; pass < program.passes; ++pass) {
-      if (pass > 0) board.run(program.procedure(Procedure::pass), frame_values);
-      for (const auto& packet : w.triangles)
-        board.run(program.procedure(Procedure::triangle), packet->values);
+      if (pass > 0) {
+        board.begin_packet({Procedure::pass, -1, w.region, w.pass_start[pass - 1]});
+        board.run(program.procedure(Procedure::pass), frame_values);
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        board.begin_packet({Procedure::triangle, w.triangles[i]->primitive, w.region,
+                            w.triangle_start[pass * n + i]});
+        board.run(program.procedure(Procedure::triangle), w.triangles[i]->values);
+      }
     }
+    board.begin_packet({Procedure::shade, -1, w.region, w.shade_start});
     board.run(program.procedure(Procedure::shade), frame_values);
+    board.end_region(w.region);
     board.read_outputs(program, rgb);
     frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
   }

@@ -40,6 +40,11 @@ struct RegionWork {
   int x0 = 0;
   int y0 = 0;
   std::vector<std::shared_ptr<const Packet>> triangles;
+  // Simulated array cycle at which the timing pass started each packet (for traces).
+  std::uint64_t clear_start = 0;
+  std::vector<std::uint64_t> triangle_start;  // pass-major: pass * triangles + i
+  std::vector<std::uint64_t> pass_start;      // the 'pass' procedure before pass k + 1
+  std::uint64_t shade_start = 0;
 };
 
 struct RendererStats {

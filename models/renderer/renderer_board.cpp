@@ -11,12 +11,32 @@ RendererBoard::RendererBoard(const RendererBoardParams& params)
 void RendererBoard::begin_region(int x0, int y0) { evaluator_.set_origin(x0, y0); }
 
 ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValues& values) {
+  if (observer_) return run_observed(procedure, values);
   ExecutionContext ctx{array_, evaluator_, values, params_.timing.fraction_bits, scratch_};
   ArrayCycles cycles{};
   for (const Instruction& ins : procedure.code) {
     const InstructionInfo& info = instruction_info(ins.op);
     info.execute(ins, ctx);
     cycles += info.cost(ins, params_.timing, values);
+  }
+  instructions_ += procedure.code.size();
+  cycles_ += cycles;
+  return cycles;
+}
+
+// The same loop as run(), with the observer told about every instruction.
+ArrayCycles RendererBoard::run_observed(const ProcedureCode& procedure,
+                                        const PacketValues& values) {
+  ExecutionContext ctx{array_, evaluator_, values, params_.timing.fraction_bits, scratch_};
+  observer_->begin_packet(packet_, procedure, *this);
+  ArrayCycles cycles{};
+  int index = 0;
+  for (const Instruction& ins : procedure.code) {
+    const InstructionInfo& info = instruction_info(ins.op);
+    info.execute(ins, ctx);
+    const ArrayCycles cost = info.cost(ins, params_.timing, values);
+    cycles += cost;
+    observer_->after_instruction(index++, ins, cost, *this);
   }
   instructions_ += procedure.code.size();
   cycles_ += cycles;

@@ -42,8 +42,8 @@ int run_render(RenderOptions o) {
   fs::create_directories(o.out_dir);
 
   nlohmann::json timeline;
-  const FrameResult result =
-      simulate_frame(config, scene, program, o.threads, o.timeline.empty() ? nullptr : &timeline);
+  const FrameResult result = simulate_frame(config, scene, program, o.threads, {},
+                                            o.timeline.empty() ? nullptr : &timeline);
   const fs::path dir(o.out_dir);
   write_png((dir / "frame.png").string(), result.image);
   write_file_atomically((dir / "config.json").string(), config.to_json().dump(2) + "\n");

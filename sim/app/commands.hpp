@@ -22,6 +22,7 @@ Command add_asm_command(CLI::App& app);
 Command add_config_command(CLI::App& app);
 Command add_scenes_command(CLI::App& app);
 Command add_sweep_command(CLI::App& app);
+Command add_trace_command(CLI::App& app);
 
 // Shared by the commands.
 

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
       add_config_command(app),
       add_scenes_command(app),
       add_sweep_command(app),
+      add_trace_command(app),
   };
 
   CLI11_PARSE(app, argc, argv);
