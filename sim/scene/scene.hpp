@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cstdint>
 #include <glm/glm.hpp>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -42,6 +44,9 @@ struct Scene {
   Camera camera;
   Light light;
   glm::vec3 background;  // RGB in [0,1]
+  // Frame-parameter overrides by name (firmware/isa/interface.hpp), e.g. highlight options
+  // from `pp5sim render --param NAME=VALUE`; unknown names are rejected by the GP.
+  std::map<std::string, std::int64_t> parameters;
 };
 
 // Tessellation overrides; 0 keeps the scene's default. For the torus, u runs along the knot and v
