@@ -57,7 +57,8 @@ struct SceneOptions {
   int tessellation_v = 0;
 };
 
-// The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere"}.
+// The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere", "figure-eight",
+// "crossing-quads"}.
 std::vector<std::string> builtin_scene_names();
 
 // Builds a scene deterministically from its arguments alone. Throws std::invalid_argument for an
@@ -65,6 +66,8 @@ std::vector<std::string> builtin_scene_names();
 //   torus:  2*u*v triangles, default u=128, v=32 (8,192); u and v in [3, 2048].
 //   sphere: 2*u*(v-1) triangles, default u=64, v=32 (3,968); u in [3, 2048], v in [2, 2048].
 //   two-triangles: 2 triangles, 6 vertices.
+//   figure-eight: 2*u*v triangles, default u=96, v=48; u in [8, 2048], v in [2, 2048].
+//   crossing-quads: 4 triangles, 8 vertices.
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
 
 // Right-handed view and OpenGL-convention projection (clip z in [-w,w]), as glm::lookAt and
