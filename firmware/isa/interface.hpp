@@ -123,7 +123,7 @@ inline constexpr FrameParameterInfo kParameters[] = {
     {"highlight_keep", "derived: 256 - highlight_opacity, the weight of the surface colour"},
     {"threshold",
      "threshold program: flag where |depth - stored depth| < threshold, depth units (default "
-     "4096)"},
+     "32768)"},
     {"delta", "half-width of fixed-width curves (epsilon programs), 1/16 pixel (default 24)"},
     {"epsilon_scale",
      "derived: (delta/16)^2 * 4^6, so that dz^2 < epsilon_scale * |slope difference|^2 with slopes "

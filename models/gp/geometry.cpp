@@ -311,7 +311,7 @@ std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::fra
   at(Parameter::highlight_green) = 230;
   at(Parameter::highlight_blue) = 0;
   at(Parameter::highlight_opacity) = 256;
-  at(Parameter::threshold) = 4096;
+  at(Parameter::threshold) = 32768;
   at(Parameter::delta) = 24;
   at(Parameter::silhouette) = 0;
   for (const auto& [name, value] : scene_.parameters) {
