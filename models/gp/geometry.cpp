@@ -95,6 +95,10 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
   const double face_length = glm::length(face);
   face = face_length > 0 ? face / face_length : glm::dvec3(0, 0, 1);
   if (glm::dot(face, -eye[0]) < 0) {
+    if (params_.cull_back_faces) {
+      ++counts.culled;
+      return;
+    }
     face = -face;
     for (auto& x : v) x.normal = -x.normal;
   }

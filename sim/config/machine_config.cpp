@@ -58,6 +58,10 @@ const std::vector<Parameter>& parameter_table() {
       {"gp.clocks_per_bin", "i860 clocks", "A", 50, 0, 100000,
        "Starting the transmission of one region's bin.",
        [](MachineConfig& c) -> Ref { return &c.gp.clocks_per_bin; }},
+      {"gp.cull_back_faces", "flag", "A", 0, 0, 1,
+       "GP library option: 1 drops triangles that face away from the eye (the silhouette "
+       "remedy for closed opaque surfaces); 0 draws both sides, lit two-sided.",
+       [](MachineConfig& c) -> Ref { return &c.gp.cull_back_faces; }},
 
       {"ring.channels", "channels", "A", 8, 1, 64,
        "Parallel channels of the ring; 8 x 32 bits x 20 MHz = 5.12 Gb/s matches the paper's "

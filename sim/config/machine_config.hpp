@@ -25,6 +25,7 @@ struct MachineConfig {
     int clocks_per_triangle = 0;
     int clocks_per_expression = 0;
     int clocks_per_bin = 0;
+    int cull_back_faces = 0;
   } gp;
   struct Ring {
     int channels = 0;
