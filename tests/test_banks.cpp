@@ -85,7 +85,10 @@ struct Bench {
     frame.parameters = GeometryEngine(gp, scene).frame_parameters();
     board.begin_region(0, 0);
     board.run(program.procedure(Procedure::clear), frame);
-    for (const PacketValues& v : stream) board.run(program.procedure(Procedure::triangle), v);
+    for (int pass = 0; pass < program.passes; ++pass) {
+      if (pass > 0) board.run(program.procedure(Procedure::pass), frame);
+      for (const PacketValues& v : stream) board.run(program.procedure(Procedure::triangle), v);
+    }
     board.run(program.procedure(Procedure::shade), frame);
     const FieldDecl* f = program.find_field("iflag");
     REQUIRE(f != nullptr);
@@ -347,4 +350,28 @@ TEST_CASE("Unknown or derived frame parameters are rejected by name", "[banks]")
   scene.parameters["highlight_opacity"] = 300;
   CHECK_THROWS_WITH(GeometryEngine(geometry_params(config), scene).frame_parameters(),
                     Catch::Contains("highlight_opacity"));
+}
+
+TEST_CASE("Multipass transparency finds intersections behind the frontmost layer", "[banks]") {
+  Bench b;
+  // A front layer over everything; behind it two screen-parallel triangles at one depth
+  // overlap in the square x, y in [40, 80): a tie in the second layer only.
+  const ScreenTriangle front = Bench::triangle({-8, -8}, {300, -8}, {-8, 300}, 0.2, 0.2, 0.2);
+  const ScreenTriangle left = Bench::triangle({0, 0}, {80, 0}, {0, 160}, 0.5, 0.5, 0.5);
+  const ScreenTriangle right = Bench::triangle({40, 40}, {128, 40}, {40, 128}, 0.5, 0.5, 0.5);
+  auto count = [&](const char* name) {
+    const Program program = b.load(name);
+    const auto flags = b.flags(program, b.packets(program, {front, left, right}));
+    return std::count(flags.begin(), flags.end(), 1u);
+  };
+  CHECK(count("exactmatch") == 0);
+  const Program opaque = b.load("exactmatch");
+  const auto packets = b.packets(opaque, {front, left, right});
+  long overlap = 0;
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 128; ++x) overlap += covers(packets[1], x, y) && covers(packets[2], x, y);
+  const auto behind = count("transparent_exactmatch");
+  CHECK(overlap > 300);
+  CHECK(behind == overlap);  // exactly the overlap of the two hidden triangles
+  CHECK(count("transparent_threshold") >= behind);
 }

@@ -97,6 +97,8 @@ enum class Parameter {
   delta,
   epsilon_scale,
   silhouette,
+  surface_opacity,
+  surface_keep,
   count
 };
 struct FrameParameterInfo {
@@ -131,11 +133,14 @@ inline constexpr FrameParameterInfo kParameters[] = {
     {"silhouette",
      "silhouette remedy: ignore the flag where the frontmost |normal z| * 127 < silhouette "
      "(default 0: off)"},
+    {"surface_opacity",
+     "opacity of every surface in the transparency programs, 0..256 (default 128)"},
+    {"surface_keep", "derived: 256 - surface_opacity"},
 };
 
 // Frame parameters computed from others: an override of their sources recomputes them.
-inline constexpr Parameter kDerivedParameters[] = {Parameter::highlight_keep,
-                                                   Parameter::epsilon_scale};
+inline constexpr Parameter kDerivedParameters[] = {
+    Parameter::highlight_keep, Parameter::epsilon_scale, Parameter::surface_keep};
 
 inline int expression_index(std::string_view name) {
   for (int i = 0; i < static_cast<int>(Expression::count); ++i) {

@@ -318,6 +318,7 @@ std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::fra
   at(Parameter::threshold) = 32768;
   at(Parameter::delta) = 24;
   at(Parameter::silhouette) = 0;
+  at(Parameter::surface_opacity) = 128;
   for (const auto& [name, value] : scene_.parameters) {
     const int k = parameter_index(name);
     if (k < 0) throw std::invalid_argument(fmt::format("unknown frame parameter '{}'", name));
@@ -343,6 +344,8 @@ std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::fra
   check(Parameter::threshold, 0, (std::int64_t{1} << params_.depth_bits) - 1);
   check(Parameter::delta, 0, 1024);
   check(Parameter::silhouette, 0, 127);
+  check(Parameter::surface_opacity, 0, 256);
+  at(Parameter::surface_keep) = 256 - at(Parameter::surface_opacity);
   at(Parameter::highlight_keep) = 256 - at(Parameter::highlight_opacity);
   // dz^2 < (delta/16)^2 * (slope * 2^kSlopeShift)^2  <=>  dz^2 < epsilon_scale * slope^2.
   at(Parameter::epsilon_scale) = std::llround(static_cast<double>(at(Parameter::delta)) *

@@ -123,7 +123,7 @@ std::vector<Segment3> intersection_segments(const Mesh& mesh) {
 }
 
 IntersectionTruth intersection_truth(const Scene& scene, int width, int height, double delta,
-                                     double spacing) {
+                                     double spacing, bool visible_only) {
   IntersectionTruth t;
   t.width = width;
   t.height = height;
@@ -198,7 +198,7 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
       if (!project(glm::mix(seg.a, seg.b, static_cast<double>(k) / steps), s)) continue;
       ++t.samples;
       if (s.x < 0 || s.y < 0 || s.x >= width || s.y >= height) continue;
-      if (hidden(s, seg.first, seg.second)) continue;
+      if (visible_only && hidden(s, seg.first, seg.second)) continue;
       t.visible.push_back({{s.x, s.y}, tangent});
       const int px = static_cast<int>(std::floor(s.x)), py = static_cast<int>(std::floor(s.y));
       for (int y = std::max(0, py - reach); y <= std::min(height - 1, py + reach); ++y) {

@@ -49,9 +49,10 @@ struct IntersectionTruth {
   std::size_t pixels = 0;            // set bits of mask
 };
 
-// Samples every segment at `spacing` pixels on the screen.
+// Samples every segment at `spacing` pixels on the screen. With visible_only false, hidden
+// parts count too (the truth for transparency, where every intersection shows).
 IntersectionTruth intersection_truth(const Scene& scene, int width, int height, double delta,
-                                     double spacing = 0.25);
+                                     double spacing = 0.25, bool visible_only = true);
 
 struct Accuracy {
   std::size_t truth = 0, flagged = 0, hits = 0;

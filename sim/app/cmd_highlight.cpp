@@ -53,8 +53,13 @@ namespace {
 
 struct HighlightOptions {
   std::vector<std::string> scenes = {"two-triangles", "crossing-quads", "figure-eight", "torus"};
-  std::vector<std::string> programs = {"exactmatch", "exactmatch_n", "threshold", "epsilon",
-                                       "epsilon_folded"};
+  std::vector<std::string> programs = {"exactmatch",
+                                       "exactmatch_n",
+                                       "threshold",
+                                       "epsilon",
+                                       "epsilon_folded",
+                                       "transparent_exactmatch",
+                                       "transparent_threshold"};
   std::string speed_scene = "torus";
   std::vector<std::string> params;
   std::string config_path;
@@ -113,13 +118,19 @@ int run_highlight(const HighlightOptions& o) {
     const GeometryEngine geometry(geometry_params(config), scene);
     const double delta =
         static_cast<double>(geometry.frame_parameters()[static_cast<int>(Parameter::delta)]) / 16.0;
-    const IntersectionTruth truth =
-        intersection_truth(scene, config.screen.width, config.screen.height, delta);
-    std::cerr << fmt::format("{}: {} intersection segments, {} visible samples, {} truth pixels\n",
-                             scene_name, truth.segments, truth.visible.size(), truth.pixels);
+    // Opaque programs are judged against the visible curves, multipass (transparency)
+    // programs against all of them.
+    IntersectionTruth truths[2];
+    for (int all = 0; all < 2; ++all) {
+      truths[all] = intersection_truth(scene, config.screen.width, config.screen.height, delta,
+                                       0.25, all == 0);
+    }
+    std::cerr << fmt::format("{}: {} intersection segments; {} truth pixels visible, {} in all\n",
+                             scene_name, truths[0].segments, truths[0].pixels, truths[1].pixels);
     const fs::path dir = fs::path(o.out_dir) / scene_name;
     fs::create_directories(dir);
     for (const Entry& e : programs) {
+      const IntersectionTruth& truth = truths[e.program.passes > 1 ? 1 : 0];
       const FieldFrame frame = render_field(config, scene, e.program, "iflag", o.threads);
       std::vector<std::uint8_t> flagged(frame.values.size());
       for (std::size_t p = 0; p < flagged.size(); ++p) flagged[p] = frame.values[p] != 0;
