@@ -79,7 +79,13 @@ std::string spilled_fields(const Program& p) {
 int run_highlight(const HighlightOptions& o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
   const auto params = parse_frame_parameters(o.params);
-  fs::create_directories(o.out_dir);
+  // Everything is checked before the first file is written.
+  std::vector<Scene> scenes;
+  for (const std::string& name : o.scenes) {
+    scenes.push_back(make_builtin_scene(name));
+    scenes.back().parameters = params;
+    GeometryEngine(geometry_params(config), scenes.back()).frame_parameters();
+  }
 
   struct Entry {
     std::string name;
@@ -95,6 +101,7 @@ int run_highlight(const HighlightOptions& o) {
     }
     programs.push_back(std::move(e));
   }
+  fs::create_directories(o.out_dir);
   // Projected polygons per second, from the timing model, on one scene.
   if (!o.speed_scene.empty()) {
     Scene scene = make_builtin_scene(o.speed_scene);
@@ -112,9 +119,8 @@ int run_highlight(const HighlightOptions& o) {
   std::string csv =
       "program,scene,truth_pixels,flagged_pixels,recall,precision,width_mean,width_sd,coverage,"
       "bits_used,memory_bits,spilled,polygons_per_second\n";
-  for (const std::string& scene_name : o.scenes) {
-    Scene scene = make_builtin_scene(scene_name);
-    scene.parameters = params;
+  for (const Scene& scene : scenes) {
+    const std::string& scene_name = scene.name;
     const GeometryEngine geometry(geometry_params(config), scene);
     const double delta =
         static_cast<double>(geometry.frame_parameters()[static_cast<int>(Parameter::delta)]) / 16.0;
