@@ -99,6 +99,7 @@ enum class Parameter {
   silhouette,
   surface_opacity,
   surface_keep,
+  normal_epsilon_scale,
   count
 };
 struct FrameParameterInfo {
@@ -136,11 +137,15 @@ inline constexpr FrameParameterInfo kParameters[] = {
     {"surface_opacity",
      "opacity of every surface in the transparency programs, 0..256 (default 128)"},
     {"surface_keep", "derived: 256 - surface_opacity"},
+    {"normal_epsilon_scale",
+     "derived: (delta/16)^2 * S^2 / 256, S = depth units per pixel per unit of eye-space slope at "
+     "the camera's target distance (epsilon_normal: slopes recovered from normals)"},
 };
 
 // Frame parameters computed from others: an override of their sources recomputes them.
 inline constexpr Parameter kDerivedParameters[] = {
-    Parameter::highlight_keep, Parameter::epsilon_scale, Parameter::surface_keep};
+    Parameter::highlight_keep, Parameter::epsilon_scale, Parameter::surface_keep,
+    Parameter::normal_epsilon_scale};
 
 inline int expression_index(std::string_view name) {
   for (int i = 0; i < static_cast<int>(Expression::count); ++i) {

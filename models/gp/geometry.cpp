@@ -351,6 +351,15 @@ std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::fra
   at(Parameter::epsilon_scale) = std::llround(static_cast<double>(at(Parameter::delta)) *
                                               static_cast<double>(at(Parameter::delta)) *
                                               std::ldexp(1.0, 2 * kSlopeShift - 8));
+  // Weak perspective at the target: d(depth)/dx_screen = S * (eye-space slope dz/dx), with
+  // S = (d depth / d z_eye) / (d x_screen / d x_eye) = depth_max |P32| / (D W P00).
+  const double distance = glm::length(glm::dvec3(scene_.camera.target - scene_.camera.eye));
+  const double depth_max = std::ldexp(1.0, params_.depth_bits) - 1.0;
+  const double s = depth_max * std::fabs(projection_[3][2]) /
+                   (distance * params_.screen_width * projection_[0][0]);
+  const double d = static_cast<double>(at(Parameter::delta)) / 16.0;
+  at(Parameter::normal_epsilon_scale) =
+      std::min<std::int64_t>(std::llround(d * d * s * s / 256.0), (std::int64_t{1} << 30) - 1);
   return p;
 }
 

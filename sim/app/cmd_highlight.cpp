@@ -57,6 +57,7 @@ struct HighlightOptions {
                                        "exactmatch_n",
                                        "threshold",
                                        "epsilon",
+                                       "epsilon_normal",
                                        "epsilon_folded",
                                        "transparent_exactmatch",
                                        "transparent_threshold"};
