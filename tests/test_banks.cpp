@@ -375,3 +375,25 @@ TEST_CASE("Multipass transparency finds intersections behind the frontmost layer
   CHECK(behind == overlap);  // exactly the overlap of the two hidden triangles
   CHECK(count("transparent_threshold") >= behind);
 }
+
+TEST_CASE("epsilon folded into the rendering pass is order-sensitive; two-pass epsilon is not",
+          "[banks]") {
+  Bench b;
+  // The paper's case: P faces the screen in front, M parallel to it behind, and B, far
+  // behind, is nearly edge-on (a sliver whose depth rises steeply across a few pixels).
+  const ScreenTriangle p = Bench::triangle({-8, -8}, {300, -8}, {-8, 300}, 0.55, 0.55, 0.55);
+  const ScreenTriangle m = Bench::triangle({-8, -8}, {300, -8}, {-8, 300}, 0.56, 0.56, 0.56);
+  const ScreenTriangle s = Bench::triangle({60, -8}, {66, -8}, {60, 300}, 0.57, 0.99, 0.57);
+  auto count = [&](const char* name, std::vector<ScreenTriangle> order) {
+    const Program program = b.load(name);
+    const auto flags = b.flags(program, b.packets(program, order));
+    return std::count(flags.begin(), flags.end(), 1u);
+  };
+  const auto folded_late = count("epsilon_folded", {p, m, s});   // B compared with P
+  const auto folded_early = count("epsilon_folded", {s, m, p});  // P arrives last
+  INFO("folded: " << folded_late << " flagged with B last, " << folded_early << " with B first");
+  CHECK(folded_late > 0);
+  CHECK(folded_early == 0);
+  CHECK(count("epsilon", {p, m, s}) == 0);
+  CHECK(count("epsilon", {s, m, p}) == 0);
+}
