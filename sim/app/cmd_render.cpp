@@ -38,6 +38,7 @@ int run_render(RenderOptions o) {
   }
   Scene scene = make_builtin_scene(o.scene_name, scene_options);
   scene.parameters = parse_frame_parameters(o.params);
+  GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(resolve_firmware(o.firmware), assembler_options(config));
   if (o.out_dir.empty()) o.out_dir = (fs::path("out") / o.scene_name).string();
   fs::create_directories(o.out_dir);
