@@ -224,6 +224,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
     setup.no_pixels += g.setup.no_pixels;
     setup.overflow += g.setup.overflow;
     setup.clip_splits += g.setup.clip_splits;
+    setup.culled += g.setup.culled;
   }
   s["gp"] = gps;
   // With frames pipelined, as on the real machine, the GPs transform frame n + 1 while the
@@ -246,6 +247,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   s["setup"] = {{"packets", packets},
                 {"clipped_away", setup.clipped_away},
                 {"clip_splits", setup.clip_splits},
+                {"culled", setup.culled},
                 {"degenerate", setup.degenerate},
                 {"no_pixel_centres", setup.no_pixels},
                 {"coefficient_overflow", setup.overflow}};

@@ -23,6 +23,12 @@ expect_error "'gp.count' must be an integer" render --config "$tmp/bad2.json" --
 expect_error "out of range" render --set renderer.count=99 --out "$tmp/c"
 printf 'field z 24\nproc triangle\n  qload z, nowhere\nend\n' > "$tmp/bad.pp5"
 expect_error "bad.pp5:3:" render --firmware "$tmp/bad.pp5" --out "$tmp/d"
+expect_error "no frame parameter 'nope'" highlight --param nope=1 --out "$tmp/e"
+expect_error "not an integer" render --param delta=wide --out "$tmp/e"
+expect_error "highlight_opacity' = 999" highlight --param highlight_opacity=999 --out "$tmp/e"
+expect_error "unknown scene 'nope'" highlight --scenes two-triangles nope --out "$tmp/e"
+expect_error "not a highlighting program" highlight --firmware phong --out "$tmp/e"
+[ -e "$tmp/e" ] && fail "highlight wrote output after bad input"
 for d in a b c d; do [ -e "$tmp/$d/frame.png" ] && fail "partial output in $tmp/$d"; done
 
 "$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \
@@ -31,6 +37,13 @@ for f in frame.png config.json stats.json; do [ -s "$tmp/ok/$f" ] || fail "missi
 grep -q "of 208 bits" "$tmp/ok.log" || fail "no bit-budget table"
 grep -q "projected throughput" "$tmp/ok.log" || fail "no throughput"
 ls "$tmp/ok" | grep -q tmp && fail "temporary file left behind"
+"$bin" highlight --scenes two-triangles --firmware exactmatch epsilon --speed-scene '' \
+  --set screen.width=256 --set screen.height=256 --out "$tmp/hl" >"$tmp/hl.log" 2>&1 \
+  || fail "highlight failed: $(cat "$tmp/hl.log")"
+grep -q "| epsilon | two-triangles |" "$tmp/hl.log" || fail "no epsilon row in the table"
+for f in highlight.md highlight.csv two-triangles/epsilon.png two-triangles/epsilon-overlay.png; do
+  [ -s "$tmp/hl/$f" ] || fail "highlight did not write $f"
+done
 "$bin" --help | grep -q render || fail "--help does not list render"
 
 # Timeline and sweeps.

@@ -27,6 +27,7 @@ struct RenderOptions {
   int threads = default_threads();
   std::vector<int> tessellation;
   std::string timeline;
+  std::vector<std::string> params;
 };
 
 int run_render(RenderOptions o) {
@@ -36,7 +37,9 @@ int run_render(RenderOptions o) {
     scene_options.tessellation_u = o.tessellation[0];
     scene_options.tessellation_v = o.tessellation[1];
   }
-  const Scene scene = make_builtin_scene(o.scene_name, scene_options);
+  Scene scene = make_builtin_scene(o.scene_name, scene_options);
+  scene.parameters = parse_frame_parameters(o.params);
+  GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(resolve_firmware(o.firmware), assembler_options(config));
   if (o.out_dir.empty()) o.out_dir = (fs::path("out") / o.scene_name).string();
   fs::create_directories(o.out_dir);
@@ -66,7 +69,9 @@ int run_render(RenderOptions o) {
 Command add_render_command(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
   auto* render = app.add_subcommand("render", "Render one frame of a scene and write its reports");
-  render->add_option("-s,--scene", o->scene_name, "Built-in scene: torus, two-triangles, sphere")
+  render
+      ->add_option("-s,--scene", o->scene_name,
+                   "Built-in scene: torus, two-triangles, sphere, figure-eight, crossing-quads")
       ->capture_default_str();
   render
       ->add_option("-f,--firmware", o->firmware,
@@ -88,6 +93,9 @@ Command add_render_command(CLI::App& app) {
   render->add_option("--timeline", o->timeline,
                      "Also write a timeline of every GP, ring channel and Renderer to FILE, in the "
                      "Chrome trace-event JSON format that ui.perfetto.dev opens");
+  render->add_option("--param", o->params,
+                     "Set a frame parameter, NAME=VALUE (repeatable), e.g. --param "
+                     "highlight_opacity=128 (see pp5sim isa)");
   return {render, [o] { return run_render(*o); }};
 }
 

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
       add_scenes_command(app),
       add_sweep_command(app),
       add_trace_command(app),
+      add_highlight_command(app),
   };
 
   CLI11_PARSE(app, argc, argv);

@@ -99,6 +99,10 @@ const std::vector<Parameter>& parameter_table() {
        "hand-coded Phong triangle then runs at 1.2 M/s on 32 GPs; the compiled rate, about "
        "100 K/s, follows from the pipeline model (docs/timing.md).",
        [](MachineConfig& c) -> Ref { return &c.gp.overhead_factor; }},
+      {"gp.cull_back_faces", "flag", "A", 0, 0, 1,
+       "GP library option: 1 drops triangles that face away from the eye (the silhouette "
+       "remedy for closed opaque surfaces); 0 draws both sides, lit two-sided.",
+       [](MachineConfig& c) -> Ref { return &c.gp.cull_back_faces; }},
       {"ring.channels", "channels", "A", 8, 1, 64,
        "Parallel channels of the ring; 8 x 32 bits x 20 MHz = 5.12 Gb/s matches the paper's "
        "5 Gb/s, but 4 x 40 MHz fits as well.",

@@ -31,6 +31,7 @@ struct MachineConfig {
     int assembly_code_bytes = 0;
     int compiled_code_bytes = 0;
     double overhead_factor = 0;
+    int cull_back_faces = 0;
   } gp;
   struct Ring {
     int channels = 0;
