@@ -6,22 +6,10 @@
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/simulation.hpp"
+#include "tests/support.hpp"
 
 using namespace pp5;
-
-namespace {
-
-Program load(const std::string& name, const MachineConfig& c) {
-  return assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5",
-                       assembler_options(c));
-}
-
-nlohmann::json without_host(nlohmann::json stats) {
-  stats.erase("host");
-  return stats;
-}
-
-}  // namespace
+using namespace pp5::test;
 
 TEST_CASE("frames and statistics are identical across runs and host thread counts", "[machine]") {
   MachineConfig config = MachineConfig::defaults();
@@ -30,7 +18,7 @@ TEST_CASE("frames and statistics are identical across runs and host thread count
   config.gp.count = 5;
   config.renderer.count = 3;
   const Scene scene = make_builtin_scene("torus", {64, 16});
-  const Program program = load("phong", config);
+  const Program program = load_program("phong", config);
   const FrameResult one = simulate_frame(config, scene, program, 1);
   const FrameResult four = simulate_frame(config, scene, program, 4);
   const FrameResult again = simulate_frame(config, scene, program, 1);
@@ -48,7 +36,7 @@ TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[
   config.gp.count = 4;
   config.renderer.count = 3;
   const Scene scene = make_builtin_scene("sphere");
-  const Program program = load("flat", config);  // no data-dependent costs
+  const Program program = load_program("flat", config);  // no data-dependent costs
   const FrameResult r = simulate_frame(config, scene, program, 2);
   const TimingParams timing = timing_params(config);
   const PacketValues none{};
@@ -82,7 +70,7 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   config.gp.count = 1;
   config.renderer.count = 1;
   const Scene scene = make_builtin_scene("two-triangles");
-  const Program program = load("flat", config);
+  const Program program = load_program("flat", config);
   const FrameResult r = simulate_frame(config, scene, program, 1);
   REQUIRE(r.stats["setup"]["packets"].get<std::uint64_t>() == 2);
 

@@ -11,24 +11,16 @@
 #include "models/machine.hpp"
 #include "models/ring/ring.hpp"
 #include "sim/simulation.hpp"
+#include "tests/support.hpp"
 
 using namespace pp5;
+using namespace pp5::test;
 
 namespace {
 
-Program load(const std::string& name, const MachineConfig& c) {
-  return assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5",
-                       assembler_options(c));
-}
-
-nlohmann::json without_host(nlohmann::json stats) {
-  stats.erase("host");
-  return stats;
-}
-
 // What the Phong firmware asks of the GP for each triangle, as the Machine computes it.
 GpWorkload phong_workload(const MachineConfig& c) {
-  const Program program = load("phong", c);
+  const Program program = load_program("phong", c);
   GpWorkload w;
   w.expressions = program.procedure(Procedure::triangle).expressions;
   const int per_coefficient =
@@ -175,7 +167,7 @@ TEST_CASE("static and dynamic balancing render identical images; dynamic is dete
   config.gp.count = 6;
   config.renderer.count = 5;
   const Scene scene = make_builtin_scene("torus", {64, 16});
-  const Program program = load("phong", config);
+  const Program program = load_program("phong", config);
   const FrameResult fixed = simulate_frame(config, scene, program, 2);
   config.set("renderer.balancing=dynamic");
   const FrameResult dynamic = simulate_frame(config, scene, program, 1);
@@ -197,7 +189,7 @@ TEST_CASE("a small instruction queue stalls the GPs, never changes the image",
   config.gp.count = 4;
   config.renderer.count = 2;
   const Scene scene = make_builtin_scene("sphere");
-  const Program program = load("gouraud", config);
+  const Program program = load_program("gouraud", config);
   const FrameResult roomy = simulate_frame(config, scene, program, 2);
   config.set("renderer.queue_words=128");
   const FrameResult tight = simulate_frame(config, scene, program, 2);
@@ -211,7 +203,7 @@ TEST_CASE("a small instruction queue stalls the GPs, never changes the image",
   // A queue smaller than one packet is a configuration error that names the key.
   config.set(std::vector<std::string>{"renderer.queue_words=64", "ring.word_bits=16"});
   try {
-    simulate_frame(config, scene, load("phong", config), 1);
+    simulate_frame(config, scene, load_program("phong", config), 1);
     FAIL("expected an error");
   } catch (const std::exception& e) {
     CHECK_THAT(e.what(), Catch::Contains("renderer.queue_words"));
@@ -245,7 +237,7 @@ TEST_CASE("overlapped shipping lets a Renderer start its next region early", "[t
   config.gp.count = 2;
   config.renderer.count = 1;  // 8 regions in a row on one board
   const Scene scene = make_builtin_scene("sphere");
-  const Program program = load("flat", config);
+  const Program program = load_program("flat", config);
   const FrameResult overlapped = simulate_frame(config, scene, program, 1);
   config.set("renderer.overlap_shipping=0");
   const FrameResult blocking = simulate_frame(config, scene, program, 1);
@@ -263,7 +255,7 @@ TEST_CASE("the frame time is attributed to GPs, ring and Renderers, and the time
   config.gp.count = 4;
   config.renderer.count = 3;
   const Scene scene = make_builtin_scene("torus", {64, 16});
-  const Program program = load("phong", config);
+  const Program program = load_program("phong", config);
   nlohmann::json timeline;
   const FrameResult r = simulate_frame(config, scene, program, 2, {}, &timeline);
   const auto& t = r.stats["timing"];
@@ -309,7 +301,7 @@ TEST_CASE("the bottleneck named is the resource that was starved", "[timing][rep
     config.set(std::vector<std::string>{"screen.width=512", "screen.height=256", "gp.count=4",
                                         "renderer.count=4"});
     config.set(sets);
-    const FrameResult r = simulate_frame(config, scene, load("phong", config), 2);
+    const FrameResult r = simulate_frame(config, scene, load_program("phong", config), 2);
     return r.stats["timing"]["bottleneck"].get<std::string>();
   };
   CHECK(bottleneck({"gp.code=compiled"}) == "GPs");
@@ -325,7 +317,7 @@ TEST_CASE("coefficient loading: hidden when double-buffered, charged in full whe
   config.gp.count = 3;
   config.renderer.count = 2;
   const Scene scene = make_builtin_scene("sphere");
-  const Program program = load("gouraud", config);
+  const Program program = load_program("gouraud", config);
   const FrameResult buffered = simulate_frame(config, scene, program, 1);
   config.set("evaluator.double_buffered=0");
   const FrameResult serial = simulate_frame(config, scene, program, 1);

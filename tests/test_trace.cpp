@@ -16,8 +16,10 @@
 #include "sim/trace/recorder.hpp"
 #include "sim/trace/snapshot.hpp"
 #include "sim/trace/trace_file.hpp"
+#include "tests/support.hpp"
 
 using namespace pp5;
+using namespace pp5::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -29,11 +31,6 @@ MachineConfig small_config() {
   c.gp.count = 5;
   c.renderer.count = 3;
   return c;
-}
-
-Program load(const std::string& name, const MachineConfig& c) {
-  return assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5",
-                       assembler_options(c));
 }
 
 const Scene& torus() {
@@ -76,7 +73,7 @@ trace::Selection patch() {
 
 TEST_CASE("replaying a trace reconstructs the selected pixels' memory exactly", "[trace]") {
   const MachineConfig c = small_config();
-  const Program p = load("phong", c);
+  const Program p = load_program("phong", c);
   FrameResult frame;
   const trace::Trace t = record(c, p, patch(), "replay.pp5t", 2, &frame);
   // The region's whole pixel memory at its end, copied from the PixelArray itself.
@@ -113,7 +110,7 @@ TEST_CASE("replaying a trace reconstructs the selected pixels' memory exactly", 
 TEST_CASE("traces are identical for any number of host threads and do not change the frame",
           "[trace]") {
   const MachineConfig c = small_config();
-  const Program p = load("gouraud", c);
+  const Program p = load_program("gouraud", c);
   trace::Selection sel;
   sel.rects.push_back({190, 140, 2, 2});
   FrameResult traced;
@@ -127,7 +124,7 @@ TEST_CASE("traces are identical for any number of host threads and do not change
 
 TEST_CASE("windows and filters select exactly what they claim", "[trace]") {
   const MachineConfig c = small_config();
-  const Program p = load("phong", c);
+  const Program p = load_program("phong", c);
   trace::Selection base;
   base.rects.push_back({186, 142, 3, 2});
   const trace::Trace full = record(c, p, base, "full.pp5t");
@@ -206,7 +203,7 @@ TEST_CASE("windows and filters select exactly what they claim", "[trace]") {
 
 TEST_CASE("bad selections are rejected with the option's name", "[trace]") {
   const MachineConfig c = small_config();
-  const Program p = load("phong", c);
+  const Program p = load_program("phong", c);
   trace::Selection s;
   s.rects.push_back({384, 0, 1, 1});
   CHECK_THROWS_WITH(trace::Recorder(c, torus(), p, s), Catch::Contains("outside the 384 x 256"));
@@ -219,7 +216,7 @@ TEST_CASE("bad selections are rejected with the option's name", "[trace]") {
 
 TEST_CASE("truncated and corrupted trace files are rejected with a message", "[trace]") {
   const MachineConfig c = small_config();
-  const Program p = load("flat", c);
+  const Program p = load_program("flat", c);
   trace::Selection sel;
   sel.rects.push_back({190, 140, 1, 1});
   record(c, p, sel, "good.pp5t");
@@ -301,8 +298,8 @@ TEST_CASE("why names the last writer; diff finds where two programs diverge", "[
   const MachineConfig c = small_config();
   trace::Selection sel;
   sel.rects.push_back({190, 140, 1, 1});
-  const trace::Trace phong = record(c, load("phong", c), sel, "phong.pp5t");
-  const trace::Trace gouraud = record(c, load("gouraud", c), sel, "gouraud.pp5t");
+  const trace::Trace phong = record(c, load_program("phong", c), sel, "phong.pp5t");
+  const trace::Trace gouraud = record(c, load_program("gouraud", c), sel, "gouraud.pp5t");
   const auto st = trace::replay(phong).at({190, 140});
   REQUIRE(st.value.at(phong.field_index("covered")) == 1);
   const std::string why = trace::why_report(phong, {190, 140});
@@ -326,7 +323,7 @@ TEST_CASE("the VCD export is accepted by GTKWave's vcd2fst", "[trace]") {
   const MachineConfig c = small_config();
   trace::Selection sel;
   sel.rects.push_back({190, 140, 2, 1});
-  const trace::Trace t = record(c, load("phong", c), sel, "vcd.pp5t");
+  const trace::Trace t = record(c, load_program("phong", c), sel, "vcd.pp5t");
   const std::string v = trace::vcd(t);
   CHECK_THAT(v, Catch::Contains("$scope module pixel_190_140 $end"));
   CHECK_THAT(v, Catch::Contains("enabled_pixels"));
@@ -343,7 +340,7 @@ TEST_CASE("the VCD export is accepted by GTKWave's vcd2fst", "[trace]") {
 
 TEST_CASE("snapshots: a region's memory at a chosen point, files and images", "[trace]") {
   const MachineConfig c = small_config();
-  const Program p = load("phong", c);
+  const Program p = load_program("phong", c);
   trace::Selection sel;
   sel.rects.push_back({190, 140, 1, 1});
   const trace::Trace t = record(c, p, sel, "snap.pp5t");
