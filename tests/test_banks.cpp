@@ -7,6 +7,7 @@
 #include <random>
 #include <regex>
 #include <sstream>
+#include <tuple>
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"
@@ -14,6 +15,7 @@
 #include "models/renderer/renderer_board.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/analysis/intersections.hpp"
+#include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
 
 using namespace pp5;
@@ -396,4 +398,53 @@ TEST_CASE("epsilon folded into the rendering pass is order-sensitive; two-pass e
   CHECK(folded_early == 0);
   CHECK(count("epsilon", {p, m, s}) == 0);
   CHECK(count("epsilon", {s, m, p}) == 0);
+}
+
+TEST_CASE("On the torus, reversing the display list changes epsilon_folded's flags, not epsilon's",
+          "[banks]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"screen.width=128", "screen.height=128"});
+  const Scene given = make_builtin_scene("torus");
+  Scene reversed = given;
+  apply_display_order(reversed.mesh, parse_display_order("reversed", "--order"));
+  REQUIRE(reversed.mesh.triangles.front() == given.mesh.triangles.back());
+  auto changed = [&](const char* name) {
+    const Program program = assemble_file(program_path(name), assembler_options(config));
+    const FieldFrame a = render_field(config, given, program, "iflag", 2);
+    const FieldFrame b = render_field(config, reversed, program, "iflag", 1);
+    long flagged = 0, differ = 0;
+    for (std::size_t p = 0; p < a.values.size(); ++p) {
+      flagged += a.values[p] != 0;
+      differ += (a.values[p] != 0) != (b.values[p] != 0);
+    }
+    REQUIRE(flagged > 100);
+    return differ;
+  };
+  const long two_pass = changed("epsilon");
+  const long folded = changed("epsilon_folded");
+  INFO("pixels changed by reversing: epsilon " << two_pass << ", epsilon_folded " << folded);
+  CHECK(two_pass == 0);
+  CHECK(folded > 0);
+}
+
+TEST_CASE("Display orders are deterministic permutations and bad ones are named", "[banks]") {
+  const Scene given = make_builtin_scene("figure-eight");
+  Scene a = given, b = given, c = given;
+  apply_display_order(a.mesh, parse_display_order("shuffled:7", "--order"));
+  apply_display_order(b.mesh, parse_display_order("shuffled:7", "--order"));
+  apply_display_order(c.mesh, parse_display_order("shuffled:8", "--order"));
+  CHECK(a.mesh.triangles == b.mesh.triangles);
+  CHECK(a.mesh.triangles != c.mesh.triangles);
+  CHECK(a.mesh.triangles != given.mesh.triangles);
+  auto key = [](const glm::uvec3& t) { return std::make_tuple(t.x, t.y, t.z); };
+  auto sorted = [&](std::vector<glm::uvec3> v) {
+    std::sort(v.begin(), v.end(), [&](auto& p, auto& q) { return key(p) < key(q); });
+    return v;
+  };
+  CHECK(sorted(a.mesh.triangles) == sorted(given.mesh.triangles));
+  CHECK(parse_display_order("shuffled", "--order").text() == "shuffled:1");
+  for (const char* bad : {"backwards", "shuffled:", "shuffled:-1", "shuffled:x", "shuffledx"}) {
+    CHECK_THROWS_WITH(parse_display_order(bad, "--order"),
+                      Catch::Contains("--order") && Catch::Contains("expected given, reversed"));
+  }
 }
