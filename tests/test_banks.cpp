@@ -2,7 +2,9 @@
 // shared-edge hits, epsilon on parallel and near-parallel planes against an integer model,
 // fixed versus varying curve width on the figure-eight surface, and the bit budget.
 #include <algorithm>
+#include <bitset>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <regex>
@@ -447,4 +449,70 @@ TEST_CASE("Display orders are deterministic permutations and bad ones are named"
     CHECK_THROWS_WITH(parse_display_order(bad, "--order"),
                       Catch::Contains("--order") && Catch::Contains("expected given, reversed"));
   }
+}
+
+TEST_CASE("Under perspective a fixed threshold widens with distance on screen z, narrows on eye z",
+          "[banks]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"screen.width=640", "screen.height=512"});
+  Scene scene = make_builtin_scene("receding-pairs");
+  scene.parameters["threshold"] = 16384;
+  const IntersectionTruth truth = intersection_truth(scene, 640, 512, 1.5);
+  REQUIRE(truth.curves.size() == 5);
+  // The pairs are identical and recede: each curve's midpoint is farther than the last.
+  const auto distance = [&](std::size_t i) {
+    return -0.5 * (truth.curves[i].a.z + truth.curves[i].b.z);
+  };
+  for (std::size_t i = 1; i < truth.curves.size(); ++i) CHECK(distance(i) > distance(i - 1));
+  std::vector<double> width[2];
+  int k = 0;
+  for (const char* name : {"threshold", "threshold_eyez"}) {
+    const Program program = assemble_file(program_path(name), assembler_options(config));
+    const FieldFrame frame = render_field(config, scene, program, "iflag", 2);
+    std::vector<std::uint8_t> flagged(frame.values.begin(), frame.values.end());
+    for (const Accuracy& a : measure_width_by_segment(truth, flagged)) {
+      CHECK(a.coverage > 0.5);
+      width[k].push_back(a.width_mean);
+    }
+    ++k;
+  }
+  INFO("screen z: " << width[0][0] << " ... " << width[0][4] << " px; eye z: " << width[1][0]
+                    << " ... " << width[1][4] << " px");
+  CHECK(width[0][4] > 1.5 * width[0][0]);  // nearest to farthest pair: wider
+  CHECK(width[1][0] > 1.5 * width[1][4]);  // narrower
+}
+
+TEST_CASE("eye_depth is exact at the vertices and affine in screen space", "[banks]") {
+  Bench b;
+  ScreenTriangle t = Bench::triangle({10, 10}, {100, 20}, {30, 110}, 0.3, 0.6, 0.9);
+  // Eye depths (camera units) at the vertices; the plane through them is not the
+  // perspective-correct eye depth, and the GP says so in the expression's meaning.
+  const Camera& cam = b.scene.camera;
+  const double fraction[3] = {0.1, 0.4, 0.8};
+  double eye[3];
+  for (int k = 0; k < 3; ++k) {
+    eye[k] = cam.near_plane + fraction[k] * (cam.far_plane - cam.near_plane);
+    t.v[k].eye_depth = eye[k];
+  }
+  std::bitset<static_cast<int>(Expression::count)> need;
+  need.set(static_cast<int>(Expression::eye_depth));
+  SetupResult r;
+  SetupCounts counts;
+  REQUIRE(GeometryEngine(b.gp, b.scene).setup(t, need, r, counts));
+  const auto& q = r.values.expressions[static_cast<int>(Expression::eye_depth)];
+  const double depth_max = std::ldexp(1.0, b.gp.depth_bits) - 1.0;
+  for (int k = 0; k < 3; ++k) {
+    const double expect = (eye[k] - cam.near_plane) / (cam.far_plane - cam.near_plane) * depth_max;
+    const double x = t.v[k].position.x - 0.5, y = t.v[k].position.y - 0.5;
+    const double got =
+        (q.D * x + q.E * y + static_cast<double>(q.F)) / std::ldexp(1.0, b.gp.fraction_bits);
+    INFO("vertex " << k);
+    CHECK(got == Approx(expect).margin(64));
+    CHECK(got == Approx(fraction[k] * depth_max).margin(64));
+  }
+  CHECK(q.A == 0);
+  CHECK(q.B == 0);
+  CHECK(q.C == 0);
+  CHECK(std::string(kExpressions[static_cast<int>(Expression::eye_depth)].meaning)
+            .find("not perspective-correct") != std::string::npos);
 }

@@ -53,10 +53,12 @@ std::map<std::string, std::int64_t> parse_frame_parameters(const std::vector<std
 namespace {
 
 struct HighlightOptions {
-  std::vector<std::string> scenes = {"two-triangles", "crossing-quads", "figure-eight", "torus"};
+  std::vector<std::string> scenes = {"two-triangles", "crossing-quads", "figure-eight", "torus",
+                                     "receding-pairs"};
   std::vector<std::string> programs = {"exactmatch",
                                        "exactmatch_n",
                                        "threshold",
+                                       "threshold_eyez",
                                        "epsilon",
                                        "epsilon_normal",
                                        "epsilon_folded",
@@ -79,6 +81,8 @@ std::string spilled_fields(const Program& p) {
   }
   return names.empty() ? "-" : fmt::format("{}", fmt::join(names, " "));
 }
+
+constexpr std::size_t kMaxCurvesReported = 8;
 
 int run_highlight(const HighlightOptions& o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
@@ -126,6 +130,7 @@ int run_highlight(const HighlightOptions& o) {
       "coverage | changed by {} order | bits of {} | spilled | {} polygons/s "
       "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       compare ? other.text() : "no other", config.renderer.memory_bits, o.speed_scene);
+  std::string curve_table;
   std::string csv =
       "program,scene,truth_pixels,flagged_pixels,recall,precision,width_mean,width_sd,coverage,"
       "order,compare_order,order_changed_pixels,order_change,bits_used,memory_bits,spilled,"
@@ -149,6 +154,21 @@ int run_highlight(const HighlightOptions& o) {
     Scene reordered = make_builtin_scene(scene_name);
     reordered.parameters = params;
     apply_display_order(reordered.mesh, other);
+    // A scene of a few separate curves (receding-pairs) also gets the width along each, by
+    // its midpoint's eye depth (distance along the view axis).
+    const std::vector<Segment3>& curves = truths[0].curves;
+    const bool by_curve = !curves.empty() && curves.size() <= kMaxCurvesReported;
+    if (by_curve) {
+      const glm::dvec3 eye(scene.camera.eye);
+      const glm::dvec3 axis = glm::normalize(glm::dvec3(scene.camera.target) - eye);
+      curve_table += fmt::format(
+          "\nwidth in pixels along each curve of {} (mean +- sd):\n\n| program |", scene_name);
+      for (const Segment3& c : curves)
+        curve_table += fmt::format(" eye depth {:.2f} |", glm::dot(0.5 * (c.a + c.b) - eye, axis));
+      curve_table += "\n|---|";
+      for (std::size_t i = 0; i < curves.size(); ++i) curve_table += "---|";
+      curve_table += "\n";
+    }
     const fs::path dir = fs::path(o.out_dir) / scene_name;
     fs::create_directories(dir);
     for (const Entry& e : programs) {
@@ -157,6 +177,15 @@ int run_highlight(const HighlightOptions& o) {
       std::vector<std::uint8_t> flagged(frame.values.size());
       for (std::size_t p = 0; p < flagged.size(); ++p) flagged[p] = frame.values[p] != 0;
       const Accuracy a = measure_accuracy(truth, flagged);
+      if (by_curve) {
+        curve_table += fmt::format("| {} |", e.name);
+        for (const Accuracy& c : measure_width_by_segment(truth, flagged)) {
+          curve_table += c.width_samples
+                             ? fmt::format(" {:.2f} +- {:.2f} |", c.width_mean, c.width_sd)
+                             : std::string(" - |");
+        }
+        curve_table += "\n";
+      }
       // Order sensitivity: pixels whose flag differs in the other order, as a share of the
       // pixels flagged in this one.
       std::size_t changed = 0;
@@ -187,6 +216,7 @@ int run_highlight(const HighlightOptions& o) {
           e.program.bits_used(), config.renderer.memory_bits, spilled_fields(e.program), speed);
     }
   }
+  table += curve_table;
   write_file_atomically((fs::path(o.out_dir) / "highlight.md").string(), table);
   write_file_atomically((fs::path(o.out_dir) / "highlight.csv").string(), csv);
   std::cout << table;
