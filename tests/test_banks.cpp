@@ -13,6 +13,7 @@
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"
+#include "models/gp/i860.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/analysis/field_render.hpp"
@@ -515,4 +516,51 @@ TEST_CASE("eye_depth is exact at the vertices and affine in screen space", "[ban
   CHECK(q.C == 0);
   CHECK(std::string(kExpressions[static_cast<int>(Expression::eye_depth)].meaning)
             .find("not perspective-correct") != std::string::npos);
+}
+
+TEST_CASE("The GP cost model counts the highlighting expressions like any other expression",
+          "[banks]") {
+  MachineConfig config = MachineConfig::defaults();
+  auto workload = [&](const char* name) {
+    const Program p = assemble_file(program_path(name), assembler_options(config));
+    GpWorkload w;
+    w.expressions = p.procedure(Procedure::triangle).expressions;
+    w.packet_words = 1 + w.expressions.count() * 3 * 2;  // 40-bit coefficients, 32-bit words
+    return w;
+  };
+  const GpWorkload threshold = workload("threshold");
+  const GpWorkload eyez = workload("threshold_eyez");
+  const GpWorkload epsilon = workload("epsilon");
+  REQUIRE(epsilon.expressions.test(static_cast<int>(Expression::slope_x)));
+  REQUIRE(epsilon.expressions.test(static_cast<int>(Expression::slope_y)));
+  REQUIRE(eyez.expressions.test(static_cast<int>(Expression::eye_depth)));
+  REQUIRE_FALSE(eyez.expressions.test(static_cast<int>(Expression::depth)));
+  // epsilon = threshold + the two slopes: each costs an expression's set-up and its words.
+  REQUIRE((epsilon.expressions ^ threshold.expressions).count() == 2);
+  const OpCounts t = I860Work::triangle(threshold, 1, 1, 1);
+  const OpCounts e = I860Work::triangle(epsilon, 1, 1, 1);
+  const OpCounts slopes = I860Work::expression_setup(Expression::slope_x) +
+                          I860Work::expression_setup(Expression::slope_y);
+  CHECK(slopes.floating() > 0);
+  CHECK(e.fadd == t.fadd + slopes.fadd);
+  CHECK(e.fmul == t.fmul + slopes.fmul);
+  CHECK(e.store == t.store + slopes.store + (epsilon.packet_words - threshold.packet_words));
+  // eye_depth replaces depth: the same work (the vertices' eye depth is the clip w).
+  const OpCounts z = I860Work::triangle(eyez, 1, 1, 1);
+  CHECK(z.floating() == t.floating());
+  CHECK(z.core() == t.core());
+  // Under both code profiles the slopes cost clocks; compiled C much more than assembly.
+  for (const char* code : {"assembly", "compiled"}) {
+    MachineConfig c = config;
+    c.set(std::vector<std::string>{std::string("gp.code=") + code});
+    const I860Model model(i860_params(c));
+    INFO(code);
+    CHECK(model.reference_triangle(epsilon).count > model.reference_triangle(threshold).count);
+  }
+  MachineConfig c = config;
+  c.set(std::vector<std::string>{"gp.code=compiled"});
+  const I860Model compiled(i860_params(c));
+  const I860Model assembly(i860_params(config));
+  CHECK(compiled.reference_triangle(epsilon).count >
+        5 * assembly.reference_triangle(epsilon).count);
 }
