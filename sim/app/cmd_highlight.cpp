@@ -135,11 +135,11 @@ int run_highlight(const HighlightOptions& o) {
 
   std::string table = fmt::format(
       "| program | scene | truth px | flagged px | recall | precision | width mean | width sd | "
-      "coverage | changed by {} order | bits of {} | spilled | {} polygons/s ({} GP code) | {} "
+      "coverage | {} | bits of {} | spilled | {} polygons/s ({} GP code) | {} "
       "polygons/s (compiled GP code) "
       "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-      compare ? other.text() : "no other", config.renderer.memory_bits, o.speed_scene,
-      config.gp.code, o.speed_scene);
+      compare ? fmt::format("changed by {} order", other.text()) : std::string("order change"),
+      config.renderer.memory_bits, o.speed_scene, config.gp.code, o.speed_scene);
   std::string curve_table;
   std::string csv =
       "program,scene,truth_pixels,flagged_pixels,recall,precision,width_mean,width_sd,coverage,"
