@@ -2,18 +2,23 @@
 // shared-edge hits, epsilon on parallel and near-parallel planes against an integer model,
 // fixed versus varying curve width on the figure-eight surface, and the bit budget.
 #include <algorithm>
+#include <bitset>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <regex>
 #include <sstream>
+#include <tuple>
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"
+#include "models/gp/i860.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/analysis/intersections.hpp"
+#include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
 
 using namespace pp5;
@@ -396,4 +401,166 @@ TEST_CASE("epsilon folded into the rendering pass is order-sensitive; two-pass e
   CHECK(folded_early == 0);
   CHECK(count("epsilon", {p, m, s}) == 0);
   CHECK(count("epsilon", {s, m, p}) == 0);
+}
+
+TEST_CASE("On the torus, reversing the display list changes epsilon_folded's flags, not epsilon's",
+          "[banks]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"screen.width=128", "screen.height=128"});
+  const Scene given = make_builtin_scene("torus");
+  Scene reversed = given;
+  apply_display_order(reversed.mesh, parse_display_order("reversed", "--order"));
+  REQUIRE(reversed.mesh.triangles.front() == given.mesh.triangles.back());
+  auto changed = [&](const char* name) {
+    const Program program = assemble_file(program_path(name), assembler_options(config));
+    const FieldFrame a = render_field(config, given, program, "iflag", 2);
+    const FieldFrame b = render_field(config, reversed, program, "iflag", 1);
+    long flagged = 0, differ = 0;
+    for (std::size_t p = 0; p < a.values.size(); ++p) {
+      flagged += a.values[p] != 0;
+      differ += (a.values[p] != 0) != (b.values[p] != 0);
+    }
+    REQUIRE(flagged > 100);
+    return differ;
+  };
+  const long two_pass = changed("epsilon");
+  const long folded = changed("epsilon_folded");
+  INFO("pixels changed by reversing: epsilon " << two_pass << ", epsilon_folded " << folded);
+  CHECK(two_pass == 0);
+  CHECK(folded > 0);
+}
+
+TEST_CASE("Display orders are deterministic permutations and bad ones are named", "[banks]") {
+  const Scene given = make_builtin_scene("figure-eight");
+  Scene a = given, b = given, c = given;
+  apply_display_order(a.mesh, parse_display_order("shuffled:7", "--order"));
+  apply_display_order(b.mesh, parse_display_order("shuffled:7", "--order"));
+  apply_display_order(c.mesh, parse_display_order("shuffled:8", "--order"));
+  CHECK(a.mesh.triangles == b.mesh.triangles);
+  CHECK(a.mesh.triangles != c.mesh.triangles);
+  CHECK(a.mesh.triangles != given.mesh.triangles);
+  auto key = [](const glm::uvec3& t) { return std::make_tuple(t.x, t.y, t.z); };
+  auto sorted = [&](std::vector<glm::uvec3> v) {
+    std::sort(v.begin(), v.end(), [&](auto& p, auto& q) { return key(p) < key(q); });
+    return v;
+  };
+  CHECK(sorted(a.mesh.triangles) == sorted(given.mesh.triangles));
+  CHECK(parse_display_order("shuffled", "--order").text() == "shuffled:1");
+  for (const char* bad : {"backwards", "shuffled:", "shuffled:-1", "shuffled:x", "shuffledx"}) {
+    CHECK_THROWS_WITH(parse_display_order(bad, "--order"),
+                      Catch::Contains("--order") && Catch::Contains("expected given, reversed"));
+  }
+}
+
+TEST_CASE("Under perspective a fixed threshold widens with distance on screen z, narrows on eye z",
+          "[banks]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"screen.width=640", "screen.height=512"});
+  Scene scene = make_builtin_scene("receding-pairs");
+  scene.parameters["threshold"] = 16384;
+  const IntersectionTruth truth = intersection_truth(scene, 640, 512, 1.5);
+  REQUIRE(truth.curves.size() == 5);
+  // The pairs are identical and recede: each curve's midpoint is farther than the last.
+  const auto distance = [&](std::size_t i) {
+    return -0.5 * (truth.curves[i].a.z + truth.curves[i].b.z);
+  };
+  for (std::size_t i = 1; i < truth.curves.size(); ++i) CHECK(distance(i) > distance(i - 1));
+  std::vector<double> width[2];
+  int k = 0;
+  for (const char* name : {"threshold", "threshold_eyez"}) {
+    const Program program = assemble_file(program_path(name), assembler_options(config));
+    const FieldFrame frame = render_field(config, scene, program, "iflag", 2);
+    std::vector<std::uint8_t> flagged(frame.values.begin(), frame.values.end());
+    for (const Accuracy& a : measure_width_by_segment(truth, flagged)) {
+      CHECK(a.coverage > 0.5);
+      width[k].push_back(a.width_mean);
+    }
+    ++k;
+  }
+  INFO("screen z: " << width[0][0] << " ... " << width[0][4] << " px; eye z: " << width[1][0]
+                    << " ... " << width[1][4] << " px");
+  CHECK(width[0][4] > 1.5 * width[0][0]);  // nearest to farthest pair: wider
+  CHECK(width[1][0] > 1.5 * width[1][4]);  // narrower
+}
+
+TEST_CASE("eye_depth is exact at the vertices and affine in screen space", "[banks]") {
+  Bench b;
+  ScreenTriangle t = Bench::triangle({10, 10}, {100, 20}, {30, 110}, 0.3, 0.6, 0.9);
+  // Eye depths (camera units) at the vertices; the plane through them is not the
+  // perspective-correct eye depth, and the GP says so in the expression's meaning.
+  const Camera& cam = b.scene.camera;
+  const double fraction[3] = {0.1, 0.4, 0.8};
+  double eye[3];
+  for (int k = 0; k < 3; ++k) {
+    eye[k] = cam.near_plane + fraction[k] * (cam.far_plane - cam.near_plane);
+    t.v[k].eye_depth = eye[k];
+  }
+  std::bitset<static_cast<int>(Expression::count)> need;
+  need.set(static_cast<int>(Expression::eye_depth));
+  SetupResult r;
+  SetupCounts counts;
+  REQUIRE(GeometryEngine(b.gp, b.scene).setup(t, need, r, counts));
+  const auto& q = r.values.expressions[static_cast<int>(Expression::eye_depth)];
+  const double depth_max = std::ldexp(1.0, b.gp.depth_bits) - 1.0;
+  for (int k = 0; k < 3; ++k) {
+    const double expect = (eye[k] - cam.near_plane) / (cam.far_plane - cam.near_plane) * depth_max;
+    const double x = t.v[k].position.x - 0.5, y = t.v[k].position.y - 0.5;
+    const double got =
+        (q.D * x + q.E * y + static_cast<double>(q.F)) / std::ldexp(1.0, b.gp.fraction_bits);
+    INFO("vertex " << k);
+    CHECK(got == Approx(expect).margin(64));
+    CHECK(got == Approx(fraction[k] * depth_max).margin(64));
+  }
+  CHECK(q.A == 0);
+  CHECK(q.B == 0);
+  CHECK(q.C == 0);
+  CHECK(std::string(kExpressions[static_cast<int>(Expression::eye_depth)].meaning)
+            .find("not perspective-correct") != std::string::npos);
+}
+
+TEST_CASE("The GP cost model counts the highlighting expressions like any other expression",
+          "[banks]") {
+  MachineConfig config = MachineConfig::defaults();
+  auto workload = [&](const char* name) {
+    const Program p = assemble_file(program_path(name), assembler_options(config));
+    GpWorkload w;
+    w.expressions = p.procedure(Procedure::triangle).expressions;
+    w.packet_words = 1 + w.expressions.count() * 3 * 2;  // 40-bit coefficients, 32-bit words
+    return w;
+  };
+  const GpWorkload threshold = workload("threshold");
+  const GpWorkload eyez = workload("threshold_eyez");
+  const GpWorkload epsilon = workload("epsilon");
+  REQUIRE(epsilon.expressions.test(static_cast<int>(Expression::slope_x)));
+  REQUIRE(epsilon.expressions.test(static_cast<int>(Expression::slope_y)));
+  REQUIRE(eyez.expressions.test(static_cast<int>(Expression::eye_depth)));
+  REQUIRE_FALSE(eyez.expressions.test(static_cast<int>(Expression::depth)));
+  // epsilon = threshold + the two slopes: each costs an expression's set-up and its words.
+  REQUIRE((epsilon.expressions ^ threshold.expressions).count() == 2);
+  const OpCounts t = I860Work::triangle(threshold, 1, 1, 1);
+  const OpCounts e = I860Work::triangle(epsilon, 1, 1, 1);
+  const OpCounts slopes = I860Work::expression_setup(Expression::slope_x) +
+                          I860Work::expression_setup(Expression::slope_y);
+  CHECK(slopes.floating() > 0);
+  CHECK(e.fadd == t.fadd + slopes.fadd);
+  CHECK(e.fmul == t.fmul + slopes.fmul);
+  CHECK(e.store == t.store + slopes.store + (epsilon.packet_words - threshold.packet_words));
+  // eye_depth replaces depth: the same work (the vertices' eye depth is the clip w).
+  const OpCounts z = I860Work::triangle(eyez, 1, 1, 1);
+  CHECK(z.floating() == t.floating());
+  CHECK(z.core() == t.core());
+  // Under both code profiles the slopes cost clocks; compiled C much more than assembly.
+  for (const char* code : {"assembly", "compiled"}) {
+    MachineConfig c = config;
+    c.set(std::vector<std::string>{std::string("gp.code=") + code});
+    const I860Model model(i860_params(c));
+    INFO(code);
+    CHECK(model.reference_triangle(epsilon).count > model.reference_triangle(threshold).count);
+  }
+  MachineConfig c = config;
+  c.set(std::vector<std::string>{"gp.code=compiled"});
+  const I860Model compiled(i860_params(c));
+  const I860Model assembly(i860_params(config));
+  CHECK(compiled.reference_triangle(epsilon).count >
+        5 * assembly.reference_triangle(epsilon).count);
 }

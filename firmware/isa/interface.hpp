@@ -3,6 +3,7 @@
 // program may define, which per-primitive expressions the GP can compute for it, and which
 // per-frame constants it sends. The assembler accepts only these names; the GP computes
 // only the expressions that a program's procedures use.
+#include <cstddef>
 #include <string_view>
 
 namespace pp5 {
@@ -40,6 +41,7 @@ enum class Expression {
   base_blue,
   slope_x,
   slope_y,
+  eye_depth,
   count
 };
 
@@ -72,7 +74,13 @@ inline constexpr ExpressionInfo kExpressions[] = {
      "the depth plane's d(depth)/dx, depth units per pixel / 64, clamped to +-32767, constant "
      "(intersection width, epsilon)"},
     {"slope_y", "d(depth)/dy (y down), same units, constant"},
+    {"eye_depth",
+     "eye-space depth (distance along the view axis), 0 at the near plane to 2^gp.depth_bits - "
+     "1 at the far plane, interpolated linearly in screen space through the three vertices: "
+     "not perspective-correct (threshold_eyez)"},
 };
+static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
+              static_cast<std::size_t>(Expression::count));
 
 // Constants of the frame, sent with every packet's procedure and usable as an operand.
 enum class Parameter {

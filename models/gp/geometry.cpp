@@ -137,6 +137,7 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
     s.position = {(ndc.x * 0.5 + 0.5) * params_.screen_width,
                   (0.5 - ndc.y * 0.5) * params_.screen_height};
     s.depth = std::clamp(ndc.z * 0.5 + 0.5, 0.0, 1.0);
+    s.eye_depth = poly[i].clip.w;
     s.lit_color = poly[i].lit;
     s.base_color = poly[i].base;
     const double n = glm::length(poly[i].normal);
@@ -252,6 +253,19 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
   auto depth = [&](int k) { return std::clamp(t.v[k].depth * depth_max, 0.5, depth_max - 1.5); };
   auto colour = [&](double c) { return std::clamp(c * 255.0, 0.5, 255.49); };
   set(Expression::depth, {depth(0), depth(1), depth(2)});
+  if (needed.test(static_cast<int>(Expression::eye_depth))) {
+    // Eye-space depth mapped linearly from [near, far] to the depth range, then a plane
+    // through the three vertices in screen space: exact at the vertices, but eye depth is
+    // not affine in screen space under perspective, so inside the triangle it is not the
+    // surface's true eye depth (no perspective correction).
+    const Camera& cam = scene_.camera;
+    const double span = static_cast<double>(cam.far_plane) - static_cast<double>(cam.near_plane);
+    auto eye = [&](int k) {
+      const double v = (t.v[k].eye_depth - static_cast<double>(cam.near_plane)) / span;
+      return std::clamp(v * depth_max, 0.5, depth_max - 1.5);
+    };
+    set(Expression::eye_depth, {eye(0), eye(1), eye(2)});
+  }
   if (needed.test(static_cast<int>(Expression::slope_x)) ||
       needed.test(static_cast<int>(Expression::slope_y))) {
     // The depth plane's gradient, in depth units per pixel, quantised for the firmware.

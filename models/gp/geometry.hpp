@@ -41,6 +41,7 @@ struct GeometryParams {
 struct ScreenVertex {
   glm::dvec2 position;
   double depth = 0;
+  double eye_depth = 0;   // distance along the view axis, eye-space units (clip w)
   glm::dvec3 lit_color;   // 0..1, lit at the vertex
   glm::dvec3 base_color;  // 0..1, unlit material
   glm::dvec3 normal;      // eye space, unit, facing the viewer

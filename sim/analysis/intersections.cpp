@@ -183,9 +183,11 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
 
   const std::vector<Segment3> segments = intersection_segments(mesh);
   t.segments = segments.size();
+  t.curves = segments;
   t.mask.assign(static_cast<std::size_t>(width) * height, 0);
   const int reach = static_cast<int>(std::ceil(delta)) + 1;
-  for (const Segment3& seg : segments) {
+  for (std::size_t index = 0; index < segments.size(); ++index) {
+    const Segment3& seg = segments[index];
     glm::dvec3 sa, sb;
     if (!project(seg.a, sa) || !project(seg.b, sb)) continue;
     const glm::dvec2 d(sb.x - sa.x, sb.y - sa.y);
@@ -199,7 +201,7 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
       ++t.samples;
       if (s.x < 0 || s.y < 0 || s.x >= width || s.y >= height) continue;
       if (visible_only && hidden(s, seg.first, seg.second)) continue;
-      t.visible.push_back({{s.x, s.y}, tangent});
+      t.visible.push_back({{s.x, s.y}, tangent, index});
       const int px = static_cast<int>(std::floor(s.x)), py = static_cast<int>(std::floor(s.y));
       for (int y = std::max(0, py - reach); y <= std::min(height - 1, py + reach); ++y) {
         for (int x = std::max(0, px - reach); x <= std::min(width - 1, px + reach); ++x) {
@@ -214,6 +216,47 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
   return t;
 }
 
+namespace {
+
+bool flagged_at(const IntersectionTruth& truth, const std::vector<std::uint8_t>& flagged,
+                glm::dvec2 s) {
+  const int x = static_cast<int>(std::floor(s.x)), y = static_cast<int>(std::floor(s.y));
+  if (x < 0 || y < 0 || x >= truth.width || y >= truth.height) return false;
+  return flagged[static_cast<std::size_t>(y) * truth.width + x] != 0;
+}
+
+// Width across the curve at one sample: walk along its normal, both ways, in quarter-pixel
+// steps while the pixels are flagged. False if the sample's own pixel is not flagged.
+bool width_at(const IntersectionTruth& truth, const std::vector<std::uint8_t>& flagged,
+              const CurveSample& s, double& w) {
+  constexpr double kStep = 0.25;
+  constexpr int kMaxSteps = 256;
+  if (!flagged_at(truth, flagged, s.screen)) return false;
+  const glm::dvec2 normal(-s.tangent.y, s.tangent.x);
+  w = kStep;
+  for (int dir = -1; dir <= 1; dir += 2) {
+    for (int k = 1;
+         k <= kMaxSteps && flagged_at(truth, flagged, s.screen + normal * (dir * k * kStep)); ++k)
+      w += kStep;
+  }
+  return true;
+}
+
+struct WidthSum {
+  double sum = 0, sum2 = 0;
+  std::size_t n = 0, samples = 0;
+  void finish(Accuracy& a) const {
+    a.width_samples = n;
+    if (n) {
+      a.width_mean = sum / n;
+      a.width_sd = std::sqrt(std::max(0.0, sum2 / n - a.width_mean * a.width_mean));
+    }
+    a.coverage = samples ? static_cast<double>(n) / samples : 0;
+  }
+};
+
+}  // namespace
+
 Accuracy measure_accuracy(const IntersectionTruth& truth,
                           const std::vector<std::uint8_t>& flagged) {
   Accuracy a;
@@ -224,33 +267,34 @@ Accuracy measure_accuracy(const IntersectionTruth& truth,
   }
   a.recall = a.truth ? static_cast<double>(a.hits) / a.truth : 0;
   a.precision = a.flagged ? static_cast<double>(a.hits) / a.flagged : 0;
-  auto at = [&](glm::dvec2 s) {
-    const int x = static_cast<int>(std::floor(s.x)), y = static_cast<int>(std::floor(s.y));
-    if (x < 0 || y < 0 || x >= truth.width || y >= truth.height) return false;
-    return flagged[static_cast<std::size_t>(y) * truth.width + x] != 0;
-  };
-  // Walk across the curve, both ways, in quarter-pixel steps while the pixels are flagged.
-  constexpr double kStep = 0.25;
-  constexpr int kMaxSteps = 256;
-  double sum = 0, sum2 = 0;
+  WidthSum all;
   for (const CurveSample& s : truth.visible) {
-    if (!at(s.screen)) continue;
-    const glm::dvec2 normal(-s.tangent.y, s.tangent.x);
-    double w = kStep;
-    for (int dir = -1; dir <= 1; dir += 2) {
-      for (int k = 1; k <= kMaxSteps && at(s.screen + normal * (dir * k * kStep)); ++k) w += kStep;
-    }
-    sum += w;
-    sum2 += w * w;
-    ++a.width_samples;
+    ++all.samples;
+    double w = 0;
+    if (!width_at(truth, flagged, s, w)) continue;
+    all.sum += w;
+    all.sum2 += w * w;
+    ++all.n;
   }
-  if (a.width_samples) {
-    a.width_mean = sum / a.width_samples;
-    a.width_sd = std::sqrt(std::max(0.0, sum2 / a.width_samples - a.width_mean * a.width_mean));
-  }
-  a.coverage =
-      truth.visible.empty() ? 0 : static_cast<double>(a.width_samples) / truth.visible.size();
+  all.finish(a);
   return a;
+}
+
+std::vector<Accuracy> measure_width_by_segment(const IntersectionTruth& truth,
+                                               const std::vector<std::uint8_t>& flagged) {
+  std::vector<WidthSum> sums(truth.curves.size());
+  for (const CurveSample& s : truth.visible) {
+    WidthSum& sum = sums.at(s.segment);
+    ++sum.samples;
+    double w = 0;
+    if (!width_at(truth, flagged, s, w)) continue;
+    sum.sum += w;
+    sum.sum2 += w * w;
+    ++sum.n;
+  }
+  std::vector<Accuracy> out(sums.size());
+  for (std::size_t i = 0; i < sums.size(); ++i) sums[i].finish(out[i]);
+  return out;
 }
 
 RgbImage overlay_image(const RgbImage& frame, const IntersectionTruth& truth,

@@ -35,14 +35,16 @@ bool triangle_intersection(const glm::dvec3 (&p)[3], const glm::dvec3 (&q)[3], g
                            glm::dvec3& b);
 
 struct CurveSample {
-  glm::dvec2 screen;   // pixel coordinates
-  glm::dvec2 tangent;  // unit, in the screen
+  glm::dvec2 screen;        // pixel coordinates
+  glm::dvec2 tangent;       // unit, in the screen
+  std::size_t segment = 0;  // index into IntersectionTruth::curves
 };
 
 struct IntersectionTruth {
   int width = 0, height = 0;
   double delta = 0;                  // half-width, pixels
   std::size_t segments = 0;          // world-space intersection segments
+  std::vector<Segment3> curves;      // those segments, in intersection_segments order
   std::size_t samples = 0;           // samples along them (on screen)
   std::vector<CurveSample> visible;  // the visible samples
   std::vector<std::uint8_t> mask;    // pixels within delta of a visible sample
@@ -65,6 +67,12 @@ struct Accuracy {
 };
 
 Accuracy measure_accuracy(const IntersectionTruth& truth, const std::vector<std::uint8_t>& flagged);
+
+// The flagged curve's width across each true segment separately (width_mean, width_sd,
+// width_samples and coverage of each; the pixel counts are left 0), indexed like
+// truth.curves: how the width changes along a scene, e.g. with distance from the eye.
+std::vector<Accuracy> measure_width_by_segment(const IntersectionTruth& truth,
+                                               const std::vector<std::uint8_t>& flagged);
 
 // The frame darkened, with flagged pixels in the truth green, flagged pixels outside it red
 // and missed truth pixels blue.

@@ -12,6 +12,7 @@
 #include "sim/analysis/intersections.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 
@@ -52,10 +53,12 @@ std::map<std::string, std::int64_t> parse_frame_parameters(const std::vector<std
 namespace {
 
 struct HighlightOptions {
-  std::vector<std::string> scenes = {"two-triangles", "crossing-quads", "figure-eight", "torus"};
+  std::vector<std::string> scenes = {"two-triangles", "crossing-quads", "figure-eight", "torus",
+                                     "receding-pairs"};
   std::vector<std::string> programs = {"exactmatch",
                                        "exactmatch_n",
                                        "threshold",
+                                       "threshold_eyez",
                                        "epsilon",
                                        "epsilon_normal",
                                        "epsilon_folded",
@@ -67,6 +70,8 @@ struct HighlightOptions {
   std::vector<std::string> sets;
   std::string out_dir = "out/highlight";
   int threads = default_threads();
+  std::string order = "given";
+  std::string compare_order = "reversed";
 };
 
 std::string spilled_fields(const Program& p) {
@@ -77,21 +82,29 @@ std::string spilled_fields(const Program& p) {
   return names.empty() ? "-" : fmt::format("{}", fmt::join(names, " "));
 }
 
+constexpr std::size_t kMaxCurvesReported = 8;
+
 int run_highlight(const HighlightOptions& o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
   const auto params = parse_frame_parameters(o.params);
+  const DisplayOrder order = parse_display_order(o.order, "--order");
+  const bool compare = o.compare_order != "none";
+  const DisplayOrder other =
+      compare ? parse_display_order(o.compare_order, "--compare-order") : DisplayOrder{};
   // Everything is checked before the first file is written.
   std::vector<Scene> scenes;
   for (const std::string& name : o.scenes) {
     scenes.push_back(make_builtin_scene(name));
     scenes.back().parameters = params;
+    apply_display_order(scenes.back().mesh, order);
     GeometryEngine(geometry_params(config), scenes.back()).frame_parameters();
   }
 
   struct Entry {
     std::string name;
     Program program;
-    double speed = 0;
+    double speed = 0;           // with the configured GP code profile
+    double speed_compiled = 0;  // with gp.code=compiled (the C code the paper modified)
   };
   std::vector<Entry> programs;
   for (const std::string& name : o.programs) {
@@ -103,23 +116,35 @@ int run_highlight(const HighlightOptions& o) {
     programs.push_back(std::move(e));
   }
   fs::create_directories(o.out_dir);
-  // Projected polygons per second, from the timing model, on one scene.
+  // Projected polygons per second, from the timing model, on one scene: with the configured
+  // GP code and with the compiled C code, which Banks' variants were built on.
+  MachineConfig compiled = config;
+  compiled.set(std::vector<std::string>{"gp.code=compiled"});
   if (!o.speed_scene.empty()) {
     Scene scene = make_builtin_scene(o.speed_scene);
     scene.parameters = params;
+    apply_display_order(scene.mesh, order);
     for (Entry& e : programs) {
       e.speed = simulate_frame(config, scene, e.program, o.threads).triangles_per_second;
+      e.speed_compiled =
+          config.gp.code == "compiled"
+              ? e.speed
+              : simulate_frame(compiled, scene, e.program, o.threads).triangles_per_second;
     }
   }
 
   std::string table = fmt::format(
       "| program | scene | truth px | flagged px | recall | precision | width mean | width sd | "
-      "coverage | bits of {} | spilled | {} polygons/s "
-      "|\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-      config.renderer.memory_bits, o.speed_scene);
+      "coverage | {} | bits of {} | spilled | {} polygons/s ({} GP code) | {} "
+      "polygons/s (compiled GP code) "
+      "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+      compare ? fmt::format("changed by {} order", other.text()) : std::string("order change"),
+      config.renderer.memory_bits, o.speed_scene, config.gp.code, o.speed_scene);
+  std::string curve_table;
   std::string csv =
       "program,scene,truth_pixels,flagged_pixels,recall,precision,width_mean,width_sd,coverage,"
-      "bits_used,memory_bits,spilled,polygons_per_second\n";
+      "order,compare_order,order_changed_pixels,order_change,bits_used,memory_bits,spilled,"
+      "polygons_per_second,polygons_per_second_compiled\n";
   for (const Scene& scene : scenes) {
     const std::string& scene_name = scene.name;
     const GeometryEngine geometry(geometry_params(config), scene);
@@ -134,6 +159,26 @@ int run_highlight(const HighlightOptions& o) {
     }
     std::cerr << fmt::format("{}: {} intersection segments; {} truth pixels visible, {} in all\n",
                              scene_name, truths[0].segments, truths[0].pixels, truths[1].pixels);
+    // The same scene in the other display-list order (from the built-in order, so that
+    // "--order reversed --compare-order given" compares the same two orders both ways).
+    Scene reordered = make_builtin_scene(scene_name);
+    reordered.parameters = params;
+    apply_display_order(reordered.mesh, other);
+    // A scene of a few separate curves (receding-pairs) also gets the width along each, by
+    // its midpoint's eye depth (distance along the view axis).
+    const std::vector<Segment3>& curves = truths[0].curves;
+    const bool by_curve = !curves.empty() && curves.size() <= kMaxCurvesReported;
+    if (by_curve) {
+      const glm::dvec3 eye(scene.camera.eye);
+      const glm::dvec3 axis = glm::normalize(glm::dvec3(scene.camera.target) - eye);
+      curve_table += fmt::format(
+          "\nwidth in pixels along each curve of {} (mean +- sd):\n\n| program |", scene_name);
+      for (const Segment3& c : curves)
+        curve_table += fmt::format(" eye depth {:.2f} |", glm::dot(0.5 * (c.a + c.b) - eye, axis));
+      curve_table += "\n|---|";
+      for (std::size_t i = 0; i < curves.size(); ++i) curve_table += "---|";
+      curve_table += "\n";
+    }
     const fs::path dir = fs::path(o.out_dir) / scene_name;
     fs::create_directories(dir);
     for (const Entry& e : programs) {
@@ -142,20 +187,51 @@ int run_highlight(const HighlightOptions& o) {
       std::vector<std::uint8_t> flagged(frame.values.size());
       for (std::size_t p = 0; p < flagged.size(); ++p) flagged[p] = frame.values[p] != 0;
       const Accuracy a = measure_accuracy(truth, flagged);
+      if (by_curve) {
+        curve_table += fmt::format("| {} |", e.name);
+        for (const Accuracy& c : measure_width_by_segment(truth, flagged)) {
+          curve_table += c.width_samples
+                             ? fmt::format(" {:.2f} +- {:.2f} |", c.width_mean, c.width_sd)
+                             : std::string(" - |");
+        }
+        curve_table += "\n";
+      }
+      // Order sensitivity: pixels whose flag differs in the other order, as a share of the
+      // pixels flagged in this one.
+      std::size_t changed = 0;
+      std::string change = "-";
+      if (compare) {
+        const FieldFrame second = render_field(config, reordered, e.program, "iflag", o.threads);
+        for (std::size_t p = 0; p < flagged.size(); ++p)
+          changed += (second.values[p] != 0) != (flagged[p] != 0);
+        change = fmt::format(
+            "{:.4f} ({} px)",
+            a.flagged ? static_cast<double>(changed) / a.flagged : static_cast<double>(changed),
+            changed);
+      }
       write_png((dir / (e.name + ".png")).string(), frame.image);
       write_png((dir / (e.name + "-overlay.png")).string(),
                 overlay_image(frame.image, truth, flagged));
       const std::string speed = o.speed_scene.empty() ? "-" : fmt::format("{:.0f}", e.speed);
+      const std::string speed_compiled =
+          o.speed_scene.empty() ? "-" : fmt::format("{:.0f}", e.speed_compiled);
       table += fmt::format(
-          "| {} | {} | {} | {} | {:.3f} | {:.3f} | {:.2f} | {:.2f} | {:.3f} | {} | {} | {} |\n",
+          "| {} | {} | {} | {} | {:.3f} | {:.3f} | {:.2f} | {:.2f} | {:.3f} | {} | {} | {} | {} | "
+          "{} "
+          "|\n",
           e.name, scene_name, a.truth, a.flagged, a.recall, a.precision, a.width_mean, a.width_sd,
-          a.coverage, e.program.bits_used(), spilled_fields(e.program), speed);
-      csv += fmt::format("{},{},{},{},{:.6f},{:.6f},{:.4f},{:.4f},{:.6f},{},{},{},{}\n", e.name,
-                         scene_name, a.truth, a.flagged, a.recall, a.precision, a.width_mean,
-                         a.width_sd, a.coverage, e.program.bits_used(), config.renderer.memory_bits,
-                         spilled_fields(e.program), speed);
+          a.coverage, change, e.program.bits_used(), spilled_fields(e.program), speed,
+          speed_compiled);
+      csv += fmt::format(
+          "{},{},{},{},{:.6f},{:.6f},{:.4f},{:.4f},{:.6f},{},{},{},{},{},{},{},{},{}\n", e.name,
+          scene_name, a.truth, a.flagged, a.recall, a.precision, a.width_mean, a.width_sd,
+          a.coverage, order.text(), compare ? other.text() : "none", compare ? changed : 0,
+          compare && a.flagged ? static_cast<double>(changed) / a.flagged : 0.0,
+          e.program.bits_used(), config.renderer.memory_bits, spilled_fields(e.program), speed,
+          speed_compiled);
     }
   }
+  table += curve_table;
   write_file_atomically((fs::path(o.out_dir) / "highlight.md").string(), table);
   write_file_atomically((fs::path(o.out_dir) / "highlight.csv").string(), csv);
   std::cout << table;
@@ -184,6 +260,14 @@ Command add_highlight_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--speed-scene", o->speed_scene,
                   "Scene for the projected polygons/s column ('' to skip)")
+      ->capture_default_str();
+  cmd->add_option("--order", o->order,
+                  "Display-list order of every scene's triangles: given, reversed, shuffled or "
+                  "shuffled:SEED (deterministic)")
+      ->capture_default_str();
+  cmd->add_option("--compare-order", o->compare_order,
+                  "Render every program again in this order and report the share of flagged "
+                  "pixels that change (order sensitivity), or 'none' to skip")
       ->capture_default_str();
   cmd->add_option("--param", o->params,
                   "Set a frame parameter, NAME=VALUE (repeatable), e.g. --param delta=32 "

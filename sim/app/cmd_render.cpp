@@ -9,6 +9,7 @@
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 
@@ -28,6 +29,7 @@ struct RenderOptions {
   std::vector<int> tessellation;
   std::string timeline;
   std::vector<std::string> params;
+  std::string order = "given";
 };
 
 int run_render(RenderOptions o) {
@@ -37,7 +39,9 @@ int run_render(RenderOptions o) {
     scene_options.tessellation_u = o.tessellation[0];
     scene_options.tessellation_v = o.tessellation[1];
   }
+  const DisplayOrder order = parse_display_order(o.order, "--order");
   Scene scene = make_builtin_scene(o.scene_name, scene_options);
+  apply_display_order(scene.mesh, order);
   scene.parameters = parse_frame_parameters(o.params);
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(resolve_firmware(o.firmware), assembler_options(config));
@@ -96,6 +100,11 @@ Command add_render_command(CLI::App& app) {
   render->add_option("--param", o->params,
                      "Set a frame parameter, NAME=VALUE (repeatable), e.g. --param "
                      "highlight_opacity=128 (see pp5sim isa)");
+  render
+      ->add_option("--order", o->order,
+                   "Display-list order of the scene's triangles: given, reversed, shuffled or "
+                   "shuffled:SEED (deterministic)")
+      ->capture_default_str();
   return {render, [o] { return run_render(*o); }};
 }
 

@@ -227,10 +227,71 @@ Scene make_crossing_quads() {
                       std::move(mesh), glm::vec3(0.2f, 0.35f, 1.0f));
 }
 
+Scene make_receding_pairs() {
+  // Five identical pairs of interpenetrating triangles (as in two-triangles: vertical planes
+  // 60 degrees apart, crossing along a vertical segment 1.2 long) at eye distances 5, 7.5,
+  // 11.25, 16.9 and 25.3, each turned to face the eye, spread left to right so that none
+  // hides another. The same geometry at growing distance: the scene for comparing depth
+  // quantities under perspective (the crossing line of pair k lies at distance 5 * 1.5^k).
+  constexpr int kPairs = 5;
+  constexpr double kHalfWidth = 0.5;
+  constexpr double kHalfHeight = 0.6;
+  constexpr double kGap = 0.04;  // radians between neighbouring pairs
+  // Directions of the pairs' centres: each pair's angular half-width beside the next, the
+  // row centred on the view axis.
+  double distance[kPairs], angle[kPairs];
+  for (int k = 0; k < kPairs; ++k) {
+    distance[k] = 5.0 * std::pow(1.5, k);
+    const double half = std::atan(kHalfWidth / distance[k]);
+    angle[k] = k == 0 ? 0.0 : angle[k - 1] + std::atan(kHalfWidth / distance[k - 1]) + half + kGap;
+  }
+  const double shift = 0.5 * (angle[0] - std::atan(kHalfWidth / distance[0]) + angle[kPairs - 1] +
+                              std::atan(kHalfWidth / distance[kPairs - 1]));
+  Mesh mesh;
+  for (int k = 0; k < kPairs; ++k) {
+    const double direction = angle[k] - shift;
+    const glm::dvec3 centre(distance[k] * std::sin(direction), 0.0,
+                            -distance[k] * std::cos(direction));
+    const glm::dvec3 toward_eye = -glm::normalize(centre);
+    const glm::dvec3 up(0.0, 1.0, 0.0);
+    const glm::dvec3 side = glm::normalize(glm::cross(up, toward_eye));
+    const glm::vec3 colors[2] = {{0.9f, 0.2f, 0.15f}, {0.2f, 0.35f, 0.95f}};
+    for (int t = 0; t < 2; ++t) {
+      // Turned -30 (red, pointing up) and +30 degrees (blue, pointing down) about the vertical.
+      const double a = glm::radians(t == 0 ? -30.0 : 30.0);
+      const glm::dvec3 across = std::cos(a) * side + std::sin(a) * toward_eye;
+      const double s = t == 0 ? 1.0 : -1.0;
+      const glm::dvec3 p[3] = {centre - s * up * kHalfHeight - across * kHalfWidth,
+                               centre - s * up * kHalfHeight + across * kHalfWidth,
+                               centre + s * up * (kHalfHeight + 0.1)};
+      glm::dvec3 normal = glm::normalize(glm::cross(p[1] - p[0], p[2] - p[0]));
+      const auto base = static_cast<unsigned>(mesh.vertices.size());
+      const bool flip = glm::dot(normal, toward_eye) < 0.0;
+      if (flip) normal = -normal;
+      for (const glm::dvec3& corner : p)
+        mesh.vertices.push_back({glm::vec3(corner), glm::vec3(normal), colors[t]});
+      mesh.triangles.push_back(flip ? glm::uvec3(base, base + 2, base + 1)
+                                    : glm::uvec3(base, base + 1, base + 2));
+    }
+  }
+  Scene scene;
+  scene.name = "receding-pairs";
+  scene.description =
+      "Five identical pairs of interpenetrating triangles receding from the eye (5 to 25 "
+      "units), for depth quantities under perspective";
+  scene.mesh = std::move(mesh);
+  // The target is the middle pair's distance: epsilon_normal scales its slopes there.
+  scene.camera = {
+      {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, -11.25f}, {0.0f, 1.0f, 0.0f}, kFovYDegrees, 2.0f, 40.0f};
+  scene.light = default_light(scene.camera);
+  scene.background = kBackground;
+  return scene;
+}
+
 }  // namespace
 
 std::vector<std::string> builtin_scene_names() {
-  return {"torus", "two-triangles", "sphere", "figure-eight", "crossing-quads"};
+  return {"torus", "two-triangles", "sphere", "figure-eight", "crossing-quads", "receding-pairs"};
 }
 
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
@@ -239,6 +300,7 @@ Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "sphere") return make_sphere(options);
   if (name == "figure-eight") return make_figure_eight(options);
   if (name == "crossing-quads") return make_crossing_quads();
+  if (name == "receding-pairs") return make_receding_pairs();
   std::string valid;
   for (const std::string& n : builtin_scene_names()) valid += (valid.empty() ? "" : ", ") + n;
   throw std::invalid_argument(fmt::format("unknown scene '{}'; valid scenes: {}", name, valid));

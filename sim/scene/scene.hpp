@@ -58,7 +58,7 @@ struct SceneOptions {
 };
 
 // The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere", "figure-eight",
-// "crossing-quads"}.
+// "crossing-quads", "receding-pairs"}.
 std::vector<std::string> builtin_scene_names();
 
 // Builds a scene deterministically from its arguments alone. Throws std::invalid_argument for an
@@ -68,6 +68,7 @@ std::vector<std::string> builtin_scene_names();
 //   two-triangles: 2 triangles, 6 vertices.
 //   figure-eight: 2*u*v triangles, default u=96, v=48; u in [8, 2048], v in [2, 2048].
 //   crossing-quads: 4 triangles, 8 vertices.
+//   receding-pairs: 10 triangles, 30 vertices; a fixed camera at the origin looking down -z.
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
 
 // Right-handed view and OpenGL-convention projection (clip z in [-w,w]), as glm::lookAt and
