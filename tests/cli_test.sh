@@ -23,7 +23,19 @@ expect_error "'gp.count' must be an integer" render --config "$tmp/bad2.json" --
 expect_error "out of range" render --set renderer.count=99 --out "$tmp/c"
 printf 'field z 24\nproc triangle\n  qload z, nowhere\nend\n' > "$tmp/bad.pp5"
 expect_error "bad.pp5:3:" render --firmware "$tmp/bad.pp5" --out "$tmp/d"
-for d in a b c d; do [ -e "$tmp/$d/frame.png" ] && fail "partial output in $tmp/$d"; done
+# Mesh and scene files (tests/data): each bad one names the file, the line or key.
+data="$(dirname "$0")/data"
+expect_error "nan.obj:3: z 'nan' is not a finite number" render --scene "$data/bad/nan.obj" --out "$tmp/e"
+expect_error "truncated.stl: binary STL declares 4 triangles" render --scene "$data/bad/truncated.stl" --out "$tmp/e"
+expect_error "limit is 4000000" render --scene "$data/bad/absurd_count.off" --out "$tmp/e"
+expect_error "key 'meshes\[0\].scale' must be a number" render --scene "$data/bad/wrong_type.json" --out "$tmp/e"
+expect_error "not valid JSON" render --scene "$data/bad/syntax.json" --out "$tmp/e"
+for d in a b c d e; do [ -e "$tmp/$d/frame.png" ] && fail "partial output in $tmp/$d"; done
+"$bin" render --scene "$data/meshes/concave.obj" --firmware flat --set screen.width=128 \
+  --set screen.height=128 --out "$tmp/mesh" >"$tmp/mesh.log" 2>&1 || fail "mesh render failed: $(cat "$tmp/mesh.log")"
+grep -q "1 triangulated" "$tmp/mesh.log" || fail "no mesh load report"
+grep -q "coefficient overflow" "$tmp/mesh.log" || fail "no set-up drop report"
+[ -s "$tmp/mesh/frame.png" ] || fail "mesh render wrote no frame"
 
 "$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \
   --out "$tmp/ok" >"$tmp/ok.log" 2>&1 || fail "render failed: $(cat "$tmp/ok.log")"
