@@ -7,6 +7,7 @@
 #include <string>
 
 #include "firmware/assembler/assembler.hpp"
+#include "fuzz/fuzz_targets.hpp"
 #include "models/machine.hpp"
 #include "sim/scene/mesh_loader.hpp"
 #include "sim/scene/scene_loader.hpp"
@@ -192,4 +193,43 @@ TEST_CASE("a mesh file renders through the firmware", "[loaders]") {
   }
   // The framed cube fills a good part of the frame.
   CHECK(covered > 128 * 128 / 5);
+}
+
+TEST_CASE("the fuzz corpus and every kept crasher run cleanly through the fuzz targets",
+          "[loaders][fuzz]") {
+  namespace fs = std::filesystem;
+  const std::pair<const char*, void (*)(const std::uint8_t*, std::size_t)> targets[] = {
+      {"mesh", fuzz::mesh},
+      {"scene", fuzz::scene},
+      {"config", fuzz::config},
+      {"asm", fuzz::assembler}};
+  int inputs = 0;
+  for (const auto& [name, run] : targets) {
+    for (const char* set : {"corpus", "regressions"}) {
+      const fs::path dir = fs::path(PP5_SOURCE_DIR) / "fuzz" / set / name;
+      if (!fs::exists(dir)) continue;
+      for (const auto& entry : fs::directory_iterator(dir)) {
+        if (!entry.is_regular_file() || entry.path().filename() == "README.md") continue;
+        INFO(entry.path().string());
+        std::ifstream in(entry.path(), std::ios::binary);
+        const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+        REQUIRE_NOTHROW(run(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
+        ++inputs;
+      }
+    }
+  }
+  CHECK(inputs > 40);
+}
+
+TEST_CASE("numbers beyond double's range are errors that name the file or key", "[loaders]") {
+  // Found by fuzz_config and fuzz_scene: nlohmann::json reports them as out_of_range, not as
+  // a parse error, and they used to escape the parsers' handlers.
+  CHECK_THAT(
+      error_of([] { MachineConfig::from_file(data_path("bad/config_number_overflow.json")); }),
+      Catch::Contains("config_number_overflow.json: not valid JSON"));
+  MachineConfig c = MachineConfig::defaults();
+  CHECK_THAT(error_of([&] { c.set("gp.count=1e999"); }),
+             Catch::Contains("value '1e999' of key 'gp.count' is not a number"));
+  CHECK_THAT(error_of([] { parse_scene_json(R"({"meshes": 1e999})", "s.json", "."); }),
+             Catch::Contains("s.json: not valid JSON"));
 }

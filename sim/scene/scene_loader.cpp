@@ -167,7 +167,7 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
   json doc;
   try {
     doc = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // syntax errors, and numbers beyond double's range
     throw SceneError(fmt::format("{}: not valid JSON: {}", origin, e.what()));
   }
   const Node root{doc, "", origin};
