@@ -44,4 +44,10 @@ grep -q "of 208 bits" "$tmp/ok.log" || fail "no bit-budget table"
 grep -q "projected throughput" "$tmp/ok.log" || fail "no throughput"
 ls "$tmp/ok" | grep -q tmp && fail "temporary file left behind"
 "$bin" --help | grep -q render || fail "--help does not list render"
+# The extremes report: every synthetic case passes; a scene's failures are named, exit 1.
+"$bin" extremes -j 2 >"$tmp/ext.log" 2>&1 || fail "extremes failed: $(cat "$tmp/ext.log")"
+grep -q "PASS shared edges across a mesh" "$tmp/ext.log" || fail "no shared-edge case"
+grep -q "0 failed" "$tmp/ext.log" || fail "extremes summary"
+expect_error "FAIL scene: depth precision" extremes --no-synthetic --scene two-triangles \
+  --set evaluator.fraction_bits=6 --set screen.width=256 --set screen.height=256
 echo "1 passed, 0 failed"

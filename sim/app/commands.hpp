@@ -21,6 +21,7 @@ Command add_isa_command(CLI::App& app);
 Command add_asm_command(CLI::App& app);
 Command add_config_command(CLI::App& app);
 Command add_scenes_command(CLI::App& app);
+Command add_extremes_command(CLI::App& app);
 
 // Shared by the commands.
 

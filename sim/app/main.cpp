@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
       add_asm_command(app),
       add_config_command(app),
       add_scenes_command(app),
+      add_extremes_command(app),
   };
 
   CLI11_PARSE(app, argc, argv);
