@@ -38,9 +38,11 @@ struct Packet {
 };
 
 // Everything one GP sends one region.
+// With a multipass program the GP sends the same packets once per pass.
 struct Bin {
   int region = 0;
   int gp = 0;
+  int pass = 0;
   std::vector<std::shared_ptr<const Packet>> packets;
   std::uint64_t words = 0;
 };

@@ -112,3 +112,56 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   CHECK(r.frame_seconds == Approx(expected).margin(1e-11));
   CHECK(r.frame_seconds > expected - 1.0 / config.renderer.clock_hz);
 }
+
+TEST_CASE("a multipass program sees every triangle once per pass, with 'pass' between",
+          "[machine]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 256;
+  config.screen.height = 128;
+  config.gp.count = 2;
+  config.renderer.count = 2;
+  const Scene scene = make_builtin_scene("two-triangles");
+  // Red counts the triangles covering a pixel over all passes; green counts the passes that
+  // have ended (the 'pass' procedure runs between passes, so 2 for 3 passes).
+  const std::string source = R"(
+option passes 3
+field r 8
+field g 8
+field b 8
+output r g b
+proc clear
+  eall
+  mov r, 0
+  mov g, 0
+  mov b, 0
+end
+proc triangle
+  eall
+  qtest.ge edge0
+  qtest.ge edge1
+  qtest.ge edge2
+  add r, 1
+end
+proc pass
+  eall
+  add g, 1
+end
+)";
+  const Program program = assemble(source, "passes", assembler_options(config));
+  REQUIRE(program.passes == 3);
+  const Program single =
+      assemble(source.substr(source.find('\n', 1)), "one", assembler_options(config));
+  const FrameResult three = simulate_frame(config, scene, program, 2);
+  const FrameResult one = simulate_frame(config, scene, single, 2);
+  std::size_t covered = 0;
+  for (std::size_t p = 0; p < one.image.rgb.size(); p += 3) {
+    CHECK(int(three.image.rgb[p]) == 3 * int(one.image.rgb[p]));
+    CHECK(int(three.image.rgb[p + 1]) == 2);
+    CHECK(int(one.image.rgb[p + 1]) == 0);
+    covered += one.image.rgb[p] > 0;
+  }
+  CHECK(covered > 1000);
+  // Each pass's bins cross the ring again, so the multipass frame carries more words.
+  CHECK(three.stats["ring"]["words"].get<std::uint64_t>() >
+        one.stats["ring"]["words"].get<std::uint64_t>());
+}

@@ -156,8 +156,19 @@ class Assembler {
   }
 
   void declare_option(const std::vector<std::string>& w) {
-    if (w.size() != 2 || w[1] != "spill") fail("unknown option: expected 'option spill'");
-    program_.spill_allowed = true;
+    if (w.size() == 2 && w[1] == "spill") {
+      program_.spill_allowed = true;
+      return;
+    }
+    if (w.size() == 3 && w[1] == "passes") {
+      std::int64_t n = 0;
+      if (!parse_integer(w[2], n) || n < 1 || n > kMaxPasses) {
+        fail("option passes: expected an integer from 1 to {} (got '{}')", kMaxPasses, w[2]);
+      }
+      program_.passes = static_cast<int>(n);
+      return;
+    }
+    fail("unknown option: expected 'option spill' or 'option passes N'");
   }
 
   void begin_procedure(const std::vector<std::string>& w) {
@@ -165,7 +176,7 @@ class Assembler {
       fail("'proc' inside procedure '{}': missing 'end'", kProcedureNames[current_]);
     if (w.size() != 2) fail("expected 'proc NAME'");
     const int p = procedure_index(w[1]);
-    if (p < 0) fail("unknown procedure '{}': expected clear, triangle or shade", w[1]);
+    if (p < 0) fail("unknown procedure '{}': expected clear, triangle, pass or shade", w[1]);
     if (program_.procedures[p].defined) fail("procedure '{}' is defined twice", w[1]);
     program_.procedures[p].defined = true;
     program_.procedures[p].line = line_;

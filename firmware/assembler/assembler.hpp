@@ -49,12 +49,16 @@ struct ProcedureCode {
   int spill_transfers = 0;  // bsld/bsst the assembler inserted
 };
 
+// The most passes a program may ask for; each pass resends every triangle.
+inline constexpr int kMaxPasses = 64;
+
 struct Program {
   std::string name;  // file name or label, for messages and reports
   std::vector<FieldDecl> fields;
   std::array<ProcedureCode, static_cast<int>(Procedure::count)> procedures;
   std::array<Field, 3> outputs{};  // red, green, blue sent to the frame buffer
   bool spill_allowed = false;
+  int passes = 1;         // times the GPs send each region's triangles (`option passes N`)
   int memory_bits = 0;    // the budget
   int resident_bits = 0;  // bits of the fields kept in pixel memory
   int staging_bits = 0;   // bits reserved for spilled fields while an instruction uses them

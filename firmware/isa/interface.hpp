@@ -8,11 +8,14 @@
 namespace pp5 {
 
 // Procedures the Renderer runs, in this order, for every region it renders.
-enum class Procedure { clear, triangle, shade, count };
-inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "shade"};
+// With `option passes N` the GPs send every region's triangles N times, and the Renderer
+// runs `pass` between one pass and the next (multipass algorithms such as depth peeling).
+enum class Procedure { clear, triangle, pass, shade, count };
+inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass", "shade"};
 inline constexpr const char* kProcedureMeaning[] = {
     "once per region, before any primitive (initialise every pixel)",
     "once per triangle binned to the region, with the triangle's expressions",
+    "once per region after each pass but the last (programs with `option passes N`)",
     "once per region, after all primitives (deferred shading)",
 };
 

@@ -64,14 +64,21 @@ void GraphicsProcessor::run() {
     }
     spend(clocks);
   }
-  // One header word per bin, so an empty bin still tells its Renderer this GP is done.
-  for (int r = 0; r < config.regions(); ++r) {
-    spend(GpClocks(config.gp.clocks_per_bin));
-    bins[r]->words += 1;
-    const int renderer = machine_.renderer_of_region(r);
-    machine_.ring().transfer(machine_.gp_stop(index_), machine_.renderer_stop(renderer),
-                             bins[r]->words);
-    machine_.renderer(renderer).deliver(std::move(bins[r]));
+  // One header word per bin, so an empty bin still tells its Renderer this GP is done. A
+  // multipass program gets the same packets again for every pass, after the previous pass's
+  // bins have all gone: the GP keeps its set-up packets, so only the sending repeats.
+  const int passes = machine_.program().passes;
+  for (int r = 0; r < config.regions(); ++r) bins[r]->words += 1;
+  for (int pass = 0; pass < passes; ++pass) {
+    for (int r = 0; r < config.regions(); ++r) {
+      spend(GpClocks(config.gp.clocks_per_bin));
+      auto bin = pass + 1 < passes ? std::make_shared<Bin>(*bins[r]) : std::move(bins[r]);
+      bin->pass = pass;
+      const int renderer = machine_.renderer_of_region(r);
+      machine_.ring().transfer(machine_.gp_stop(index_), machine_.renderer_stop(renderer),
+                               bin->words);
+      machine_.renderer(renderer).deliver(std::move(bin));
+    }
   }
   stats_.finished = sc_core::sc_time_stamp();
 }

@@ -14,7 +14,8 @@
 
 namespace pp5 {
 
-// The instruction stream of one region, in execution order.
+// The instruction stream of one region: clear, then for each of the program's passes the
+// triangles in this order (with `pass` between passes), then shade.
 struct RegionWork {
   int region = 0;
   int x0 = 0;
@@ -51,7 +52,8 @@ class Renderer : public sc_core::sc_module {
   int index_;
   Machine& machine_;
   std::vector<int> regions_;
-  std::map<int, std::vector<std::shared_ptr<const Bin>>> inbox_;  // region -> bins by GP
+  // region -> pass -> bins by GP
+  std::map<int, std::vector<std::vector<std::shared_ptr<const Bin>>>> inbox_;
   sc_core::sc_event arrived_;
   sc_core::sc_time cycle_;
   RendererStats stats_;
