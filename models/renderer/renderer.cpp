@@ -75,6 +75,11 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
   const auto& geometry = board.array().geometry();
   std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work_) {
+    if (w.triangles.empty()) {  // the same stream every time: executed once, then reused
+      board.run_empty_region(w.x0, w.y0, program, frame_values, rgb);
+      frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
+      continue;
+    }
     board.begin_region(w.x0, w.y0);
     board.run(program.procedure(Procedure::clear), frame_values);
     for (int pass = 0; pass < program.passes; ++pass) {
