@@ -131,6 +131,7 @@ TEST_CASE("every bad mesh or scene file gets its own message", "[loaders]") {
       {"bad/syntax.json", "syntax.json: not valid JSON"},
       {"bad/missing_mesh.json", "missing.obj: cannot open the file"},
       {"bad/bad_mesh.json", "nan.obj:3: z 'nan' is not a finite number"},
+      {"bad/path_name.json", "key 'name' must be a plain name"},
   };
   for (const auto& [file, message] : cases) {
     INFO(file);

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -182,6 +184,16 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
 
   Scene scene;
   scene.name = root.has("name") ? root.at("name").string() : fs::path(origin).stem().string();
+  // The name becomes the default output folder, out/NAME: keep it a plain file name.
+  const bool plain =
+      !scene.name.empty() && scene.name[0] != '.' &&
+      std::all_of(scene.name.begin(), scene.name.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_' || ch == '.';
+      });
+  if (!plain && root.has("name")) {
+    root.at("name").fail("must be a plain name of letters, digits, '-', '_' and '.'");
+  }
+  if (!plain) scene.name = "scene";
   scene.description = root.has("description") ? root.at("description").string()
                                               : fmt::format("scene file {}", origin);
   for (std::size_t i = 0; i < meshes.value.size(); ++i) {
