@@ -1,6 +1,9 @@
 #include "models/machine.hpp"
 
+#include <fmt/format.h>
+
 #include <atomic>
+#include <stdexcept>
 #include <thread>
 
 #include "models/frame_buffer/frame_buffer.hpp"
@@ -20,6 +23,7 @@ GeometryParams geometry_params(const MachineConfig& c) {
   g.depth_bits = c.gp.depth_bits;
   g.fraction_bits = c.evaluator.fraction_bits;
   g.coefficient_bits = c.evaluator.coefficient_bits;
+  g.cull_back_faces = c.gp.cull_back_faces != 0;
   return g;
 }
 
@@ -31,6 +35,20 @@ TimingParams timing_params(const MachineConfig& c) {
   t.block_bits = c.renderer.block_bits;
   t.backing_store_cycles_per_block = c.renderer.backing_store_cycles_per_block;
   return t;
+}
+
+I860Params i860_params(const MachineConfig& c) {
+  I860Params p;
+  p.code = parse_gp_code(c.gp.code);
+  p.fp_latency_clocks = c.gp.fp_latency_clocks;
+  p.load_use_clocks = c.gp.load_use_clocks;
+  p.icache_bytes = c.gp.icache_bytes;
+  p.icache_line_bytes = c.gp.icache_line_bytes;
+  p.icache_miss_clocks = c.gp.icache_miss_clocks;
+  p.assembly_code_bytes = c.gp.assembly_code_bytes;
+  p.compiled_code_bytes = c.gp.compiled_code_bytes;
+  p.overhead_factor = c.gp.overhead_factor;
+  return p;
 }
 
 RendererBoardParams board_params(const MachineConfig& c) {
@@ -64,9 +82,22 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       program_(program),
       geometry_(geometry_params(config), scene),
       timing_(timing_params(config)),
-      frame_parameters_(geometry_.frame_parameters()) {
+      frame_parameters_(geometry_.frame_parameters()),
+      i860_(i860_params(config)),
+      dynamic_(config.renderer.balancing == "dynamic"),
+      owner_(config.regions(), -1),
+      claimed_(config.renderer.count, 0) {
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
+  const ProcedureCode& triangle = program.procedure(Procedure::triangle);
+  workload_.expressions = triangle.expressions;
+  workload_.packet_words = packet_words(static_cast<int>(triangle.expressions.count()));
+  if (workload_.packet_words + 1 > static_cast<std::uint64_t>(config.renderer.queue_words)) {
+    throw std::runtime_error(fmt::format(
+        "key 'renderer.queue_words' = {} is too small: one triangle packet of '{}' takes {} "
+        "words plus a header word",
+        config.renderer.queue_words, program.name, workload_.packet_words));
+  }
   RingParams rp;
   rp.channels = config.ring.channels;
   rp.word_bits = config.ring.word_bits;
@@ -91,6 +122,26 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
 
 Machine::~Machine() = default;
 
+int Machine::claim_region(int renderer) {
+  int region = -1;
+  if (dynamic_) {
+    if (next_region_ < config_.regions()) region = next_region_++;
+  } else {
+    const int r = renderer + claimed_[renderer] * renderer_count();
+    if (r < config_.regions()) {
+      region = r;
+      ++claimed_[renderer];
+    }
+  }
+  if (region >= 0) owner_[region] = renderer;
+  return region;
+}
+
+void Machine::record_timeline(bool on) {
+  timeline_on_ = on;
+  ring_->record_messages(on);
+}
+
 std::string Machine::fmt_name(const char* base, int k) {
   return std::string(base) + std::to_string(k);
 }
@@ -108,7 +159,8 @@ std::uint64_t Machine::region_words() const {
   return (bits + config_.ring.word_bits - 1) / config_.ring.word_bits;
 }
 
-void Machine::execute_pixels(int threads) {
+void Machine::execute_pixels(int threads,
+                             const std::function<BoardObserver*(int renderer)>& observe) {
   RendererBoardParams params = board_params(config_);
   // Only the bits the program declares are allocated and processed: fields beyond them would
   // be refused by the pixel array's bounds checks, never silently dropped.
@@ -125,6 +177,7 @@ void Machine::execute_pixels(int threads) {
   auto worker = [&] {
     for (int k = next++; k < renderer_count(); k = next++) {
       RendererBoard board(params);
+      if (observe) board.set_observer(observe(k));
       board.share_empty_region(first);
       renderers_[k]->execute(board, program_, *frame_buffer_, frame_values);
     }

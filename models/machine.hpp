@@ -4,21 +4,31 @@
 //
 // A triangle's path: the host's display list (the Scene) is split into contiguous blocks,
 // one per GP; each GraphicsProcessor transforms, clips, lights and sets up its triangles
-// (models/gp/geometry.hpp) and bins the packets by region; then, region by region, it sends
-// each bin over the Ring to the Renderer that owns the region; each Renderer charges the
-// firmware's cycles for its bins in GP order (so ties resolve in display-list order) and
-// ships the finished region over the ring to the FrameBuffer.
+// (models/gp/geometry.hpp), charging i860 clocks from the cost model (models/gp/i860.hpp),
+// and bins the packets by region. Each Renderer claims regions (statically, region r to
+// Renderer r mod count, or dynamically, the next unrendered region when it is nearly done
+// with one) and opens one (region, pass) stage at a time for input; a GP sends its bin for a
+// stage over the Ring once the stage is open, in messages no larger than the Renderer's
+// instruction queue, stalling while the queue is full. The Renderer charges the firmware's
+// cycles for each message as it arrives and ships the finished region over the ring to the
+// FrameBuffer, from its backing store while it starts the next region.
+//
+// Protocol that keeps this deadlock-free: a Renderer opens its next stage only when every
+// GP has sent its last message of the current one, so its queue never holds a message it
+// cannot eventually consume.
 //
 // Timing and function are separated: no instruction's cost depends on pixel data, so the
 // modules advance simulated time from the instruction table alone, and record each
 // region's packets; after the simulation each Renderer's board executes its regions'
 // instruction streams on its pixel array (execute_pixels), in parallel across boards.
+#include <functional>
 #include <memory>
 #include <systemc>
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"
+#include "models/gp/i860.hpp"
 #include "sim/config/machine_config.hpp"
 #include "sim/image/png_writer.hpp"
 #include "sim/scene/scene.hpp"
@@ -37,6 +47,28 @@ struct Packet {
   PacketValues values;
 };
 
+// Part of a GP's bin for one (region, pass), as one ring message into a Renderer's queue.
+struct BinMessage {
+  int region = 0;
+  int pass = 0;
+  int gp = 0;
+  bool last = false;  // the GP's final message for this (region, pass)
+  std::vector<std::shared_ptr<const Packet>> packets;
+  std::uint64_t words = 0;
+  sc_core::sc_time requested;  // the GP asked the ring for it
+  sc_core::sc_time arrival;    // fully in the Renderer's queue
+};
+
+// One slice of activity for the timeline (Chrome trace-event format, see simulation.cpp).
+enum class Unit { gp, ring, renderer, frame_buffer };
+struct TimelineSlice {
+  Unit unit;
+  int index;  // GP, ring channel, Renderer
+  std::string name;
+  sc_core::sc_time start;
+  sc_core::sc_time end;
+};
+
 // Everything one GP sends one region.
 // With a multipass program the GP sends the same packets once per pass.
 struct Bin {
@@ -50,7 +82,9 @@ struct Bin {
 // The machine configuration seen by each plain-C++ part.
 GeometryParams geometry_params(const MachineConfig& config);
 TimingParams timing_params(const MachineConfig& config);
+I860Params i860_params(const MachineConfig& config);
 struct RendererBoardParams;
+class BoardObserver;
 RendererBoardParams board_params(const MachineConfig& config);
 AssemblerOptions assembler_options(const MachineConfig& config);
 
@@ -82,8 +116,27 @@ class Machine : public sc_core::sc_module {
   int frame_buffer_stop() const { return gp_count() + renderer_count(); }
   int ring_stops() const { return frame_buffer_stop() + 1; }
 
-  // Static assignment: region r belongs to Renderer r mod count.
-  int renderer_of_region(int region) const { return region % renderer_count(); }
+  // The next region for Renderer k (static: r mod count == k; dynamic: the next unclaimed),
+  // or -1 when there is none. Records the owner and wakes GPs waiting for an open stage.
+  int claim_region(int renderer);
+  // The Renderer that claimed `region`, or -1 if none has yet.
+  int owner_of_region(int region) const { return owner_[region]; }
+  bool dynamic_balancing() const { return dynamic_; }
+  // Notified whenever a Renderer opens a stage for input or frees queue space.
+  sc_core::sc_event& input_changed() { return input_changed_; }
+
+  // The GP cost model and what the firmware asks of each triangle.
+  const I860Model& i860() const { return i860_; }
+  const GpWorkload& gp_workload() const { return workload_; }
+
+  // The timeline: when on, modules record slices of activity.
+  void record_timeline(bool on);
+  bool timeline_on() const { return timeline_on_; }
+  void add_slice(Unit unit, int index, std::string name, sc_core::sc_time start,
+                 sc_core::sc_time end) {
+    if (timeline_on_) slices_.push_back({unit, index, std::move(name), start, end});
+  }
+  const std::vector<TimelineSlice>& slices() const { return slices_; }
   // Ring words of a packet carrying `expressions` linear expressions.
   std::uint64_t packet_words(int expressions) const;
   std::uint64_t region_words() const;
@@ -91,7 +144,9 @@ class Machine : public sc_core::sc_module {
   // Runs every board's recorded instruction streams on its pixel array, on `threads` host
   // threads, and stores the results in the frame buffer's image. Deterministic: each
   // board executes its own regions in order, whatever the thread count.
-  void execute_pixels(int threads);
+  // `observe`, if given, returns an observer (or null) for Renderer k's board; see
+  // BoardObserver. Each board's observer is called from one host thread only.
+  void execute_pixels(int threads, const std::function<BoardObserver*(int renderer)>& observe = {});
 
  private:
   static std::string fmt_name(const char* base, int k);
@@ -106,6 +161,15 @@ class Machine : public sc_core::sc_module {
   std::unique_ptr<FrameBuffer> frame_buffer_;
   std::vector<std::unique_ptr<Renderer>> renderers_;
   std::vector<std::unique_ptr<GraphicsProcessor>> gps_;
+  I860Model i860_;
+  GpWorkload workload_;
+  bool dynamic_ = false;
+  std::vector<int> owner_;    // region -> Renderer, -1 until claimed
+  int next_region_ = 0;       // dynamic: the next unclaimed region
+  std::vector<int> claimed_;  // static: regions each Renderer has claimed so far
+  sc_core::sc_event input_changed_;
+  bool timeline_on_ = false;
+  std::vector<TimelineSlice> slices_;
 };
 
 }  // namespace pp5

@@ -2,6 +2,7 @@
 // Runs one frame through the whole machine and gathers what it produced: the image, the
 // statistics and the human-readable summary. A library entry point, so that tests, the
 // command-line program and (later) sweeps share it; each call gets a fresh SystemC kernel.
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -12,6 +13,8 @@
 
 namespace pp5 {
 
+class BoardObserver;
+
 struct FrameResult {
   RgbImage image;
   nlohmann::json stats;
@@ -19,8 +22,13 @@ struct FrameResult {
   double triangles_per_second = 0;  // projected for the real machine
 };
 
+// `observe`, if given, attaches an observer to Renderer k's board (tracing, snapshots).
+// With `timeline`, the run also records every unit's activity and stores it there as a
+// Chrome trace-event document (ui.perfetto.dev and chrome://tracing open it).
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
-                           int threads);
+                           int threads,
+                           const std::function<BoardObserver*(int renderer)>& observe = {},
+                           nlohmann::json* timeline = nullptr);
 
 // The bit-budget table and the headline figures, as printed after a run.
 std::string bit_budget_table(const Program& program, const TimingParams& timing);

@@ -23,6 +23,12 @@ expect_error "'gp.count' must be an integer" render --config "$tmp/bad2.json" --
 expect_error "out of range" render --set renderer.count=99 --out "$tmp/c"
 printf 'field z 24\nproc triangle\n  qload z, nowhere\nend\n' > "$tmp/bad.pp5"
 expect_error "bad.pp5:3:" render --firmware "$tmp/bad.pp5" --out "$tmp/d"
+expect_error "no frame parameter 'nope'" highlight --param nope=1 --out "$tmp/e"
+expect_error "not an integer" render --param delta=wide --out "$tmp/e"
+expect_error "highlight_opacity' = 999" highlight --param highlight_opacity=999 --out "$tmp/e"
+expect_error "unknown scene 'nope'" highlight --scenes two-triangles nope --out "$tmp/e"
+expect_error "not a highlighting program" highlight --firmware phong --out "$tmp/e"
+[ -e "$tmp/e" ] && fail "highlight wrote output after bad input"
 # Mesh and scene files (tests/data): each bad one names the file, the line or key.
 data="$(dirname "$0")/data"
 expect_error "nan.obj:3: z 'nan' is not a finite number" render --scene "$data/bad/nan.obj" --out "$tmp/e"
@@ -43,6 +49,13 @@ for f in frame.png config.json stats.json; do [ -s "$tmp/ok/$f" ] || fail "missi
 grep -q "of 208 bits" "$tmp/ok.log" || fail "no bit-budget table"
 grep -q "projected throughput" "$tmp/ok.log" || fail "no throughput"
 ls "$tmp/ok" | grep -q tmp && fail "temporary file left behind"
+"$bin" highlight --scenes two-triangles --firmware exactmatch epsilon --speed-scene '' \
+  --set screen.width=256 --set screen.height=256 --out "$tmp/hl" >"$tmp/hl.log" 2>&1 \
+  || fail "highlight failed: $(cat "$tmp/hl.log")"
+grep -q "| epsilon | two-triangles |" "$tmp/hl.log" || fail "no epsilon row in the table"
+for f in highlight.md highlight.csv two-triangles/epsilon.png two-triangles/epsilon-overlay.png; do
+  [ -s "$tmp/hl/$f" ] || fail "highlight did not write $f"
+done
 "$bin" --help | grep -q render || fail "--help does not list render"
 # The extremes report: every synthetic case passes; a scene's failures are named, exit 1.
 "$bin" extremes -j 2 >"$tmp/ext.log" 2>&1 || fail "extremes failed: $(cat "$tmp/ext.log")"
@@ -50,4 +63,33 @@ grep -q "PASS shared edges across a mesh" "$tmp/ext.log" || fail "no shared-edge
 grep -q "0 failed" "$tmp/ext.log" || fail "extremes summary"
 expect_error "FAIL scene: depth precision" extremes --no-synthetic --scene two-triangles \
   --set evaluator.fraction_bits=6 --set screen.width=256 --set screen.height=256
+
+# Timeline and sweeps.
+"$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \
+  --out "$tmp/tl" --timeline "$tmp/tl/timeline.json" >"$tmp/tl.log" 2>&1 || fail "timeline run failed"
+grep -q '"traceEvents"' "$tmp/tl/timeline.json" || fail "no trace events"
+grep -q "bottleneck:" "$tmp/tl.log" || fail "no bottleneck in the summary"
+expect_error "unknown key 'gp.cont'" sweep --grid gp.cont=1,2 --out "$tmp/sw0"
+expect_error "'renderer.count'" sweep --grid renderer.count=1,99 --out "$tmp/sw0"
+expect_error "expected KEY=V1,V2" sweep --grid gp.count --out "$tmp/sw0"
+expect_error "swept twice" sweep --grid gp.count=1 --grid gp.count=2 --out "$tmp/sw0"
+[ -e "$tmp/sw0" ] && fail "a bad grid wrote output"
+n=$("$bin" sweep --grid gp.count=1,2 --grid renderer.count=1,2,4 --scene two-triangles \
+  --out "$tmp/sw1" --print-commands | grep -c " render ")
+[ "$n" = 6 ] || fail "--print-commands printed $n commands, expected 6"
+# A printed command runs as is (as GNU parallel or a Slurm task would), and aggregate takes
+# the finished runs and names the missing ones.
+"$bin" sweep --grid gp.count=1,2 --scene two-triangles --set screen.width=256 \
+  --set screen.height=128 --out "$tmp/sw2" --print-commands | head -1 | bash >/dev/null 2>&1 \
+  || fail "a printed command failed"
+"$bin" sweep aggregate "$tmp/sw2" >"$tmp/sw2.log" 2>&1 || fail "aggregate of a partial sweep failed"
+grep -q "1 runs, 1 missing" "$tmp/sw2.log" || fail "aggregate said: $(cat "$tmp/sw2.log")"
+"$bin" sweep --grid gp.count=1,2 --grid renderer.balancing=static,dynamic --scene two-triangles \
+  --set screen.width=256 --set screen.height=128 --out "$tmp/sw" >/dev/null 2>&1 || fail "sweep failed"
+"$bin" sweep aggregate "$tmp/sw" -o "$tmp/sw.csv" >/dev/null || fail "aggregate failed"
+[ "$(wc -l < "$tmp/sw.csv")" = 5 ] || fail "sweep.csv: expected a header and 4 rows"
+head -1 "$tmp/sw.csv" | grep -q "^gp.count,renderer.balancing,frame_seconds" || fail "bad CSV header"
+"$bin" sweep plot "$tmp/sw.csv" -o "$tmp/sw.svg" >/dev/null || fail "plot failed"
+grep -q "<polyline" "$tmp/sw.svg" || fail "no lines in the plot"
+expect_error "no column 'nope'" sweep plot "$tmp/sw.csv" -y nope -o "$tmp/bad.svg"
 echo "1 passed, 0 failed"

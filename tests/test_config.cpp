@@ -255,11 +255,16 @@ TEST_CASE("to_json round-trips and every key is described", "[config]") {
     CHECK_FALSE(p.unit.empty());
     CHECK_FALSE(p.description.empty());
     CHECK_FALSE(p.default_value.empty());
-    CHECK(p.range.find(" .. ") != std::string::npos);
     CHECK((p.confidence == "P" || p.confidence == "S" || p.confidence == "A"));
     // The described default is the one defaults() has.
     const auto dot = p.key.find('.');
     const json& value = defaults[p.key.substr(0, dot)][p.key.substr(dot + 1)];
+    if (value.is_string()) {  // a choice: the range lists the allowed values
+      CHECK(value.get<std::string>() == p.default_value);
+      CHECK(p.range.find(p.default_value) != std::string::npos);
+      continue;
+    }
+    CHECK(p.range.find(" .. ") != std::string::npos);
     CHECK(json::parse(p.default_value).get<double>() == value.get<double>());
   }
   CHECK(described == keys);

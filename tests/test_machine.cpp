@@ -6,22 +6,10 @@
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/simulation.hpp"
+#include "tests/support.hpp"
 
 using namespace pp5;
-
-namespace {
-
-Program load(const std::string& name, const MachineConfig& c) {
-  return assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5",
-                       assembler_options(c));
-}
-
-nlohmann::json without_host(nlohmann::json stats) {
-  stats.erase("host");
-  return stats;
-}
-
-}  // namespace
+using namespace pp5::test;
 
 TEST_CASE("frames and statistics are identical across runs and host thread counts", "[machine]") {
   MachineConfig config = MachineConfig::defaults();
@@ -30,7 +18,7 @@ TEST_CASE("frames and statistics are identical across runs and host thread count
   config.gp.count = 5;
   config.renderer.count = 3;
   const Scene scene = make_builtin_scene("torus", {64, 16});
-  const Program program = load("phong", config);
+  const Program program = load_program("phong", config);
   const FrameResult one = simulate_frame(config, scene, program, 1);
   const FrameResult four = simulate_frame(config, scene, program, 4);
   const FrameResult again = simulate_frame(config, scene, program, 1);
@@ -48,7 +36,7 @@ TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[
   config.gp.count = 4;
   config.renderer.count = 3;
   const Scene scene = make_builtin_scene("sphere");
-  const Program program = load("flat", config);  // no data-dependent costs
+  const Program program = load_program("flat", config);  // no data-dependent costs
   const FrameResult r = simulate_frame(config, scene, program, 2);
   const TimingParams timing = timing_params(config);
   const PacketValues none{};
@@ -61,8 +49,10 @@ TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[
   std::vector<std::uint64_t> expected(config.renderer.count, 0);
   std::uint64_t packets = 0;
   for (std::size_t region = 0; region < per_region.size(); ++region) {
-    expected[region % config.renderer.count] +=
-        overhead + clear + per_region[region] * (overhead + tri);
+    // Each finished region's colours are copied to the backing store (one 32-bit block).
+    expected[region % config.renderer.count] += overhead + clear +
+                                                per_region[region] * (overhead + tri) +
+                                                config.renderer.backing_store_cycles_per_block;
     packets += per_region[region];
   }
   CHECK(packets == r.stats["setup"]["packets"].get<std::uint64_t>());
@@ -80,34 +70,49 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   config.gp.count = 1;
   config.renderer.count = 1;
   const Scene scene = make_builtin_scene("two-triangles");
-  const Program program = load("flat", config);
+  const Program program = load_program("flat", config);
   const FrameResult r = simulate_frame(config, scene, program, 1);
   REQUIRE(r.stats["setup"]["packets"].get<std::uint64_t>() == 2);
 
-  // The critical path, unit by unit: the GP transforms and sets up both triangles and
-  // starts its one bin; the ring carries the bin one hop; the Renderer runs clear and two
-  // triangle packets; the ring carries the region one hop to the frame buffer.
+  // The critical path, unit by unit: the GP transforms and sets up both triangles (the i860
+  // cost model's clocks) and starts its one message; the ring carries the bin one hop; the
+  // Renderer, which ran clear while it waited, loads the first packet's coefficients, runs two
+  // triangle packets, copies the colours
+  // to the backing store, and the ring carries the region one hop to the frame buffer.
   const int expressions =
       static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
-  const double gp_clocks = 2.0 * config.gp.clocks_per_triangle +
-                           2.0 * expressions * config.gp.clocks_per_expression +
-                           config.gp.clocks_per_bin;
   const int per_coefficient =
       (config.evaluator.coefficient_bits + config.ring.word_bits - 1) / config.ring.word_bits;
   const double packet_words = 1 + expressions * 3 * per_coefficient;
+  GpWorkload workload;
+  workload.expressions = program.procedure(Procedure::triangle).expressions;
+  workload.packet_words = static_cast<std::uint64_t>(packet_words);
+  const I860Model i860(i860_params(config));
+  const double gp_clocks =
+      static_cast<double>(i860.clocks(I860Work::triangle(workload, 1, 1, 1), 1).count) * 2 +
+      static_cast<double>(i860.clocks(I860Work::send_bin(), 0).count);
+  CHECK(r.stats["gp"][0]["busy_clocks"].get<double>() == gp_clocks);
   const double bin_words = 1 + 2 * packet_words;
   const TimingParams timing = timing_params(config);
   const PacketValues none{};
+  const double clear_cycles =
+      config.renderer.packet_overhead_cycles +
+      procedure_cost(program.procedure(Procedure::clear), timing, none).count;
+  // The first packet's coefficients load after the bin arrives (one word per cycle); the
+  // second's load while the first executes.
   const double renderer_cycles =
-      3.0 * config.renderer.packet_overhead_cycles +
-      procedure_cost(program.procedure(Procedure::clear), timing, none).count +
-      2.0 * procedure_cost(program.procedure(Procedure::triangle), timing, none).count;
+      (packet_words - 1) / config.evaluator.coefficient_words_per_cycle +
+      2.0 * (config.renderer.packet_overhead_cycles +
+             procedure_cost(program.procedure(Procedure::triangle), timing, none).count) +
+      config.renderer.backing_store_cycles_per_block;
   const double region_words =
       128.0 * 128 * config.frame_buffer.bits_per_pixel / config.ring.word_bits;
   const double hop = config.ring.hop_latency_cycles;
-  const double expected =
-      gp_clocks / config.gp.clock_hz + (bin_words + hop) / config.ring.clock_hz +
-      renderer_cycles / config.renderer.clock_hz + (region_words + hop) / config.ring.clock_hz;
+  const double bin_arrival =
+      gp_clocks / config.gp.clock_hz + (bin_words + hop) / config.ring.clock_hz;
+  REQUIRE(clear_cycles / config.renderer.clock_hz < bin_arrival);
+  const double expected = bin_arrival + renderer_cycles / config.renderer.clock_hz +
+                          (region_words + hop) / config.ring.clock_hz;
   // Not one array cycle early, and on time (to SystemC's picosecond resolution).
   CHECK(r.frame_seconds == Approx(expected).margin(1e-11));
   CHECK(r.frame_seconds > expected - 1.0 / config.renderer.clock_hz);

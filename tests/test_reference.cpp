@@ -9,8 +9,10 @@
 #include "models/gp/geometry.hpp"
 #include "models/machine.hpp"
 #include "sim/simulation.hpp"
+#include "tests/support.hpp"
 
 using namespace pp5;
+using namespace pp5::test;
 
 namespace {
 
@@ -21,11 +23,6 @@ MachineConfig small_machine() {
   c.gp.count = 3;
   c.renderer.count = 2;
   return c;
-}
-
-Program load(const std::string& name, const MachineConfig& c) {
-  return assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5",
-                       assembler_options(c));
 }
 
 // floor(value / 2^shift) of A X + B Y + C, exactly.
@@ -149,7 +146,7 @@ void check_scene(const std::string& scene_name, const std::string& firmware) {
   SceneOptions options;
   if (scene_name == "torus") options = {48, 16};
   const Scene scene = make_builtin_scene(scene_name, options);
-  const Program program = load(firmware, config);
+  const Program program = load_program(firmware, config);
   const FrameResult result = simulate_frame(config, scene, program, 2);
   const RgbImage expected = reference_frame(config, scene, program, firmware);
   REQUIRE(result.image.width == expected.width);

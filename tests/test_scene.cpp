@@ -114,8 +114,9 @@ bool same_scene(const Scene& a, const Scene& b) {
 
 }  // namespace
 
-TEST_CASE("builtin_scene_names lists the three scenes", "[scene]") {
-  CHECK(pp5::builtin_scene_names() == std::vector<std::string>{"torus", "two-triangles", "sphere"});
+TEST_CASE("builtin_scene_names lists the scenes", "[scene]") {
+  CHECK(pp5::builtin_scene_names() == std::vector<std::string>{"torus", "two-triangles", "sphere",
+                                                               "figure-eight", "crossing-quads"});
 }
 
 TEST_CASE("every built-in scene is well formed, lit and framed", "[scene]") {

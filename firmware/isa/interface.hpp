@@ -38,8 +38,15 @@ enum class Expression {
   base_red,
   base_green,
   base_blue,
+  slope_x,
+  slope_y,
   count
 };
+
+// Depth slopes are sent as constants in units of 2^kSlopeShift depth units per pixel, clamped
+// to a signed 16-bit range: steeper planes (near edge-on) saturate rather than wrap.
+inline constexpr int kSlopeShift = 6;
+inline constexpr int kSlopeLimit = 32767;
 struct ExpressionInfo {
   const char* name;
   const char* meaning;
@@ -61,6 +68,10 @@ inline constexpr ExpressionInfo kExpressions[] = {
     {"base_red", "unlit material red, 0..255, interpolated (for deferred shading)"},
     {"base_green", "unlit material green, 0..255, interpolated"},
     {"base_blue", "unlit material blue, 0..255, interpolated"},
+    {"slope_x",
+     "the depth plane's d(depth)/dx, depth units per pixel / 64, clamped to +-32767, constant "
+     "(intersection width, epsilon)"},
+    {"slope_y", "d(depth)/dy (y down), same units, constant"},
 };
 
 // Constants of the frame, sent with every packet's procedure and usable as an operand.
@@ -77,6 +88,18 @@ enum class Parameter {
   background_red,
   background_green,
   background_blue,
+  highlight_red,
+  highlight_green,
+  highlight_blue,
+  highlight_opacity,
+  highlight_keep,
+  threshold,
+  delta,
+  epsilon_scale,
+  silhouette,
+  surface_opacity,
+  surface_keep,
+  normal_epsilon_scale,
   count
 };
 struct FrameParameterInfo {
@@ -96,7 +119,33 @@ inline constexpr FrameParameterInfo kParameters[] = {
     {"background_red", "background red, 0..255"},
     {"background_green", "background green, 0..255"},
     {"background_blue", "background blue, 0..255"},
+    {"highlight_red", "intersection highlight red, 0..255 (default 255)"},
+    {"highlight_green", "highlight green, 0..255 (default 230)"},
+    {"highlight_blue", "highlight blue, 0..255 (default 0)"},
+    {"highlight_opacity", "highlight opacity, 0..256 (256 = opaque, the default)"},
+    {"highlight_keep", "derived: 256 - highlight_opacity, the weight of the surface colour"},
+    {"threshold",
+     "threshold program: flag where |depth - stored depth| < threshold, depth units (default "
+     "32768)"},
+    {"delta", "half-width of fixed-width curves (epsilon programs), 1/16 pixel (default 24)"},
+    {"epsilon_scale",
+     "derived: (delta/16)^2 * 4^6, so that dz^2 < epsilon_scale * |slope difference|^2 with slopes "
+     "in units of 64 depth units per pixel"},
+    {"silhouette",
+     "silhouette remedy: ignore the flag where the frontmost |normal z| * 127 < silhouette "
+     "(default 0: off)"},
+    {"surface_opacity",
+     "opacity of every surface in the transparency programs, 0..256 (default 128)"},
+    {"surface_keep", "derived: 256 - surface_opacity"},
+    {"normal_epsilon_scale",
+     "derived: (delta/16)^2 * S^2 / 256, S = depth units per pixel per unit of eye-space slope at "
+     "the camera's target distance (epsilon_normal: slopes recovered from normals)"},
 };
+
+// Frame parameters computed from others: an override of their sources recomputes them.
+inline constexpr Parameter kDerivedParameters[] = {
+    Parameter::highlight_keep, Parameter::epsilon_scale, Parameter::surface_keep,
+    Parameter::normal_epsilon_scale};
 
 inline int expression_index(std::string_view name) {
   for (int i = 0; i < static_cast<int>(Expression::count); ++i) {

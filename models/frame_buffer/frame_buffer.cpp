@@ -12,8 +12,8 @@ FrameBuffer::FrameBuffer(sc_core::sc_module_name name, int width, int height, in
   image_.rgb.assign(static_cast<std::size_t>(width) * height * 3, 0);
 }
 
-void FrameBuffer::region_arrived(int region) {
-  arrival_[region] = sc_core::sc_time_stamp();
+void FrameBuffer::region_arrived(int region, sc_core::sc_time when) {
+  arrival_[region] = when;
   last_ = std::max(last_, arrival_[region]);
   ++received_;
 }

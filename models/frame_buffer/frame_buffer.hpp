@@ -12,8 +12,9 @@ class FrameBuffer : public sc_core::sc_module {
  public:
   FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions);
 
-  // A region's pixels have arrived over the ring (timing).
-  void region_arrived(int region);
+  // A region's pixels arrive over the ring at `when` (timing; `when` may lie in the future
+  // of the caller, whose ring interface sends while its array works on).
+  void region_arrived(int region, sc_core::sc_time when);
   // A region's pixel values (function): rgb is region_width x region_height, row-major;
   // the part inside the screen is copied to the frame.
   void store_region(int x0, int y0, int region_width, int region_height,

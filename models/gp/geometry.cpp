@@ -1,7 +1,10 @@
 #include "models/gp/geometry.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace pp5 {
 
@@ -92,6 +95,10 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
   const double face_length = glm::length(face);
   face = face_length > 0 ? face / face_length : glm::dvec3(0, 0, 1);
   if (glm::dot(face, -eye[0]) < 0) {
+    if (params_.cull_back_faces) {
+      ++counts.culled;
+      return;
+    }
     face = -face;
     for (auto& x : v) x.normal = -x.normal;
   }
@@ -245,6 +252,19 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
   auto depth = [&](int k) { return std::clamp(t.v[k].depth * depth_max, 0.5, depth_max - 1.5); };
   auto colour = [&](double c) { return std::clamp(c * 255.0, 0.5, 255.49); };
   set(Expression::depth, {depth(0), depth(1), depth(2)});
+  if (needed.test(static_cast<int>(Expression::slope_x)) ||
+      needed.test(static_cast<int>(Expression::slope_y))) {
+    // The depth plane's gradient, in depth units per pixel, quantised for the firmware.
+    const std::array<double, 3> f{depth(0), depth(1), depth(2)};
+    const double a = ((f[1] - f[0]) * (w[2] - w[0]) - (f[2] - f[0]) * (w[1] - w[0])) / det;
+    const double b = ((f[2] - f[0]) * (u[1] - u[0]) - (f[1] - f[0]) * (u[2] - u[0])) / det;
+    auto slope = [](double g) {
+      return std::clamp(std::nearbyint(std::ldexp(g, -kSlopeShift)),
+                        -static_cast<double>(kSlopeLimit), static_cast<double>(kSlopeLimit));
+    };
+    constant(Expression::slope_x, slope(a));
+    constant(Expression::slope_y, slope(b));
+  }
   for (int c = 0; c < 3; ++c) {
     set(static_cast<Expression>(static_cast<int>(Expression::red) + c),
         {colour(t.v[0].lit_color[c]), colour(t.v[1].lit_color[c]), colour(t.v[2].lit_color[c])});
@@ -291,6 +311,55 @@ std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::fra
   at(Parameter::background_red) = unit(scene_.background.r);
   at(Parameter::background_green) = unit(scene_.background.g);
   at(Parameter::background_blue) = unit(scene_.background.b);
+  at(Parameter::highlight_red) = 255;
+  at(Parameter::highlight_green) = 230;
+  at(Parameter::highlight_blue) = 0;
+  at(Parameter::highlight_opacity) = 256;
+  at(Parameter::threshold) = 32768;
+  at(Parameter::delta) = 24;
+  at(Parameter::silhouette) = 0;
+  at(Parameter::surface_opacity) = 128;
+  for (const auto& [name, value] : scene_.parameters) {
+    const int k = parameter_index(name);
+    if (k < 0) throw std::invalid_argument(fmt::format("unknown frame parameter '{}'", name));
+    for (Parameter d : kDerivedParameters) {
+      if (k == static_cast<int>(d)) {
+        throw std::invalid_argument(
+            fmt::format("frame parameter '{}' is derived from others and cannot be set", name));
+      }
+    }
+    p[k] = value;
+  }
+  auto check = [&](Parameter k, std::int64_t lo, std::int64_t hi) {
+    if (at(k) < lo || at(k) > hi) {
+      throw std::invalid_argument(fmt::format("frame parameter '{}' = {} is outside [{}, {}]",
+                                              kParameters[static_cast<int>(k)].name, at(k), lo,
+                                              hi));
+    }
+  };
+  check(Parameter::highlight_red, 0, 255);
+  check(Parameter::highlight_green, 0, 255);
+  check(Parameter::highlight_blue, 0, 255);
+  check(Parameter::highlight_opacity, 0, 256);
+  check(Parameter::threshold, 0, (std::int64_t{1} << params_.depth_bits) - 1);
+  check(Parameter::delta, 0, 1024);
+  check(Parameter::silhouette, 0, 127);
+  check(Parameter::surface_opacity, 0, 256);
+  at(Parameter::surface_keep) = 256 - at(Parameter::surface_opacity);
+  at(Parameter::highlight_keep) = 256 - at(Parameter::highlight_opacity);
+  // dz^2 < (delta/16)^2 * (slope * 2^kSlopeShift)^2  <=>  dz^2 < epsilon_scale * slope^2.
+  at(Parameter::epsilon_scale) = std::llround(static_cast<double>(at(Parameter::delta)) *
+                                              static_cast<double>(at(Parameter::delta)) *
+                                              std::ldexp(1.0, 2 * kSlopeShift - 8));
+  // Weak perspective at the target: d(depth)/dx_screen = S * (eye-space slope dz/dx), with
+  // S = (d depth / d z_eye) / (d x_screen / d x_eye) = depth_max |P32| / (D W P00).
+  const double distance = glm::length(glm::dvec3(scene_.camera.target - scene_.camera.eye));
+  const double depth_max = std::ldexp(1.0, params_.depth_bits) - 1.0;
+  const double s = depth_max * std::fabs(projection_[3][2]) /
+                   (distance * params_.screen_width * projection_[0][0]);
+  const double d = static_cast<double>(at(Parameter::delta)) / 16.0;
+  at(Parameter::normal_epsilon_scale) =
+      std::min<std::int64_t>(std::llround(d * d * s * s / 256.0), (std::int64_t{1} << 30) - 1);
   return p;
 }
 

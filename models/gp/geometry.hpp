@@ -33,6 +33,7 @@ struct GeometryParams {
   int depth_bits = 24;
   int fraction_bits = 12;
   int coefficient_bits = 40;
+  bool cull_back_faces = false;  // drop triangles facing away from the eye
 };
 
 // A triangle after projection: screen position (pixels, y down), depth in [0, 1], and the
@@ -57,6 +58,7 @@ struct SetupCounts {
   std::uint64_t no_pixels = 0;     // covers no pixel centre
   std::uint64_t overflow = 0;      // a coefficient did not fit evaluator.coefficient_bits
   std::uint64_t clip_splits = 0;   // extra triangles made by clipping
+  std::uint64_t culled = 0;        // back-facing, dropped (GeometryParams::cull_back_faces)
 };
 
 struct SetupResult {

@@ -1,5 +1,8 @@
 #include "models/gp/graphics_processor.hpp"
 
+#include <algorithm>
+#include <iterator>
+
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -16,7 +19,46 @@ GraphicsProcessor::GraphicsProcessor(sc_core::sc_module_name name, int index, in
   SC_THREAD(run);
 }
 
+void GraphicsProcessor::begin(GpActivity a) {
+  const sc_core::sc_time now = sc_core::sc_time_stamp();
+  if (activity_.back().second == a) return;
+  if (activity_.back().first == now) {
+    activity_.back().second = a;
+  } else {
+    activity_.push_back({now, a});
+  }
+}
+
+GpActivityTimes GraphicsProcessor::activity(sc_core::sc_time from, sc_core::sc_time to) const {
+  GpActivityTimes t;
+  if (!(from < to)) return t;
+  auto it = std::upper_bound(activity_.begin(), activity_.end(), from,
+                             [](sc_core::sc_time v, const auto& e) { return v < e.first; });
+  if (it != activity_.begin()) --it;
+  for (; it != activity_.end() && it->first < to; ++it) {
+    const sc_core::sc_time a = std::max(from, it->first);
+    const sc_core::sc_time b =
+        std::next(it) == activity_.end() ? to : std::min(to, std::next(it)->first);
+    if (!(a < b)) continue;
+    const double d = (b - a).to_seconds();
+    switch (it->second) {
+      case GpActivity::compute:
+        t.compute += d;
+        break;
+      case GpActivity::ring:
+        t.ring += d;
+        break;
+      case GpActivity::renderer:
+      case GpActivity::done:
+        t.renderer += d;
+        break;
+    }
+  }
+  return t;
+}
+
 void GraphicsProcessor::spend(GpClocks clocks) {
+  begin(GpActivity::compute);
   stats_.busy += clocks;
   wait(clock_ * static_cast<double>(clocks.count));
 }
@@ -25,11 +67,8 @@ void GraphicsProcessor::run() {
   const MachineConfig& config = machine_.config();
   const GeometryEngine& geometry = machine_.geometry();
   const ProcedureCode& triangle = machine_.program().procedure(Procedure::triangle);
-  const int expressions = static_cast<int>(triangle.expressions.count());
-  const std::uint64_t words = machine_.packet_words(expressions);
-  const GpClocks per_triangle(config.gp.clocks_per_triangle);
-  const GpClocks per_setup(static_cast<std::uint64_t>(config.gp.clocks_per_expression) *
-                           expressions);
+  const GpWorkload& workload = machine_.gp_workload();
+  const std::uint64_t words = workload.packet_words;
 
   std::vector<std::shared_ptr<Bin>> bins(config.regions());
   for (int r = 0; r < config.regions(); ++r) {
@@ -43,10 +82,11 @@ void GraphicsProcessor::run() {
     screen.clear();
     geometry.transform(i, screen, stats_.setup);
     ++stats_.triangles_in;
-    GpClocks clocks = per_triangle;
+    int setups = 0;
+    int binned = 0;
     for (const ScreenTriangle& t : screen) {
       ++stats_.screen_triangles;
-      clocks += per_setup;
+      ++setups;
       SetupResult result;
       if (!geometry.setup(t, triangle.expressions, result, stats_.setup)) continue;
       auto packet = std::make_shared<Packet>();
@@ -60,27 +100,98 @@ void GraphicsProcessor::run() {
         bins[r]->packets.push_back(packet);
         bins[r]->words += words;
         ++stats_.packets;
+        ++binned;
       }
     }
-    spend(clocks);
+    const OpCounts ops =
+        I860Work::triangle(workload, static_cast<int>(screen.size()), setups, binned);
+    stats_.ops += ops;
+    stats_.geometry += machine_.i860().clocks(ops, 1);
   }
-  // One header word per bin, so an empty bin still tells its Renderer this GP is done. A
-  // multipass program gets the same packets again for every pass, after the previous pass's
-  // bins have all gone: the GP keeps its set-up packets, so only the sending repeats.
+  // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
+  stats_.busy += stats_.geometry;
+  wait(clock_ * static_cast<double>(stats_.geometry.count));
+  stats_.geometry_done = sc_core::sc_time_stamp();
+  machine_.add_slice(Unit::gp, index_, "geometry", sc_core::SC_ZERO_TIME, stats_.geometry_done);
+
+  // Bins go out as their Renderers open (pass, region) stages: each message goes to the
+  // lowest open stage whose Renderer's queue has room for it, so a full queue holds up only
+  // the bins bound for it. A multipass program gets the same packets again for every pass:
+  // the GP keeps its set-up packets, so only the sending repeats.
   const int passes = machine_.program().passes;
-  for (int r = 0; r < config.regions(); ++r) bins[r]->words += 1;
-  for (int pass = 0; pass < passes; ++pass) {
-    for (int r = 0; r < config.regions(); ++r) {
-      spend(GpClocks(config.gp.clocks_per_bin));
-      auto bin = pass + 1 < passes ? std::make_shared<Bin>(*bins[r]) : std::move(bins[r]);
-      bin->pass = pass;
-      const int renderer = machine_.renderer_of_region(r);
-      machine_.ring().transfer(machine_.gp_stop(index_), machine_.renderer_stop(renderer),
-                               bin->words);
-      machine_.renderer(renderer).deliver(std::move(bin));
+  const int n = config.regions();
+  const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
+  std::vector<std::size_t> next(static_cast<std::size_t>(passes) * n, 0);
+  std::vector<bool> done(next.size(), false);
+  std::size_t remaining = next.size();
+  auto message_for = [&](int s) {
+    const Bin& bin = *bins[s % n];
+    auto m = std::make_shared<BinMessage>();
+    m->region = bin.region;
+    m->pass = s / n;
+    m->gp = index_;
+    m->words = 1;  // a header word, so an empty bin still tells its Renderer this GP is done
+    std::size_t k = next[s];
+    while (k < bin.packets.size() && m->words + bin.packets[k]->words <= capacity) {
+      m->words += bin.packets[k]->words;
+      m->packets.push_back(bin.packets[k++]);
     }
+    m->last = k == bin.packets.size();
+    return m;
+  };
+  while (remaining > 0) {
+    std::shared_ptr<BinMessage> m;
+    int pick = -1;
+    bool open = false;
+    for (int s = 0; s < passes * n && pick < 0; ++s) {
+      if (done[s]) continue;
+      const int region = s % n;
+      const int owner = machine_.owner_of_region(region);
+      if (owner < 0 || !machine_.renderer(owner).accepts(region, s / n)) continue;
+      open = true;
+      m = message_for(s);
+      if (machine_.renderer(owner).has_room(m->words)) pick = s;
+    }
+    if (pick < 0) {
+      const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+      begin(GpActivity::renderer);
+      wait(machine_.input_changed());
+      (open ? stats_.waiting_queue : stats_.waiting_stage) += sc_core::sc_time_stamp() - t0;
+      continue;
+    }
+    machine_.renderer(machine_.owner_of_region(pick % n)).reserve_room(m->words);
+    next[pick] += m->packets.size();
+    if (m->last) {
+      done[pick] = true;
+      --remaining;
+    }
+    send(std::move(m));
   }
+  begin(GpActivity::done);
   stats_.finished = sc_core::sc_time_stamp();
+}
+
+void GraphicsProcessor::send(std::shared_ptr<BinMessage> m) {
+  const int renderer_index = machine_.owner_of_region(m->region);
+  Renderer& renderer = machine_.renderer(renderer_index);
+  // Starting the message costs i860 clocks; its room in the queue is already reserved.
+  spend(machine_.i860().clocks(I860Work::send_bin(), 0));
+  m->requested = sc_core::sc_time_stamp();
+  const RingBooking b = machine_.ring().reserve(machine_.gp_stop(index_),
+                                                machine_.renderer_stop(renderer_index), m->words);
+  m->arrival = b.arrival;
+  ++stats_.messages;
+  if (machine_.timeline_on()) {
+    machine_.add_slice(Unit::gp, index_,
+                       "send region " + std::to_string(m->region) + " to renderer" +
+                           std::to_string(renderer_index),
+                       m->requested, b.end);
+  }
+  renderer.deliver(std::move(m));
+  // The GP's ring interface sends one message at a time.
+  begin(GpActivity::ring);
+  stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
+  wait(b.end - sc_core::sc_time_stamp());
 }
 
 }  // namespace pp5

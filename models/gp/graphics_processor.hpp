@@ -1,8 +1,12 @@
 #pragma once
 // A Graphics Processor (Intel i860) as a SystemC module: transforms, clips, lights and sets
 // up its share of the display list, bins the packets by region, then sends each region's
-// bin over the ring to the Renderer that owns the region. The arithmetic is
-// GeometryEngine's; this module charges its time in i860 clocks.
+// bin over the ring to the Renderer that claims the region. The arithmetic is
+// GeometryEngine's; the time is the i860 cost model's (models/gp/i860.hpp), in i860 clocks.
+//
+// Contract: geometry for the whole share first (one kernel event), then bins in the order
+// (pass, region) as their Renderers open them; a bin travels in messages no larger than the
+// Renderer's queue, and the GP stalls while the queue has no room or the stage is not open.
 #include <memory>
 #include <systemc>
 #include <vector>
@@ -13,12 +17,30 @@
 namespace pp5 {
 
 struct GpStats {
-  GpClocks busy{};
+  GpClocks busy{};                     // clocks computing (geometry and starting messages)
+  GpClocks geometry{};                 // of which transform, clip, light, set-up, binning
+  OpCounts ops;                        // the i860 operations of the geometry
+  sc_core::sc_time waiting_stage;      // waiting for a Renderer to open a stage
+  sc_core::sc_time waiting_queue;      // waiting for room in a Renderer's queue
+  sc_core::sc_time waiting_ring;       // waiting for its ring interface to send
   std::uint64_t triangles_in = 0;      // scene triangles it transformed
   std::uint64_t packets = 0;           // triangle packets it sent (one per region touched)
+  std::uint64_t messages = 0;          // ring messages it sent
   std::uint64_t screen_triangles = 0;  // triangles after clipping that reached set-up
   SetupCounts setup;
+  sc_core::sc_time geometry_done;
   sc_core::sc_time finished;
+};
+
+// What a GP is doing: computing, sending on the ring, or waiting for a Renderer (its queue
+// full, or no stage open for the GP's remaining bins).
+enum class GpActivity { compute, ring, renderer, done };
+
+// Time spent in each activity over an interval, in seconds.
+struct GpActivityTimes {
+  double compute = 0;
+  double ring = 0;
+  double renderer = 0;
 };
 
 class GraphicsProcessor : public sc_core::sc_module {
@@ -27,10 +49,14 @@ class GraphicsProcessor : public sc_core::sc_module {
   GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last, Machine& machine);
 
   const GpStats& stats() const { return stats_; }
+  // How the GP spent [from, to): so that a Renderer's wait for this GP can be attributed.
+  GpActivityTimes activity(sc_core::sc_time from, sc_core::sc_time to) const;
 
  private:
   void run();
   void spend(GpClocks clocks);
+  void send(std::shared_ptr<BinMessage> message);
+  void begin(GpActivity a);
 
   int index_;
   int first_;  // display-list range [first_, last_)
@@ -38,6 +64,9 @@ class GraphicsProcessor : public sc_core::sc_module {
   Machine& machine_;
   sc_core::sc_time clock_;
   GpStats stats_;
+  // When each activity began, in time order.
+  std::vector<std::pair<sc_core::sc_time, GpActivity>> activity_{
+      {sc_core::SC_ZERO_TIME, GpActivity::compute}};
 };
 
 }  // namespace pp5

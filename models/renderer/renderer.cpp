@@ -1,6 +1,10 @@
 #include "models/renderer/renderer.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "models/frame_buffer/frame_buffer.hpp"
+#include "models/gp/graphics_processor.hpp"
 #include "models/ring/ring.hpp"
 
 namespace pp5 {
@@ -9,65 +13,252 @@ Renderer::Renderer(sc_core::sc_module_name name, int index, Machine& machine)
     : sc_module(name),
       index_(index),
       machine_(machine),
-      cycle_(1.0 / machine.config().renderer.clock_hz, sc_core::SC_SEC) {
-  for (int r = index; r < machine.config().regions(); r += machine.config().renderer.count) {
-    regions_.push_back(r);
-    inbox_[r].assign(machine.program().passes,
-                     std::vector<std::shared_ptr<const Bin>>(machine.config().gp.count));
-  }
+      cycle_(1.0 / machine.config().renderer.clock_hz, sc_core::SC_SEC),
+      capacity_(static_cast<std::uint64_t>(machine.config().renderer.queue_words)) {
   SC_THREAD(run);
 }
 
-void Renderer::deliver(std::shared_ptr<const Bin> bin) {
-  inbox_[bin->region][bin->pass][bin->gp] = std::move(bin);
+void Renderer::reserve_room(std::uint64_t words) {
+  queued_words_ += words;
+  stats_.queue_peak_words = std::max(stats_.queue_peak_words, queued_words_);
+}
+
+void Renderer::deliver(std::shared_ptr<const BinMessage> message) {
+  const bool last = message->last;
+  queue_.push_back(std::move(message));
+  if (last && ++lasts_delivered_ == machine_.gp_count()) open_next_stage();
   arrived_.notify(sc_core::SC_ZERO_TIME);
 }
 
-ArrayCycles Renderer::charge(const ProcedureCode& procedure, const PacketValues& values) {
-  if (!procedure.defined) return ArrayCycles{};
+void Renderer::open_next_stage() {
+  lasts_delivered_ = 0;
+  if (open_region_ >= 0 && open_pass_ + 1 < machine_.program().passes) {
+    ++open_pass_;
+  } else {
+    // The last pass of the region is all in the queue: take the next region now, so that
+    // its bins flow in while this one finishes.
+    open_region_ = machine_.claim_region(index_);
+    open_pass_ = open_region_ >= 0 ? 0 : -1;
+  }
+  if (open_region_ >= 0) stages_.push_back({open_region_, open_pass_});
+  machine_.input_changed().notify(sc_core::SC_ZERO_TIME);
+}
+
+void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values) {
+  if (!procedure.defined) return;
+  const MachineConfig& config = machine_.config();
+  const TimingParams& timing = machine_.timing();
   ++stats_.packets;
   stats_.instructions += procedure.code.size();
-  return ArrayCycles(machine_.config().renderer.packet_overhead_cycles) +
-         procedure_cost(procedure, machine_.timing(), values);
+  ArrayCycles cycles(config.renderer.packet_overhead_cycles);
+  for (const Instruction& ins : procedure.code) {
+    const ArrayCycles cost = instruction_cost(ins, timing, values);
+    const bool transfer = ins.op == Opcode::bsld || ins.op == Opcode::bsst;
+    if (!transfer || !config.renderer.backing_store_overlap) {
+      cycles += cost;
+      continue;
+    }
+    cursor_ += cycle_ * static_cast<double>(cycles.count);
+    stats_.busy += cycles;
+    cycles = ArrayCycles{};
+    const sc_core::sc_time length = cycle_ * static_cast<double>(cost.count);
+    if (ins.op == Opcode::bsst) {
+      // The array issues the store in one cycle; the port moves the blocks while the array
+      // goes on (a later write to the field is the firmware's to order after a load).
+      const ArrayCycles issue(1);
+      cursor_ += cycle_ * static_cast<double>(issue.count);
+      stats_.busy += issue;
+      port_free_ = std::max(cursor_, port_free_) + length;
+    } else {
+      // A load's data must be in pixel memory before the next instruction can use it.
+      if (port_free_ > cursor_) {
+        stats_.stall +=
+            ArrayCycles(static_cast<std::uint64_t>((port_free_ - cursor_) / cycle_ + 0.5));
+        cursor_ = port_free_;
+      }
+      cursor_ += length;
+      port_free_ = cursor_;
+      stats_.busy += cost;
+    }
+  }
+  cursor_ += cycle_ * static_cast<double>(cycles.count);
+  stats_.busy += cycles;
+}
+
+void Renderer::load_coefficients(const Packet& packet, sc_core::sc_time arrival) {
+  const MachineConfig& config = machine_.config();
+  // The packet's words after its header are coefficients, moved from the queue into the
+  // evaluator's input registers.
+  const std::uint64_t words = packet.words > 0 ? packet.words - 1 : 0;
+  const auto per_cycle = static_cast<std::uint64_t>(config.evaluator.coefficient_words_per_cycle);
+  const ArrayCycles load((words + per_cycle - 1) / per_cycle);
+  if (!config.evaluator.double_buffered) {
+    cursor_ += cycle_ * static_cast<double>(load.count);
+    stats_.busy += load;
+    return;
+  }
+  // Double-buffered: the next packet's coefficients load while the current packet executes;
+  // the array waits only if they are not in yet.
+  const sc_core::sc_time ready =
+      std::max(arrival, coefficients_free_) + cycle_ * static_cast<double>(load.count);
+  if (ready > cursor_) {
+    stats_.stall += ArrayCycles(static_cast<std::uint64_t>((ready - cursor_) / cycle_ + 0.5));
+    cursor_ = ready;
+  }
+  coefficients_free_ = cursor_;
+}
+
+void Renderer::catch_up() {
+  const sc_core::sc_time now = sc_core::sc_time_stamp();
+  if (cursor_ > now) wait(cursor_ - now);
+  cursor_ = sc_core::sc_time_stamp();
+}
+
+void Renderer::ship(int region) {
+  const MachineConfig& config = machine_.config();
+  Ring& ring = machine_.ring();
+  const int from = machine_.renderer_stop(index_);
+  const int to = machine_.frame_buffer_stop();
+  const std::uint64_t words = machine_.region_words();
+  if (config.renderer.overlap_shipping) {
+    // Colours go to the backing store (before the next region's clear overwrites them); its
+    // video-RAM port then streams them onto the ring while the array works on.
+    const int blocks = (config.frame_buffer.bits_per_pixel + config.renderer.block_bits - 1) /
+                       config.renderer.block_bits;
+    const ArrayCycles copy(static_cast<std::uint64_t>(blocks) *
+                           config.renderer.backing_store_cycles_per_block);
+    if (port_free_ > cursor_) {
+      stats_.stall +=
+          ArrayCycles(static_cast<std::uint64_t>((port_free_ - cursor_) / cycle_ + 0.5));
+      cursor_ = port_free_;
+    }
+    const sc_core::sc_time t0 = cursor_;
+    cursor_ += cycle_ * static_cast<double>(copy.count);
+    port_free_ = cursor_;
+    stats_.busy += copy;
+    catch_up();
+    machine_.add_slice(Unit::renderer, index_, "copy out", t0, cursor_);
+    const RingBooking b = ring.reserve(from, to, words, ship_free_);
+    ship_free_ = b.end;
+    machine_.frame_buffer().region_arrived(region, b.arrival);
+    stats_.finished = std::max(stats_.finished, b.arrival);
+  } else {
+    catch_up();
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    ring.transfer(from, to, words);
+    stats_.waiting_ship += sc_core::sc_time_stamp() - t0;
+    cursor_ = sc_core::sc_time_stamp();
+    machine_.frame_buffer().region_arrived(region, cursor_);
+    stats_.finished = std::max(stats_.finished, cursor_);
+  }
 }
 
 void Renderer::run() {
   const MachineConfig& config = machine_.config();
   const Program& program = machine_.program();
+  const int gps = machine_.gp_count();
   PacketValues frame_values;
   frame_values.parameters = machine_.frame_parameters();
-  for (int region : regions_) {
-    RegionWork w;
-    w.region = region;
-    w.x0 = (region % config.regions_x()) * config.renderer.region_width;
-    w.y0 = (region / config.regions_x()) * config.renderer.region_height;
-    ArrayCycles cycles = charge(program.procedure(Procedure::clear), frame_values);
-    for (int pass = 0; pass < program.passes; ++pass) {
-      if (pass > 0) cycles += charge(program.procedure(Procedure::pass), frame_values);
-      auto& bins = inbox_[region][pass];
-      for (int g = 0; g < config.gp.count; ++g) {
-        while (!bins[g]) wait(arrived_);
-        for (const auto& packet : bins[g]->packets) {
-          cycles += charge(program.procedure(Procedure::triangle), packet->values);
-          if (pass == 0) w.triangles.push_back(packet);
-        }
-        // Time advances per bin, not per cycle: one kernel event for a whole stream.
-        wait(cycle_ * static_cast<double>(cycles.count));
-        stats_.busy += cycles;
-        cycles = ArrayCycles{};
-      }
+  cursor_ = sc_core::SC_ZERO_TIME;
+  open_next_stage();
+  std::vector<std::vector<std::shared_ptr<const Packet>>> by_gp(gps);
+  // The array cycle at which each packet started, by pass and GP (for traces): a GP's
+  // packets come in the same order in every pass.
+  std::vector<std::vector<std::vector<std::uint64_t>>> starts(
+      program.passes, std::vector<std::vector<std::uint64_t>>(gps));
+  auto cycle_now = [&] { return static_cast<std::uint64_t>(std::llround(cursor_ / cycle_)); };
+  std::uint64_t clear_start = 0;
+  std::vector<std::uint64_t> pass_start;
+  sc_core::sc_time region_start;
+  while (!stages_.empty()) {
+    const Stage stage = stages_.front();
+    stages_.pop_front();
+    if (stage.pass == 0) {
+      for (auto& v : by_gp) v.clear();
+      for (auto& pass : starts)
+        for (auto& v : pass) v.clear();
+      pass_start.clear();
+      region_start = cursor_;
+      clear_start = cycle_now();
+      charge(program.procedure(Procedure::clear), frame_values);
+    } else {
+      pass_start.push_back(cycle_now());
+      charge(program.procedure(Procedure::pass), frame_values);
     }
-    cycles += charge(program.procedure(Procedure::shade), frame_values);
-    wait(cycle_ * static_cast<double>(cycles.count));
-    stats_.busy += cycles;
-    inbox_.erase(region);
-    machine_.ring().transfer(machine_.renderer_stop(index_), machine_.frame_buffer_stop(),
-                             machine_.region_words());
-    machine_.frame_buffer().region_arrived(region);
+    int lasts = 0;
+    while (lasts < gps) {
+      catch_up();
+      const sc_core::sc_time waiting_from = sc_core::sc_time_stamp();
+      std::size_t pick = queue_.size();
+      for (;;) {
+        for (std::size_t k = 0; k < queue_.size(); ++k) {
+          const BinMessage& m = *queue_[k];
+          if (m.region != stage.region || m.pass != stage.pass) continue;
+          if (pick == queue_.size() || m.arrival < queue_[pick]->arrival) pick = k;
+        }
+        if (pick < queue_.size()) break;
+        wait(arrived_);
+      }
+      const std::shared_ptr<const BinMessage> m = queue_[pick];
+      queue_.erase(queue_.begin() + static_cast<std::ptrdiff_t>(pick));
+      if (m->arrival > sc_core::sc_time_stamp()) wait(m->arrival - sc_core::sc_time_stamp());
+      // Whatever of the wait came after the GP asked for the message was the ring's.
+      const sc_core::sc_time now = sc_core::sc_time_stamp();
+      const sc_core::sc_time ring_from = std::max(waiting_from, m->requested);
+      const sc_core::sc_time ring_part = now > ring_from ? now - ring_from : sc_core::SC_ZERO_TIME;
+      stats_.waiting_ring += ring_part;
+      // Before that, it was whatever the sending GP was doing: computing (the GPs' time),
+      // sending earlier messages (the ring's) or waiting for other Renderers (theirs).
+      const GpActivityTimes before =
+          machine_.gp(m->gp).activity(waiting_from, std::min(m->requested, now));
+      stats_.waiting_gp += sc_core::sc_time(before.compute, sc_core::SC_SEC);
+      stats_.waiting_ring += sc_core::sc_time(before.ring, sc_core::SC_SEC);
+      stats_.waiting_renderers += sc_core::sc_time(before.renderer, sc_core::SC_SEC);
+      cursor_ = now;
+      const sc_core::sc_time t0 = cursor_;
+      for (const auto& packet : m->packets) {
+        load_coefficients(*packet, m->arrival);
+        starts[stage.pass][m->gp].push_back(cycle_now());
+        charge(program.procedure(Procedure::triangle), packet->values);
+        if (stage.pass == 0) by_gp[m->gp].push_back(packet);
+      }
+      // Time advances per message, not per cycle: one kernel event for a whole stream.
+      catch_up();
+      ++stats_.messages;
+      if (machine_.timeline_on() && cursor_ > t0) {
+        machine_.add_slice(
+            Unit::renderer, index_,
+            "gp" + std::to_string(m->gp) + ": " + std::to_string(m->packets.size()) + " triangles",
+            t0, cursor_);
+      }
+      queued_words_ -= m->words;
+      machine_.input_changed().notify(sc_core::SC_ZERO_TIME);
+      if (m->last) ++lasts;
+    }
+    if (stage.pass + 1 < program.passes) continue;
+    const std::uint64_t shade_start = cycle_now();
+    charge(program.procedure(Procedure::shade), frame_values);
+    catch_up();
+    machine_.add_slice(Unit::renderer, index_, "region " + std::to_string(stage.region),
+                       region_start, cursor_);
+    RegionWork w;
+    w.region = stage.region;
+    w.x0 = (stage.region % config.regions_x()) * config.renderer.region_width;
+    w.y0 = (stage.region / config.regions_x()) * config.renderer.region_height;
+    for (auto& v : by_gp) w.triangles.insert(w.triangles.end(), v.begin(), v.end());
+    w.clear_start = clear_start;
+    w.pass_start = pass_start;
+    w.shade_start = shade_start;
+    for (const auto& pass : starts)
+      for (const auto& v : pass)
+        w.triangle_start.insert(w.triangle_start.end(), v.begin(), v.end());
+    ship(stage.region);
     ++stats_.regions;
     work_.push_back(std::move(w));
   }
-  stats_.finished = sc_core::sc_time_stamp();
+  catch_up();
+  stats_.computed = sc_core::sc_time_stamp();
+  stats_.finished = std::max(stats_.finished, stats_.computed);
 }
 
 void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,
@@ -75,19 +266,31 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
   const auto& geometry = board.array().geometry();
   std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work_) {
-    if (w.triangles.empty()) {  // the same stream every time: executed once, then reused
+    // An empty region's stream is the same every time: executed once, then reused (a traced
+    // board runs every instruction, so that the trace shows them).
+    if (w.triangles.empty() && !board.observed()) {
       board.run_empty_region(w.x0, w.y0, program, frame_values, rgb);
       frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
       continue;
     }
     board.begin_region(w.x0, w.y0);
+    board.begin_packet({Procedure::clear, -1, w.region, w.clear_start});
     board.run(program.procedure(Procedure::clear), frame_values);
+    const std::size_t n = w.triangles.size();
     for (int pass = 0; pass < program.passes; ++pass) {
-      if (pass > 0) board.run(program.procedure(Procedure::pass), frame_values);
-      for (const auto& packet : w.triangles)
-        board.run(program.procedure(Procedure::triangle), packet->values);
+      if (pass > 0) {
+        board.begin_packet({Procedure::pass, -1, w.region, w.pass_start[pass - 1]});
+        board.run(program.procedure(Procedure::pass), frame_values);
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        board.begin_packet({Procedure::triangle, w.triangles[i]->primitive, w.region,
+                            w.triangle_start[pass * n + i]});
+        board.run(program.procedure(Procedure::triangle), w.triangles[i]->values);
+      }
     }
+    board.begin_packet({Procedure::shade, -1, w.region, w.shade_start});
     board.run(program.procedure(Procedure::shade), frame_values);
+    board.end_region(w.region);
     board.read_outputs(program, rgb);
     frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
   }

@@ -1,10 +1,26 @@
 #pragma once
-// A Renderer board as a SystemC module: the timing half. It receives bins over the ring,
-// charges the firmware's cycles for each in GP order, and ships finished regions to the
-// frame buffer. The functional half is RendererBoard (renderer_board.hpp), which executes
-// the same streams on the pixel array; see models/machine.hpp for how the two meet.
-#include <map>
+// A Renderer board as a SystemC module: the timing half. It claims regions, opens one
+// (region, pass) stage at a time for input, charges the firmware's cycles for each message
+// in its instruction queue as it arrives, and ships finished regions to the frame buffer.
+// The functional half is RendererBoard (renderer_board.hpp), which executes the same
+// streams on the pixel array; see models/machine.hpp for how the two meet.
+//
+// Contract:
+//  - Busy cycles are exactly the instruction table's cycles (plus packet decoding and the
+//    copy of finished colours to the backing store); time advances once per message or
+//    procedure block, never per cycle.
+//  - A triangle packet's coefficients move into the evaluator at
+//    evaluator.coefficient_words_per_cycle; double-buffered (evaluator.double_buffered), the
+//    next packet's load overlaps the current packet's execution and only a shortfall stalls.
+//  - With renderer.backing_store_overlap, a bsst costs the array one issue cycle and then
+//    occupies the backing-store port for its blocks; a bsld waits for the port, then for its
+//    own transfer. Waiting for the port counts as a stall, not as busy.
+//  - Every wait is attributed, from the sending GP's activity: to the GPs (it was computing),
+//    the ring (it was sending, or the message was crossing) or the Renderers (it was waiting
+//    for another Renderer), so the frame time splits into GP, ring and Renderer time.
+#include <deque>
 #include <memory>
+#include <string>
 #include <systemc>
 #include <vector>
 
@@ -15,20 +31,39 @@
 namespace pp5 {
 
 // The instruction stream of one region: clear, then for each of the program's passes the
-// triangles in this order (with `pass` between passes), then shade.
+// triangles in this order (with `pass` between passes), then shade. Triangles are kept in
+// GP order, which is display-list order, whatever order their messages arrived in: no
+// instruction's cost depends on pixel data, so the order changes the image only on depth
+// ties, and this way it never changes with timing or load balancing.
 struct RegionWork {
   int region = 0;
   int x0 = 0;
   int y0 = 0;
   std::vector<std::shared_ptr<const Packet>> triangles;
+  // Simulated array cycle at which the timing pass started each packet (for traces).
+  std::uint64_t clear_start = 0;
+  std::vector<std::uint64_t> triangle_start;  // pass-major: pass * triangles + i
+  std::vector<std::uint64_t> pass_start;      // the 'pass' procedure before pass k + 1
+  std::uint64_t shade_start = 0;
 };
 
 struct RendererStats {
-  ArrayCycles busy{};  // cycles executing micro-instructions and decoding packets
+  ArrayCycles busy{};   // cycles executing micro-instructions, decoding packets, copying out
+  ArrayCycles stall{};  // cycles waiting for the backing-store port
+  // Idle, waiting for a message, while the GP that sent it was computing (waiting_gp), or was
+  // sending earlier messages or this one was crossing the ring (waiting_ring), or the GP was
+  // itself waiting for other Renderers' queues or stages (waiting_renderers).
+  sc_core::sc_time waiting_gp;
+  sc_core::sc_time waiting_ring;
+  sc_core::sc_time waiting_renderers;
+  sc_core::sc_time waiting_ship;  // blocked shipping a region (no overlapped shipping)
   std::uint64_t regions = 0;
   std::uint64_t packets = 0;
+  std::uint64_t messages = 0;
   std::uint64_t instructions = 0;  // micro-instructions issued to the array
-  sc_core::sc_time finished;       // when its last region left for the frame buffer
+  std::uint64_t queue_peak_words = 0;
+  sc_core::sc_time computed;  // when its array finished its last region
+  sc_core::sc_time finished;  // when its last region reached the frame buffer
 };
 
 class Renderer : public sc_core::sc_module {
@@ -36,8 +71,13 @@ class Renderer : public sc_core::sc_module {
   SC_HAS_PROCESS(Renderer);
   Renderer(sc_core::sc_module_name name, int index, Machine& machine);
 
-  // A GP's bin has arrived over the ring.
-  void deliver(std::shared_ptr<const Bin> bin);
+  // The stage open for input, and room in the queue.
+  bool accepts(int region, int pass) const { return open_region_ == region && open_pass_ == pass; }
+  bool has_room(std::uint64_t words) const { return queued_words_ + words <= capacity_; }
+  // A GP takes room for its next message (after has_room), before it starts sending.
+  void reserve_room(std::uint64_t words);
+  // A GP's message has been booked on the ring; it is in the queue from its arrival on.
+  void deliver(std::shared_ptr<const BinMessage> message);
 
   const RendererStats& stats() const { return stats_; }
   const std::vector<RegionWork>& work() const { return work_; }
@@ -46,16 +86,35 @@ class Renderer : public sc_core::sc_module {
                const PacketValues& frame_values) const;
 
  private:
+  struct Stage {
+    int region;
+    int pass;
+  };
   void run();
-  ArrayCycles charge(const ProcedureCode& procedure, const PacketValues& values);
+  void open_next_stage();
+  // Adds one procedure's time at the array's cursor.
+  void charge(const ProcedureCode& procedure, const PacketValues& values);
+  // Loads a triangle packet's coefficients into the evaluator before it runs.
+  void load_coefficients(const Packet& packet, sc_core::sc_time arrival);
+  // Advances simulated time to the cursor (one kernel event).
+  void catch_up();
+  void ship(int region);
 
   int index_;
   Machine& machine_;
-  std::vector<int> regions_;
-  // region -> pass -> bins by GP
-  std::map<int, std::vector<std::vector<std::shared_ptr<const Bin>>>> inbox_;
-  sc_core::sc_event arrived_;
   sc_core::sc_time cycle_;
+  std::uint64_t capacity_;
+  int open_region_ = -1;
+  int open_pass_ = -1;
+  int lasts_delivered_ = 0;
+  std::deque<Stage> stages_;  // opened, not yet processed
+  std::vector<std::shared_ptr<const BinMessage>> queue_;
+  std::uint64_t queued_words_ = 0;
+  sc_core::sc_event arrived_;
+  sc_core::sc_time cursor_;             // the array's time within a block
+  sc_core::sc_time port_free_;          // the backing-store port's
+  sc_core::sc_time ship_free_;          // the ring interface's, for outgoing regions
+  sc_core::sc_time coefficients_free_;  // the evaluator's spare coefficient registers
   RendererStats stats_;
   std::vector<RegionWork> work_;
 };

@@ -31,6 +31,12 @@ void RendererBoard::run_rest_of_empty(const Program& program, const PacketValues
 void RendererBoard::run_empty_region(int x0, int y0, const Program& program,
                                      const PacketValues& frame_values,
                                      std::vector<std::uint8_t>& rgb) {
+  if (observer_) {  // a traced board shows every instruction: nothing is reused
+    begin_region(x0, y0);
+    run(program.procedure(Procedure::clear), frame_values);
+    run_rest_of_empty(program, frame_values, rgb);
+    return;
+  }
   bool origin_free = true;
   for (const QuadraticCoefficients& c : frame_values.expressions) {
     origin_free = origin_free && c.A == 0 && c.B == 0 && c.C == 0 && c.D == 0 && c.E == 0;
@@ -73,12 +79,32 @@ void RendererBoard::share_empty_region(const RendererBoard& other) {
 
 ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValues& values) {
   materialise();
+  if (observer_) return run_observed(procedure, values);
   ExecutionContext ctx{array_, evaluator_, values, params_.timing.fraction_bits, scratch_};
   ArrayCycles cycles{};
   for (const Instruction& ins : procedure.code) {
     const InstructionInfo& info = instruction_info(ins.op);
     info.execute(ins, ctx);
     cycles += info.cost(ins, params_.timing, values);
+  }
+  instructions_ += procedure.code.size();
+  cycles_ += cycles;
+  return cycles;
+}
+
+// The same loop as run(), with the observer told about every instruction.
+ArrayCycles RendererBoard::run_observed(const ProcedureCode& procedure,
+                                        const PacketValues& values) {
+  ExecutionContext ctx{array_, evaluator_, values, params_.timing.fraction_bits, scratch_};
+  observer_->begin_packet(packet_, procedure, *this);
+  ArrayCycles cycles{};
+  int index = 0;
+  for (const Instruction& ins : procedure.code) {
+    const InstructionInfo& info = instruction_info(ins.op);
+    info.execute(ins, ctx);
+    const ArrayCycles cost = info.cost(ins, params_.timing, values);
+    cycles += cost;
+    observer_->after_instruction(index++, ins, cost, *this);
   }
   instructions_ += procedure.code.size();
   cycles_ += cycles;

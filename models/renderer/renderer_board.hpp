@@ -11,11 +11,38 @@
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
+#include "firmware/isa/interface.hpp"
 #include "firmware/isa/isa.hpp"
 #include "models/evaluator/evaluator.hpp"
 #include "models/pixel_array/pixel_array.hpp"
 
 namespace pp5 {
+
+class RendererBoard;
+
+// Which packet the board is about to run, for observers (tracing); supplied by the
+// Renderer, which knows the region, the primitive and when the timing pass started it.
+struct PacketContext {
+  Procedure procedure = Procedure::clear;
+  int primitive = -1;  // scene triangle, or -1 for clear/shade
+  int region = 0;
+  std::uint64_t start_cycle = 0;  // simulated array cycle at which the packet starts
+};
+
+// An opt-in observer of a board's execution (see sim/trace/). Contract: the board calls
+// begin_packet before each packet's first instruction, after_instruction after each
+// instruction has executed (with its index in the procedure and its cost), and end_region
+// after a region's shade procedure. With no observer the board's only extra work is one
+// predictable branch per procedure run.
+class BoardObserver {
+ public:
+  virtual ~BoardObserver() = default;
+  virtual void begin_packet(const PacketContext& packet, const ProcedureCode& procedure,
+                            const RendererBoard& board) = 0;
+  virtual void after_instruction(int index, const Instruction& instruction, ArrayCycles cost,
+                                 const RendererBoard& board) = 0;
+  virtual void end_region(int region, const RendererBoard& board) = 0;
+};
 
 struct RendererBoardParams {
   PixelArrayGeometry array;
@@ -31,6 +58,13 @@ class RendererBoard {
   // would): the program's clear procedure is what initialises it.
   void begin_region(int x0, int y0);
   ArrayCycles run(const ProcedureCode& procedure, const PacketValues& values);
+  // Observation (tracing): `observer` may be null; the board does not own it.
+  void set_observer(BoardObserver* observer) { observer_ = observer; }
+  bool observed() const { return observer_ != nullptr; }
+  void begin_packet(const PacketContext& packet) { packet_ = packet; }
+  void end_region(int region) {
+    if (observer_) observer_->end_region(region, *this);
+  }
   // Reads the program's output fields of every pixel as 8-bit RGB, row-major.
   void read_outputs(const Program& program, std::vector<std::uint8_t>& rgb) const;
 
@@ -82,6 +116,10 @@ class RendererBoard {
   std::uint64_t empty_reused_ = 0;
   ExpressionEvaluator evaluator_;
   std::vector<Word> scratch_;
+  BoardObserver* observer_ = nullptr;
+  PacketContext packet_;
+  ArrayCycles run_observed(const ProcedureCode& procedure, const PacketValues& values);
+
   std::uint64_t instructions_ = 0;
   ArrayCycles cycles_{};
 };

@@ -1,5 +1,8 @@
 #include "models/ring/ring.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace pp5 {
 
 Ring::Ring(sc_core::sc_module_name name, const RingParams& params, int stops)
@@ -10,22 +13,31 @@ Ring::Ring(sc_core::sc_module_name name, const RingParams& params, int stops)
       free_at_(params.channels, sc_core::SC_ZERO_TIME),
       busy_(params.channels) {}
 
-void Ring::transfer(int from, int to, std::uint64_t words) {
-  const sc_core::sc_time now = sc_core::sc_time_stamp();
+RingBooking Ring::reserve(int from, int to, std::uint64_t words, sc_core::sc_time not_before) {
+  const sc_core::sc_time now = std::max(sc_core::sc_time_stamp(), not_before);
   int channel = 0;
   for (int c = 1; c < params_.channels; ++c) {
     if (free_at_[c] < free_at_[channel]) channel = c;
   }
   const sc_core::sc_time start = free_at_[channel] > now ? free_at_[channel] : now;
+  if (start > now)
+    contention_ += RingCycles(static_cast<std::uint64_t>(std::llround((start - now) / cycle_)));
   const sc_core::sc_time length = cycle_ * static_cast<double>(words);
   free_at_[channel] = start + length;
   busy_[channel] += RingCycles(words);
   ++messages_;
   words_ += words;
   const int hops = ((to - from) % stops_ + stops_) % stops_;
-  const sc_core::sc_time arrival =
-      start + length + cycle_ * static_cast<double>(hops * params_.hop_latency_cycles);
-  wait(arrival - now);
+  RingBooking b;
+  b.end = start + length;
+  b.arrival = b.end + cycle_ * static_cast<double>(hops * params_.hop_latency_cycles);
+  if (record_) log_.push_back({channel, from, to, words, start, b.end, b.arrival});
+  return b;
+}
+
+void Ring::transfer(int from, int to, std::uint64_t words) {
+  const RingBooking b = reserve(from, to, words);
+  wait(b.arrival - sc_core::sc_time_stamp());
 }
 
 }  // namespace pp5

@@ -1,13 +1,16 @@
 #pragma once
 // The ring network: stops in a loop (GPs, Renderers, frame buffer), `channels` parallel
-// channels of `word_bits` each, one word per channel per ring cycle.
+// channels of `word_bits` each, one word per channel per ring cycle. GP-to-Renderer bins and
+// Renderer-to-frame-buffer regions share the channels.
 //
-// Contract (the simple model; contention is per channel, hops pipeline): a message takes
-// the channel that frees first, holds it for one ring cycle per word, and arrives
-// `hops * hop_latency_cycles` after its last word leaves. transfer() blocks the calling
-// SystemC thread until arrival. Channel choice breaks ties by the lowest index, so runs
-// are deterministic.
+// Contract (contention is per channel, hops pipeline): a message takes the channel that
+// frees first (ties to the lowest index, so runs are deterministic), holds it for one ring
+// cycle per word from max(now, channel free), and arrives `hops * hop_latency_cycles` after
+// its last word leaves. No channel ever carries more than one word per cycle, so the ring
+// never exceeds channels x word_bits x clock. reserve() books a message and returns when it
+// arrives without blocking; transfer() blocks the calling SystemC thread until arrival.
 #include <cstdint>
+#include <string>
 #include <systemc>
 #include <vector>
 
@@ -22,17 +25,43 @@ struct RingParams {
   int hop_latency_cycles = 1;
 };
 
+// One message on the ring, for the timeline.
+struct RingMessage {
+  int channel = 0;
+  int from = 0;
+  int to = 0;
+  std::uint64_t words = 0;
+  sc_core::sc_time start;    // first word leaves
+  sc_core::sc_time end;      // last word leaves: the channel is free again
+  sc_core::sc_time arrival;  // last word reaches `to`
+};
+
+struct RingBooking {
+  sc_core::sc_time end;      // the sender's interface is free again
+  sc_core::sc_time arrival;  // the message has fully arrived
+};
+
 class Ring : public sc_core::sc_module {
  public:
   Ring(sc_core::sc_module_name name, const RingParams& params, int stops);
 
+  // `not_before`: the sender's interface is busy until then (default: now).
+  RingBooking reserve(int from, int to, std::uint64_t words,
+                      sc_core::sc_time not_before = sc_core::SC_ZERO_TIME);
   void transfer(int from, int to, std::uint64_t words);
 
+  // Keep every message for the timeline (off by default: it costs memory).
+  void record_messages(bool on) { record_ = on; }
+  const std::vector<RingMessage>& messages_log() const { return log_; }
+
   const RingParams& params() const { return params_; }
+  int stops() const { return stops_; }
   std::uint64_t messages() const { return messages_; }
   std::uint64_t words() const { return words_; }
   // Ring cycles each channel spent carrying words.
   const std::vector<RingCycles>& busy() const { return busy_; }
+  // Cycles messages waited for a free channel, summed.
+  RingCycles contention() const { return contention_; }
   double bandwidth_bits_per_second() const {
     return params_.channels * params_.word_bits * params_.clock_hz;
   }
@@ -43,8 +72,11 @@ class Ring : public sc_core::sc_module {
   sc_core::sc_time cycle_;
   std::vector<sc_core::sc_time> free_at_;
   std::vector<RingCycles> busy_;
+  RingCycles contention_{};
   std::uint64_t messages_ = 0;
   std::uint64_t words_ = 0;
+  bool record_ = false;
+  std::vector<RingMessage> log_;
 };
 
 }  // namespace pp5

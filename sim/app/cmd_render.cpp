@@ -27,6 +27,8 @@ struct RenderOptions {
   std::string out_dir;
   int threads = default_threads();
   std::vector<int> tessellation;
+  std::string timeline;
+  std::vector<std::string> params;
 };
 
 int run_render(RenderOptions o) {
@@ -36,16 +38,21 @@ int run_render(RenderOptions o) {
     scene_options.tessellation_u = o.tessellation[0];
     scene_options.tessellation_v = o.tessellation[1];
   }
-  const Scene scene = load_scene(o.scene_name, scene_options);
+  Scene scene = load_scene(o.scene_name, scene_options);
+  scene.parameters = parse_frame_parameters(o.params);
+  GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(resolve_firmware(o.firmware), assembler_options(config));
   if (o.out_dir.empty()) o.out_dir = (fs::path("out") / scene.name).string();
   fs::create_directories(o.out_dir);
 
-  const FrameResult result = simulate_frame(config, scene, program, o.threads);
+  nlohmann::json timeline;
+  const FrameResult result = simulate_frame(config, scene, program, o.threads, {},
+                                            o.timeline.empty() ? nullptr : &timeline);
   const fs::path dir(o.out_dir);
   write_png((dir / "frame.png").string(), result.image);
   write_file_atomically((dir / "config.json").string(), config.to_json().dump(2) + "\n");
   write_file_atomically((dir / "stats.json").string(), result.stats.dump(2) + "\n");
+  if (!o.timeline.empty()) write_file_atomically(o.timeline, timeline.dump() + "\n");
 
   std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n{}\n\n", scene.name,
                            scene.mesh.triangles.size(), program.name, scene.description);
@@ -66,6 +73,9 @@ int run_render(RenderOptions o) {
   }
   std::cout << fmt::format("\nwrote {}/frame.png, {}/config.json, {}/stats.json\n", o.out_dir,
                            o.out_dir, o.out_dir);
+  if (!o.timeline.empty()) {
+    std::cout << fmt::format("wrote {} (open it in ui.perfetto.dev)\n", o.timeline);
+  }
   return 0;
 }
 
@@ -96,6 +106,12 @@ Command add_render_command(CLI::App& app) {
       ->add_option("--tessellation", o->tessellation,
                    "Tessellation U V of the torus or sphere (default 128 32 and 64 32)")
       ->expected(2);
+  render->add_option("--timeline", o->timeline,
+                     "Also write a timeline of every GP, ring channel and Renderer to FILE, in the "
+                     "Chrome trace-event JSON format that ui.perfetto.dev opens");
+  render->add_option("--param", o->params,
+                     "Set a frame parameter, NAME=VALUE (repeatable), e.g. --param "
+                     "highlight_opacity=128 (see pp5sim isa)");
   return {render, [o] { return run_render(*o); }};
 }
 

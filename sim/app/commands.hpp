@@ -3,7 +3,9 @@
 // the program by one line in main.cpp: add_NAME_command registers its options on the CLI11 app
 // and returns the function that runs it once the command line has been parsed.
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,9 @@ Command add_isa_command(CLI::App& app);
 Command add_asm_command(CLI::App& app);
 Command add_config_command(CLI::App& app);
 Command add_scenes_command(CLI::App& app);
+Command add_sweep_command(CLI::App& app);
+Command add_trace_command(CLI::App& app);
+Command add_highlight_command(CLI::App& app);
 Command add_extremes_command(CLI::App& app);
 
 // Shared by the commands.
@@ -39,5 +44,8 @@ std::string markdown_cell(const std::string& text);
 
 // A sensible default for --threads: the host's hardware threads.
 int default_threads();
+
+// --param NAME=VALUE items as frame-parameter overrides (names checked, values integers).
+std::map<std::string, std::int64_t> parse_frame_parameters(const std::vector<std::string>& items);
 
 }  // namespace pp5

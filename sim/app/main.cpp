@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
       add_asm_command(app),
       add_config_command(app),
       add_scenes_command(app),
+      add_sweep_command(app),
+      add_trace_command(app),
+      add_highlight_command(app),
       add_extremes_command(app),
   };
 

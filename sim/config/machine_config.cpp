@@ -1,6 +1,7 @@
 #include "sim/config/machine_config.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <fstream>
 #include <functional>
@@ -12,7 +13,7 @@ namespace pp5 {
 
 namespace {
 
-using Ref = std::variant<int*, double*>;
+using Ref = std::variant<int*, double*, std::string*>;
 
 struct Parameter {
   const char* key;
@@ -23,7 +24,24 @@ struct Parameter {
   double max;
   const char* description;
   Ref (*ref)(MachineConfig&);
+  // Text parameters: the allowed values separated by '|', the first being the default.
+  const char* choices = nullptr;
 };
+
+std::vector<std::string> split_choices(const char* choices) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (const char* c = choices; *c; ++c) {
+    if (*c == '|') {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += *c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
 
 // The single declaration of every machine parameter. Confidence: P = the 1989 SIGGRAPH
 // paper, S = a secondary source, A = an assumption of this simulator (see
@@ -48,17 +66,43 @@ const std::vector<Parameter>& parameter_table() {
       {"gp.depth_bits", "bits", "A", 24, 8, 32,
        "Range of the depth expression: 0 at the near plane to 2^n - 1 at the far plane.",
        [](MachineConfig& c) -> Ref { return &c.gp.depth_bits; }},
-      {"gp.clocks_per_triangle", "i860 clocks", "A", 600, 0, 1000000,
-       "Transform, clip test, vertex lighting and binning of one triangle (hand-coded "
-       "assembly; a first-order figure until the i860 cost model replaces it).",
-       [](MachineConfig& c) -> Ref { return &c.gp.clocks_per_triangle; }},
-      {"gp.clocks_per_expression", "i860 clocks", "A", 30, 0, 100000,
-       "Computing and packing the coefficients of one expression the firmware asks for.",
-       [](MachineConfig& c) -> Ref { return &c.gp.clocks_per_expression; }},
-      {"gp.clocks_per_bin", "i860 clocks", "A", 50, 0, 100000,
-       "Starting the transmission of one region's bin.",
-       [](MachineConfig& c) -> Ref { return &c.gp.clocks_per_bin; }},
-
+      {"gp.code", "profile", "S", 0, 0, 0,
+       "Quality of the GP's per-triangle code: 'assembly' (hand-coded, dual-instruction mode, "
+       "scheduled pipelines, fits the instruction cache; over 1 M Phong triangles/s with 32 "
+       "GPs) or 'compiled' (C: one instruction per clock, unscheduled, about 100 K/s).",
+       [](MachineConfig& c) -> Ref { return &c.gp.code; }, "assembly|compiled"},
+      {"gp.fp_latency_clocks", "i860 clocks", "S", 3, 1, 10,
+       "Stages of the i860's floating-point adder and single-precision multiplier pipelines: "
+       "what an unscheduled operation waits for its result, and what a scheduled chain pays "
+       "once to fill and drain.",
+       [](MachineConfig& c) -> Ref { return &c.gp.fp_latency_clocks; }},
+      {"gp.load_use_clocks", "i860 clocks", "A", 2, 1, 10,
+       "Clocks from a load's issue until compiled code can use its value (one delay slot).",
+       [](MachineConfig& c) -> Ref { return &c.gp.load_use_clocks; }},
+      {"gp.icache_bytes", "bytes", "S", 4096, 256, 1048576, "i860 XR instruction cache.",
+       [](MachineConfig& c) -> Ref { return &c.gp.icache_bytes; }},
+      {"gp.icache_line_bytes", "bytes", "S", 32, 4, 256, "Instruction-cache line.",
+       [](MachineConfig& c) -> Ref { return &c.gp.icache_line_bytes; }},
+      {"gp.icache_miss_clocks", "i860 clocks", "A", 6, 0, 1000,
+       "Refilling one instruction-cache line from GP memory.",
+       [](MachineConfig& c) -> Ref { return &c.gp.icache_miss_clocks; }},
+      {"gp.assembly_code_bytes", "bytes", "A", 3584, 256, 1048576,
+       "Size of the hand-coded per-triangle loop; the sources say it fits the 4 KB cache.",
+       [](MachineConfig& c) -> Ref { return &c.gp.assembly_code_bytes; }},
+      {"gp.compiled_code_bytes", "bytes", "A", 12288, 256, 1048576,
+       "Size of the compiled per-triangle loop (about 3x the hand-coded one), which does not fit "
+       "the instruction cache.",
+       [](MachineConfig& c) -> Ref { return &c.gp.compiled_code_bytes; }},
+      {"gp.overhead_factor", "ratio", "A", 3.26, 1, 100,
+       "Clocks of the counted operations are multiplied by this for the work the count leaves "
+       "out (display-list traversal, PPHIGS state, the message-passing OS). Calibrated: the "
+       "hand-coded Phong triangle then runs at 1.2 M/s on 32 GPs; the compiled rate, about "
+       "100 K/s, follows from the pipeline model (docs/timing.md).",
+       [](MachineConfig& c) -> Ref { return &c.gp.overhead_factor; }},
+      {"gp.cull_back_faces", "flag", "A", 0, 0, 1,
+       "GP library option: 1 drops triangles that face away from the eye (the silhouette "
+       "remedy for closed opaque surfaces); 0 draws both sides, lit two-sided.",
+       [](MachineConfig& c) -> Ref { return &c.gp.cull_back_faces; }},
       {"ring.channels", "channels", "A", 8, 1, 64,
        "Parallel channels of the ring; 8 x 32 bits x 20 MHz = 5.12 Gb/s matches the paper's "
        "5 Gb/s, but 4 x 40 MHz fits as well.",
@@ -95,8 +139,27 @@ const std::vector<Parameter>& parameter_table() {
        [](MachineConfig& c) -> Ref { return &c.renderer.block_bits; }},
       {"renderer.backing_store_cycles_per_block", "array cycles", "A", 64, 1, 100000,
        "Time to move one block between pixel memory and backing store; 'much slower than "
-       "local memory' is all the sources say. Charged in full (no overlap yet).",
+       "local memory' is all the sources say.",
        [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_cycles_per_block; }},
+      {"renderer.backing_store_overlap", "0 or 1", "P", 1, 0, 1,
+       "1: backing-store transfers are asynchronous, as the paper says: a store (bsst) "
+       "occupies the backing-store port while the array goes on, a load (bsld) waits only for "
+       "the port and its own blocks. 0: every transfer stops the array for its full time.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_overlap; }},
+      {"renderer.overlap_shipping", "0 or 1", "A", 1, 0, 1,
+       "1: a finished region's colours are moved to the backing store and cross the ring from "
+       "there while the array starts its next region (one region in flight per board). 0: the "
+       "Renderer waits until its region has reached the frame buffer.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.overlap_shipping; }},
+      {"renderer.queue_words", "ring words", "A", 4096, 64, 1048576,
+       "Capacity of a Renderer's instruction queue. A GP's bin travels in messages of at "
+       "most this size, and a GP stalls until the queue has room for its next message.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.queue_words; }},
+      {"renderer.balancing", "mode", "A", 0, 0, 0,
+       "Assignment of screen regions to Renderers: 'static' (region r to Renderer r mod "
+       "count) or 'dynamic' (a Renderer takes the next unrendered region when it finishes "
+       "one). The image is identical; only the time differs.",
+       [](MachineConfig& c) -> Ref { return &c.renderer.balancing; }, "static|dynamic"},
       {"renderer.packet_overhead_cycles", "array cycles", "A", 8, 0, 100000,
        "Controller cycles to decode one instruction packet and start its procedure.",
        [](MachineConfig& c) -> Ref { return &c.renderer.packet_overhead_cycles; }},
@@ -115,6 +178,14 @@ const std::vector<Parameter>& parameter_table() {
        "Pipeline latency of the evaluator tree (about log2 of 128 levels plus input stages).",
        [](MachineConfig& c) -> Ref { return &c.evaluator.latency_cycles; }},
 
+      {"evaluator.coefficient_words_per_cycle", "words/cycle", "A", 1, 1, 64,
+       "Ring words of a packet's coefficients moved from the instruction queue into the "
+       "evaluator's input registers per array cycle.",
+       [](MachineConfig& c) -> Ref { return &c.evaluator.coefficient_words_per_cycle; }},
+      {"evaluator.double_buffered", "0 or 1", "A", 1, 0, 1,
+       "1: the evaluator holds a second set of coefficient registers, so the next packet's "
+       "coefficients load while the current packet executes. 0: loading stops the array.",
+       [](MachineConfig& c) -> Ref { return &c.evaluator.double_buffered; }},
       {"frame_buffer.bits_per_pixel", "bits", "A", 32, 8, 64,
        "Bits per pixel sent from a Renderer to the frame buffer (24-bit colour in a word).",
        [](MachineConfig& c) -> Ref { return &c.frame_buffer.bits_per_pixel; }},
@@ -137,6 +208,19 @@ std::string format_value(double v, bool is_int) {
 void assign(MachineConfig& config, const Parameter& p, const nlohmann::json& value,
             const std::string& origin) {
   const Ref ref = p.ref(config);
+  if (auto* text = std::get_if<std::string*>(&ref)) {
+    const auto allowed = split_choices(p.choices);
+    if (value.is_string()) {
+      for (const auto& a : allowed) {
+        if (a == value.get<std::string>()) {
+          **text = a;
+          return;
+        }
+      }
+    }
+    throw ConfigError(fmt::format("{}: key '{}' must be one of \"{}\" (got {})", origin, p.key,
+                                  fmt::join(allowed, "\", \""), value.dump()));
+  }
   const bool is_int = std::holds_alternative<int*>(ref);
   if (!value.is_number() || (is_int && !value.is_number_integer())) {
     throw ConfigError(fmt::format("{}: key '{}' must be {} (got {})", origin, p.key,
@@ -221,6 +305,8 @@ MachineConfig MachineConfig::defaults() {
     const Ref ref = p.ref(c);
     if (auto* i = std::get_if<int*>(&ref)) {
       **i = static_cast<int>(p.default_value);
+    } else if (auto* text = std::get_if<std::string*>(&ref)) {
+      **text = split_choices(p.choices).front();
     } else {
       *std::get<double*>(ref) = p.default_value;
     }
@@ -265,7 +351,7 @@ void MachineConfig::set(const std::vector<std::string>& assignments) {
     }
     nlohmann::json value;
     try {
-      value = nlohmann::json::parse(text);
+      value = p->choices ? nlohmann::json(text) : nlohmann::json::parse(text);
     } catch (const nlohmann::json::exception&) {
       throw ConfigError(
           fmt::format("{}: value '{}' of key '{}' is not a number", origin, text, key));
@@ -286,6 +372,8 @@ nlohmann::json MachineConfig::to_json() const {
     auto& slot = doc[key.substr(0, dot)][key.substr(dot + 1)];
     if (auto* i = std::get_if<int*>(&ref)) {
       slot = **i;
+    } else if (auto* text = std::get_if<std::string*>(&ref)) {
+      slot = **text;
     } else {
       slot = *std::get<double*>(ref);
     }
@@ -298,6 +386,12 @@ std::vector<ParameterInfo> describe_parameters() {
   MachineConfig scratch;
   for (const auto& p : parameter_table()) {
     const bool is_int = std::holds_alternative<int*>(p.ref(scratch));
+    if (p.choices) {
+      const auto allowed = split_choices(p.choices);
+      rows.push_back({p.key, p.unit, p.confidence, p.description, allowed.front(),
+                      fmt::format("{}", fmt::join(allowed, ", "))});
+      continue;
+    }
     rows.push_back({p.key, p.unit, p.confidence, p.description,
                     format_value(p.default_value, is_int),
                     format_value(p.min, is_int) + " .. " + format_value(p.max, is_int)});

@@ -22,9 +22,16 @@ struct MachineConfig {
     double clock_hz = 0;
     int subpixel_bits = 0;
     int depth_bits = 0;
-    int clocks_per_triangle = 0;
-    int clocks_per_expression = 0;
-    int clocks_per_bin = 0;
+    std::string code;  // assembly | compiled
+    int fp_latency_clocks = 0;
+    int load_use_clocks = 0;
+    int icache_bytes = 0;
+    int icache_line_bytes = 0;
+    int icache_miss_clocks = 0;
+    int assembly_code_bytes = 0;
+    int compiled_code_bytes = 0;
+    double overhead_factor = 0;
+    int cull_back_faces = 0;
   } gp;
   struct Ring {
     int channels = 0;
@@ -43,12 +50,18 @@ struct MachineConfig {
     int block_bits = 0;
     int backing_store_cycles_per_block = 0;
     int packet_overhead_cycles = 0;
+    int backing_store_overlap = 0;
+    int overlap_shipping = 0;
+    int queue_words = 0;
+    std::string balancing;  // static | dynamic
   } renderer;
   struct Evaluator {
     int coefficient_bits = 0;
     int result_bits = 0;
     int fraction_bits = 0;
     int latency_cycles = 0;
+    int coefficient_words_per_cycle = 0;
+    int double_buffered = 0;
   } evaluator;
   struct FrameBuffer {
     int bits_per_pixel = 0;

@@ -172,14 +172,73 @@ Scene make_sphere(const SceneOptions& options) {
                       glm::vec3(0.3f, 0.4f, 1.0f));
 }
 
+Scene make_figure_eight(const SceneOptions& options) {
+  // Cross-sections y = const are figure-eights x = sin u, z = b(y) sin u cos u, which cross
+  // themselves at x = z = 0 with slopes dz/dx = +-b(y): steeply near the ends (|y| = 1),
+  // shallowly in the middle. The crossing line, x = z = 0, is the self-intersection. The
+  // samples of u are offset by half a step so the line runs through triangle interiors.
+  const int nu = segments(options.tessellation_u, 96, 8, "figure-eight", "tessellation_u");
+  const int nv = segments(options.tessellation_v, 48, 2, "figure-eight", "tessellation_v");
+  Mesh mesh;
+  for (int j = 0; j <= nv; ++j) {
+    const double y = -1.0 + 2.0 * j / nv;
+    const double b = 0.2 + 2.2 * y * y;
+    for (int i = 0; i < nu; ++i) {
+      const double u = kTwoPi * (i + 0.5) / nu;
+      const glm::vec3 color = hue_ramp(0.5 * (y + 1.0) * 0.6);
+      mesh.vertices.push_back({glm::vec3(static_cast<float>(std::sin(u)), static_cast<float>(y),
+                                         static_cast<float>(b * std::sin(u) * std::cos(u))),
+                               glm::vec3(0.0f), color});
+    }
+  }
+  auto index = [nu](int i, int j) { return static_cast<unsigned>(j * nu + (i % nu)); };
+  for (int j = 0; j < nv; ++j) {
+    for (int i = 0; i < nu; ++i) {
+      mesh.triangles.emplace_back(index(i, j), index(i + 1, j), index(i + 1, j + 1));
+      mesh.triangles.emplace_back(index(i, j), index(i + 1, j + 1), index(i, j + 1));
+    }
+  }
+  compute_smooth_normals(mesh);
+  return finish_scene("figure-eight",
+                      "A surface whose cross-sections are figure-eights, self-intersecting "
+                      "steeply at its ends and shallowly in the middle (Banks, figure 7)",
+                      std::move(mesh), glm::vec3(0.25f, 0.2f, 1.0f));
+}
+
+Scene make_crossing_quads() {
+  // Two unit squares through the y axis, 50 degrees apart, each two triangles: the scene for
+  // transparency, where blending hides the line where they cross.
+  Mesh mesh;
+  auto add = [&mesh](double degrees, glm::vec3 color) {
+    const double a = degrees * kTwoPi / 360.0;
+    const glm::vec3 across(static_cast<float>(std::cos(a)), 0.0f, static_cast<float>(-std::sin(a)));
+    const glm::vec3 up(0.0f, 1.0f, 0.0f);
+    const glm::vec3 normal = glm::normalize(glm::cross(across, up));
+    const auto base = static_cast<unsigned>(mesh.vertices.size());
+    for (const glm::vec3 corner : {-across - up, across - up, across + up, -across + up})
+      mesh.vertices.push_back({corner, normal, color});
+    mesh.triangles.emplace_back(base, base + 1, base + 2);
+    mesh.triangles.emplace_back(base, base + 2, base + 3);
+  };
+  add(-25.0, glm::vec3(0.95f, 0.55f, 0.2f));
+  add(25.0, glm::vec3(0.25f, 0.6f, 0.95f));
+  return finish_scene("crossing-quads",
+                      "Two intersecting square polygons, 50 degrees apart (for transparency)",
+                      std::move(mesh), glm::vec3(0.2f, 0.35f, 1.0f));
+}
+
 }  // namespace
 
-std::vector<std::string> builtin_scene_names() { return {"torus", "two-triangles", "sphere"}; }
+std::vector<std::string> builtin_scene_names() {
+  return {"torus", "two-triangles", "sphere", "figure-eight", "crossing-quads"};
+}
 
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "torus") return make_torus(options);
   if (name == "two-triangles") return make_two_triangles();
   if (name == "sphere") return make_sphere(options);
+  if (name == "figure-eight") return make_figure_eight(options);
+  if (name == "crossing-quads") return make_crossing_quads();
   std::string valid;
   for (const std::string& n : builtin_scene_names()) valid += (valid.empty() ? "" : ", ") + n;
   throw std::invalid_argument(fmt::format("unknown scene '{}'; valid scenes: {}", name, valid));

@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cstdint>
 #include <glm/glm.hpp>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -42,6 +44,9 @@ struct Scene {
   Camera camera;
   Light light;
   glm::vec3 background;  // RGB in [0,1]
+  // Frame-parameter overrides by name (firmware/isa/interface.hpp), e.g. highlight options
+  // from `pp5sim render --param NAME=VALUE`; unknown names are rejected by the GP.
+  std::map<std::string, std::int64_t> parameters;
 };
 
 // Tessellation overrides; 0 keeps the scene's default. For the torus, u runs along the knot and v
@@ -52,7 +57,8 @@ struct SceneOptions {
   int tessellation_v = 0;
 };
 
-// The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere"}.
+// The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere", "figure-eight",
+// "crossing-quads"}.
 std::vector<std::string> builtin_scene_names();
 
 // Builds a scene deterministically from its arguments alone. Throws std::invalid_argument for an
@@ -60,6 +66,8 @@ std::vector<std::string> builtin_scene_names();
 //   torus:  2*u*v triangles, default u=128, v=32 (8,192); u and v in [3, 2048].
 //   sphere: 2*u*(v-1) triangles, default u=64, v=32 (3,968); u in [3, 2048], v in [2, 2048].
 //   two-triangles: 2 triangles, 6 vertices.
+//   figure-eight: 2*u*v triangles, default u=96, v=48; u in [8, 2048], v in [2, 2048].
+//   crossing-quads: 4 triangles, 8 vertices.
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
 
 // Right-handed view and OpenGL-convention projection (clip z in [-w,w]), as glm::lookAt and

@@ -1,0 +1,99 @@
+#include "sim/analysis/field_render.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <stdexcept>
+#include <thread>
+
+#include "models/gp/geometry.hpp"
+#include "models/machine.hpp"
+#include "models/renderer/renderer_board.hpp"
+
+namespace pp5 {
+
+FieldFrame render_field(const MachineConfig& config, const Scene& scene, const Program& program,
+                        const std::string& field, int threads) {
+  const FieldDecl* decl = program.find_field(field);
+  if (decl == nullptr) {
+    throw std::invalid_argument(
+        fmt::format("{}: the program has no field '{}' to read back", program.name, field));
+  }
+  const GeometryEngine geometry(geometry_params(config), scene);
+  PacketValues frame;
+  frame.parameters = geometry.frame_parameters();
+  const auto& needed = program.procedure(Procedure::triangle).expressions;
+
+  std::vector<std::vector<PacketValues>> bins(config.regions());
+  FieldFrame out;
+  SetupCounts counts;
+  std::vector<ScreenTriangle> screen;
+  std::vector<int> regions;
+  for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
+    screen.clear();
+    geometry.transform(i, screen, counts);
+    for (const ScreenTriangle& t : screen) {
+      SetupResult r;
+      if (!geometry.setup(t, needed, r, counts)) continue;
+      r.values.parameters = frame.parameters;
+      regions.clear();
+      geometry.bin(r, regions);
+      for (int region : regions) {
+        bins[region].push_back(r.values);
+        ++out.packets;
+      }
+    }
+  }
+
+  const int w = config.screen.width;
+  const int h = config.screen.height;
+  const int rw = config.renderer.region_width;
+  const int rh = config.renderer.region_height;
+  const int across = (w + rw - 1) / rw;
+  out.image.width = w;
+  out.image.height = h;
+  out.image.rgb.assign(static_cast<std::size_t>(w) * h * 3, 0);
+  out.values.assign(static_cast<std::size_t>(w) * h, 0);
+  const RendererBoardParams params = board_params(config);
+  // A resident field is read in place; a spilled one is never the flag of these programs.
+  if (decl->spilled) {
+    throw std::invalid_argument(fmt::format(
+        "{}: field '{}' lives in the backing store and cannot be read back", program.name, field));
+  }
+  const Field f{decl->lo, decl->width, decl->is_signed};
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    RendererBoard board(params);
+    std::vector<std::uint8_t> rgb;
+    for (int region = next++; region < config.regions(); region = next++) {
+      const int x0 = (region % across) * rw;
+      const int y0 = (region / across) * rh;
+      board.begin_region(x0, y0);
+      board.run(program.procedure(Procedure::clear), frame);
+      for (int pass = 0; pass < program.passes; ++pass) {
+        if (pass > 0) board.run(program.procedure(Procedure::pass), frame);
+        for (const PacketValues& v : bins[region])
+          board.run(program.procedure(Procedure::triangle), v);
+      }
+      board.run(program.procedure(Procedure::shade), frame);
+      board.read_outputs(program, rgb);
+      for (int y = 0; y < rh && y0 + y < h; ++y) {
+        for (int x = 0; x < rw && x0 + x < w; ++x) {
+          const int p = y * rw + x;
+          const std::size_t q = static_cast<std::size_t>(y0 + y) * w + (x0 + x);
+          for (int c = 0; c < 3; ++c) out.image.rgb[q * 3 + c] = rgb[p * 3 + c];
+          out.values[q] = board.array().read(p, f);
+        }
+      }
+    }
+  };
+  const int n = std::max(1, std::min(threads, config.regions()));
+  std::vector<std::thread> pool;
+  for (int t = 1; t < n; ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+}  // namespace pp5

@@ -1,0 +1,530 @@
+// pp5sim sweep: architecture studies over a grid of machine parameters.
+//
+//   pp5sim sweep --grid gp.count=1,2,4 --grid renderer.count=1,4,16 --out DIR   runs locally
+//   pp5sim sweep ... --print-commands   one `pp5sim render` line per run (GNU parallel, Slurm)
+//   pp5sim sweep aggregate DIR -o sweep.csv   one CSV row per run, from each run's stats.json
+//   pp5sim sweep plot sweep.csv -o sweep.svg  throughput against the swept parameters
+//
+// Each run has its own folder DIR/KEY-VALUE_KEY-VALUE holding config.json and stats.json, as
+// `pp5sim render --out` writes them; DIR/sweep.json records the grid for the later steps.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/machine.hpp"
+#include "sim/app/commands.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
+
+namespace fs = std::filesystem;
+
+namespace pp5 {
+
+namespace {
+
+struct Axis {
+  std::string key;
+  std::vector<std::string> values;
+};
+
+struct SweepOptions {
+  std::vector<std::string> grid;
+  std::string scene_name = "torus";
+  std::string firmware = "phong";
+  std::string config_path;
+  std::vector<std::string> sets;
+  std::string out_dir = "out/sweep";
+  bool print_commands = false;
+  int threads = default_threads();
+  std::vector<int> tessellation;
+  // aggregate
+  std::string aggregate_dir;
+  std::string csv_out;
+  // plot
+  std::string plot_csv;
+  std::string plot_out;
+  std::string plot_x;
+  std::string plot_series;
+  std::string plot_y = "triangles_per_second";
+};
+
+std::vector<Axis> parse_grid(const std::vector<std::string>& grid) {
+  if (grid.empty()) {
+    throw std::runtime_error("--grid: give at least one, e.g. --grid gp.count=1,2,4,8");
+  }
+  std::vector<Axis> axes;
+  std::set<std::string> seen;
+  for (const std::string& g : grid) {
+    const auto eq = g.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == g.size()) {
+      throw std::runtime_error(
+          fmt::format("--grid {}: expected KEY=V1,V2,..., e.g. gp.count=1,2,4", g));
+    }
+    Axis a;
+    a.key = g.substr(0, eq);
+    if (!seen.insert(a.key).second) {
+      throw std::runtime_error(fmt::format("--grid {}: key '{}' is swept twice", g, a.key));
+    }
+    std::stringstream values(g.substr(eq + 1));
+    std::string v;
+    while (std::getline(values, v, ',')) {
+      if (v.empty()) throw std::runtime_error(fmt::format("--grid {}: empty value", g));
+      // Each value must be valid on its own: the error names the key.
+      MachineConfig probe = MachineConfig::defaults();
+      try {
+        probe.set(a.key + "=" + v);
+      } catch (const ConfigError& e) {
+        throw std::runtime_error(fmt::format("--grid {}: {}", g, e.what()));
+      }
+      a.values.push_back(v);
+    }
+    axes.push_back(std::move(a));
+  }
+  return axes;
+}
+
+// Every combination, the first axis varying slowest.
+std::vector<std::vector<std::string>> combinations(const std::vector<Axis>& axes) {
+  std::vector<std::vector<std::string>> out{{}};
+  for (const Axis& a : axes) {
+    std::vector<std::vector<std::string>> next;
+    for (const auto& partial : out) {
+      for (const std::string& v : a.values) {
+        auto c = partial;
+        c.push_back(v);
+        next.push_back(std::move(c));
+      }
+    }
+    out = std::move(next);
+  }
+  return out;
+}
+
+std::string run_name(const std::vector<Axis>& axes, const std::vector<std::string>& values) {
+  std::string name;
+  for (std::size_t k = 0; k < axes.size(); ++k) {
+    name += (k ? "_" : "") + axes[k].key + "-" + values[k];
+  }
+  return name;
+}
+
+std::string shell_quote(const std::string& s) {
+  if (s.find_first_not_of(
+          "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-/=,+") ==
+      std::string::npos) {
+    return s;
+  }
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+int run_sweep(const SweepOptions& o, const std::string& program_path) {
+  const std::vector<Axis> axes = parse_grid(o.grid);
+  const auto runs = combinations(axes);
+  // Check every run's whole configuration before writing anything.
+  std::vector<MachineConfig> configs;
+  for (const auto& values : runs) {
+    std::vector<std::string> sets = o.sets;
+    for (std::size_t k = 0; k < axes.size(); ++k) sets.push_back(axes[k].key + "=" + values[k]);
+    configs.push_back(load_config(o.config_path, sets));
+  }
+  SceneOptions scene_options;
+  if (o.tessellation.size() == 2) {
+    scene_options.tessellation_u = o.tessellation[0];
+    scene_options.tessellation_v = o.tessellation[1];
+  }
+  const Scene scene = make_builtin_scene(o.scene_name, scene_options);
+  const std::string firmware = resolve_firmware(o.firmware);
+  for (const MachineConfig& c : configs) assemble_file(firmware, assembler_options(c));
+
+  fs::create_directories(o.out_dir);
+  nlohmann::json grid = nlohmann::json::object();
+  for (const Axis& a : axes) grid[a.key] = a.values;
+  write_file_atomically((fs::path(o.out_dir) / "sweep.json").string(),
+                        nlohmann::json{{"grid", grid},
+                                       {"order",
+                                        [&] {
+                                          std::vector<std::string> k;
+                                          for (const Axis& a : axes) k.push_back(a.key);
+                                          return k;
+                                        }()},
+                                       {"scene", o.scene_name},
+                                       {"firmware", o.firmware}}
+                                .dump(2) +
+                            "\n");
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const fs::path dir = fs::path(o.out_dir) / run_name(axes, runs[i]);
+    if (o.print_commands) {
+      std::string line =
+          fmt::format("{} render --scene {} --firmware {}", shell_quote(program_path),
+                      shell_quote(o.scene_name), shell_quote(firmware));
+      if (!o.config_path.empty()) line += " --config " + shell_quote(o.config_path);
+      if (o.tessellation.size() == 2) {
+        line += fmt::format(" --tessellation {} {}", o.tessellation[0], o.tessellation[1]);
+      }
+      for (const std::string& s : o.sets) line += " --set " + shell_quote(s);
+      for (std::size_t k = 0; k < axes.size(); ++k) {
+        line += " --set " + shell_quote(axes[k].key + "=" + runs[i][k]);
+      }
+      line += " --threads 1 --out " + shell_quote(dir.string());
+      std::cout << line << "\n";
+      continue;
+    }
+    const Program program = assemble_file(firmware, assembler_options(configs[i]));
+    const FrameResult r = simulate_frame(configs[i], scene, program, o.threads);
+    fs::create_directories(dir);
+    write_file_atomically((dir / "config.json").string(), configs[i].to_json().dump(2) + "\n");
+    write_file_atomically((dir / "stats.json").string(), r.stats.dump(2) + "\n");
+    std::cerr << fmt::format("[{}/{}] {}: {:.3f} ms, {:.0f} triangles/s, bottleneck {}\n", i + 1,
+                             runs.size(), dir.filename().string(), r.frame_seconds * 1e3,
+                             r.triangles_per_second,
+                             r.stats["timing"]["bottleneck"].get<std::string>());
+  }
+  if (!o.print_commands) {
+    std::cout << fmt::format("{} runs in {}; next: pp5sim sweep aggregate {} -o sweep.csv\n",
+                             runs.size(), o.out_dir, o.out_dir);
+  }
+  return 0;
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path.string()));
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", path.string(), e.what()));
+  }
+}
+
+// The metrics of one run, as CSV columns.
+const std::vector<std::pair<std::string, std::vector<std::string>>>& metric_columns() {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> columns = {
+      {"frame_seconds", {"frame", "simulated_seconds"}},
+      {"triangles_per_second", {"frame", "projected_triangles_per_second"}},
+      {"pipelined_triangles_per_second", {"frame", "pipelined_triangles_per_second"}},
+      {"gp_clocks_per_triangle", {"frame", "gp_clocks_per_triangle"}},
+      {"bottleneck", {"timing", "bottleneck"}},
+      {"gp_seconds", {"timing", "gp_seconds"}},
+      {"ring_seconds", {"timing", "ring_seconds"}},
+      {"renderer_seconds", {"timing", "renderer_seconds"}},
+      {"gp_utilisation", {"timing", "gp_utilisation_mean"}},
+      {"ring_utilisation", {"timing", "ring_utilisation"}},
+      {"renderer_utilisation", {"timing", "renderer_utilisation_mean"}},
+  };
+  return columns;
+}
+
+std::string csv_value(const nlohmann::json& v) {
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_number_integer()) return std::to_string(v.get<long long>());
+  return fmt::format("{:.9g}", v.get<double>());
+}
+
+int run_aggregate(const SweepOptions& o) {
+  const fs::path dir(o.aggregate_dir);
+  const nlohmann::json sweep = read_json(dir / "sweep.json");
+  const auto keys = sweep.at("order").get<std::vector<std::string>>();
+  // The runs the grid defines; other folders (from an earlier grid) are not this sweep's.
+  std::vector<Axis> axes;
+  for (const auto& k : keys)
+    axes.push_back({k, sweep.at("grid").at(k).get<std::vector<std::string>>()});
+  std::vector<fs::path> runs;
+  for (const auto& values : combinations(axes)) runs.push_back(dir / run_name(axes, values));
+  std::sort(runs.begin(), runs.end());
+  std::string csv;
+  std::vector<std::pair<std::vector<double>, std::string>> sorted_rows;
+  for (const auto& k : keys) csv += k + ",";
+  for (const auto& [name, path] : metric_columns()) csv += name + ",";
+  csv.back() = '\n';
+  int rows = 0;
+  int missing = 0;
+  for (const fs::path& run : runs) {
+    if (!fs::exists(run / "stats.json") || !fs::exists(run / "config.json")) {
+      std::cerr << fmt::format("pp5sim: warning: {}: no stats.json or config.json (not run yet?)\n",
+                               run.string());
+      ++missing;
+      continue;
+    }
+    const nlohmann::json config = read_json(run / "config.json");
+    const nlohmann::json stats = read_json(run / "stats.json");
+    std::string row;
+    std::vector<double> order;
+    for (const auto& k : keys) {
+      const auto dot = k.find('.');
+      const nlohmann::json& v = config.at(k.substr(0, dot)).at(k.substr(dot + 1));
+      order.push_back(v.is_number() ? v.get<double>() : 0.0);
+      row += csv_value(v) + ",";
+    }
+    for (const auto& [name, path] : metric_columns()) {
+      const nlohmann::json* v = &stats;
+      for (const auto& p : path) {
+        if (!v->contains(p)) {
+          throw std::runtime_error(fmt::format("{}: no '{}' in stats.json (from an older pp5sim?)",
+                                               (run / "stats.json").string(),
+                                               fmt::join(path, ".")));
+        }
+        v = &(*v)[p];
+      }
+      row += csv_value(*v) + ",";
+    }
+    row.back() = '\n';
+    sorted_rows.push_back({order, row});
+    ++rows;
+  }
+  // Rows in the grid's numeric order (folder names sort as text).
+  std::stable_sort(sorted_rows.begin(), sorted_rows.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& r : sorted_rows) csv += r.second;
+  if (rows == 0) throw std::runtime_error(fmt::format("{}: no finished runs", dir.string()));
+  const std::string out = o.csv_out.empty() ? (dir / "sweep.csv").string() : o.csv_out;
+  write_file_atomically(out, csv);
+  std::cout << fmt::format("wrote {} ({} runs{})\n", out, rows,
+                           missing ? fmt::format(", {} missing", missing) : "");
+  return 0;
+}
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  int column(const std::string& name, const std::string& path) const {
+    for (std::size_t k = 0; k < header.size(); ++k) {
+      if (header[k] == name) return static_cast<int>(k);
+    }
+    throw std::runtime_error(
+        fmt::format("{}: no column '{}' (columns: {})", path, name, fmt::join(header, ", ")));
+  }
+};
+
+Csv read_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path));
+  Csv csv;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    if (n == 1) {
+      csv.header = cells;
+    } else if (!line.empty()) {
+      if (cells.size() != csv.header.size()) {
+        throw std::runtime_error(
+            fmt::format("{}:{}: {} cells, expected {}", path, n, cells.size(), csv.header.size()));
+      }
+      csv.rows.push_back(cells);
+    }
+  }
+  if (csv.rows.empty()) throw std::runtime_error(fmt::format("{}: no rows", path));
+  return csv;
+}
+
+double number(const std::string& text, const std::string& path, const std::string& column) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used == text.size()) return v;
+  } catch (const std::exception&) {
+  }
+  throw std::runtime_error(
+      fmt::format("{}: column '{}' has '{}', which is not a number", path, column, text));
+}
+
+std::string svg_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else
+      out += c;
+  }
+  return out;
+}
+
+std::string si(double v) {
+  if (v >= 1e6) return fmt::format("{:g}M", v / 1e6);
+  if (v >= 1e3) return fmt::format("{:g}K", v / 1e3);
+  return fmt::format("{:g}", v);
+}
+
+// Throughput against the first swept parameter, one line per value of the second, on
+// log-log axes (sweeps of counts are geometric).
+int run_plot(const SweepOptions& o) {
+  const Csv csv = read_csv(o.plot_csv);
+  const std::string x_name = o.plot_x.empty() ? csv.header.at(0) : o.plot_x;
+  const int xc = csv.column(x_name, o.plot_csv);
+  const int yc = csv.column(o.plot_y, o.plot_csv);
+  int sc = -1;
+  if (!o.plot_series.empty()) {
+    sc = csv.column(o.plot_series, o.plot_csv);
+  } else if (xc != 1 && csv.header.size() > 1 && csv.header[1] != metric_columns()[0].first) {
+    sc = 1;
+  } else if (xc != 0 && csv.header[0] != metric_columns()[0].first) {
+    sc = 0;
+  }
+  // Lines in the order their values first appear (the CSV is in grid order).
+  std::vector<std::pair<std::string, std::vector<std::pair<double, double>>>> series;
+  for (const auto& row : csv.rows) {
+    const std::string s = sc >= 0 ? row[sc] : "";
+    auto it =
+        std::find_if(series.begin(), series.end(), [&](const auto& e) { return e.first == s; });
+    if (it == series.end()) it = series.insert(series.end(), {s, {}});
+    it->second.push_back(
+        {number(row[xc], o.plot_csv, x_name), number(row[yc], o.plot_csv, o.plot_y)});
+  }
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+  for (auto& [s, pts] : series) {
+    std::sort(pts.begin(), pts.end());
+    for (const auto& [x, y] : pts) {
+      if (x <= 0 || y <= 0) {
+        throw std::runtime_error(fmt::format("{}: log axes need positive values ({}={}, {}={})",
+                                             o.plot_csv, x_name, x, o.plot_y, y));
+      }
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+  }
+  const double lx0 = std::log10(x0), lx1 = std::max(std::log10(x1), lx0 + 1e-9);
+  const double ly0 = std::floor(std::log10(y0)), ly1 = std::ceil(std::log10(y1) + 1e-9);
+  const int W = 760, H = 480, L = 90, R = 170, T = 50, B = 60;
+  auto px = [&](double x) { return L + (std::log10(x) - lx0) / (lx1 - lx0) * (W - L - R); };
+  auto py = [&](double y) { return H - B - (std::log10(y) - ly0) / (ly1 - ly0) * (H - T - B); };
+  std::string svg = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" "
+      "font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" "
+      "fill=\"white\"/>\n",
+      W, H);
+  svg += fmt::format(
+      "<text x=\"{}\" y=\"24\" font-size=\"15\" text-anchor=\"middle\">{} against {}"
+      "</text>\n",
+      W / 2, svg_escape(o.plot_y), svg_escape(x_name));
+  for (double d = ly0; d <= ly1 + 1e-9; d += 1) {
+    for (int m = 1; m < 10; ++m) {
+      const double y = std::pow(10.0, d) * m;
+      if (std::log10(y) > ly1 + 1e-9) break;
+      svg += fmt::format("<line x1=\"{}\" x2=\"{}\" y1=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"{}\"/>\n",
+                         L, W - R, py(y), py(y), m == 1 ? "#bbb" : "#eee");
+      if (m == 1 || m == 2 || m == 5) {
+        svg += fmt::format("<text x=\"{}\" y=\"{:.1f}\" text-anchor=\"end\">{}</text>\n", L - 6,
+                           py(y) + 4, si(y));
+      }
+    }
+  }
+  std::set<double> xs;
+  for (const auto& [s, pts] : series) {
+    for (const auto& p : pts) xs.insert(p.first);
+  }
+  for (double x : xs) {
+    svg += fmt::format("<line x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{}\" y2=\"{}\" stroke=\"#eee\"/>\n",
+                       px(x), px(x), T, H - B);
+    svg += fmt::format("<text x=\"{:.1f}\" y=\"{}\" text-anchor=\"middle\">{:g}</text>\n", px(x),
+                       H - B + 18, x);
+  }
+  svg += fmt::format(
+      "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" fill=\"none\" "
+      "stroke=\"black\"/>\n",
+      L, T, W - L - R, H - T - B);
+  svg += fmt::format("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{} (log scale)</text>\n",
+                     (L + W - R) / 2, H - 16, svg_escape(x_name));
+  svg += fmt::format(
+      "<text transform=\"translate(20,{}) rotate(-90)\" text-anchor=\"middle\">{} "
+      "(log scale)</text>\n",
+      (T + H - B) / 2, svg_escape(o.plot_y));
+  static const char* colours[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                  "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
+  int k = 0;
+  for (const auto& [s, pts] : series) {
+    const char* colour = colours[k % 10];
+    std::string path;
+    for (const auto& [x, y] : pts) {
+      path += fmt::format("{:.1f},{:.1f} ", px(x), py(y));
+      svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3\" fill=\"{}\"/>\n", px(x),
+                         py(y), colour);
+    }
+    svg += fmt::format("<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"/>\n",
+                       path, colour);
+    if (sc >= 0) {
+      const int ly = T + 10 + 20 * k;
+      svg += fmt::format(
+          "<line x1=\"{}\" x2=\"{}\" y1=\"{}\" y2=\"{}\" stroke=\"{}\" "
+          "stroke-width=\"2\"/>\n",
+          W - R + 12, W - R + 36, ly, ly, colour);
+      svg += fmt::format("<text x=\"{}\" y=\"{}\">{} = {}</text>\n", W - R + 42, ly + 4,
+                         svg_escape(csv.header[sc]), svg_escape(s));
+    }
+    ++k;
+  }
+  svg += "</svg>\n";
+  const std::string out =
+      o.plot_out.empty() ? (fs::path(o.plot_csv).replace_extension(".svg")).string() : o.plot_out;
+  write_file_atomically(out, svg);
+  std::cout << fmt::format("wrote {} ({} series, {} points)\n", out, series.size(),
+                           csv.rows.size());
+  return 0;
+}
+
+}  // namespace
+
+Command add_sweep_command(CLI::App& app) {
+  auto o = std::make_shared<SweepOptions>();
+  auto* sweep = app.add_subcommand(
+      "sweep",
+      "Architecture studies: render a scene for every point of a grid of machine parameters "
+      "(or print one pp5sim command per point), then aggregate the runs into a CSV and plot it");
+  sweep->require_subcommand(0, 1);
+  sweep->add_option("-g,--grid", o->grid,
+                    "A swept parameter, KEY=V1,V2,... (repeatable; every combination runs), e.g. "
+                    "--grid gp.count=1,2,4,8,16,32 --grid renderer.count=1,2,4,8,16");
+  sweep->add_option("-s,--scene", o->scene_name, "Built-in scene")->capture_default_str();
+  sweep->add_option("-f,--firmware", o->firmware, "Firmware program")->capture_default_str();
+  add_config_options(*sweep, o->config_path, o->sets);
+  sweep->add_option("-o,--out", o->out_dir, "Folder for sweep.json and one folder per run")
+      ->capture_default_str();
+  sweep->add_flag("--print-commands", o->print_commands,
+                  "Do not run: print one `pp5sim render` command per run, for GNU parallel "
+                  "(`| parallel`) or a Slurm job array; then run `sweep aggregate`");
+  sweep->add_option("-j,--threads", o->threads, "Host threads for each run's pixel arrays")
+      ->check(CLI::Range(1, 256));
+  sweep->add_option("--tessellation", o->tessellation, "Tessellation U V of the scene")
+      ->expected(2);
+
+  auto* aggregate =
+      sweep->add_subcommand("aggregate", "Collect every run's stats.json under DIR into one CSV");
+  aggregate->add_option("dir", o->aggregate_dir, "The sweep's output folder")->required();
+  aggregate->add_option("-o,--out", o->csv_out, "CSV file [DIR/sweep.csv]");
+
+  auto* plot = sweep->add_subcommand(
+      "plot", "Draw a metric of the CSV against a swept parameter, one line per value of another");
+  plot->add_option("csv", o->plot_csv, "The CSV of `sweep aggregate`")->required();
+  plot->add_option("-o,--out", o->plot_out, "SVG file [CSV with .svg]");
+  plot->add_option("-x", o->plot_x, "Column on the x axis [the first swept parameter]");
+  plot->add_option("--series", o->plot_series,
+                   "Column whose values make the lines [the second swept parameter]");
+  plot->add_option("-y", o->plot_y, "Column on the y axis")->capture_default_str();
+
+  return {sweep, [o, aggregate, plot] {
+            if (*aggregate) return run_aggregate(*o);
+            if (*plot) return run_plot(*o);
+            std::error_code ec;
+            const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+            return run_sweep(*o, ec ? std::string("pp5sim") : self.string());
+          }};
+}
+
+}  // namespace pp5

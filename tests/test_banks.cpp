@@ -1,0 +1,399 @@
+// Intersection-highlighting firmware (Banks): the exactMatch predicates on random streams,
+// shared-edge hits, epsilon on parallel and near-parallel planes against an integer model,
+// fixed versus varying curve width on the figure-eight surface, and the bit budget.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/gp/geometry.hpp"
+#include "models/machine.hpp"
+#include "models/renderer/renderer_board.hpp"
+#include "sim/analysis/field_render.hpp"
+#include "sim/analysis/intersections.hpp"
+#include "sim/scene/scene.hpp"
+
+using namespace pp5;
+
+namespace {
+
+std::string program_path(const std::string& name) {
+  return std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5";
+}
+
+std::int64_t floor_value(const QuadraticCoefficients& q, int x, int y, int shift) {
+  const __int128 v = static_cast<__int128>(q.D) * x + static_cast<__int128>(q.E) * y + q.F;
+  const __int128 d = static_cast<__int128>(1) << shift;
+  __int128 f = v / d;
+  if (v % d != 0 && v < 0) --f;
+  return static_cast<std::int64_t>(f);
+}
+
+// One 128 x 128 region: triangles given directly in screen space, set up by the GP code and
+// executed by a Renderer board.
+struct Bench {
+  MachineConfig config = MachineConfig::defaults();
+  Scene scene = make_builtin_scene("two-triangles");
+  GeometryParams gp;
+  Bench() {
+    gp = geometry_params(config);
+    gp.screen_width = 128;
+    gp.screen_height = 128;
+  }
+  Program load(const std::string& name) const {
+    return assemble_file(program_path(name), assembler_options(config));
+  }
+  static ScreenTriangle triangle(glm::dvec2 a, glm::dvec2 b, glm::dvec2 c, double za, double zb,
+                                 double zc, glm::dvec3 na = {0, 0, 1}, glm::dvec3 nb = {0, 0, 1},
+                                 glm::dvec3 nc = {0, 0, 1}) {
+    ScreenTriangle t;
+    const glm::dvec2 p[3] = {a, b, c};
+    const double z[3] = {za, zb, zc};
+    const glm::dvec3 n[3] = {na, nb, nc};
+    for (int k = 0; k < 3; ++k) {
+      t.v[k].position = p[k];
+      t.v[k].depth = z[k];
+      t.v[k].base_color = glm::dvec3(0.5);
+      t.v[k].lit_color = glm::dvec3(0.5);
+      t.v[k].normal = glm::normalize(n[k]);
+    }
+    t.flat_color = glm::dvec3(0.5);
+    return t;
+  }
+  // Packets for `program`, in order; triangles with no pixels are dropped.
+  std::vector<PacketValues> packets(const Program& program,
+                                    const std::vector<ScreenTriangle>& tris) const {
+    const GeometryEngine engine(gp, scene);
+    std::vector<PacketValues> out;
+    SetupCounts counts;
+    for (const ScreenTriangle& t : tris) {
+      SetupResult r;
+      if (!engine.setup(t, program.procedure(Procedure::triangle).expressions, r, counts)) continue;
+      r.values.parameters = engine.frame_parameters();
+      out.push_back(r.values);
+    }
+    return out;
+  }
+  // Runs the program and returns its flag field for every pixel.
+  std::vector<std::uint64_t> flags(const Program& program,
+                                   const std::vector<PacketValues>& stream) const {
+    RendererBoard board(board_params(config));
+    PacketValues frame;
+    frame.parameters = GeometryEngine(gp, scene).frame_parameters();
+    board.begin_region(0, 0);
+    board.run(program.procedure(Procedure::clear), frame);
+    for (int pass = 0; pass < program.passes; ++pass) {
+      if (pass > 0) board.run(program.procedure(Procedure::pass), frame);
+      for (const PacketValues& v : stream) board.run(program.procedure(Procedure::triangle), v);
+    }
+    board.run(program.procedure(Procedure::shade), frame);
+    const FieldDecl* f = program.find_field("iflag");
+    REQUIRE(f != nullptr);
+    std::vector<std::uint64_t> out(128 * 128);
+    for (int p = 0; p < 128 * 128; ++p)
+      out[p] = board.array().read(p, Field{f->lo, f->width, f->is_signed});
+    return out;
+  }
+};
+
+bool covers(const PacketValues& v, int x, int y) {
+  for (int e = 0; e < 3; ++e) {
+    if (floor_value(v.expressions[static_cast<int>(Expression::edge0) + e], x, y, 0) < 0)
+      return false;
+  }
+  return true;
+}
+
+std::int64_t depth_at(const PacketValues& v, int x, int y, int frac) {
+  return floor_value(v.expressions[static_cast<int>(Expression::depth)], x, y, frac) & 0xFFFFFF;
+}
+
+}  // namespace
+
+TEST_CASE("exactMatch flags exactly the pixels where two polygons share the minimum depth",
+          "[banks]") {
+  Bench b;
+  const Program program = b.load("exactmatch");
+  const int frac = b.config.evaluator.fraction_bits;
+  std::mt19937 rng(1234);
+  std::uniform_real_distribution<double> pos(-20.0, 148.0);
+  std::uniform_int_distribution<int> level(1, 4);
+  std::uniform_real_distribution<double> slope(-0.002, 0.002);
+  // Depths on a few levels, so that ties of the frontmost depth are common: screen-parallel
+  // triangles (exact constant depth) and a few sloped ones crossing them.
+  std::vector<ScreenTriangle> tris;
+  for (int i = 0; i < 24; ++i) {
+    const glm::dvec2 a(pos(rng), pos(rng)), c(pos(rng), pos(rng)), d(pos(rng), pos(rng));
+    const double z = level(rng) * 0.125;
+    if (i % 4 == 3) {
+      tris.push_back(
+          Bench::triangle(a, c, d, z + 64 * slope(rng), z + 64 * slope(rng), z + 64 * slope(rng)));
+    } else {
+      tris.push_back(Bench::triangle(a, c, d, z, z, z));
+    }
+  }
+  std::vector<PacketValues> stream = b.packets(program, tris);
+  REQUIRE(stream.size() > 16);
+  std::size_t flagged_total = 0;
+  for (int order = 0; order < 6; ++order) {
+    if (order > 0) std::shuffle(stream.begin(), stream.end(), rng);
+    const auto flags = b.flags(program, stream);
+    for (int y = 0; y < 128; ++y) {
+      for (int x = 0; x < 128; ++x) {
+        // P4: two different polygons attain the minimum depth over those covering the pixel.
+        std::int64_t best = 0xFFFFFF;
+        int at_best = 0;
+        for (const PacketValues& v : stream) {
+          if (!covers(v, x, y)) continue;
+          const std::int64_t z = depth_at(v, x, y, frac);
+          if (z < best) {
+            best = z;
+            at_best = 1;
+          } else if (z == best) {
+            ++at_best;
+          }
+        }
+        INFO("pixel " << x << "," << y << " order " << order);
+        REQUIRE((flags[y * 128 + x] == 1) == (at_best >= 2));
+        flagged_total += flags[y * 128 + x];
+      }
+    }
+  }
+  CHECK(flagged_total > 100);  // the stream really does produce ties
+}
+
+TEST_CASE("Shared-edge false hits appear with exactMatch and not with exactMatch'", "[banks]") {
+  Bench b;
+  // A fold: two triangles share the vertical edge x = 10.5 (through pixel centres), both lie
+  // to its right, so the top-left rule gives the edge's pixels to both; the vertex normals on
+  // the shared edge are the same for both (a smooth mesh), the third vertices' differ.
+  const glm::dvec3 edge_normal(-0.3, 0.1, 1.0);
+  const ScreenTriangle t1 = Bench::triangle({10.5, 10.5}, {10.5, 70.5}, {70.5, 40.5}, 0.3, 0.3,
+                                            0.31, edge_normal, edge_normal, {0.4, 0.0, 1.0});
+  const ScreenTriangle t2 = Bench::triangle({10.5, 10.5}, {10.5, 70.5}, {50.5, 50.5}, 0.3, 0.3,
+                                            0.36, edge_normal, edge_normal, {-0.5, 0.3, 1.0});
+  std::size_t em = 0, emn = 0;
+  int off_edge = 0;
+  for (const char* name : {"exactmatch", "exactmatch_n"}) {
+    const Program program = b.load(name);
+    for (int order = 0; order < 2; ++order) {
+      const auto stream = b.packets(program, order ? std::vector{t2, t1} : std::vector{t1, t2});
+      REQUIRE(stream.size() == 2);
+      const auto flags = b.flags(program, stream);
+      for (int y = 0; y < 128; ++y) {
+        for (int x = 0; x < 128; ++x) {
+          if (!flags[y * 128 + x]) continue;
+          (std::string(name) == "exactmatch" ? em : emn) += 1;
+          off_edge += x != 10;
+        }
+      }
+    }
+  }
+  CHECK(em >= 2 * 50);  // the edge's pixels, in both orders
+  CHECK(off_edge == 0);
+  CHECK(emn == 0);
+}
+
+TEST_CASE("epsilon is zero for parallel planes and near-parallel planes do not overflow",
+          "[banks]") {
+  Bench b;
+  const int frac = b.config.evaluator.fraction_bits;
+  const GeometryEngine engine(b.gp, b.scene);
+  const auto k = engine.frame_parameters();
+  const std::int64_t scale = k[static_cast<int>(Parameter::epsilon_scale)];
+  // Two triangles covering the region, plane depths z = base + gx x + gy y (depth in [0,1]).
+  auto plane = [](double base, double gx, double gy) {
+    return Bench::triangle({-8, -8}, {300, -8}, {-8, 300}, base - 8 * gx - 8 * gy,
+                           base + 300 * gx - 8 * gy, base - 8 * gx + 300 * gy);
+  };
+  struct Case {
+    const char* what;
+    ScreenTriangle a, b;
+  };
+  const double px = 1.0 / 16777215.0;  // one depth unit
+  const std::vector<Case> cases = {
+      {"parallel, 3 units apart", plane(0.4, 500 * px, 200 * px),
+       plane(0.4 + 3 * px, 500 * px, 200 * px)},
+      {"near-parallel, slopes 64 units/pixel apart", plane(0.4, 500 * px, 200 * px),
+       plane(0.4, 564 * px, 200 * px)},
+      {"near-parallel and steep (clamped slopes)", plane(0.5, 0.004, 0.0005),
+       plane(0.5, 0.004 + 64 * px, 0.0005)},
+      {"crossing steeply", plane(0.5, 0.003, -0.001), plane(0.5, -0.002, 0.0004)},
+  };
+  for (const char* name : {"epsilon", "epsilon_folded"}) {
+    const Program program = b.load(name);
+    for (const Case& c : cases) {
+      const auto stream = b.packets(program, {c.a, c.b});
+      REQUIRE(stream.size() == 2);
+      const auto flags = b.flags(program, stream);
+      // The integer model of the test: dz^2 < epsilon_scale * ((a2-a1)^2 + (b2-b1)^2).
+      auto slope = [&](const PacketValues& v, Expression e) {
+        return v.expressions[static_cast<int>(e)].F >> frac;
+      };
+      const __int128 da =
+          slope(stream[1], Expression::slope_x) - slope(stream[0], Expression::slope_x);
+      const __int128 db =
+          slope(stream[1], Expression::slope_y) - slope(stream[0], Expression::slope_y);
+      const __int128 m2 = da * da + db * db;
+      std::size_t expected_count = 0;
+      for (int y = 0; y < 128; ++y) {
+        for (int x = 0; x < 128; ++x) {
+          const __int128 dz = depth_at(stream[0], x, y, frac) - depth_at(stream[1], x, y, frac);
+          const bool expected = dz * dz < static_cast<__int128>(scale) * m2;
+          expected_count += expected;
+          INFO(name << ": " << c.what << " at " << x << "," << y);
+          REQUIRE((flags[y * 128 + x] == 1) == expected);
+        }
+      }
+      if (std::string(c.what).rfind("parallel", 0) == 0) CHECK(expected_count == 0);
+      if (std::string(c.what).rfind("crossing", 0) == 0) CHECK(expected_count > 100);
+    }
+  }
+  // The threshold program, by contrast, flags the parallel near-miss everywhere.
+  const Program threshold = b.load("threshold");
+  const auto flags = b.flags(threshold, b.packets(threshold, {cases[0].a, cases[0].b}));
+  CHECK(std::count(flags.begin(), flags.end(), 1u) == 128 * 128);
+}
+
+TEST_CASE("On the figure-eight surface epsilon's curve width varies less than threshold's",
+          "[banks]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"screen.width=256", "screen.height=256"});
+  Scene scene = make_builtin_scene("figure-eight");
+  scene.parameters["threshold"] = 131072;  // about the same mean width at this screen size
+  const IntersectionTruth truth = intersection_truth(scene, 256, 256, 1.5);
+  REQUIRE(truth.visible.size() > 200);
+  Accuracy acc[2];
+  int i = 0;
+  for (const char* name : {"threshold", "epsilon"}) {
+    const Program program = assemble_file(program_path(name), assembler_options(config));
+    const FieldFrame frame = render_field(config, scene, program, "iflag", 2);
+    std::vector<std::uint8_t> flagged(frame.values.begin(), frame.values.end());
+    acc[i++] = measure_accuracy(truth, flagged);
+  }
+  INFO("threshold width " << acc[0].width_mean << " +- " << acc[0].width_sd << ", epsilon "
+                          << acc[1].width_mean << " +- " << acc[1].width_sd);
+  CHECK(acc[1].recall > 0.8);
+  CHECK(acc[0].width_samples > 100);
+  CHECK(acc[1].width_sd / acc[1].width_mean < 0.5 * (acc[0].width_sd / acc[0].width_mean));
+}
+
+TEST_CASE("The two-pass epsilon does not fit in 208 bits; spilled, it computes the same flags",
+          "[banks]") {
+  MachineConfig config = MachineConfig::defaults();
+  std::ifstream in(program_path("epsilon"));
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string without_spill =
+      std::regex_replace(text.str(), std::regex("\noption spill[^\n]*\n"), "\n");
+  REQUIRE(without_spill != text.str());
+  // Without spilling, the assembler refuses it and says what does not fit.
+  try {
+    assemble(without_spill, "epsilon-no-spill", assembler_options(config));
+    FAIL("the two-pass epsilon should not fit in 208 bits");
+  } catch (const std::exception& e) {
+    CHECK_THAT(e.what(), Catch::Contains("208"));
+  }
+  const Program spilled = assemble(text.str(), "epsilon", assembler_options(config));
+  CHECK(spilled.bits_used() <= 208);
+  CHECK(std::any_of(spilled.fields.begin(), spilled.fields.end(),
+                    [](const FieldDecl& f) { return f.spilled; }));
+  // With a larger pixel memory nothing spills: flags and image must be the same bits.
+  MachineConfig big = config;
+  big.set(std::vector<std::string>{"renderer.memory_bits=512", "screen.width=256",
+                                   "screen.height=256"});
+  config.set(std::vector<std::string>{"screen.width=256", "screen.height=256"});
+  const Program resident = assemble(without_spill, "epsilon", assembler_options(big));
+  CHECK(std::none_of(resident.fields.begin(), resident.fields.end(),
+                     [](const FieldDecl& f) { return f.spilled; }));
+  const Scene scene = make_builtin_scene("two-triangles");
+  const FieldFrame a = render_field(config, scene, spilled, "iflag", 2);
+  const FieldFrame r = render_field(big, scene, resident, "iflag", 1);
+  CHECK(std::count(a.values.begin(), a.values.end(), 1u) > 50);
+  CHECK(a.values == r.values);
+  CHECK(a.image.rgb == r.image.rgb);
+}
+
+TEST_CASE("The truth finds the two triangles' crossing and the highlight command's parts agree",
+          "[banks]") {
+  const Scene scene = make_builtin_scene("two-triangles");
+  const auto segments = intersection_segments(scene.mesh);
+  REQUIRE(segments.size() == 1);
+  // Both triangles contain the y axis between -0.8 and 0.8.
+  const double lo = std::min(segments[0].a.y, segments[0].b.y);
+  const double hi = std::max(segments[0].a.y, segments[0].b.y);
+  CHECK(lo == Approx(-0.8).margin(1e-5));
+  CHECK(hi == Approx(0.8).margin(1e-5));
+  CHECK(std::abs(segments[0].a.x) < 1e-5);
+  CHECK(std::abs(segments[0].a.z) < 1e-5);
+  // Parallel and disjoint triangles do not intersect.
+  const glm::dvec3 p[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  const glm::dvec3 q[3] = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+  glm::dvec3 a, b2;
+  CHECK_FALSE(triangle_intersection(p, q, a, b2));
+}
+
+TEST_CASE("Unknown or derived frame parameters are rejected by name", "[banks]") {
+  Scene scene = make_builtin_scene("two-triangles");
+  const MachineConfig config = MachineConfig::defaults();
+  scene.parameters["no_such"] = 1;
+  CHECK_THROWS_WITH(GeometryEngine(geometry_params(config), scene).frame_parameters(),
+                    Catch::Contains("no_such"));
+  scene.parameters.clear();
+  scene.parameters["epsilon_scale"] = 1;
+  CHECK_THROWS_WITH(GeometryEngine(geometry_params(config), scene).frame_parameters(),
+                    Catch::Contains("derived"));
+  scene.parameters.clear();
+  scene.parameters["highlight_opacity"] = 300;
+  CHECK_THROWS_WITH(GeometryEngine(geometry_params(config), scene).frame_parameters(),
+                    Catch::Contains("highlight_opacity"));
+}
+
+TEST_CASE("Multipass transparency finds intersections behind the frontmost layer", "[banks]") {
+  Bench b;
+  // A front layer over everything; behind it two screen-parallel triangles at one depth
+  // overlap in the square x, y in [40, 80): a tie in the second layer only.
+  const ScreenTriangle front = Bench::triangle({-8, -8}, {300, -8}, {-8, 300}, 0.2, 0.2, 0.2);
+  const ScreenTriangle left = Bench::triangle({0, 0}, {80, 0}, {0, 160}, 0.5, 0.5, 0.5);
+  const ScreenTriangle right = Bench::triangle({40, 40}, {128, 40}, {40, 128}, 0.5, 0.5, 0.5);
+  auto count = [&](const char* name) {
+    const Program program = b.load(name);
+    const auto flags = b.flags(program, b.packets(program, {front, left, right}));
+    return std::count(flags.begin(), flags.end(), 1u);
+  };
+  CHECK(count("exactmatch") == 0);
+  const Program opaque = b.load("exactmatch");
+  const auto packets = b.packets(opaque, {front, left, right});
+  long overlap = 0;
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 128; ++x) overlap += covers(packets[1], x, y) && covers(packets[2], x, y);
+  const auto behind = count("transparent_exactmatch");
+  CHECK(overlap > 300);
+  CHECK(behind == overlap);  // exactly the overlap of the two hidden triangles
+  CHECK(count("transparent_threshold") >= behind);
+}
+
+TEST_CASE("epsilon folded into the rendering pass is order-sensitive; two-pass epsilon is not",
+          "[banks]") {
+  Bench b;
+  // The paper's case: P faces the screen in front, M parallel to it behind, and B, far
+  // behind, is nearly edge-on (a sliver whose depth rises steeply across a few pixels).
+  const ScreenTriangle p = Bench::triangle({-8, -8}, {300, -8}, {-8, 300}, 0.55, 0.55, 0.55);
+  const ScreenTriangle m = Bench::triangle({-8, -8}, {300, -8}, {-8, 300}, 0.56, 0.56, 0.56);
+  const ScreenTriangle s = Bench::triangle({60, -8}, {66, -8}, {60, 300}, 0.57, 0.99, 0.57);
+  auto count = [&](const char* name, std::vector<ScreenTriangle> order) {
+    const Program program = b.load(name);
+    const auto flags = b.flags(program, b.packets(program, order));
+    return std::count(flags.begin(), flags.end(), 1u);
+  };
+  const auto folded_late = count("epsilon_folded", {p, m, s});   // B compared with P
+  const auto folded_early = count("epsilon_folded", {s, m, p});  // P arrives last
+  INFO("folded: " << folded_late << " flagged with B last, " << folded_early << " with B first");
+  CHECK(folded_late > 0);
+  CHECK(folded_early == 0);
+  CHECK(count("epsilon", {p, m, s}) == 0);
+  CHECK(count("epsilon", {s, m, p}) == 0);
+}

@@ -1,0 +1,333 @@
+// Timing of the whole machine: the i860 cost model and its calibration, the ring's
+// bandwidth and latency at the earliest legal cycle, the Renderer's instruction queue,
+// backing-store overlap and load balancing, and the timeline.
+#include <catch2/catch.hpp>
+#include <map>
+#define SC_INCLUDE_DYNAMIC_PROCESSES
+#include <systemc>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/gp/i860.hpp"
+#include "models/machine.hpp"
+#include "models/ring/ring.hpp"
+#include "sim/simulation.hpp"
+#include "tests/support.hpp"
+
+using namespace pp5;
+using namespace pp5::test;
+
+namespace {
+
+// What the Phong firmware asks of the GP for each triangle, as the Machine computes it.
+GpWorkload phong_workload(const MachineConfig& c) {
+  const Program program = load_program("phong", c);
+  GpWorkload w;
+  w.expressions = program.procedure(Procedure::triangle).expressions;
+  const int per_coefficient =
+      (c.evaluator.coefficient_bits + c.ring.word_bits - 1) / c.ring.word_bits;
+  w.packet_words = 1 + w.expressions.count() * 3 * per_coefficient;
+  return w;
+}
+
+// A fresh SystemC kernel, so that each test can elaborate its own modules.
+void fresh_kernel() {
+  sc_core::sc_curr_simcontext = new sc_core::sc_simcontext();
+  sc_core::sc_default_global_context = sc_core::sc_curr_simcontext;
+}
+
+// Senders that each push `messages` messages of `words` words through the ring, back to back.
+struct RingLoad : sc_core::sc_module {
+  SC_HAS_PROCESS(RingLoad);
+  RingLoad(sc_core::sc_module_name name, Ring& ring, int senders, int messages, std::uint64_t words)
+      : sc_module(name), ring_(ring), messages_(messages), words_(words) {
+    for (int s = 0; s < senders; ++s) {
+      sc_core::sc_spawn(
+          [this, s] {
+            for (int m = 0; m < messages_; ++m) {
+              ring_.transfer(s, s + 1, words_);
+              last = std::max(last, sc_core::sc_time_stamp());
+            }
+          },
+          sc_core::sc_gen_unique_name("sender"));
+    }
+  }
+  Ring& ring_;
+  int messages_;
+  std::uint64_t words_;
+  sc_core::sc_time last;
+};
+
+}  // namespace
+
+TEST_CASE("i860 model: the calibration points within 10%", "[timing][gp]") {
+  MachineConfig c = MachineConfig::defaults();
+  const GpWorkload w = phong_workload(c);
+  // Hand-coded assembly: "well over 1,000,000" Phong triangles/s on the 32-GP machine; the
+  // calibration target is 1.2 M.
+  I860Params assembly = i860_params(c);
+  REQUIRE(assembly.code == GpCode::assembly);
+  const double fast = I860Model(assembly).reference_rate(w, 32, c.gp.clock_hz);
+  CHECK(fast == Approx(1.2e6).epsilon(0.10));
+  CHECK(fast > 1.0e6);
+  // Compiled C: about 100,000/s. Not fitted: it follows from the pipeline model and the
+  // same overhead factor.
+  c.set("gp.code=compiled");
+  const double slow = I860Model(i860_params(c)).reference_rate(w, 32, c.gp.clock_hz);
+  CHECK(slow == Approx(1.0e5).epsilon(0.10));
+}
+
+TEST_CASE("i860 model: each profile's pipeline rules, not one clock off", "[timing][gp]") {
+  I860Params p;
+  p.overhead_factor = 1;
+  OpCounts ops;
+  ops.fadd = 10;
+  ops.fmul = 14;
+  ops.load = 5;
+  ops.store = 3;
+  ops.integer = 4;
+  ops.branch = 2;
+  ops.chains = 3;
+  // Assembly: max(FP pairs, core) + a pipeline fill per chain; the loop fits the cache.
+  p.code = GpCode::assembly;
+  CHECK(I860Model(p).clocks(ops, 1).count == 14 + 3 * 3);
+  ops.integer = 40;  // now the core side dominates
+  CHECK(I860Model(p).clocks(ops, 1).count == 5 + 3 + 40 + 2 + 3 * 3);
+  // Compiled: serial issue, FP waits its latency, loads their use delay, branches their slot,
+  // and every line of a loop larger than the cache misses once per pass.
+  p.code = GpCode::compiled;
+  p.compiled_code_bytes = 4096;  // fits: no misses
+  const std::uint64_t serial = (10 + 14) * 3 + 5 * 2 + 3 + 40 + 2 * 2;
+  CHECK(I860Model(p).clocks(ops, 1).count == serial);
+  p.compiled_code_bytes = 4097;  // one byte over: 129 lines refill every pass
+  CHECK(I860Model(p).clocks(ops, 1).count == serial + 129 * 6);
+  CHECK(I860Model(p).clocks(ops, 2).count == serial + 2 * 129 * 6);
+}
+
+TEST_CASE("i860 model: more firmware expressions cost more GP clocks", "[timing][gp]") {
+  const I860Model model(I860Params{});
+  GpWorkload flat;
+  flat.expressions.set(static_cast<int>(Expression::edge0));
+  flat.expressions.set(static_cast<int>(Expression::edge1));
+  flat.expressions.set(static_cast<int>(Expression::edge2));
+  flat.packet_words = 1 + 3 * 3 * 2;
+  GpWorkload gouraud = flat;
+  for (Expression e : {Expression::depth, Expression::red, Expression::green, Expression::blue})
+    gouraud.expressions.set(static_cast<int>(e));
+  gouraud.packet_words = 1 + 7 * 3 * 2;
+  CHECK(model.reference_triangle(flat).count < model.reference_triangle(gouraud).count);
+  // A triangle spanning more regions, or split by clipping, costs more (in assembly, the
+  // extra binning is integer work that dual-instruction mode can hide behind the FP work).
+  const OpCounts one = I860Work::triangle(gouraud, 1, 1, 1);
+  I860Params compiled;
+  compiled.code = GpCode::compiled;
+  CHECK(I860Model(compiled).clocks(I860Work::triangle(gouraud, 1, 1, 4), 1).count >
+        I860Model(compiled).clocks(one, 1).count);
+  CHECK(model.clocks(I860Work::triangle(gouraud, 1, 1, 4), 1).count >= model.clocks(one, 1).count);
+  CHECK(model.clocks(I860Work::triangle(gouraud, 2, 2, 1), 1).count > model.clocks(one, 1).count);
+}
+
+TEST_CASE("ring: one message arrives at its earliest legal cycle", "[timing][ring]") {
+  fresh_kernel();
+  RingParams p;
+  p.channels = 2;
+  p.hop_latency_cycles = 3;
+  Ring ring("ring", p, 10);
+  RingLoad load("load", ring, 1, 1, 100);
+  sc_core::sc_start();
+  const sc_core::sc_time cycle(1.0 / p.clock_hz, sc_core::SC_SEC);
+  // 100 words, then 1 hop of 3 cycles: not one cycle early, and on time.
+  CHECK(load.last == cycle * 103.0);
+  CHECK(ring.busy()[0].count == 100);
+  CHECK(ring.busy()[1].count == 0);
+}
+
+TEST_CASE("ring: saturated, it reaches and never exceeds its bandwidth", "[timing][ring]") {
+  fresh_kernel();
+  RingParams p;
+  p.channels = 4;
+  p.hop_latency_cycles = 0;
+  Ring ring("ring", p, 20);
+  // 12 senders for 4 channels: every channel always has a message waiting.
+  RingLoad load("load", ring, 12, 50, 64);
+  sc_core::sc_start();
+  const double cycles = load.last.to_seconds() * p.clock_hz;
+  const double words = 12.0 * 50 * 64;
+  // The ideal: every channel carries a word every cycle.
+  CHECK(cycles == Approx(words / p.channels).epsilon(1e-9));
+  for (const RingCycles& c : ring.busy()) CHECK(c.count <= static_cast<std::uint64_t>(cycles));
+  CHECK(ring.words() == static_cast<std::uint64_t>(words));
+  CHECK(ring.contention().count > 0);
+}
+
+TEST_CASE("static and dynamic balancing render identical images; dynamic is deterministic",
+          "[timing][balancing]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 512;
+  config.screen.height = 384;
+  config.gp.count = 6;
+  config.renderer.count = 5;
+  const Scene scene = make_builtin_scene("torus", {64, 16});
+  const Program program = load_program("phong", config);
+  const FrameResult fixed = simulate_frame(config, scene, program, 2);
+  config.set("renderer.balancing=dynamic");
+  const FrameResult dynamic = simulate_frame(config, scene, program, 1);
+  const FrameResult again = simulate_frame(config, scene, program, 3);
+  CHECK(fixed.image.rgb == dynamic.image.rgb);
+  CHECK(dynamic.image.rgb == again.image.rgb);
+  CHECK(without_host(dynamic.stats) == without_host(again.stats));
+  // The same work, differently spread: the Renderers' total busy cycles agree.
+  CHECK(fixed.stats["renderers_total"]["busy_cycles"] ==
+        dynamic.stats["renderers_total"]["busy_cycles"]);
+  CHECK(dynamic.stats["timing"]["balancing"] == "dynamic");
+}
+
+TEST_CASE("a small instruction queue stalls the GPs, never changes the image",
+          "[timing][renderer]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 256;
+  config.screen.height = 256;
+  config.gp.count = 4;
+  config.renderer.count = 2;
+  const Scene scene = make_builtin_scene("sphere");
+  const Program program = load_program("gouraud", config);
+  const FrameResult roomy = simulate_frame(config, scene, program, 2);
+  config.set("renderer.queue_words=128");
+  const FrameResult tight = simulate_frame(config, scene, program, 2);
+  CHECK(roomy.image.rgb == tight.image.rgb);
+  double stalled = 0;
+  for (const auto& g : tight.stats["gp"]) stalled += g["waiting_for_queue_seconds"].get<double>();
+  CHECK(stalled > 0);
+  for (const auto& r : tight.stats["renderer"]) CHECK(r["queue_peak_words"].get<int>() <= 128);
+  CHECK(tight.stats["ring"]["messages"].get<int>() > roomy.stats["ring"]["messages"].get<int>());
+  CHECK(tight.frame_seconds >= roomy.frame_seconds);
+  // A queue smaller than one packet is a configuration error that names the key.
+  config.set(std::vector<std::string>{"renderer.queue_words=64", "ring.word_bits=16"});
+  try {
+    simulate_frame(config, scene, load_program("phong", config), 1);
+    FAIL("expected an error");
+  } catch (const std::exception& e) {
+    CHECK_THAT(e.what(), Catch::Contains("renderer.queue_words"));
+  }
+}
+
+TEST_CASE("overlapped backing-store transfers are faster and change no pixel",
+          "[timing][renderer]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 256;
+  config.screen.height = 128;
+  config.gp.count = 2;
+  config.renderer.count = 2;
+  const Scene scene = make_builtin_scene("two-triangles");
+  const Program program = assemble_file(
+      std::string(PP5_SOURCE_DIR) + "/tests/data/firmware/spill.pp5", assembler_options(config));
+  REQUIRE(program.procedure(Procedure::triangle).spill_transfers > 0);
+  const FrameResult overlapped = simulate_frame(config, scene, program, 2);
+  config.set("renderer.backing_store_overlap=0");
+  const FrameResult serial = simulate_frame(config, scene, program, 2);
+  CHECK(overlapped.image.rgb == serial.image.rgb);
+  CHECK(overlapped.frame_seconds < serial.frame_seconds);
+  CHECK(overlapped.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>() <
+        serial.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>());
+}
+
+TEST_CASE("overlapped shipping lets a Renderer start its next region early", "[timing][renderer]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 512;
+  config.screen.height = 256;
+  config.gp.count = 2;
+  config.renderer.count = 1;  // 8 regions in a row on one board
+  const Scene scene = make_builtin_scene("sphere");
+  const Program program = load_program("flat", config);
+  const FrameResult overlapped = simulate_frame(config, scene, program, 1);
+  config.set("renderer.overlap_shipping=0");
+  const FrameResult blocking = simulate_frame(config, scene, program, 1);
+  CHECK(overlapped.image.rgb == blocking.image.rgb);
+  CHECK(overlapped.frame_seconds < blocking.frame_seconds);
+  CHECK(blocking.stats["renderer"][0]["blocked_shipping_seconds"].get<double>() > 0);
+  CHECK(overlapped.stats["renderer"][0]["blocked_shipping_seconds"].get<double>() == 0);
+}
+
+TEST_CASE("the frame time is attributed to GPs, ring and Renderers, and the timeline nests",
+          "[timing][report]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 384;
+  config.screen.height = 256;
+  config.gp.count = 4;
+  config.renderer.count = 3;
+  const Scene scene = make_builtin_scene("torus", {64, 16});
+  const Program program = load_program("phong", config);
+  nlohmann::json timeline;
+  const FrameResult r = simulate_frame(config, scene, program, 2, {}, &timeline);
+  const auto& t = r.stats["timing"];
+  const double sum = t["gp_seconds"].get<double>() + t["ring_seconds"].get<double>() +
+                     t["renderer_seconds"].get<double>();
+  CHECK(sum == Approx(r.frame_seconds).epsilon(1e-6));
+  CHECK(t["unattributed_seconds"].get<double>() < 1e-9);
+  const std::string bottleneck = t["bottleneck"];
+  CHECK((bottleneck == "GPs" || bottleneck == "ring" || bottleneck == "Renderers"));
+  // Utilisation can never exceed 1.
+  for (const auto& g : r.stats["gp"]) CHECK(g["utilisation"].get<double>() <= 1.0);
+  for (const auto& c : r.stats["ring"]["channels"]) CHECK(c["utilisation"].get<double>() <= 1.0);
+  for (const auto& x : r.stats["renderer"]) CHECK(x["utilisation"].get<double>() <= 1.0);
+
+  // The timeline: complete slices per (pid, tid) track that never partially overlap.
+  REQUIRE(timeline.contains("traceEvents"));
+  std::map<std::pair<int, int>, std::vector<std::pair<double, double>>> tracks;
+  int ring_slices = 0;
+  for (const auto& e : timeline["traceEvents"]) {
+    if (e["ph"] != "X") continue;
+    tracks[{e["pid"].get<int>(), e["tid"].get<int>()}].push_back(
+        {e["ts"].get<double>(), e["ts"].get<double>() + e["dur"].get<double>()});
+    ring_slices += e["pid"].get<int>() == 2;
+  }
+  CHECK(ring_slices == r.stats["ring"]["messages"].get<int>());
+  for (auto& [track, slices] : tracks) {
+    std::sort(slices.begin(), slices.end(), [](auto& a, auto& b) {
+      return a.first < b.first || (a.first == b.first && a.second > b.second);
+    });
+    std::vector<double> open;
+    for (const auto& [start, end] : slices) {
+      while (!open.empty() && open.back() <= start + 1e-6) open.pop_back();
+      if (!open.empty()) CHECK(end <= open.back() + 1e-6);
+      open.push_back(end);
+    }
+  }
+}
+
+TEST_CASE("the bottleneck named is the resource that was starved", "[timing][report]") {
+  const Scene scene = make_builtin_scene("torus", {64, 16});
+  auto bottleneck = [&](const std::vector<std::string>& sets) {
+    MachineConfig config = MachineConfig::defaults();
+    config.set(std::vector<std::string>{"screen.width=512", "screen.height=256", "gp.count=4",
+                                        "renderer.count=4"});
+    config.set(sets);
+    const FrameResult r = simulate_frame(config, scene, load_program("phong", config), 2);
+    return r.stats["timing"]["bottleneck"].get<std::string>();
+  };
+  CHECK(bottleneck({"gp.code=compiled"}) == "GPs");
+  CHECK(bottleneck({"ring.channels=1", "ring.clock_hz=2e6"}) == "ring");
+  CHECK(bottleneck({"renderer.count=1", "gp.count=16"}) == "Renderers");
+}
+
+TEST_CASE("coefficient loading: hidden when double-buffered, charged in full when not",
+          "[timing][renderer]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 256;
+  config.screen.height = 256;
+  config.gp.count = 3;
+  config.renderer.count = 2;
+  const Scene scene = make_builtin_scene("sphere");
+  const Program program = load_program("gouraud", config);
+  const FrameResult buffered = simulate_frame(config, scene, program, 1);
+  config.set("evaluator.double_buffered=0");
+  const FrameResult serial = simulate_frame(config, scene, program, 1);
+  CHECK(buffered.image.rgb == serial.image.rgb);
+  const auto packets = buffered.stats["setup"]["packets"].get<std::uint64_t>();
+  const int expressions =
+      static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
+  const std::uint64_t coefficient_words = expressions * 3 * 2;  // 40-bit coefficients: 2 words
+  CHECK(serial.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>() -
+            buffered.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>() ==
+        packets * coefficient_words);
+  CHECK(serial.frame_seconds > buffered.frame_seconds);
+}
