@@ -161,14 +161,24 @@ std::uint64_t Machine::region_words() const {
 
 void Machine::execute_pixels(int threads,
                              const std::function<BoardObserver*(int renderer)>& observe) {
-  const RendererBoardParams params = board_params(config_);
+  RendererBoardParams params = board_params(config_);
+  // Only the bits the program declares are allocated and processed: fields beyond them would
+  // be refused by the pixel array's bounds checks, never silently dropped.
+  params.array.memory_bits = std::max(1, program_.bits_used());
   PacketValues frame_values;
   frame_values.parameters = frame_parameters_;
+  // One empty region, executed before the boards start, serves every board whose state
+  // after clear matches it (RendererBoard::run_empty_region checks); the rest of the boards'
+  // regions run as recorded.
+  RendererBoard first(params);
+  std::vector<std::uint8_t> empty_rgb;
+  first.run_empty_region(0, 0, program_, frame_values, empty_rgb);
   std::atomic<int> next{0};
   auto worker = [&] {
     for (int k = next++; k < renderer_count(); k = next++) {
       RendererBoard board(params);
       if (observe) board.set_observer(observe(k));
+      board.share_empty_region(first);
       renderers_[k]->execute(board, program_, *frame_buffer_, frame_values);
     }
   };

@@ -4,7 +4,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config python3
   libsystemc-dev libglm-dev libfmt-dev catch2 nlohmann-json3-dev libcli11-dev libpng-dev
-  libbenchmark-dev gtkwave librsvg2-bin
+  libbenchmark-dev gtkwave librsvg2-bin clang libclang-rt-dev
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -29,7 +29,19 @@ expect_error "highlight_opacity' = 999" highlight --param highlight_opacity=999 
 expect_error "unknown scene 'nope'" highlight --scenes two-triangles nope --out "$tmp/e"
 expect_error "not a highlighting program" highlight --firmware phong --out "$tmp/e"
 [ -e "$tmp/e" ] && fail "highlight wrote output after bad input"
-for d in a b c d; do [ -e "$tmp/$d/frame.png" ] && fail "partial output in $tmp/$d"; done
+# Mesh and scene files (tests/data): each bad one names the file, the line or key.
+data="$(dirname "$0")/data"
+expect_error "nan.obj:3: z 'nan' is not a finite number" render --scene "$data/bad/nan.obj" --out "$tmp/e"
+expect_error "truncated.stl: binary STL declares 4 triangles" render --scene "$data/bad/truncated.stl" --out "$tmp/e"
+expect_error "limit is 4000000" render --scene "$data/bad/absurd_count.off" --out "$tmp/e"
+expect_error "key 'meshes\[0\].scale' must be a number" render --scene "$data/bad/wrong_type.json" --out "$tmp/e"
+expect_error "not valid JSON" render --scene "$data/bad/syntax.json" --out "$tmp/e"
+for d in a b c d e; do [ -e "$tmp/$d/frame.png" ] && fail "partial output in $tmp/$d"; done
+"$bin" render --scene "$data/meshes/concave.obj" --firmware flat --set screen.width=128 \
+  --set screen.height=128 --out "$tmp/mesh" >"$tmp/mesh.log" 2>&1 || fail "mesh render failed: $(cat "$tmp/mesh.log")"
+grep -q "1 triangulated" "$tmp/mesh.log" || fail "no mesh load report"
+grep -q "coefficient overflow" "$tmp/mesh.log" || fail "no set-up drop report"
+[ -s "$tmp/mesh/frame.png" ] || fail "mesh render wrote no frame"
 
 "$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \
   --out "$tmp/ok" >"$tmp/ok.log" 2>&1 || fail "render failed: $(cat "$tmp/ok.log")"
@@ -45,6 +57,12 @@ for f in highlight.md highlight.csv two-triangles/epsilon.png two-triangles/epsi
   [ -s "$tmp/hl/$f" ] || fail "highlight did not write $f"
 done
 "$bin" --help | grep -q render || fail "--help does not list render"
+# The extremes report: every synthetic case passes; a scene's failures are named, exit 1.
+"$bin" extremes -j 2 >"$tmp/ext.log" 2>&1 || fail "extremes failed: $(cat "$tmp/ext.log")"
+grep -q "PASS shared edges across a mesh" "$tmp/ext.log" || fail "no shared-edge case"
+grep -q "0 failed" "$tmp/ext.log" || fail "extremes summary"
+expect_error "FAIL scene: depth precision" extremes --no-synthetic --scene two-triangles \
+  --set evaluator.fraction_bits=6 --set screen.width=256 --set screen.height=256
 
 # Timeline and sweeps.
 "$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \

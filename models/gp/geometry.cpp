@@ -246,7 +246,9 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
   auto constant = [&](Expression e, double value) {
     if (needed.test(static_cast<int>(e))) {
       pv.expressions[static_cast<int>(e)] =
-          QuadraticCoefficients::constant(std::llround(value) << params_.fraction_bits);
+          // A multiplication, not a shift: constants may be negative.
+          QuadraticCoefficients::constant(std::llround(value) *
+                                          (std::int64_t{1} << params_.fraction_bits));
     }
   };
   const double depth_max = std::ldexp(1.0, params_.depth_bits) - 1.0;

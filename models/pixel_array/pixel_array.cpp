@@ -378,4 +378,10 @@ std::uint64_t PixelArray::carry_bit(int pixel) const {
   return (carry_[pixel / kWordBits] >> (pixel % kWordBits)) & 1;
 }
 
+bool PixelArray::same_state(const PixelArray& other) const {
+  return words_ == other.words_ && stack_top_ == other.stack_top_ && memory_ == other.memory_ &&
+         enable_ == other.enable_ && carry_ == other.carry_ && stack_ == other.stack_ &&
+         backing_ == other.backing_;
+}
+
 }  // namespace pp5

@@ -113,6 +113,11 @@ class PixelArray {
   bool enabled(int pixel) const;
   std::uint64_t carry_bit(int pixel) const;
 
+  // Whether every bit of state an instruction can observe is the same: pixel memory, Enable
+  // and its stack, carries and backing store. Two arrays in the same state give the same
+  // results for the same instruction stream.
+  bool same_state(const PixelArray& other) const;
+
  private:
   void mark_enable_changed() { active_valid_ = false; }
   void check_no_overlap(const Field& dst, const Bits& src, const char* what) const;

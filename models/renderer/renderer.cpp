@@ -266,6 +266,13 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
   const auto& geometry = board.array().geometry();
   std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work_) {
+    // An empty region's stream is the same every time: executed once, then reused (a traced
+    // board runs every instruction, so that the trace shows them).
+    if (w.triangles.empty() && !board.observed()) {
+      board.run_empty_region(w.x0, w.y0, program, frame_values, rgb);
+      frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
+      continue;
+    }
     board.begin_region(w.x0, w.y0);
     board.begin_packet({Procedure::clear, -1, w.region, w.clear_start});
     board.run(program.procedure(Procedure::clear), frame_values);

@@ -8,9 +8,77 @@ RendererBoard::RendererBoard(const RendererBoardParams& params)
       evaluator_(params.evaluator, params.array.width, params.array.height),
       scratch_(static_cast<std::size_t>(Bits::kMaxBits) * array_.words(), 0) {}
 
-void RendererBoard::begin_region(int x0, int y0) { evaluator_.set_origin(x0, y0); }
+void RendererBoard::begin_region(int x0, int y0) {
+  materialise();
+  evaluator_.set_origin(x0, y0);
+}
+
+void RendererBoard::materialise() const {
+  if (!lazy_) return;
+  array_ = *empty_after_shade_;
+  lazy_ = false;
+}
+
+void RendererBoard::run_rest_of_empty(const Program& program, const PacketValues& frame_values,
+                                      std::vector<std::uint8_t>& rgb) {
+  for (int pass = 1; pass < program.passes; ++pass) {
+    run(program.procedure(Procedure::pass), frame_values);
+  }
+  run(program.procedure(Procedure::shade), frame_values);
+  read_outputs(program, rgb);
+}
+
+void RendererBoard::run_empty_region(int x0, int y0, const Program& program,
+                                     const PacketValues& frame_values,
+                                     std::vector<std::uint8_t>& rgb) {
+  if (observer_) {  // a traced board shows every instruction: nothing is reused
+    begin_region(x0, y0);
+    run(program.procedure(Procedure::clear), frame_values);
+    run_rest_of_empty(program, frame_values, rgb);
+    return;
+  }
+  bool origin_free = true;
+  for (const QuadraticCoefficients& c : frame_values.expressions) {
+    origin_free = origin_free && c.A == 0 && c.B == 0 && c.C == 0 && c.D == 0 && c.E == 0;
+  }
+  if (lazy_ && origin_free && clear_restores_.value_or(false)) {
+    rgb = *empty_rgb_;
+    ++empty_reused_;
+    return;
+  }
+  begin_region(x0, y0);
+  const bool was_kept_state = empty_after_shade_ && array_.same_state(*empty_after_shade_);
+  run(program.procedure(Procedure::clear), frame_values);
+  if (!origin_free) {
+    run_rest_of_empty(program, frame_values, rgb);
+    return;
+  }
+  if (empty_after_clear_ && array_.same_state(*empty_after_clear_)) {
+    if (was_kept_state) clear_restores_ = true;
+    rgb = *empty_rgb_;
+    lazy_ = true;
+    ++empty_reused_;
+    return;
+  }
+  // Nothing kept, or a different state (fields the clear procedure leaves alone hold what an
+  // earlier region put there): execute, and keep this region's states instead, since the
+  // next empty region on this board will most likely start from them.
+  empty_after_clear_ = std::make_shared<const PixelArray>(array_);
+  run_rest_of_empty(program, frame_values, rgb);
+  empty_after_shade_ = std::make_shared<const PixelArray>(array_);
+  empty_rgb_ = std::make_shared<const std::vector<std::uint8_t>>(rgb);
+  clear_restores_.reset();
+}
+
+void RendererBoard::share_empty_region(const RendererBoard& other) {
+  if (!other.empty_after_clear_ || empty_after_clear_) return;
+  empty_after_clear_ = other.empty_after_clear_;
+  empty_after_shade_ = other.empty_after_shade_;
+  empty_rgb_ = other.empty_rgb_;
+}
 
 ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValues& values) {
+  materialise();
   if (observer_) return run_observed(procedure, values);
   ExecutionContext ctx{array_, evaluator_, values, params_.timing.fraction_bits, scratch_};
   ArrayCycles cycles{};
@@ -44,6 +112,7 @@ ArrayCycles RendererBoard::run_observed(const ProcedureCode& procedure,
 }
 
 void RendererBoard::read_outputs(const Program& program, std::vector<std::uint8_t>& rgb) const {
+  materialise();
   const int n = array_.pixels();
   rgb.resize(static_cast<std::size_t>(n) * 3);
   for (int c = 0; c < 3; ++c) {

@@ -6,6 +6,8 @@
 // instruction table on the PixelArray; run() returns the cycles those instructions cost,
 // the same figure the Renderer module charges in simulated time.
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
@@ -58,6 +60,7 @@ class RendererBoard {
   ArrayCycles run(const ProcedureCode& procedure, const PacketValues& values);
   // Observation (tracing): `observer` may be null; the board does not own it.
   void set_observer(BoardObserver* observer) { observer_ = observer; }
+  bool observed() const { return observer_ != nullptr; }
   void begin_packet(const PacketContext& packet) { packet_ = packet; }
   void end_region(int region) {
     if (observer_) observer_->end_region(region, *this);
@@ -65,15 +68,52 @@ class RendererBoard {
   // Reads the program's output fields of every pixel as 8-bit RGB, row-major.
   void read_outputs(const Program& program, std::vector<std::uint8_t>& rgb) const;
 
-  PixelArray& array() { return array_; }
-  const PixelArray& array() const { return array_; }
+  // A region no primitive touches: clear, the passes with no triangles, shade, and its
+  // outputs, as run_region would give them; see "Empty regions" below.
+  void run_empty_region(int x0, int y0, const Program& program, const PacketValues& frame_values,
+                        std::vector<std::uint8_t>& rgb);
+  // Empty regions whose result was reused rather than executed again.
+  std::uint64_t empty_regions_reused() const { return empty_reused_; }
+  // Starts from another board's kept empty region (if it has one) instead of executing a
+  // first one here: boards of one frame run the same program, so one board's result serves
+  // all whose state after clear matches (checked, as for the board's own).
+  void share_empty_region(const RendererBoard& other);
+
+  PixelArray& array() {
+    materialise();
+    return array_;
+  }
+  const PixelArray& array() const {
+    materialise();
+    return array_;
+  }
   ExpressionEvaluator& evaluator() { return evaluator_; }
   std::uint64_t instructions_executed() const { return instructions_; }
   ArrayCycles cycles_executed() const { return cycles_; }
 
  private:
+  // Empty regions. Their stream is the same every time (clear, the passes' procedures, shade,
+  // all with the frame's values, whose expressions are zero, so the region's origin does not
+  // matter): its result depends only on the array's state before it. So the first empty
+  // region is executed for real and its states after clear and after shade and its outputs
+  // are kept; a later empty region whose state after clear is the same (the clear procedure
+  // initialises every field that matters, as real firmware does) takes the kept outputs, and
+  // the array is left "lazily" in the kept after-shade state, copied in only when something
+  // else runs. A run of empty regions then costs nothing once clear is known to map the
+  // after-shade state onto the kept after-clear state. Exact: nothing is assumed that is not
+  // checked on the array's full state; the simulated timing still charges every region.
+  void materialise() const;
+  void run_rest_of_empty(const Program& program, const PacketValues& frame_values,
+                         std::vector<std::uint8_t>& rgb);
+
   RendererBoardParams params_;
-  PixelArray array_;
+  mutable PixelArray array_;
+  mutable bool lazy_ = false;  // array_'s true state is *empty_after_shade_
+  std::shared_ptr<const PixelArray> empty_after_clear_;
+  std::shared_ptr<const PixelArray> empty_after_shade_;
+  std::shared_ptr<const std::vector<std::uint8_t>> empty_rgb_;
+  std::optional<bool> clear_restores_;  // clear(after shade) == after clear
+  std::uint64_t empty_reused_ = 0;
   ExpressionEvaluator evaluator_;
   std::vector<Word> scratch_;
   BoardObserver* observer_ = nullptr;

@@ -11,6 +11,7 @@
 #include "sim/image/png_writer.hpp"
 #include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
+#include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
 
 namespace fs = std::filesystem;
@@ -40,12 +41,12 @@ int run_render(RenderOptions o) {
     scene_options.tessellation_v = o.tessellation[1];
   }
   const DisplayOrder order = parse_display_order(o.order, "--order");
-  Scene scene = make_builtin_scene(o.scene_name, scene_options);
+  Scene scene = load_scene(o.scene_name, scene_options);
   apply_display_order(scene.mesh, order);
   scene.parameters = parse_frame_parameters(o.params);
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(resolve_firmware(o.firmware), assembler_options(config));
-  if (o.out_dir.empty()) o.out_dir = (fs::path("out") / o.scene_name).string();
+  if (o.out_dir.empty()) o.out_dir = (fs::path("out") / scene.name).string();
   fs::create_directories(o.out_dir);
 
   nlohmann::json timeline;
@@ -57,9 +58,23 @@ int run_render(RenderOptions o) {
   write_file_atomically((dir / "stats.json").string(), result.stats.dump(2) + "\n");
   if (!o.timeline.empty()) write_file_atomically(o.timeline, timeline.dump() + "\n");
 
-  std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n\n", scene.name,
-                           scene.mesh.triangles.size(), program.name);
+  std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n{}\n\n", scene.name,
+                           scene.mesh.triangles.size(), program.name, scene.description);
   std::cout << summary(result, program, timing_params(config));
+  // What set-up dropped, so that no triangle disappears silently.
+  const auto& setup = result.stats["setup"];
+  std::cout << fmt::format(
+      "set-up dropped: {} clipped away, {} zero-area, {} without a pixel centre, {} with a "
+      "coefficient overflow\n",
+      setup["clipped_away"].get<std::uint64_t>(), setup["degenerate"].get<std::uint64_t>(),
+      setup["no_pixel_centres"].get<std::uint64_t>(),
+      setup["coefficient_overflow"].get<std::uint64_t>());
+  if (setup["coefficient_overflow"].get<std::uint64_t>() > 0) {
+    std::cout << fmt::format(
+        "warning: {} triangles were not drawn because a coefficient did not fit "
+        "evaluator.coefficient_bits = {} (see 'pp5sim extremes')\n",
+        setup["coefficient_overflow"].get<std::uint64_t>(), config.evaluator.coefficient_bits);
+  }
   std::cout << fmt::format("\nwrote {}/frame.png, {}/config.json, {}/stats.json\n", o.out_dir,
                            o.out_dir, o.out_dir);
   if (!o.timeline.empty()) {
@@ -75,7 +90,8 @@ Command add_render_command(CLI::App& app) {
   auto* render = app.add_subcommand("render", "Render one frame of a scene and write its reports");
   render
       ->add_option("-s,--scene", o->scene_name,
-                   "Built-in scene: torus, two-triangles, sphere, figure-eight, crossing-quads")
+                   "A built-in scene (see 'pp5sim scenes'), a mesh file (.obj .ply .stl .off) or a "
+                   "scene file (.json, described in README.md)")
       ->capture_default_str();
   render
       ->add_option("-f,--firmware", o->firmware,

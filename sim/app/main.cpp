@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
       add_sweep_command(app),
       add_trace_command(app),
       add_highlight_command(app),
+      add_extremes_command(app),
   };
 
   CLI11_PARSE(app, argc, argv);

@@ -327,7 +327,7 @@ MachineConfig MachineConfig::from_file(const std::string& path) {
   nlohmann::json doc;
   try {
     doc = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
     throw ConfigError(fmt::format("{}: not valid JSON: {}", path, e.what()));
   }
   return from_json(doc, path);
@@ -352,7 +352,7 @@ void MachineConfig::set(const std::vector<std::string>& assignments) {
     nlohmann::json value;
     try {
       value = p->choices ? nlohmann::json(text) : nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error&) {
+    } catch (const nlohmann::json::exception&) {
       throw ConfigError(
           fmt::format("{}: value '{}' of key '{}' is not a number", origin, text, key));
     }

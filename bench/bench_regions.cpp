@@ -1,0 +1,55 @@
+// Host cost of regions that no primitive touches. The same scene (a sphere of 3,968
+// triangles, filling one 128 x 128 region) is rendered with the Phong firmware on a 128 x 128
+// screen and in the top-left region of a 4096 x 4096 screen (1,024 regions, 1,023 of them
+// empty). Each empty region's stream (clear, shade) runs once per board and is reused, so the
+// big screen should cost about what the small one does: compare the two times (the ratio is
+// the figure to report). The simulated timing still charges every region's real work, so
+// the counter sim_ms is the 4096 x 4096 machine's frame time.
+#include <benchmark/benchmark.h>
+
+#include <string>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/machine.hpp"
+#include "sim/simulation.hpp"
+
+namespace {
+
+// A sphere placed so that a 90-degree camera at the origin sees it inside screen pixels
+// [8, 120] of a square screen `width` pixels wide.
+pp5::Scene sphere_in_first_region(int width) {
+  pp5::Scene scene = pp5::make_builtin_scene("sphere");
+  const pp5::BoundingSphere b = pp5::bounding_sphere(scene.mesh);
+  const double d = 10.0;                 // view distance of the centre
+  const double pixel = 2.0 * d / width;  // world size of a pixel at that distance
+  const double radius = 56.0 * pixel;    // 112 pixels across
+  const double cx = -d + 64.0 * pixel, cy = d - 64.0 * pixel;
+  for (pp5::Vertex& v : scene.mesh.vertices) {
+    v.position = glm::vec3((v.position - b.center) / b.radius * static_cast<float>(radius) +
+                           glm::vec3(static_cast<float>(cx), static_cast<float>(cy), -d));
+  }
+  scene.camera = pp5::Camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 90.0f, 1.0f, 20.0f};
+  scene.light = pp5::default_light(scene.camera);
+  return scene;
+}
+
+void BM_OneRegionScene(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0));
+  pp5::MachineConfig config = pp5::MachineConfig::defaults();
+  config.set(std::vector<std::string>{"screen.width=" + std::to_string(width),
+                                      "screen.height=" + std::to_string(width)});
+  const pp5::Scene scene = sphere_in_first_region(width);
+  const pp5::Program program = pp5::assemble_file(
+      std::string(PP5_SOURCE_DIR) + "/firmware/programs/phong.pp5", pp5::assembler_options(config));
+  double sim_seconds = 0;
+  for (auto _ : state) {
+    const pp5::FrameResult r = pp5::simulate_frame(config, scene, program, 1);
+    sim_seconds = r.frame_seconds;
+    benchmark::DoNotOptimize(r.image.rgb.data());
+  }
+  state.counters["regions"] = config.regions();
+  state.counters["sim_ms"] = sim_seconds * 1e3;
+}
+BENCHMARK(BM_OneRegionScene)->Arg(128)->Arg(4096)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace

@@ -1,0 +1,93 @@
+#pragma once
+// The fuzz targets as plain functions, so that the libFuzzer programs (fuzz_*.cpp, built with
+// -DPP5_FUZZ=ON and clang) and the normal test suite (which replays every input kept in
+// fuzz/regressions/) run exactly the same code.
+//
+// Contract of each target: any input either parses or throws the parser's own error type
+// with a message; anything else (another exception, a crash, a sanitizer report, a hang,
+// running out of memory) is a bug. The targets catch only the documented error types, so an
+// unexpected std::exception escapes and libFuzzer reports it as a crash.
+#include <cstddef>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+
+#include "firmware/assembler/assembler.hpp"
+#include "sim/config/machine_config.hpp"
+#include "sim/scene/mesh_loader.hpp"
+#include "sim/scene/scene_loader.hpp"
+
+namespace pp5::fuzz {
+
+// Limits small enough that each input runs in milliseconds, so the fuzzer explores.
+inline LoadLimits fuzz_limits() {
+  LoadLimits limits;
+  limits.max_vertices = 100'000;
+  limits.max_triangles = 200'000;
+  limits.max_polygon_vertices = 256;
+  return limits;
+}
+
+// The first byte chooses the format, the rest is the file.
+inline void mesh(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return;
+  static const char* formats[] = {"obj", "off", "stl", "ply"};
+  const std::string_view text(reinterpret_cast<const char*>(data) + 1, size - 1);
+  try {
+    parse_mesh(text, formats[data[0] % 4], "fuzz", nullptr, fuzz_limits());
+  } catch (const MeshError&) {
+  }
+}
+
+inline void scene(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    // Mesh files resolve against a folder that does not exist, so they fail cleanly.
+    parse_scene_json(text, "fuzz.json", "/nonexistent-pp5-fuzz", fuzz_limits());
+  } catch (const SceneError&) {
+  } catch (const MeshError&) {
+  }
+}
+
+inline void config(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  // Lines starting with '=' are --set assignments; the rest is the JSON document.
+  std::string doc;
+  std::vector<std::string> sets;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(pos, end - pos);
+    if (!line.empty() && line[0] == '=') {
+      sets.push_back(line.substr(1));
+    } else {
+      doc += line + "\n";
+    }
+    pos = end + 1;
+  }
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(doc);
+  } catch (const nlohmann::json::exception&) {  // the file reader turns these into ConfigError
+    return;
+  }
+  try {
+    MachineConfig c = MachineConfig::from_json(j, "fuzz.json");
+    c.set(sets);
+    (void)c.to_json().dump();
+  } catch (const ConfigError&) {
+  }
+}
+
+inline void assembler(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    const Program p = assemble(text, "fuzz.pp5", AssemblerOptions{});
+    (void)listing(p, TimingParams{});
+  } catch (const AssemblyError&) {
+  }
+}
+
+}  // namespace pp5::fuzz

@@ -1,0 +1,68 @@
+#pragma once
+// Mesh files: Wavefront OBJ, PLY (ASCII and binary), STL (ASCII and binary) and OFF.
+//
+// Contract:
+//  - Every error is a MeshError whose message starts with "FILE:LINE:" (text formats) or
+//    "FILE:" plus the element and byte offset (binary formats), and says what was expected.
+//  - Nothing a file says can make the loader allocate more than the limits allow: declared
+//    counts are checked against LoadLimits and against the bytes the file actually holds
+//    before anything is reserved.
+//  - Polygons with more than three vertices are triangulated by ear clipping in the plane of
+//    their Newell normal, so concave polygons come out right.
+//  - Coordinates must be finite. Triangles with a repeated vertex or zero area are dropped and
+//    counted (they would cover no pixel); edges shared by more than two triangles
+//    (non-manifold) are counted and rendered as they are.
+//  - Vertex normals are always recomputed (compute_smooth_normals); vertex colours come from
+//    the file where it has them, otherwise from `default_color`.
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+#include "sim/scene/scene.hpp"
+
+namespace pp5 {
+
+class MeshError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct LoadLimits {
+  std::size_t max_vertices = 4'000'000;
+  std::size_t max_triangles = 8'000'000;
+  std::size_t max_polygon_vertices = 4096;  // per face
+};
+
+// What loading found besides the mesh itself.
+struct MeshLoadReport {
+  std::size_t polygons = 0;            // faces read from the file
+  std::size_t triangulated = 0;        // faces with more than three vertices
+  std::size_t dropped_degenerate = 0;  // repeated vertex or zero area
+  std::size_t non_manifold_edges = 0;  // edges used by more than two triangles
+  std::size_t ignored_statements = 0;  // OBJ statements that do not describe geometry
+};
+
+// The formats by file extension (case-insensitive): .obj .ply .stl .off.
+bool is_mesh_file(const std::string& path);
+
+// Reads `path`; the format comes from its extension.
+Mesh load_mesh(const std::string& path, MeshLoadReport* report = nullptr,
+               const LoadLimits& limits = {}, glm::vec3 default_color = glm::vec3(0.8f));
+
+// Parses `data` as `format` ("obj", "ply", "stl" or "off"); `origin` names it in messages.
+Mesh parse_mesh(std::string_view data, const std::string& format, const std::string& origin,
+                MeshLoadReport* report = nullptr, const LoadLimits& limits = {},
+                glm::vec3 default_color = glm::vec3(0.8f));
+
+// Appends the triangles of a simple polygon (indices into `positions`, in order) to `out`,
+// by ear clipping in the plane of its Newell normal. Returns false if the polygon is not
+// simple (no ear could be found); the remaining part is then fanned so nothing is lost.
+bool triangulate_polygon(const std::vector<glm::vec3>& positions,
+                         const std::vector<unsigned>& polygon, std::vector<glm::uvec3>& out);
+
+// A scene around one mesh: the camera framed on it from the front and a little above, the
+// project's standard light and background.
+Scene scene_from_mesh(Mesh mesh, const std::string& name, const std::string& description);
+
+}  // namespace pp5

@@ -1,0 +1,320 @@
+#include "sim/scene/scene_loader.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <glm/gtc/matrix_transform.hpp>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace pp5 {
+
+namespace {
+
+using nlohmann::json;
+
+// A JSON value with its path, for messages that name the key.
+struct Node {
+  const json& value;
+  std::string path;
+  const std::string& origin;
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw SceneError(fmt::format("{}: key '{}' {}", origin, path, what));
+  }
+  Node at(const std::string& key) const {
+    return {value.at(key), path.empty() ? key : path + "." + key, origin};
+  }
+  Node at(std::size_t i) const { return {value.at(i), fmt::format("{}[{}]", path, i), origin}; }
+  bool has(const std::string& key) const { return value.contains(key); }
+
+  void check_keys(std::initializer_list<const char*> allowed) const {
+    if (!value.is_object()) fail(fmt::format("must be an object (got {})", value.type_name()));
+    const std::set<std::string> ok(allowed.begin(), allowed.end());
+    for (const auto& item : value.items()) {
+      if (!ok.count(item.key())) {
+        std::string list;
+        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        throw SceneError(fmt::format("{}: unknown key '{}{}' (expected one of: {})", origin,
+                                     path.empty() ? "" : path + ".", item.key(), list));
+      }
+    }
+  }
+  double number(double lo, double hi) const {
+    if (!value.is_number()) fail(fmt::format("must be a number (got {})", value.type_name()));
+    const double v = value.get<double>();
+    if (!std::isfinite(v) || v < lo || v > hi) {
+      fail(fmt::format("must be in [{}, {}] (got {})", lo, hi, v));
+    }
+    return v;
+  }
+  std::string string() const {
+    if (!value.is_string()) fail(fmt::format("must be a string (got {})", value.type_name()));
+    return value.get<std::string>();
+  }
+  glm::dvec3 vec3(double lo = -1e30, double hi = 1e30) const {
+    if (!value.is_array() || value.size() != 3) {
+      fail(fmt::format("must be an array of 3 numbers (got {})",
+                       value.is_array() ? fmt::format("{} elements", value.size())
+                                        : std::string(value.type_name())));
+    }
+    return {at(std::size_t{0}).number(lo, hi), at(std::size_t{1}).number(lo, hi),
+            at(std::size_t{2}).number(lo, hi)};
+  }
+  const json& array() const {
+    if (!value.is_array()) fail(fmt::format("must be an array (got {})", value.type_name()));
+    return value;
+  }
+};
+
+// Bounds every coordinate so that transformed positions stay finite in single precision.
+constexpr double kMaxCoordinate = 1e15;
+
+Mesh inline_mesh(const Node& node, const LoadLimits& limits, glm::vec3 color) {
+  const Node vs = node.at("vertices");
+  const Node ts = node.at("triangles");
+  if (vs.array().size() > limits.max_vertices) {
+    vs.fail(fmt::format("has {} vertices; the limit is {}", vs.value.size(), limits.max_vertices));
+  }
+  if (ts.array().size() > limits.max_triangles) {
+    ts.fail(
+        fmt::format("has {} triangles; the limit is {}", ts.value.size(), limits.max_triangles));
+  }
+  Mesh mesh;
+  for (std::size_t i = 0; i < vs.value.size(); ++i) {
+    Vertex v{};
+    v.position = glm::vec3(vs.at(i).vec3(-kMaxCoordinate, kMaxCoordinate));
+    v.color = color;
+    mesh.vertices.push_back(v);
+  }
+  for (std::size_t i = 0; i < ts.value.size(); ++i) {
+    const Node t = ts.at(i);
+    if (!t.value.is_array() || t.value.size() != 3) t.fail("must be an array of 3 vertex indices");
+    glm::uvec3 tri;
+    for (int k = 0; k < 3; ++k) {
+      const Node e = t.at(static_cast<std::size_t>(k));
+      if (!e.value.is_number_integer()) e.fail("must be an integer vertex index");
+      const auto index = e.value.get<long long>();
+      if (index < 0 || index >= static_cast<long long>(mesh.vertices.size())) {
+        e.fail(fmt::format("is {}, outside [0, {})", index, mesh.vertices.size()));
+      }
+      tri[k] = static_cast<unsigned>(index);
+    }
+    mesh.triangles.push_back(tri);
+  }
+  if (mesh.triangles.empty()) ts.fail("must hold at least one triangle");
+  compute_smooth_normals(mesh);
+  return mesh;
+}
+
+glm::dmat4 mesh_transform(const Node& m) {
+  glm::dmat4 t(1.0);
+  if (m.has("translate")) t = glm::translate(t, m.at("translate").vec3());
+  if (m.has("rotate_degrees")) {
+    const glm::dvec3 r = glm::radians(m.at("rotate_degrees").vec3(-36000, 36000));
+    t = glm::rotate(t, r.z, glm::dvec3(0, 0, 1));
+    t = glm::rotate(t, r.y, glm::dvec3(0, 1, 0));
+    t = glm::rotate(t, r.x, glm::dvec3(1, 0, 0));
+  }
+  if (m.has("scale")) {
+    const Node s = m.at("scale");
+    const glm::dvec3 k =
+        s.value.is_array() ? s.vec3(-1e12, 1e12) : glm::dvec3(s.number(-1e12, 1e12));
+    if (k.x == 0 || k.y == 0 || k.z == 0) s.fail("must not be zero (it would flatten the mesh)");
+    t = glm::scale(t, k);
+  }
+  return t;
+}
+
+void append(Mesh& scene_mesh, const Mesh& part, const glm::dmat4& transform, const Node& where,
+            const LoadLimits& limits) {
+  if (scene_mesh.vertices.size() + part.vertices.size() > limits.max_vertices ||
+      scene_mesh.triangles.size() + part.triangles.size() > limits.max_triangles) {
+    where.fail(fmt::format("makes the scene larger than the limits ({} vertices, {} triangles)",
+                           limits.max_vertices, limits.max_triangles));
+  }
+  const auto base = static_cast<unsigned>(scene_mesh.vertices.size());
+  const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
+  // A mirroring transform turns the winding around; swap two corners to keep it.
+  const bool mirrored = glm::determinant(glm::dmat3(transform)) < 0;
+  for (const Vertex& v : part.vertices) {
+    Vertex out = v;
+    const glm::dvec3 p = glm::dvec3(transform * glm::dvec4(glm::dvec3(v.position), 1.0));
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
+        glm::length(p) > kMaxCoordinate * 1e3) {
+      where.fail("places a vertex beyond the finite range");
+    }
+    out.position = glm::vec3(p);
+    const glm::dvec3 n = normal_matrix * glm::dvec3(v.normal);
+    out.normal = glm::length(n) > 0 ? glm::vec3(glm::normalize(n)) : v.normal;
+    scene_mesh.vertices.push_back(out);
+  }
+  for (const glm::uvec3& t : part.triangles) {
+    scene_mesh.triangles.push_back(mirrored ? glm::uvec3(t.x + base, t.z + base, t.y + base)
+                                            : t + glm::uvec3(base));
+  }
+}
+
+}  // namespace
+
+Scene parse_scene_json(const std::string& text, const std::string& origin,
+                       const std::string& base_dir, const LoadLimits& limits) {
+  json doc;
+  try {
+    doc = json::parse(text);
+  } catch (const json::exception& e) {  // syntax errors, and numbers beyond double's range
+    throw SceneError(fmt::format("{}: not valid JSON: {}", origin, e.what()));
+  }
+  const Node root{doc, "", origin};
+  if (!doc.is_object()) {
+    throw SceneError(
+        fmt::format("{}: a scene file must be a JSON object (got {})", origin, doc.type_name()));
+  }
+  root.check_keys({"name", "description", "meshes", "camera", "light", "background"});
+  if (!root.has("meshes")) throw SceneError(origin + ": missing key 'meshes' (an array of meshes)");
+  const Node meshes = root.at("meshes");
+  if (meshes.array().empty()) meshes.fail("must hold at least one mesh");
+
+  Scene scene;
+  scene.name = root.has("name") ? root.at("name").string() : fs::path(origin).stem().string();
+  // The name becomes the default output folder, out/NAME: keep it a plain file name.
+  const bool plain =
+      !scene.name.empty() && scene.name[0] != '.' &&
+      std::all_of(scene.name.begin(), scene.name.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_' || ch == '.';
+      });
+  if (!plain && root.has("name")) {
+    root.at("name").fail("must be a plain name of letters, digits, '-', '_' and '.'");
+  }
+  if (!plain) scene.name = "scene";
+  scene.description = root.has("description") ? root.at("description").string()
+                                              : fmt::format("scene file {}", origin);
+  for (std::size_t i = 0; i < meshes.value.size(); ++i) {
+    const Node m = meshes.at(i);
+    m.check_keys({"file", "builtin", "vertices", "triangles", "translate", "rotate_degrees",
+                  "scale", "color"});
+    const glm::vec3 color =
+        m.has("color") ? glm::vec3(m.at("color").vec3(0.0, 1.0)) : glm::vec3(0.8f);
+    const int sources = m.has("file") + m.has("builtin") + m.has("vertices");
+    if (sources != 1) {
+      m.fail("needs exactly one of 'file', 'builtin' or 'vertices' (with 'triangles')");
+    }
+    Mesh part;
+    if (m.has("file")) {
+      fs::path file = m.at("file").string();
+      if (file.is_relative()) file = fs::path(base_dir) / file;
+      part = load_mesh(file.string(), nullptr, limits, color);
+    } else if (m.has("builtin")) {
+      try {
+        part = make_builtin_scene(m.at("builtin").string()).mesh;
+      } catch (const std::invalid_argument& e) {
+        m.at("builtin").fail(e.what());
+      }
+      if (m.has("color")) {
+        for (Vertex& v : part.vertices) v.color = color;
+      }
+    } else {
+      if (!m.has("triangles")) m.fail("has 'vertices' but no 'triangles'");
+      part = inline_mesh(m, limits, color);
+    }
+    append(scene.mesh, part, mesh_transform(m), m, limits);
+  }
+
+  if (root.has("camera")) {
+    const Node c = root.at("camera");
+    if (c.has("view_direction")) {
+      c.check_keys({"view_direction", "fov_y_degrees"});
+      const glm::dvec3 dir = c.at("view_direction").vec3();
+      if (glm::length(glm::dvec2(dir.x, dir.z)) < 1e-6 * glm::length(dir) ||
+          glm::length(dir) == 0) {
+        c.at("view_direction").fail("must not be zero or parallel to the y axis");
+      }
+      const double fov = c.has("fov_y_degrees") ? c.at("fov_y_degrees").number(1, 170) : 40.0;
+      scene.camera = frame_mesh(scene.mesh, glm::vec3(dir), static_cast<float>(fov), 1.05f);
+    } else {
+      c.check_keys({"eye", "target", "up", "fov_y_degrees", "near", "far"});
+      for (const char* k : {"eye", "target", "near", "far"}) {
+        if (!c.has(k))
+          c.fail(fmt::format("needs '{}' (or 'view_direction' to frame the meshes)", k));
+      }
+      scene.camera.eye = glm::vec3(c.at("eye").vec3());
+      scene.camera.target = glm::vec3(c.at("target").vec3());
+      scene.camera.up = c.has("up") ? glm::vec3(c.at("up").vec3()) : glm::vec3(0, 1, 0);
+      scene.camera.fov_y_degrees =
+          c.has("fov_y_degrees") ? static_cast<float>(c.at("fov_y_degrees").number(1, 170)) : 40.f;
+      scene.camera.near_plane = static_cast<float>(c.at("near").number(1e-9, 1e30));
+      scene.camera.far_plane = static_cast<float>(c.at("far").number(1e-9, 1e30));
+      if (!(scene.camera.far_plane > scene.camera.near_plane)) {
+        c.at("far").fail("must be greater than 'near'");
+      }
+      const glm::vec3 back = scene.camera.eye - scene.camera.target;
+      if (glm::length(back) == 0.0f) c.at("target").fail("must differ from 'eye'");
+      if (glm::length(glm::cross(scene.camera.up, back)) == 0.0f) {
+        c.at("up").fail("must not be zero or parallel to the view direction");
+      }
+    }
+  } else {
+    scene.camera = frame_mesh(scene.mesh, glm::vec3(0.3f, 0.4f, 1.0f), 40.0f, 1.05f);
+  }
+
+  scene.light = default_light(scene.camera);
+  if (root.has("light")) {
+    const Node l = root.at("light");
+    l.check_keys({"direction", "ambient", "diffuse", "specular", "shininess"});
+    if (l.has("direction")) {
+      const glm::dvec3 d = l.at("direction").vec3();
+      if (glm::length(d) == 0.0) l.at("direction").fail("must not be the zero vector");
+      scene.light.direction = glm::vec3(glm::normalize(d));
+    }
+    if (l.has("ambient")) scene.light.ambient = static_cast<float>(l.at("ambient").number(0, 1));
+    if (l.has("diffuse")) scene.light.diffuse = static_cast<float>(l.at("diffuse").number(0, 1));
+    if (l.has("specular")) scene.light.specular = static_cast<float>(l.at("specular").number(0, 1));
+    if (l.has("shininess")) {
+      scene.light.shininess = static_cast<float>(l.at("shininess").number(1, 1024));
+    }
+  }
+  scene.background = root.has("background") ? glm::vec3(root.at("background").vec3(0.0, 1.0))
+                                            : glm::vec3(0.05f, 0.05f, 0.08f);
+  return scene;
+}
+
+Scene load_scene_file(const std::string& path, const LoadLimits& limits) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(fmt::format("{}: cannot open the scene file", path));
+  std::ostringstream text;
+  text << in.rdbuf();
+  const std::string base = fs::path(path).parent_path().string();
+  return parse_scene_json(text.str(), path, base.empty() ? "." : base, limits);
+}
+
+Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {
+  const fs::path p(name_or_path);
+  std::string ext = p.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".json") return load_scene_file(name_or_path);
+  if (is_mesh_file(name_or_path)) {
+    MeshLoadReport report;
+    Mesh mesh = load_mesh(name_or_path, &report);
+    return scene_from_mesh(
+        std::move(mesh), p.stem().string(),
+        fmt::format("mesh file {} ({} faces, {} triangulated, {} degenerate dropped, {} "
+                    "non-manifold edges)",
+                    name_or_path, report.polygons, report.triangulated, report.dropped_degenerate,
+                    report.non_manifold_edges));
+  }
+  try {
+    return make_builtin_scene(name_or_path, options);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(fmt::format(
+        "{} (or give a mesh file .obj .ply .stl .off, or a scene file .json)", e.what()));
+  }
+}
+
+}  // namespace pp5

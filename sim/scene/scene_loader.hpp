@@ -1,0 +1,50 @@
+#pragma once
+// Scene description files (JSON) and the one entry point the command line uses to turn a
+// --scene argument (a built-in name, a mesh file or a scene file) into a Scene.
+//
+// A scene file:
+//   {
+//     "meshes": [                                  required, at least one
+//       {"file": "bunny.obj",                      a mesh file, relative to the scene file,
+//        "translate": [0, 0, 0],                   or "builtin": "sphere", or inline
+//        "rotate_degrees": [0, 30, 0],             "vertices": [[x,y,z], ...] and
+//        "scale": 1.0,                             "triangles": [[i,j,k], ...];
+//        "color": [0.8, 0.3, 0.2]}                 the material's colour (RGB in 0..1)
+//     ],
+//     "camera": {"eye": [..], "target": [..], "up": [0,1,0],
+//                "fov_y_degrees": 40, "near": 0.1, "far": 100},
+//        or {"view_direction": [x,y,z], "fov_y_degrees": 40} to frame the meshes;
+//        absent: framed from the front and a little above
+//     "light": {"direction": [x,y,z], "ambient": 0.15, "diffuse": 0.8,
+//               "specular": 0.3, "shininess": 16},   absent: the standard key light
+//     "background": [r, g, b],
+//     "name": "...", "description": "..."
+//   }
+// Rotation applies about x, then y, then z, after scaling and before translation.
+//
+// Contract: unknown keys, wrong types and out-of-range values are SceneError whose message
+// names the file and the key's path (e.g. "meshes[1].scale"); mesh-file errors keep the
+// mesh file's own line numbers.
+#include <stdexcept>
+#include <string>
+
+#include "sim/scene/mesh_loader.hpp"
+#include "sim/scene/scene.hpp"
+
+namespace pp5 {
+
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Parses a scene description; `origin` names it in messages and `base_dir` resolves
+// relative mesh paths.
+Scene parse_scene_json(const std::string& text, const std::string& origin,
+                       const std::string& base_dir, const LoadLimits& limits = {});
+Scene load_scene_file(const std::string& path, const LoadLimits& limits = {});
+
+// A built-in scene name, a mesh file (.obj .ply .stl .off) or a scene file (.json).
+Scene load_scene(const std::string& name_or_path, const SceneOptions& options = {});
+
+}  // namespace pp5
