@@ -15,23 +15,11 @@
 #include "models/machine.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
+#include "sim/kernel.hpp"
 
 namespace pp5 {
 
 namespace {
-
-// SystemC allows one elaboration per kernel; a new simulation context gives every frame a
-// fresh kernel, so that one process can simulate many frames. The old context is left
-// alive on purpose: objects of the previous run may still refer to it while they unwind.
-void fresh_kernel() {
-  setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0);
-  if (sc_core::sc_get_status() == sc_core::SC_ELABORATION && sc_core::sc_delta_count() == 0 &&
-      sc_core::sc_get_top_level_objects().empty()) {
-    return;  // an untouched kernel: use it
-  }
-  sc_core::sc_curr_simcontext = new sc_core::sc_simcontext();
-  sc_core::sc_default_global_context = sc_core::sc_curr_simcontext;
-}
 
 // Chrome trace-event JSON: one process per kind of unit, one thread per unit, complete
 // ("X") slices in microseconds. Slices of one track are recorded in time order and nest.
@@ -164,7 +152,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   fresh_kernel();
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
   machine->record_timeline(timeline != nullptr);
-  sc_core::sc_start();
+  run_kernel();
   if (timeline) *timeline = timeline_document(*machine);
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();

@@ -10,6 +10,7 @@
 #include "models/gp/i860.hpp"
 #include "models/machine.hpp"
 #include "models/ring/ring.hpp"
+#include "sim/kernel.hpp"
 #include "sim/simulation.hpp"
 #include "tests/support.hpp"
 
@@ -27,12 +28,6 @@ GpWorkload phong_workload(const MachineConfig& c) {
       (c.evaluator.coefficient_bits + c.ring.word_bits - 1) / c.ring.word_bits;
   w.packet_words = 1 + w.expressions.count() * 3 * per_coefficient;
   return w;
-}
-
-// A fresh SystemC kernel, so that each test can elaborate its own modules.
-void fresh_kernel() {
-  sc_core::sc_curr_simcontext = new sc_core::sc_simcontext();
-  sc_core::sc_default_global_context = sc_core::sc_curr_simcontext;
 }
 
 // Senders that each push `messages` messages of `words` words through the ring, back to back.
@@ -133,7 +128,7 @@ TEST_CASE("ring: one message arrives at its earliest legal cycle", "[timing][rin
   p.hop_latency_cycles = 3;
   Ring ring("ring", p, 10);
   RingLoad load("load", ring, 1, 1, 100);
-  sc_core::sc_start();
+  run_kernel();
   const sc_core::sc_time cycle(1.0 / p.clock_hz, sc_core::SC_SEC);
   // 100 words, then 1 hop of 3 cycles: not one cycle early, and on time.
   CHECK(load.last == cycle * 103.0);
@@ -149,7 +144,7 @@ TEST_CASE("ring: saturated, it reaches and never exceeds its bandwidth", "[timin
   Ring ring("ring", p, 20);
   // 12 senders for 4 channels: every channel always has a message waiting.
   RingLoad load("load", ring, 12, 50, 64);
-  sc_core::sc_start();
+  run_kernel();
   const double cycles = load.last.to_seconds() * p.clock_hz;
   const double words = 12.0 * 50 * 64;
   // The ideal: every channel carries a word every cycle.
