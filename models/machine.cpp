@@ -23,6 +23,7 @@ GeometryParams geometry_params(const MachineConfig& c) {
   g.depth_bits = c.gp.depth_bits;
   g.fraction_bits = c.evaluator.fraction_bits;
   g.coefficient_bits = c.evaluator.coefficient_bits;
+  g.result_bits = c.evaluator.result_bits;
   g.cull_back_faces = c.gp.cull_back_faces != 0;
   return g;
 }

@@ -232,9 +232,19 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
     const __int128 f0 = static_cast<__int128>(std::llround(f[0] * f_scale)) * scale;
     const __int128 num = f0 - static_cast<__int128>(Ai) * (xs[0] - half) -
                          static_cast<__int128>(Bi) * (ys[0] - half);
-    const __int128 C = (num >= 0 ? num + scale / 2 : num - scale / 2) / scale;
-    if (C >= (static_cast<__int128>(1) << (cb - 1)) ||
-        C < -(static_cast<__int128>(1) << (cb - 1))) {
+    __int128 C = (num >= 0 ? num + scale / 2 : num - scale / 2) / scale;
+    // C is sent modulo 2^coefficient_bits when the evaluator's sums wrap at no more bits
+    // than that: every pixel then still gets A x + B y + C exactly modulo 2^result_bits, and
+    // inside the triangle, where the attribute lies within its range, that is its exact
+    // value. A steep plane far from the screen's origin needs this: its C is far beyond the
+    // width while the values it yields are not. (Edge functions are never wrapped: their
+    // sign matters at every pixel.)
+    const __int128 span = static_cast<__int128>(1) << cb;
+    if (params_.result_bits <= cb) {
+      C = ((C % span) + span) % span;
+      if (C >= span / 2) C -= span;
+    }
+    if (C >= span / 2 || C < -span / 2) {
       overflow = true;
       return QuadraticCoefficients{};
     }

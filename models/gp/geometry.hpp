@@ -33,6 +33,7 @@ struct GeometryParams {
   int depth_bits = 24;
   int fraction_bits = 12;
   int coefficient_bits = 40;
+  int result_bits = 40;          // the evaluator's: its sums wrap modulo 2^result_bits
   bool cull_back_faces = false;  // drop triangles facing away from the eye
 };
 

@@ -381,23 +381,36 @@ std::vector<ExtremeCase> synthetic_extreme_cases(const MachineConfig& base, int 
   std::vector<ExtremeCase> cases;
   cases.push_back(depth_precision_case(base, threads));
 
-  {  // Coefficient overflow: an edge-on triangle far from the screen's origin.
+  {  // Coefficient width: a steep plane far from the screen's origin, and one too steep.
     ViewScene v(kScreen, kScreen);
+    // Edge-on at x = 230: a depth gradient of about 2^37 per pixel (with fraction bits), so
+    // its constant term is far beyond 40 bits while every value inside it is in range.
     v.triangle(v.at(230.3, 40.0, 1.5), v.at(230.7, 220.0, 1.5), v.at(230.4, 130.0, 90.0));
     v.triangle(v.at(20.0, 20.0, 5.0), v.at(60.0, 20.0, 5.0), v.at(20.0, 60.0, 5.0));
-    const Drawn d = draw_flat(config, v.scene, threads);
-    std::uint64_t drawn = 0;
-    for (std::size_t p = 0; p < d.image.rgb.size(); p += 3) drawn += d.image.rgb[p] > 0;
+    const Drawn wide = draw_flat(config, v.scene, threads);
+    std::uint64_t wide_drawn = 0;
+    for (int y = 0; y < kScreen; ++y) {
+      for (int x = 200; x < kScreen; ++x) {
+        wide_drawn += wide.image.rgb[3 * (static_cast<std::size_t>(y) * kScreen + x)] > 0;
+      }
+    }
+    // A sixteenth of a pixel wide with the same depth span: the gradient itself, about 2^42
+    // per pixel, does not fit.
+    ViewScene w(kScreen, kScreen);
+    w.triangle(w.at(230.4375, 40.0, 1.5), w.at(230.5625, 220.0, 1.5), w.at(230.4375, 130.0, 90.0));
+    const Drawn steep = draw_flat(config, w.scene, threads);
     ExtremeCase c;
-    c.name = "coefficient overflow";
+    c.name = "coefficient width";
     c.expected =
-        "a triangle edge-on to the screen at x = 230 has a depth gradient of about 2^37 per "
-        "pixel (with fraction bits), so its constant term exceeds the coefficient width: it is "
-        "dropped and counted in stats.json setup.coefficient_overflow and the render summary, "
-        "never drawn with wrapped values; the ordinary triangle beside it is drawn";
-    c.observed =
-        fmt::format("{} of 2 triangles dropped and counted; {} pixels drawn", d.overflow, drawn);
-    c.pass = d.overflow == 1 && drawn > 0;
+        "a triangle edge-on to the screen at x = 230 has a constant term far beyond the 40-bit "
+        "coefficients; sent modulo 2^40, which the evaluator's wrapping sums make exact, it is "
+        "drawn and nothing is dropped. A triangle so thin that its depth gradient itself does "
+        "not fit is dropped and counted in stats.json setup.coefficient_overflow and the render "
+        "summary, never drawn with wrapped values";
+    c.observed = fmt::format(
+        "steep triangle: {} dropped, {} pixels drawn right of x = 200; too steep: {} dropped",
+        wide.overflow, wide_drawn, steep.overflow);
+    c.pass = wide.overflow == 0 && wide_drawn > 0 && steep.overflow == 1;
     cases.push_back(c);
   }
 
