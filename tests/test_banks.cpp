@@ -286,7 +286,7 @@ TEST_CASE("On the figure-eight surface epsilon's curve width varies less than th
   CHECK(acc[1].width_sd / acc[1].width_mean < 0.5 * (acc[0].width_sd / acc[0].width_mean));
 }
 
-TEST_CASE("The two-pass epsilon does not fit in 208 bits; spilled, it computes the same flags",
+TEST_CASE("The two-pass epsilon does not fit in 208 bits - spilled, it computes the same flags",
           "[banks]") {
   MachineConfig config = MachineConfig::defaults();
   std::ifstream in(program_path("epsilon"));
@@ -381,7 +381,7 @@ TEST_CASE("Multipass transparency finds intersections behind the frontmost layer
   CHECK(count("transparent_threshold") >= behind);
 }
 
-TEST_CASE("epsilon folded into the rendering pass is order-sensitive; two-pass epsilon is not",
+TEST_CASE("epsilon folded into the rendering pass is order-sensitive - two-pass epsilon is not",
           "[banks]") {
   Bench b;
   // The paper's case: P faces the screen in front, M parallel to it behind, and B, far

@@ -95,7 +95,7 @@ TEST_CASE("a self-intersecting polygon is fanned and reported as not simple", "[
   CHECK(out.size() == 2);
 }
 
-TEST_CASE("zero-area triangles are dropped and counted; non-manifold edges render", "[loaders]") {
+TEST_CASE("zero-area triangles are dropped and counted - non-manifold edges render", "[loaders]") {
   MeshLoadReport report;
   const Mesh m = load_mesh(data_path("meshes/zero_area.obj"), &report);
   CHECK(m.triangles.size() == 1);

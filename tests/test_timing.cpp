@@ -154,7 +154,7 @@ TEST_CASE("ring: saturated, it reaches and never exceeds its bandwidth", "[timin
   CHECK(ring.contention().count > 0);
 }
 
-TEST_CASE("static and dynamic balancing render identical images; dynamic is deterministic",
+TEST_CASE("static and dynamic balancing render identical images - dynamic is deterministic",
           "[timing][balancing]") {
   MachineConfig config = MachineConfig::defaults();
   config.screen.width = 512;

@@ -294,7 +294,7 @@ TEST_CASE("truncated and corrupted trace files are rejected with a message", "[t
                     Catch::Contains("bad header"));
 }
 
-TEST_CASE("why names the last writer; diff finds where two programs diverge", "[trace]") {
+TEST_CASE("why names the last writer - diff finds where two programs diverge", "[trace]") {
   const MachineConfig c = small_config();
   trace::Selection sel;
   sel.rects.push_back({190, 140, 1, 1});
