@@ -33,7 +33,7 @@ struct PacketContext {
 // begin_packet before each packet's first instruction, after_instruction after each
 // instruction has executed (with its index in the procedure and its cost), and end_region
 // after a region's shade procedure. With no observer the board's only extra work is one
-// predictable branch per procedure run.
+// predictable branch per instruction.
 class BoardObserver {
  public:
   virtual ~BoardObserver() = default;
@@ -118,7 +118,6 @@ class RendererBoard {
   std::vector<Word> scratch_;
   BoardObserver* observer_ = nullptr;
   PacketContext packet_;
-  ArrayCycles run_observed(const ProcedureCode& procedure, const PacketValues& values);
 
   std::uint64_t instructions_ = 0;
   ArrayCycles cycles_{};
