@@ -1,18 +1,7 @@
 #!/usr/bin/env bash
 # The command-line program as a user meets it: bad input gives a clear message, a non-zero
 # exit and no output files; good input writes the frame and both reports.
-set -u
-bin="$1"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-
-expect_error() {  # expect_error PATTERN ARGS...
-  local pattern="$1"; shift
-  local out
-  out=$("$bin" "$@" 2>&1) && fail "'$*' exited 0"
-  echo "$out" | grep -q -- "$pattern" || fail "'$*' said: $out (expected: $pattern)"
-}
+. "$(dirname "$0")/cli_lib.sh"
 
 expect_error "unknown scene 'nope'" render --scene nope --out "$tmp/a"
 expect_error "no such file" render --firmware /nonexistent.pp5 --out "$tmp/b"

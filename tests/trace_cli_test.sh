@@ -2,18 +2,7 @@
 # pp5sim trace as a user meets it (the README's "Tracing a pixel"): record one pixel of the
 # torus, ask why it has its colour, diff it against another firmware program, export a VCD
 # that GTKWave's vcd2fst accepts; bad input gives a message, a non-zero exit and no file.
-set -u
-bin="$1"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*"; exit 1; }
-
-expect_error() {  # expect_error PATTERN ARGS...
-  local pattern="$1"; shift
-  local out
-  out=$("$bin" "$@" 2>&1) && fail "'$*' exited 0"
-  echo "$out" | grep -q -- "$pattern" || fail "'$*' said: $out (expected: $pattern)"
-}
+. "$(dirname "$0")/cli_lib.sh"
 
 "$bin" trace record --pixel 500,400 -o "$tmp/phong.pp5t" >"$tmp/rec.log" 2>&1 ||
   fail "record failed: $(cat "$tmp/rec.log")"
