@@ -1,6 +1,5 @@
 #include "sim/kernel.hpp"
 
-#include <cstddef>
 #include <cstdlib>
 #include <systemc>
 

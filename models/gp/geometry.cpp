@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace pp5 {
 
@@ -215,9 +216,14 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
   }
   const double det = (u[1] - u[0]) * (w[2] - w[0]) - (u[2] - u[0]) * (w[1] - w[0]);
   bool overflow = false;
+  // The gradient (per pixel in x and y) of the plane through the three vertices' values.
+  auto gradient = [&](const std::array<double, 3>& f) {
+    return std::pair<double, double>{
+        ((f[1] - f[0]) * (w[2] - w[0]) - (f[2] - f[0]) * (w[1] - w[0])) / det,
+        ((f[2] - f[0]) * (u[1] - u[0]) - (f[1] - f[0]) * (u[2] - u[0])) / det};
+  };
   auto plane = [&](std::array<double, 3> f) {
-    const double a = ((f[1] - f[0]) * (w[2] - w[0]) - (f[2] - f[0]) * (w[1] - w[0])) / det;
-    const double b = ((f[2] - f[0]) * (u[1] - u[0]) - (f[1] - f[0]) * (u[2] - u[0])) / det;
+    const auto [a, b] = gradient(f);
     const double A = std::nearbyint(a * f_scale);
     const double B = std::nearbyint(b * f_scale);
     const double limit = std::ldexp(1.0, cb - 1);
@@ -281,9 +287,7 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
   if (needed.test(static_cast<int>(Expression::slope_x)) ||
       needed.test(static_cast<int>(Expression::slope_y))) {
     // The depth plane's gradient, in depth units per pixel, quantised for the firmware.
-    const std::array<double, 3> f{depth(0), depth(1), depth(2)};
-    const double a = ((f[1] - f[0]) * (w[2] - w[0]) - (f[2] - f[0]) * (w[1] - w[0])) / det;
-    const double b = ((f[2] - f[0]) * (u[1] - u[0]) - (f[1] - f[0]) * (u[2] - u[0])) / det;
+    const auto [a, b] = gradient({depth(0), depth(1), depth(2)});
     auto slope = [](double g) {
       return std::clamp(std::nearbyint(std::ldexp(g, -kSlopeShift)),
                         -static_cast<double>(kSlopeLimit), static_cast<double>(kSlopeLimit));
