@@ -69,16 +69,6 @@ struct TimelineSlice {
   sc_core::sc_time end;
 };
 
-// Everything one GP sends one region.
-// With a multipass program the GP sends the same packets once per pass.
-struct Bin {
-  int region = 0;
-  int gp = 0;
-  int pass = 0;
-  std::vector<std::shared_ptr<const Packet>> packets;
-  std::uint64_t words = 0;
-};
-
 // The machine configuration seen by each plain-C++ part.
 GeometryParams geometry_params(const MachineConfig& config);
 TimingParams timing_params(const MachineConfig& config);

@@ -162,7 +162,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
 
   FrameResult result;
   FrameBuffer& fb = machine->frame_buffer();
-  result.image = fb.image();
+  result.image = fb.take_image();
   result.frame_seconds = fb.frame_complete().to_seconds();
   const auto triangles = scene.mesh.triangles.size();
   result.triangles_per_second =

@@ -1,7 +1,11 @@
 #include "models/frame_buffer/frame_buffer.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 namespace pp5 {
 
@@ -9,7 +13,19 @@ FrameBuffer::FrameBuffer(sc_core::sc_module_name name, int width, int height, in
     : sc_module(name), arrival_(regions, sc_core::SC_ZERO_TIME) {
   image_.width = width;
   image_.height = height;
-  image_.rgb.assign(static_cast<std::size_t>(width) * height * 3, 0);
+  const std::size_t bytes = static_cast<std::size_t>(width) * height * 3;
+  image_.rgb.reserve(bytes);
+#if defined(__linux__)
+  // Host speed only: a large frame (48 MB at 4096 x 4096) is first touched here, and with
+  // 2 MB pages that takes 1/512 of the page faults. The advice may be ignored; nothing
+  // depends on it.
+  constexpr std::uintptr_t kHugePage = std::uintptr_t{2} << 20;
+  const auto begin = reinterpret_cast<std::uintptr_t>(image_.rgb.data());
+  const std::uintptr_t first = (begin + kHugePage - 1) & ~(kHugePage - 1);
+  const std::uintptr_t last = (begin + bytes) & ~(kHugePage - 1);
+  if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+#endif
+  image_.rgb.assign(bytes, 0);
 }
 
 void FrameBuffer::region_arrived(int region, sc_core::sc_time when) {

@@ -2,6 +2,7 @@
 // The conventional frame buffer: a ring stop that receives finished regions and assembles
 // the frame.
 #include <systemc>
+#include <utility>
 #include <vector>
 
 #include "sim/image/png_writer.hpp"
@@ -20,7 +21,9 @@ class FrameBuffer : public sc_core::sc_module {
   void store_region(int x0, int y0, int region_width, int region_height,
                     const std::vector<std::uint8_t>& rgb);
 
-  const RgbImage& image() const { return image_; }
+  // Hands the assembled frame over (a 4096 x 4096 frame is 48 MB: moved, not copied); the
+  // frame buffer is empty afterwards.
+  RgbImage take_image() { return std::move(image_); }
   // Simulated time at which the last region arrived: the frame time.
   sc_core::sc_time frame_complete() const { return last_; }
   int regions_received() const { return received_; }

@@ -70,12 +70,9 @@ void GraphicsProcessor::run() {
   const GpWorkload& workload = machine_.gp_workload();
   const std::uint64_t words = workload.packet_words;
 
-  std::vector<std::shared_ptr<Bin>> bins(config.regions());
-  for (int r = 0; r < config.regions(); ++r) {
-    bins[r] = std::make_shared<Bin>();
-    bins[r]->region = r;
-    bins[r]->gp = index_;
-  }
+  // A bin per region: the packets this GP sends it, in display-list order. With a multipass
+  // program the same packets go out once per pass.
+  std::vector<std::vector<std::shared_ptr<const Packet>>> bins(config.regions());
   std::vector<ScreenTriangle> screen;
   std::vector<int> regions;
   for (int i = first_; i < last_; ++i) {
@@ -97,8 +94,7 @@ void GraphicsProcessor::run() {
       regions.clear();
       geometry.bin(result, regions);
       for (int r : regions) {
-        bins[r]->packets.push_back(packet);
-        bins[r]->words += words;
+        bins[r].push_back(packet);
         ++stats_.packets;
         ++binned;
       }
@@ -124,43 +120,49 @@ void GraphicsProcessor::run() {
   std::vector<std::size_t> next(static_cast<std::size_t>(passes) * n, 0);
   std::vector<bool> done(next.size(), false);
   std::size_t remaining = next.size();
-  auto message_for = [&](int s) {
-    const Bin& bin = *bins[s % n];
-    auto m = std::make_shared<BinMessage>();
-    m->region = bin.region;
-    m->pass = s / n;
-    m->gp = index_;
-    m->words = 1;  // a header word, so an empty bin still tells its Renderer this GP is done
-    std::size_t k = next[s];
-    while (k < bin.packets.size() && m->words + bin.packets[k]->words <= capacity) {
-      m->words += bin.packets[k]->words;
-      m->packets.push_back(bin.packets[k++]);
-    }
-    m->last = k == bin.packets.size();
-    return m;
-  };
+  // Every packet is `words` long, so a message carries a header word and as many of the
+  // bin's remaining packets as fit in a queue: its size is known before it is built.
+  const std::size_t per_message = (capacity - 1) / words;  // >= 1, checked by the Machine
+  auto packets_for = [&](int s) { return std::min(per_message, bins[s % n].size() - next[s]); };
+  auto words_for = [&](int s) { return 1 + packets_for(s) * words; };
+  // Each Renderer has at most one stage open, so the candidates are those stages, tried in
+  // stage order: the lowest open stage this GP still owes something, whose queue has room.
+  std::vector<int> open_stages;
+  open_stages.reserve(static_cast<std::size_t>(machine_.renderer_count()));
   while (remaining > 0) {
-    std::shared_ptr<BinMessage> m;
+    open_stages.clear();
+    for (int k = 0; k < machine_.renderer_count(); ++k) {
+      const int s = machine_.renderer(k).open_stage(n);
+      if (s >= 0 && !done[s] && machine_.owner_of_region(s % n) == k) open_stages.push_back(s);
+    }
+    std::sort(open_stages.begin(), open_stages.end());
     int pick = -1;
-    bool open = false;
-    for (int s = 0; s < passes * n && pick < 0; ++s) {
-      if (done[s]) continue;
-      const int region = s % n;
-      const int owner = machine_.owner_of_region(region);
-      if (owner < 0 || !machine_.renderer(owner).accepts(region, s / n)) continue;
-      open = true;
-      m = message_for(s);
-      if (machine_.renderer(owner).has_room(m->words)) pick = s;
+    for (int s : open_stages) {
+      if (machine_.renderer(machine_.owner_of_region(s % n)).has_room(words_for(s))) {
+        pick = s;
+        break;
+      }
     }
     if (pick < 0) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();
       begin(GpActivity::renderer);
       wait(machine_.input_changed());
-      (open ? stats_.waiting_queue : stats_.waiting_stage) += sc_core::sc_time_stamp() - t0;
+      (open_stages.empty() ? stats_.waiting_stage : stats_.waiting_queue) +=
+          sc_core::sc_time_stamp() - t0;
       continue;
     }
+    const auto& bin = bins[pick % n];
+    auto m = std::make_shared<BinMessage>();
+    m->region = pick % n;
+    m->pass = pick / n;
+    m->gp = index_;
+    m->words = words_for(pick);  // the header word tells the Renderer even an empty bin is done
+    const std::size_t first = next[pick];
+    next[pick] += packets_for(pick);
+    m->packets.assign(bin.begin() + static_cast<std::ptrdiff_t>(first),
+                      bin.begin() + static_cast<std::ptrdiff_t>(next[pick]));
+    m->last = next[pick] == bin.size();
     machine_.renderer(machine_.owner_of_region(pick % n)).reserve_room(m->words);
-    next[pick] += m->packets.size();
     if (m->last) {
       done[pick] = true;
       --remaining;

@@ -73,6 +73,10 @@ class Renderer : public sc_core::sc_module {
 
   // The stage open for input, and room in the queue.
   bool accepts(int region, int pass) const { return open_region_ == region && open_pass_ == pass; }
+  // The (region, pass) stage open for input as pass * regions + region, or -1 when none is.
+  int open_stage(int regions) const {
+    return open_region_ < 0 ? -1 : open_pass_ * regions + open_region_;
+  }
   bool has_room(std::uint64_t words) const { return queued_words_ + words <= capacity_; }
   // A GP takes room for its next message (after has_room), before it starts sending.
   void reserve_room(std::uint64_t words);
