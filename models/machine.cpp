@@ -87,6 +87,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       i860_(i860_params(config)),
       dynamic_(config.renderer.balancing == "dynamic"),
       owner_(config.regions(), -1),
+      bin_senders_(config.regions(), 0),
       claimed_(config.renderer.count, 0) {
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
@@ -136,6 +137,16 @@ int Machine::claim_region(int renderer) {
   }
   if (region >= 0) owner_[region] = renderer;
   return region;
+}
+
+void Machine::add_bin_senders(const std::vector<int>& regions) {
+  for (int r : regions) ++bin_senders_[r];
+}
+
+std::uint64_t Machine::bin_map_words() const {
+  const auto bits = static_cast<std::uint64_t>(config_.regions());
+  const auto word = static_cast<std::uint64_t>(config_.ring.word_bits);
+  return 1 + (bits + word - 1) / word;
 }
 
 void Machine::record_timeline(bool on) {

@@ -111,6 +111,14 @@ class Machine : public sc_core::sc_module {
   int claim_region(int renderer);
   // The Renderer that claimed `region`, or -1 if none has yet.
   int owner_of_region(int region) const { return owner_[region]; }
+  // The bin maps: each GP, when its geometry is done, tells every Renderer which regions it
+  // has packets for. A Renderer waits for a region's bins from those GPs only, so a region no
+  // primitive touches waits for no message at all. A Renderer may read bin_senders() only
+  // once every GP's map has reached it.
+  void add_bin_senders(const std::vector<int>& regions);
+  int bin_senders(int region) const { return bin_senders_[region]; }
+  // Words of one bin map on the ring: a header word and one bit per region.
+  std::uint64_t bin_map_words() const;
   bool dynamic_balancing() const { return dynamic_; }
   // Notified whenever a Renderer opens a stage for input or frees queue space.
   sc_core::sc_event& input_changed() { return input_changed_; }
@@ -154,9 +162,10 @@ class Machine : public sc_core::sc_module {
   I860Model i860_;
   GpWorkload workload_;
   bool dynamic_ = false;
-  std::vector<int> owner_;    // region -> Renderer, -1 until claimed
-  int next_region_ = 0;       // dynamic: the next unclaimed region
-  std::vector<int> claimed_;  // static: regions each Renderer has claimed so far
+  std::vector<int> owner_;        // region -> Renderer, -1 until claimed
+  std::vector<int> bin_senders_;  // region -> GPs with packets for it
+  int next_region_ = 0;           // dynamic: the next unclaimed region
+  std::vector<int> claimed_;      // static: regions each Renderer has claimed so far
   sc_core::sc_event input_changed_;
   bool timeline_on_ = false;
   std::vector<TimelineSlice> slices_;

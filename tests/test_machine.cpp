@@ -75,7 +75,8 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   REQUIRE(r.stats["setup"]["packets"].get<std::uint64_t>() == 2);
 
   // The critical path, unit by unit: the GP transforms and sets up both triangles (the i860
-  // cost model's clocks) and starts its one message; the ring carries the bin one hop; the
+  // cost model's clocks), sends its bin map (a header word and one bit for the one region),
+  // then starts its one bin message; the ring carries the bin one hop; the
   // Renderer, which ran clear while it waited, loads the first packet's coefficients, runs two
   // triangle packets, copies the colours
   // to the backing store, and the ring carries the region one hop to the frame buffer.
@@ -90,8 +91,9 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   const I860Model i860(i860_params(config));
   const double gp_clocks =
       static_cast<double>(i860.clocks(I860Work::triangle(workload, 1, 1, 1), 1).count) * 2 +
-      static_cast<double>(i860.clocks(I860Work::send_bin(), 0).count);
+      2.0 * static_cast<double>(i860.clocks(I860Work::send_bin(), 0).count);
   CHECK(r.stats["gp"][0]["busy_clocks"].get<double>() == gp_clocks);
+  const double map_words = 2;
   const double bin_words = 1 + 2 * packet_words;
   const TimingParams timing = timing_params(config);
   const PacketValues none{};
@@ -108,8 +110,9 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   const double region_words =
       128.0 * 128 * config.frame_buffer.bits_per_pixel / config.ring.word_bits;
   const double hop = config.ring.hop_latency_cycles;
+  // The GP's ring interface is busy with the map before the bin starts.
   const double bin_arrival =
-      gp_clocks / config.gp.clock_hz + (bin_words + hop) / config.ring.clock_hz;
+      gp_clocks / config.gp.clock_hz + (map_words + bin_words + hop) / config.ring.clock_hz;
   REQUIRE(clear_cycles / config.renderer.clock_hz < bin_arrival);
   const double expected = bin_arrival + renderer_cycles / config.renderer.clock_hz +
                           (region_words + hop) / config.ring.clock_hz;

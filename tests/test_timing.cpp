@@ -326,3 +326,52 @@ TEST_CASE("coefficient loading: hidden when double-buffered, charged in full whe
         packets * coefficient_words);
   CHECK(serial.frame_seconds > buffered.frame_seconds);
 }
+
+TEST_CASE("a region no primitive touches waits for no bin message", "[timing]") {
+  // One triangle in the top-left region of a 512 x 512 screen (16 regions).
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"screen.width=512", "screen.height=512", "gp.count=4",
+                                      "renderer.count=4"});
+  Scene scene = make_builtin_scene("two-triangles");
+  const double d = 10.0, pixel = 2.0 * d / 512;
+  auto at = [&](double px, double py) {
+    Vertex v{};
+    v.position = glm::vec3(static_cast<float>(-d + px * pixel), static_cast<float>(d - py * pixel),
+                           static_cast<float>(-d));
+    v.normal = glm::vec3(0, 0, 1);
+    v.color = glm::vec3(0.8f);
+    return v;
+  };
+  scene.mesh.vertices = {at(10, 10), at(10, 100), at(100, 10)};
+  scene.mesh.triangles = {glm::uvec3(0, 1, 2)};
+  scene.camera = Camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 90.0f, 1.0f, 20.0f};
+  const Program program = load_program("flat", config);
+  for (const char* balancing : {"static", "dynamic"}) {
+    INFO(balancing);
+    config.renderer.balancing = balancing;
+    const FrameResult r = simulate_frame(config, scene, program, 1);
+    REQUIRE(r.stats["setup"]["packets"].get<std::uint64_t>() == 1);
+    // Every GP sends its bin map; only the one holding the triangle sends a bin.
+    std::uint64_t gp_messages = 0;
+    for (const auto& g : r.stats["gp"]) gp_messages += g["messages"].get<std::uint64_t>();
+    CHECK(gp_messages == 4 + 1);
+    std::uint64_t renderer_messages = 0, regions = 0, most = 0;
+    for (const auto& k : r.stats["renderer"]) {
+      renderer_messages += k["messages"].get<std::uint64_t>();
+      regions += k["regions"].get<std::uint64_t>();
+      most = std::max(most, k["regions"].get<std::uint64_t>());
+    }
+    CHECK(renderer_messages == 1);
+    CHECK(regions == 16);
+    // Empty regions are complete as soon as the maps are in, but a Renderer claims the next
+    // one only when it starts on the present one, so none takes the whole run.
+    CHECK(most <= 6);
+    // Every region, empty or not, is still cleared, shaded and shipped: the far corner has
+    // the background, the triangle its colour.
+    const auto pixel_at = [&](int x, int y) {
+      return r.image.rgb[(static_cast<std::size_t>(y) * 512 + x) * 3];
+    };
+    CHECK(pixel_at(511, 511) == std::lround(scene.background.r * 255));
+    CHECK(pixel_at(20, 20) != pixel_at(511, 511));
+  }
+}

@@ -110,6 +110,15 @@ void GraphicsProcessor::run() {
   stats_.geometry_done = sc_core::sc_time_stamp();
   machine_.add_slice(Unit::gp, index_, "geometry", sc_core::SC_ZERO_TIME, stats_.geometry_done);
 
+  // The bin map goes first, in one message that passes every Renderer: which regions this
+  // GP has packets for.
+  std::vector<int> nonempty;
+  for (int r = 0; r < config.regions(); ++r) {
+    if (!bins[r].empty()) nonempty.push_back(r);
+  }
+  machine_.add_bin_senders(nonempty);
+  send_bin_map();
+
   // Bins go out as their Renderers open (pass, region) stages: each message goes to the
   // lowest open stage whose Renderer's queue has room for it, so a full queue holds up only
   // the bins bound for it. A multipass program gets the same packets again for every pass:
@@ -118,8 +127,13 @@ void GraphicsProcessor::run() {
   const int n = config.regions();
   const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
   std::vector<std::size_t> next(static_cast<std::size_t>(passes) * n, 0);
+  // An empty bin is not sent: the map has told its Renderer not to wait for it.
   std::vector<bool> done(next.size(), false);
-  std::size_t remaining = next.size();
+  std::size_t remaining = 0;
+  for (std::size_t s = 0; s < done.size(); ++s) {
+    done[s] = bins[s % n].empty();
+    if (!done[s]) ++remaining;
+  }
   // Every packet is `words` long, so a message carries a header word and as many of the
   // bin's remaining packets as fit in a queue: its size is known before it is built.
   const std::size_t per_message = (capacity - 1) / words;  // >= 1, checked by the Machine
@@ -156,7 +170,7 @@ void GraphicsProcessor::run() {
     m->region = pick % n;
     m->pass = pick / n;
     m->gp = index_;
-    m->words = words_for(pick);  // the header word tells the Renderer even an empty bin is done
+    m->words = words_for(pick);
     const std::size_t first = next[pick];
     next[pick] += packets_for(pick);
     m->packets.assign(bin.begin() + static_cast<std::ptrdiff_t>(first),
@@ -171,6 +185,28 @@ void GraphicsProcessor::run() {
   }
   begin(GpActivity::done);
   stats_.finished = sc_core::sc_time_stamp();
+}
+
+void GraphicsProcessor::send_bin_map() {
+  spend(machine_.i860().clocks(I860Work::send_bin(), 0));
+  Ring& ring = machine_.ring();
+  const int from = machine_.gp_stop(index_);
+  int farthest = machine_.renderer_stop(0);
+  for (int k = 1; k < machine_.renderer_count(); ++k) {
+    if (ring.hops(from, machine_.renderer_stop(k)) > ring.hops(from, farthest))
+      farthest = machine_.renderer_stop(k);
+  }
+  const sc_core::sc_time requested = sc_core::sc_time_stamp();
+  const RingBooking b = ring.reserve(from, farthest, machine_.bin_map_words());
+  ++stats_.messages;
+  if (machine_.timeline_on()) machine_.add_slice(Unit::gp, index_, "bin map", requested, b.end);
+  for (int k = 0; k < machine_.renderer_count(); ++k) {
+    machine_.renderer(k).deliver_bin_map(requested,
+                                         b.end + ring.hop_delay(from, machine_.renderer_stop(k)));
+  }
+  begin(GpActivity::ring);
+  stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
+  wait(b.end - sc_core::sc_time_stamp());
 }
 
 void GraphicsProcessor::send(std::shared_ptr<BinMessage> m) {

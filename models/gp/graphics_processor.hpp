@@ -56,6 +56,9 @@ class GraphicsProcessor : public sc_core::sc_module {
   void run();
   void spend(GpClocks clocks);
   void send(std::shared_ptr<BinMessage> message);
+  // Tells every Renderer which regions this GP has packets for (Machine::add_bin_senders),
+  // in one message around the ring.
+  void send_bin_map();
   void begin(GpActivity a);
 
   int index_;

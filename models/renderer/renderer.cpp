@@ -26,12 +26,43 @@ void Renderer::reserve_room(std::uint64_t words) {
 void Renderer::deliver(std::shared_ptr<const BinMessage> message) {
   const bool last = message->last;
   queue_.push_back(std::move(message));
-  if (last && ++lasts_delivered_ == machine_.gp_count()) open_next_stage();
+  if (last) {
+    ++lasts_delivered_;
+    advance();
+  }
   arrived_.notify(sc_core::SC_ZERO_TIME);
+}
+
+void Renderer::deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arrival) {
+  ++maps_delivered_;
+  maps_requested_ = std::max(maps_requested_, requested);
+  maps_arrival_ = std::max(maps_arrival_, arrival);
+  if (maps_complete()) {
+    maps_complete_.notify(sc_core::SC_ZERO_TIME);
+    advance();
+  }
+}
+
+void Renderer::advance() {
+  if (open_region_ < 0 || !maps_complete()) return;
+  const int senders = machine_.bin_senders(open_region_);
+  if (lasts_delivered_ == senders && (senders > 0 || open_started_)) open_next_stage();
+}
+
+void Renderer::wait_for_bin_maps() {
+  const sc_core::sc_time from = sc_core::sc_time_stamp();
+  while (!maps_complete()) wait(maps_complete_);
+  if (maps_arrival_ > sc_core::sc_time_stamp()) wait(maps_arrival_ - sc_core::sc_time_stamp());
+  const sc_core::sc_time now = sc_core::sc_time_stamp();
+  const sc_core::sc_time gp_until = std::min(std::max(from, maps_requested_), now);
+  stats_.waiting_gp += gp_until - from;
+  stats_.waiting_ring += now - gp_until;
+  cursor_ = std::max(cursor_, now);
 }
 
 void Renderer::open_next_stage() {
   lasts_delivered_ = 0;
+  open_started_ = false;
   if (open_region_ >= 0 && open_pass_ + 1 < machine_.program().passes) {
     ++open_pass_;
   } else {
@@ -173,6 +204,10 @@ void Renderer::run() {
   while (!stages_.empty()) {
     const Stage stage = stages_.front();
     stages_.pop_front();
+    if (stage.region == open_region_ && stage.pass == open_pass_) {
+      open_started_ = true;
+      advance();
+    }
     if (stage.pass == 0) {
       for (auto& v : by_gp) v.clear();
       for (auto& pass : starts)
@@ -185,8 +220,11 @@ void Renderer::run() {
       pass_start.push_back(cycle_now());
       charge(program.procedure(Procedure::pass), frame_values);
     }
+    catch_up();
+    if (!maps_complete() || maps_arrival_ > sc_core::sc_time_stamp()) wait_for_bin_maps();
+    const int senders = machine_.bin_senders(stage.region);
     int lasts = 0;
-    while (lasts < gps) {
+    while (lasts < senders) {
       catch_up();
       const sc_core::sc_time waiting_from = sc_core::sc_time_stamp();
       std::size_t pick = queue_.size();

@@ -15,6 +15,8 @@
 //  - With renderer.backing_store_overlap, a bsst costs the array one issue cycle and then
 //    occupies the backing-store port for its blocks; a bsld waits for the port, then for its
 //    own transfer. Waiting for the port counts as a stall, not as busy.
+//  - A (region, pass) stage waits for the bins of the GPs whose bin map names the region,
+//    so a region no primitive touches costs clear, shade and shipping, and no message.
 //  - Every wait is attributed, from the sending GP's activity: to the GPs (it was computing),
 //    the ring (it was sending, or the message was crossing) or the Renderers (it was waiting
 //    for another Renderer), so the frame time splits into GP, ring and Renderer time.
@@ -82,6 +84,8 @@ class Renderer : public sc_core::sc_module {
   void reserve_room(std::uint64_t words);
   // A GP's message has been booked on the ring; it is in the queue from its arrival on.
   void deliver(std::shared_ptr<const BinMessage> message);
+  // A GP's bin map has been booked on the ring (Machine::bin_senders has its regions).
+  void deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arrival);
 
   const RendererStats& stats() const { return stats_; }
   const std::vector<RegionWork>& work() const { return work_; }
@@ -96,6 +100,15 @@ class Renderer : public sc_core::sc_module {
   };
   void run();
   void open_next_stage();
+  // Opens the next stage if the open one has all its input: every GP's bin map and the last
+  // message of every GP that has packets for it. A stage nobody has packets for is complete
+  // as soon as the maps are in, but the next opens only once the Renderer starts on it, so
+  // a run of empty regions is not all claimed at once.
+  void advance();
+  bool maps_complete() const { return maps_delivered_ == machine_.gp_count(); }
+  // Waits until every bin map has arrived; the wait is the GPs' (before the last map was
+  // asked for) and the ring's (after).
+  void wait_for_bin_maps();
   // Adds one procedure's time at the array's cursor.
   void charge(const ProcedureCode& procedure, const PacketValues& values);
   // Loads a triangle packet's coefficients into the evaluator before it runs.
@@ -111,6 +124,11 @@ class Renderer : public sc_core::sc_module {
   int open_region_ = -1;
   int open_pass_ = -1;
   int lasts_delivered_ = 0;
+  bool open_started_ = false;  // processing of the open stage has begun
+  int maps_delivered_ = 0;
+  sc_core::sc_time maps_requested_;  // the last GP's
+  sc_core::sc_time maps_arrival_;    // the last map's
+  sc_core::sc_event maps_complete_;
   std::deque<Stage> stages_;  // opened, not yet processed
   std::vector<std::shared_ptr<const BinMessage>> queue_;
   std::uint64_t queued_words_ = 0;

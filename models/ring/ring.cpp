@@ -27,12 +27,15 @@ RingBooking Ring::reserve(int from, int to, std::uint64_t words, sc_core::sc_tim
   busy_[channel] += RingCycles(words);
   ++messages_;
   words_ += words;
-  const int hops = ((to - from) % stops_ + stops_) % stops_;
   RingBooking b;
   b.end = start + length;
-  b.arrival = b.end + cycle_ * static_cast<double>(hops * params_.hop_latency_cycles);
+  b.arrival = b.end + hop_delay(from, to);
   if (record_) log_.push_back({channel, from, to, words, start, b.end, b.arrival});
   return b;
+}
+
+sc_core::sc_time Ring::hop_delay(int from, int to) const {
+  return cycle_ * static_cast<double>(hops(from, to) * params_.hop_latency_cycles);
 }
 
 void Ring::transfer(int from, int to, std::uint64_t words) {

@@ -49,6 +49,10 @@ class Ring : public sc_core::sc_module {
   RingBooking reserve(int from, int to, std::uint64_t words,
                       sc_core::sc_time not_before = sc_core::SC_ZERO_TIME);
   void transfer(int from, int to, std::uint64_t words);
+  // Time from a message's last word leaving `from` to its arrival at `to`: a message booked
+  // to the farthest of several stops passes the nearer ones on the way (a broadcast).
+  sc_core::sc_time hop_delay(int from, int to) const;
+  int hops(int from, int to) const { return ((to - from) % stops_ + stops_) % stops_; }
 
   // Keep every message for the timeline (off by default: it costs memory).
   void record_messages(bool on) { record_ = on; }
