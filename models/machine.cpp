@@ -188,6 +188,7 @@ void Machine::execute_pixels(int threads,
   std::atomic<int> next{0};
   auto worker = [&] {
     for (int k = next++; k < renderer_count(); k = next++) {
+      if (renderers_[k]->work().empty()) continue;  // a Renderer the frame did not use
       RendererBoard board(params);
       if (observe) board.set_observer(observe(k));
       board.share_empty_region(first);
