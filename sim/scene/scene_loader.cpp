@@ -162,6 +162,25 @@ void append(Mesh& scene_mesh, const Mesh& part, const glm::dmat4& transform, con
   }
 }
 
+// One directional light; absent keys keep the standard key light's.
+Light parse_light(const Node& l, const Camera& camera, bool allow_ambient) {
+  if (allow_ambient) {
+    l.check_keys({"direction", "ambient", "diffuse", "specular", "shininess"});
+  } else {
+    l.check_keys({"direction", "diffuse", "specular", "shininess"});
+  }
+  Light light = default_light(camera);
+  if (l.has("direction")) {
+    const glm::dvec3 d = l.at("direction").vec3();
+    if (glm::length(d) == 0.0) l.at("direction").fail("must not be the zero vector");
+    light.direction = glm::vec3(glm::normalize(d));
+  }
+  if (l.has("diffuse")) light.diffuse = static_cast<float>(l.at("diffuse").number(0, 1));
+  if (l.has("specular")) light.specular = static_cast<float>(l.at("specular").number(0, 1));
+  if (l.has("shininess")) light.shininess = static_cast<float>(l.at("shininess").number(1, 1024));
+  return light;
+}
+
 }  // namespace
 
 Scene parse_scene_json(const std::string& text, const std::string& origin,
@@ -177,7 +196,8 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     throw SceneError(
         fmt::format("{}: a scene file must be a JSON object (got {})", origin, doc.type_name()));
   }
-  root.check_keys({"name", "description", "meshes", "camera", "light", "background"});
+  root.check_keys(
+      {"name", "description", "meshes", "camera", "ambient", "light", "lights", "background"});
   if (!root.has("meshes")) throw SceneError(origin + ": missing key 'meshes' (an array of meshes)");
   const Node meshes = root.at("meshes");
   if (meshes.array().empty()) meshes.fail("must hold at least one mesh");
@@ -264,21 +284,30 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     scene.camera = frame_mesh(scene.mesh, glm::vec3(0.3f, 0.4f, 1.0f), 40.0f, 1.05f);
   }
 
-  scene.light = default_light(scene.camera);
-  if (root.has("light")) {
-    const Node l = root.at("light");
-    l.check_keys({"direction", "ambient", "diffuse", "specular", "shininess"});
-    if (l.has("direction")) {
-      const glm::dvec3 d = l.at("direction").vec3();
-      if (glm::length(d) == 0.0) l.at("direction").fail("must not be the zero vector");
-      scene.light.direction = glm::vec3(glm::normalize(d));
+  if (root.has("light") && root.has("lights")) {
+    root.at("lights").fail("cannot be given with 'light' (put that light in 'lights')");
+  }
+  const bool light_ambient = root.has("light") && root.at("light").has("ambient");
+  if (light_ambient && root.has("ambient")) {
+    root.at("ambient").fail("cannot be given with 'light.ambient'");
+  }
+  if (root.has("ambient")) scene.ambient = static_cast<float>(root.at("ambient").number(0, 1));
+  if (light_ambient) {
+    scene.ambient = static_cast<float>(root.at("light").at("ambient").number(0, 1));
+  }
+  if (root.has("lights")) {
+    const Node ls = root.at("lights");
+    const std::size_t n = ls.array().size();
+    if (n < 1 || n > static_cast<std::size_t>(kMaxLights)) {
+      ls.fail(fmt::format("holds {} lights; a scene has 1 to {}", n, kMaxLights));
     }
-    if (l.has("ambient")) scene.light.ambient = static_cast<float>(l.at("ambient").number(0, 1));
-    if (l.has("diffuse")) scene.light.diffuse = static_cast<float>(l.at("diffuse").number(0, 1));
-    if (l.has("specular")) scene.light.specular = static_cast<float>(l.at("specular").number(0, 1));
-    if (l.has("shininess")) {
-      scene.light.shininess = static_cast<float>(l.at("shininess").number(1, 1024));
+    for (std::size_t k = 0; k < n; ++k) {
+      scene.lights.push_back(parse_light(ls.at(k), scene.camera, false));
     }
+  } else if (root.has("light")) {
+    scene.lights = {parse_light(root.at("light"), scene.camera, true)};
+  } else {
+    scene.lights = {default_light(scene.camera)};
   }
   scene.background = root.has("background") ? glm::vec3(root.at("background").vec3(0.0, 1.0))
                                             : glm::vec3(0.05f, 0.05f, 0.08f);

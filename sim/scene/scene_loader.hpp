@@ -15,16 +15,21 @@
 //                "fov_y_degrees": 40, "near": 0.1, "far": 100},
 //        or {"view_direction": [x,y,z], "fov_y_degrees": 40} to frame the meshes;
 //        absent: framed from the front and a little above
-//     "light": {"direction": [x,y,z], "ambient": 0.15, "diffuse": 0.8,
-//               "specular": 0.3, "shininess": 16},   absent: the standard key light
+//     "ambient": 0.15,                             the scene's ambient reflection, 0..1
+//     "lights": [                                  1 to 8 directional lights, each adding
+//       {"direction": [x,y,z], "diffuse": 0.8,     its diffuse and specular terms; absent
+//        "specular": 0.3, "shininess": 16}, ...]   keys take the standard key light's
+//        or "light": {...} for one light (which may also hold "ambient"; not with "lights");
+//        neither: the standard key light
 //     "background": [r, g, b],
 //     "name": "...", "description": "..."
 //   }
 // Rotation applies about x, then y, then z, after scaling and before translation.
 //
-// Contract: unknown keys, wrong types and out-of-range values are SceneError whose message
-// names the file and the key's path (e.g. "meshes[1].scale"); mesh-file errors keep the
-// mesh file's own line numbers.
+// Contract: unknown keys, wrong types, out-of-range values and keys that exclude each other
+// ("light" with "lights", "ambient" with "light.ambient") are SceneError whose message names
+// the file and the key's path (e.g. "meshes[1].scale", "lights[2].diffuse"); mesh-file errors
+// keep the mesh file's own line numbers.
 #include <stdexcept>
 #include <string>
 
