@@ -181,6 +181,10 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
        {"background_red", "background_green", "background_blue", "light_x", "light_y", "light_z",
         "half_x", "half_y", "half_z", "ambient", "diffuse", "specular"},
        155},
+      {"transparent.pp5",
+       {"edge0", "edge1", "edge2", "depth", "red", "green", "blue", "opacity"},
+       {"background_red", "background_green", "background_blue"},
+       182},
   };
   for (const Expected& e : programs) {
     SECTION(e.file) {

@@ -46,6 +46,7 @@ enum class Expression {
   slope_x,
   slope_y,
   eye_depth,
+  opacity,
   count
 };
 
@@ -82,6 +83,7 @@ inline constexpr ExpressionInfo kExpressions[] = {
      "eye-space depth (distance along the view axis), 0 at the near plane to 2^gp.depth_bits - "
      "1 at the far plane, interpolated linearly in screen space through the three vertices: "
      "not perspective-correct (threshold_eyez)"},
+    {"opacity", "the material's opacity, 0..256 (256 = opaque), interpolated (transparent)"},
 };
 static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
               static_cast<std::size_t>(Expression::count));

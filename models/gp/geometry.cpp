@@ -16,11 +16,13 @@ struct ClipVertex {
   glm::dvec3 lit;
   glm::dvec3 base;
   glm::dvec3 normal;
+  double opacity;
 };
 
 ClipVertex mix(const ClipVertex& a, const ClipVertex& b, double t) {
   return {a.clip + (b.clip - a.clip) * t, a.lit + (b.lit - a.lit) * t,
-          a.base + (b.base - a.base) * t, a.normal + (b.normal - a.normal) * t};
+          a.base + (b.base - a.base) * t, a.normal + (b.normal - a.normal) * t,
+          a.opacity + (b.opacity - a.opacity) * t};
 }
 
 // Signed distance to clip plane k of the view volume -w <= x, y, z <= w.
@@ -98,6 +100,7 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
     v[k].clip = projection_ * e;
     v[k].base = glm::dvec3(src.color);
     v[k].normal = glm::normalize(normal_matrix_ * glm::dvec3(src.normal));
+    v[k].opacity = src.opacity;
   }
   // Two-sided lighting: the surfaces of interest (the self-intersecting torus) show both
   // sides, so normals are turned toward the viewer.
@@ -150,6 +153,7 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
     s.eye_depth = poly[i].clip.w;
     s.lit_color = poly[i].lit;
     s.base_color = poly[i].base;
+    s.opacity = poly[i].opacity;
     const double n = glm::length(poly[i].normal);
     s.normal = n > 0 ? poly[i].normal / n : face;
   }
@@ -304,6 +308,9 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
     constant(Expression::slope_x, slope(a));
     constant(Expression::slope_y, slope(b));
   }
+  // Opacity 0..256 (256 = opaque), clamped like a colour so that floor() stays in range.
+  auto opacity = [&](int k) { return std::clamp(t.v[k].opacity * 256.0, 0.5, 256.49); };
+  set(Expression::opacity, {opacity(0), opacity(1), opacity(2)});
   for (int c = 0; c < 3; ++c) {
     set(static_cast<Expression>(static_cast<int>(Expression::red) + c),
         {colour(t.v[0].lit_color[c]), colour(t.v[1].lit_color[c]), colour(t.v[2].lit_color[c])});

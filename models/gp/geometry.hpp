@@ -46,6 +46,7 @@ struct ScreenVertex {
   glm::dvec3 lit_color;   // 0..1, lit at the vertex
   glm::dvec3 base_color;  // 0..1, unlit material
   glm::dvec3 normal;      // eye space, unit, facing the viewer
+  double opacity = 1;     // the material's, 0..1
 };
 struct ScreenTriangle {
   std::array<ScreenVertex, 3> v;

@@ -27,6 +27,7 @@ std::uint64_t clip_attributes(const GpWorkload& w) {
   if (needs_vertex_light(w)) n += 3;
   if (needs_normals(w)) n += 3;
   if (any(w, {E::base_red, E::base_green, E::base_blue})) n += 3;
+  if (any(w, {E::opacity})) n += 1;
   return n;
 }
 

@@ -8,11 +8,13 @@
 
 namespace pp5 {
 
-// One mesh vertex in world space. `normal` is unit length; `color` is RGB in [0,1].
+// One mesh vertex in world space. `normal` is unit length; `color` is RGB in [0,1]; `opacity`
+// is the material's, in [0,1] (1 = opaque; only programs with the `opacity` expression use it).
 struct Vertex {
   glm::vec3 position;
   glm::vec3 normal;
   glm::vec3 color;
+  float opacity = 1.0f;
 };
 
 // An indexed triangle mesh. Every index in `triangles` is < vertices.size(). Triangles are wound
@@ -48,6 +50,9 @@ struct Scene {
   float ambient = 0.15f;      // ambient reflection, in [0,1], once for the whole scene
   std::vector<Light> lights;  // 1..kMaxLights
   glm::vec3 background;       // RGB in [0,1]
+  // The firmware the scene asks for (a program name or .pp5 path), or empty for the
+  // command's default; `pp5sim render --firmware` overrides it.
+  std::string firmware;
   // Frame-parameter overrides by name (firmware/isa/interface.hpp), e.g. highlight options
   // from `pp5sim render --param NAME=VALUE`; unknown names are rejected by the GP.
   std::map<std::string, std::int64_t> parameters;

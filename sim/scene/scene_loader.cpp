@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -162,6 +164,41 @@ void append(Mesh& scene_mesh, const Mesh& part, const glm::dmat4& transform, con
   }
 }
 
+// A surface's material: its colour (absent: a mesh file's own colours, or 0.8 grey) and
+// opacity.
+struct Material {
+  std::optional<glm::vec3> color;
+  float opacity = 1.0f;
+};
+
+Material parse_material(const Node& m) {
+  m.check_keys({"color", "opacity"});
+  Material out;
+  if (m.has("color")) out.color = glm::vec3(m.at("color").vec3(0.0, 1.0));
+  if (m.has("opacity")) out.opacity = static_cast<float>(m.at("opacity").number(0, 1));
+  return out;
+}
+
+// A mesh's "material" (a name from "materials" or an inline material) or its "color".
+Material mesh_material(const Node& m, const std::map<std::string, Material>& materials) {
+  if (m.has("material") && m.has("color")) {
+    m.at("color").fail("cannot be given with 'material' (give the material a 'color')");
+  }
+  if (m.has("color")) return {glm::vec3(m.at("color").vec3(0.0, 1.0)), 1.0f};
+  if (!m.has("material")) return {};
+  const Node mat = m.at("material");
+  if (mat.value.is_object()) return parse_material(mat);
+  const std::string name = mat.string();
+  const auto it = materials.find(name);
+  if (it == materials.end()) {
+    std::string known;
+    for (const auto& [k, v] : materials) known += (known.empty() ? "" : ", ") + k;
+    mat.fail(fmt::format("names an unknown material '{}' (the file's 'materials': {})", name,
+                         known.empty() ? "none" : known));
+  }
+  return it->second;
+}
+
 // One directional light; absent keys keep the standard key light's.
 Light parse_light(const Node& l, const Camera& camera, bool allow_ambient) {
   if (allow_ambient) {
@@ -196,8 +233,8 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     throw SceneError(
         fmt::format("{}: a scene file must be a JSON object (got {})", origin, doc.type_name()));
   }
-  root.check_keys(
-      {"name", "description", "meshes", "camera", "ambient", "light", "lights", "background"});
+  root.check_keys({"name", "description", "meshes", "materials", "camera", "ambient", "light",
+                   "lights", "background", "firmware"});
   if (!root.has("meshes")) throw SceneError(origin + ": missing key 'meshes' (an array of meshes)");
   const Node meshes = root.at("meshes");
   if (meshes.array().empty()) meshes.fail("must hold at least one mesh");
@@ -216,12 +253,21 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
   if (!plain) scene.name = "scene";
   scene.description = root.has("description") ? root.at("description").string()
                                               : fmt::format("scene file {}", origin);
+  std::map<std::string, Material> materials;
+  if (root.has("materials")) {
+    const Node ms = root.at("materials");
+    if (!ms.value.is_object()) {
+      ms.fail(fmt::format("must be an object of named materials (got {})", ms.value.type_name()));
+    }
+    for (const auto& item : ms.value.items())
+      materials[item.key()] = parse_material(ms.at(item.key()));
+  }
   for (std::size_t i = 0; i < meshes.value.size(); ++i) {
     const Node m = meshes.at(i);
     m.check_keys({"file", "builtin", "vertices", "triangles", "translate", "rotate_degrees",
-                  "scale", "color"});
-    const glm::vec3 color =
-        m.has("color") ? glm::vec3(m.at("color").vec3(0.0, 1.0)) : glm::vec3(0.8f);
+                  "scale", "color", "material"});
+    const Material material = mesh_material(m, materials);
+    const glm::vec3 color = material.color.value_or(glm::vec3(0.8f));
     const int sources = m.has("file") + m.has("builtin") + m.has("vertices");
     if (sources != 1) {
       m.fail("needs exactly one of 'file', 'builtin' or 'vertices' (with 'triangles')");
@@ -237,13 +283,14 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
       } catch (const std::invalid_argument& e) {
         m.at("builtin").fail(e.what());
       }
-      if (m.has("color")) {
+      if (material.color) {
         for (Vertex& v : part.vertices) v.color = color;
       }
     } else {
       if (!m.has("triangles")) m.fail("has 'vertices' but no 'triangles'");
       part = inline_mesh(m, limits, color);
     }
+    for (Vertex& v : part.vertices) v.opacity = material.opacity;
     append(scene.mesh, part, mesh_transform(m), m, limits);
   }
 
@@ -311,6 +358,17 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
   }
   scene.background = root.has("background") ? glm::vec3(root.at("background").vec3(0.0, 1.0))
                                             : glm::vec3(0.05f, 0.05f, 0.08f);
+  if (root.has("firmware")) {
+    const Node f = root.at("firmware");
+    fs::path program = f.string();
+    if (program.empty()) f.fail("must name a program (e.g. \"transparent\") or a .pp5 file");
+    // A .pp5 path is relative to the scene file, like mesh files; a name is looked up in
+    // firmware/programs.
+    if (program.extension() == ".pp5" && program.is_relative()) {
+      program = fs::path(base_dir) / program;
+    }
+    scene.firmware = program.string();
+  }
   return scene;
 }
 
