@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Scene files with materials and a firmware of their own, as `pp5sim render` meets them: the
-# scene's program unless --firmware overrides it, and a warning when a program would ignore
-# the scene's opacity.
+# Scene files with materials, lights and a firmware of their own, as `pp5sim render` meets
+# them: the scene's program unless --firmware overrides it, and a warning when a program
+# would ignore the scene's opacity or all but its first light.
 . "$(dirname "$0")/cli_lib.sh"
 data="$(dirname "$0")/data"
 small=(--set screen.width=128 --set screen.height=128)
@@ -24,6 +24,23 @@ grep -q "opacity is ignored" "$tmp/over.log" && fail "the warning went to stdout
 "$bin" render --scene two-triangles --firmware phong "${small[@]}" --out "$tmp/opaque" \
   >/dev/null 2>"$tmp/opaque.err" || fail "render failed"
 [ -s "$tmp/opaque.err" ] && fail "unexpected stderr: $(cat "$tmp/opaque.err")"
+
+# Two lights: a program that lights pixels itself without a `light` procedure sees only the
+# first; the example scene's own program (transparent) warns about nothing.
+example="$(dirname "$0")/../examples/scenes/glass.json"
+"$bin" render --scene "$example" --firmware exactmatch "${small[@]}" --out "$tmp/em" \
+  >/dev/null 2>"$tmp/em.err" || fail "render failed: $(cat "$tmp/em.err")"
+grep -q "^warning: scene 'glass' has 2 lights, but firmware 'exactmatch' has no 'light' procedure: it shades with the first light only" \
+  "$tmp/em.err" || fail "no light warning: $(cat "$tmp/em.err")"
+grep -q "opacity is ignored" "$tmp/em.err" || fail "no opacity warning: $(cat "$tmp/em.err")"
+for fw in phong gouraud; do
+  "$bin" render --scene "$example" --firmware $fw "${small[@]}" --out "$tmp/$fw" >/dev/null \
+    2>"$tmp/$fw.err" || fail "render failed"
+  grep -q "lights, but" "$tmp/$fw.err" && fail "$fw sums the lights, yet: $(cat "$tmp/$fw.err")"
+done
+"$bin" render --scene "$example" "${small[@]}" --out "$tmp/ex" >/dev/null 2>"$tmp/ex.err" \
+  || fail "example render failed: $(cat "$tmp/ex.err")"
+[ -s "$tmp/ex.err" ] && fail "unexpected stderr: $(cat "$tmp/ex.err")"
 
 printf '{"meshes": [{"builtin": "two-triangles", "material": "stone"}]}' >"$tmp/bad.json"
 expect_error "bad.json: key 'meshes\[0\].material' names an unknown material 'stone'" \

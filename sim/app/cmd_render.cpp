@@ -34,17 +34,30 @@ struct RenderOptions {
   std::string order = "given";
 };
 
-// Opacity reaches the pixels only through the `opacity` expression: say so when a scene's
-// transparent materials would come out opaque.
-void warn_if_opacity_ignored(const Scene& scene, const Program& program) {
+// What the scene asks for that the program would ignore, one stderr line each: opacity
+// reaches the pixels only through the `opacity` expression, and a program that lights pixels
+// itself (it reads light_x) but has no `light` procedure sees the first light only.
+void warn_about_ignored_scene_parts(const Scene& scene, const Program& program) {
+  const std::string name = fs::path(program.name).stem().string();
   const bool transparent = std::any_of(scene.mesh.vertices.begin(), scene.mesh.vertices.end(),
                                        [](const Vertex& v) { return v.opacity < 1.0f; });
   const int opacity = static_cast<int>(Expression::opacity);
-  if (!transparent || program.procedure(Procedure::triangle).expressions.test(opacity)) return;
-  std::cerr << fmt::format(
-      "warning: scene '{}' has materials with opacity < 1, but firmware '{}' has no 'opacity' "
-      "expression: the opacity is ignored (use --firmware transparent)\n",
-      scene.name, fs::path(program.name).stem().string());
+  if (transparent && !program.procedure(Procedure::triangle).expressions.test(opacity)) {
+    std::cerr << fmt::format(
+        "warning: scene '{}' has materials with opacity < 1, but firmware '{}' has no 'opacity' "
+        "expression: the opacity is ignored (use --firmware transparent)\n",
+        scene.name, name);
+  }
+  bool reads_light = false;
+  for (const ProcedureCode& code : program.procedures) {
+    reads_light = reads_light || code.parameters.test(static_cast<int>(Parameter::light_x));
+  }
+  if (scene.lights.size() > 1 && reads_light && !program.procedure(Procedure::light).defined) {
+    std::cerr << fmt::format(
+        "warning: scene '{}' has {} lights, but firmware '{}' has no 'light' procedure: it "
+        "shades with the first light only (phong sums them all)\n",
+        scene.name, scene.lights.size(), name);
+  }
 }
 
 int run_render(RenderOptions o) {
@@ -63,7 +76,7 @@ int run_render(RenderOptions o) {
                                : !scene.firmware.empty() ? scene.firmware
                                                          : "phong";
   const Program program = assemble_file(resolve_firmware(firmware), assembler_options(config));
-  warn_if_opacity_ignored(scene, program);
+  warn_about_ignored_scene_parts(scene, program);
   if (o.out_dir.empty()) o.out_dir = (fs::path("out") / scene.name).string();
   fs::create_directories(o.out_dir);
 
