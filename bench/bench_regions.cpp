@@ -29,7 +29,7 @@ pp5::Scene sphere_in_first_region(int width) {
                            glm::vec3(static_cast<float>(cx), static_cast<float>(cy), -d));
   }
   scene.camera = pp5::Camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 90.0f, 1.0f, 20.0f};
-  scene.light = pp5::default_light(scene.camera);
+  scene.lights = {pp5::default_light(scene.camera)};
   return scene;
 }
 

@@ -83,7 +83,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       program_(program),
       geometry_(geometry_params(config), scene),
       timing_(timing_params(config)),
-      frame_parameters_(geometry_.frame_parameters()),
+      frame_values_(geometry_.frame_values()),
       i860_(i860_params(config)),
       dynamic_(config.renderer.balancing == "dynamic"),
       owner_(config.regions(), -1),
@@ -93,6 +93,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
   const int renderers = config.renderer.count;
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);
   workload_.expressions = triangle.expressions;
+  workload_.lights = geometry_.lights();
   workload_.packet_words = packet_words(static_cast<int>(triangle.expressions.count()));
   if (workload_.packet_words + 1 > static_cast<std::uint64_t>(config.renderer.queue_words)) {
     throw std::runtime_error(fmt::format(
@@ -177,14 +178,12 @@ void Machine::execute_pixels(int threads,
   // Only the bits the program declares are allocated and processed: fields beyond them would
   // be refused by the pixel array's bounds checks, never silently dropped.
   params.array.memory_bits = std::max(1, program_.bits_used());
-  PacketValues frame_values;
-  frame_values.parameters = frame_parameters_;
   // One empty region, executed before the boards start, serves every board whose state
   // after clear matches it (RendererBoard::run_empty_region checks); the rest of the boards'
   // regions run as recorded.
   RendererBoard first(params);
   std::vector<std::uint8_t> empty_rgb;
-  first.run_empty_region(0, 0, program_, frame_values, empty_rgb);
+  first.run_empty_region(0, 0, program_, frame_values_, empty_rgb);
   std::atomic<int> next{0};
   auto worker = [&] {
     for (int k = next++; k < renderer_count(); k = next++) {
@@ -192,7 +191,7 @@ void Machine::execute_pixels(int threads,
       RendererBoard board(params);
       if (observe) board.set_observer(observe(k));
       board.share_empty_region(first);
-      renderers_[k]->execute(board, program_, *frame_buffer_, frame_values);
+      renderers_[k]->execute(board, program_, *frame_buffer_, frame_values_);
     }
   };
   const int n = std::max(1, std::min(threads, renderer_count()));

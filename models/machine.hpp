@@ -90,8 +90,10 @@ class Machine : public sc_core::sc_module {
   const GeometryEngine& geometry() const { return geometry_; }
   const TimingParams& timing() const { return timing_; }
   const std::array<std::int64_t, static_cast<int>(Parameter::count)>& frame_parameters() const {
-    return frame_parameters_;
+    return frame_values_.frame.parameters;
   }
+  // The values of clear, pass and shade, and of each light's `light` procedure.
+  const FrameValues& frame_values() const { return frame_values_; }
 
   Ring& ring() { return *ring_; }
   FrameBuffer& frame_buffer() { return *frame_buffer_; }
@@ -154,7 +156,7 @@ class Machine : public sc_core::sc_module {
   const Program& program_;
   GeometryEngine geometry_;
   TimingParams timing_;
-  std::array<std::int64_t, static_cast<int>(Parameter::count)> frame_parameters_{};
+  FrameValues frame_values_;
   std::unique_ptr<Ring> ring_;
   std::unique_ptr<FrameBuffer> frame_buffer_;
   std::vector<std::unique_ptr<Renderer>> renderers_;

@@ -180,7 +180,11 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
         "nz"},
        {"background_red", "background_green", "background_blue", "light_x", "light_y", "light_z",
         "half_x", "half_y", "half_z", "ambient", "diffuse", "specular"},
-       154},
+       155},
+      {"transparent.pp5",
+       {"edge0", "edge1", "edge2", "depth", "red", "green", "blue", "opacity"},
+       {"background_red", "background_green", "background_blue"},
+       182},
   };
   for (const Expected& e : programs) {
     SECTION(e.file) {
@@ -238,7 +242,12 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
       CHECK(all_parameters == e.parameters);
       CHECK(p.procedure(Procedure::clear).defined);
       CHECK(p.procedure(Procedure::triangle).defined);
-      CHECK(p.procedure(Procedure::shade).defined == (std::string(e.file) == "phong.pp5"));
+      const std::string file = e.file;
+      CHECK(p.procedure(Procedure::shade).defined ==
+            (file == "phong.pp5" || file == "transparent.pp5"));
+      CHECK(p.procedure(Procedure::light).defined == (file == "phong.pp5"));
+      CHECK(p.procedure(Procedure::pass).defined == (file == "transparent.pp5"));
+      CHECK(p.passes == (file == "transparent.pp5" ? 4 : 1));
     }
   }
 }

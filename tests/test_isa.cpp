@@ -284,7 +284,8 @@ TEST_CASE("the Renderer board charges the table's costs", "[isa]") {
 
   std::uint64_t total = 0;
   std::uint64_t instructions = 0;
-  for (const Procedure proc : {Procedure::clear, Procedure::triangle, Procedure::shade}) {
+  for (const Procedure proc :
+       {Procedure::clear, Procedure::triangle, Procedure::light, Procedure::shade}) {
     const ProcedureCode& code = p.procedure(proc);
     INFO("proc " << kProcedureNames[static_cast<int>(proc)]);
     std::uint64_t expected = 0;
@@ -301,6 +302,6 @@ TEST_CASE("the Renderer board charges the table's costs", "[isa]") {
 
   // mac costs follow the parameters a packet binds: other values, other cost.
   PacketValues zero;
-  CHECK(procedure_cost(p.procedure(Procedure::shade), params.timing, zero).count <
-        procedure_cost(p.procedure(Procedure::shade), params.timing, values).count);
+  CHECK(procedure_cost(p.procedure(Procedure::light), params.timing, zero).count <
+        procedure_cost(p.procedure(Procedure::light), params.timing, values).count);
 }

@@ -165,8 +165,9 @@ TEST_CASE("scene files combine meshes, transforms, materials, camera and light",
   REQUIRE(s.mesh.triangles.size() == 12 + sphere.triangles.size());
   CHECK(s.mesh.vertices.front().color == glm::vec3(0.9f, 0.3f, 0.2f));
   CHECK(s.mesh.vertices.back().color == glm::vec3(0.2f, 0.5f, 0.9f));
-  CHECK(s.light.ambient == Approx(0.2));
-  CHECK(glm::length(s.light.direction) == Approx(1.0));
+  CHECK(s.ambient == Approx(0.2));
+  REQUIRE(s.lights.size() == 1);
+  CHECK(glm::length(s.lights[0].direction) == Approx(1.0));
   CHECK(s.background == glm::vec3(0.1f, 0.1f, 0.12f));
   // The sphere was scaled by 0.8 and moved to x = 2.5.
   const BoundingSphere b =

@@ -48,23 +48,30 @@ std::int64_t wrap_signed(std::int64_t v, int bits) {
   return static_cast<std::int64_t>((u ^ sign) - sign);
 }
 
-// The phong.pp5 shade procedure, written out in integer C++.
-void shade_phong(RefPixel& p,
-                 const std::array<std::int64_t, static_cast<int>(Parameter::count)>& k) {
-  auto P = [&](Parameter q) { return k[static_cast<int>(q)]; };
-  auto dot = [&](Parameter a, Parameter b, Parameter c) {
-    std::int64_t d = wrap_signed(p.n[0] * P(a) + p.n[1] * P(b) + p.n[2] * P(c), 16);
-    return d < 0 ? 0 : d;
-  };
-  const std::int64_t nl = dot(Parameter::light_x, Parameter::light_y, Parameter::light_z);
-  std::int64_t term = (((nl >> 6) & 0xFF) * P(Parameter::diffuse)) & 0xFFFF;
-  std::int64_t level = (P(Parameter::ambient) + (term >> 8)) & 0x1FF;
-  if (level > 255) level = 255;
-  const std::int64_t nh = dot(Parameter::half_x, Parameter::half_y, Parameter::half_z);
-  std::int64_t shine = (((nh >> 6) & 0xFF) * ((nh >> 6) & 0xFF)) & 0xFFFF;
-  for (int i = 0; i < 3; ++i) shine = ((shine >> 8) * (shine >> 8)) & 0xFFFF;
-  term = ((shine >> 8) * P(Parameter::specular)) & 0xFFFF;
-  const std::int64_t spec = (term >> 8) & 0xFF;
+// The phong.pp5 light and shade procedures, written out in integer C++: each light adds its
+// diffuse and specular terms to the accumulators (clamped after each), then the material is
+// multiplied by the level and the specular added.
+void shade_phong(RefPixel& p, const FrameValues& values) {
+  auto P = [&](const PacketValues& v, Parameter q) { return v.parameters[static_cast<int>(q)]; };
+  std::int64_t level = P(values.frame, Parameter::ambient);
+  std::int64_t spec = 0;
+  for (const PacketValues& light : values.lights) {
+    auto dot = [&](Parameter a, Parameter b, Parameter c) {
+      std::int64_t d =
+          wrap_signed(p.n[0] * P(light, a) + p.n[1] * P(light, b) + p.n[2] * P(light, c), 16);
+      return d < 0 ? 0 : d;
+    };
+    const std::int64_t nl = dot(Parameter::light_x, Parameter::light_y, Parameter::light_z);
+    std::int64_t term = (((nl >> 6) & 0xFF) * P(light, Parameter::diffuse)) & 0xFFFF;
+    level = (level + (term >> 8)) & 0x1FF;
+    if (level > 255) level = 255;
+    const std::int64_t nh = dot(Parameter::half_x, Parameter::half_y, Parameter::half_z);
+    std::int64_t shine = (((nh >> 6) & 0xFF) * ((nh >> 6) & 0xFF)) & 0xFFFF;
+    for (int i = 0; i < 3; ++i) shine = ((shine >> 8) * (shine >> 8)) & 0xFFFF;
+    term = ((shine >> 8) * P(light, Parameter::specular)) & 0xFFFF;
+    spec = (spec + (term >> 8)) & 0x1FF;
+    if (spec > 255) spec = 255;
+  }
   for (int c = 0; c < 3; ++c) {
     std::int64_t v = ((p.rgb[c] * level) & 0xFFFF) >> 8;
     v += spec;
@@ -75,7 +82,8 @@ void shade_phong(RefPixel& p,
 RgbImage reference_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                          const std::string& mode) {
   const GeometryEngine engine(geometry_params(config), scene);
-  const auto params = engine.frame_parameters();
+  const FrameValues values = engine.frame_values();
+  const auto& params = values.frame.parameters;
   const int frac = config.evaluator.fraction_bits;
   const int w = config.screen.width;
   const int h = config.screen.height;
@@ -127,7 +135,7 @@ RgbImage reference_frame(const MachineConfig& config, const Scene& scene, const 
   img.height = h;
   img.rgb.resize(px.size() * 3);
   for (std::size_t k = 0; k < px.size(); ++k) {
-    if (mode == "phong" && px[k].covered) shade_phong(px[k], params);
+    if (mode == "phong" && px[k].covered) shade_phong(px[k], values);
     for (int c = 0; c < 3; ++c) img.rgb[k * 3 + c] = static_cast<std::uint8_t>(px[k].rgb[c]);
   }
   return img;
@@ -141,17 +149,22 @@ std::size_t differing_pixels(const RgbImage& a, const RgbImage& b) {
   return n;
 }
 
-void check_scene(const std::string& scene_name, const std::string& firmware) {
+// With `lights` > 1, the scene gets lights from other sides besides its key light.
+void check_scene(const std::string& scene_name, const std::string& firmware, int lights = 1) {
   const MachineConfig config = small_machine();
   SceneOptions options;
   if (scene_name == "torus") options = {48, 16};
-  const Scene scene = make_builtin_scene(scene_name, options);
+  Scene scene = make_builtin_scene(scene_name, options);
+  const Light others[] = {{glm::normalize(glm::vec3(1.0f, -0.3f, 0.6f)), 0.5f, 0.6f, 32.0f},
+                          {glm::vec3(0.0f, 0.0f, 1.0f), 0.3f, 0.9f, 8.0f},
+                          {glm::normalize(glm::vec3(0.2f, 1.0f, -0.4f)), 0.7f, 0.4f, 16.0f}};
+  for (int k = 1; k < lights; ++k) scene.lights.push_back(others[(k - 1) % 3]);
   const Program program = load_program(firmware, config);
   const FrameResult result = simulate_frame(config, scene, program, 2);
   const RgbImage expected = reference_frame(config, scene, program, firmware);
   REQUIRE(result.image.width == expected.width);
   REQUIRE(result.image.height == expected.height);
-  INFO(scene_name << " with " << firmware);
+  INFO(scene_name << " with " << firmware << ", " << lights << " lights");
   CHECK(differing_pixels(result.image, expected) == 0);
   // The scene must actually draw something, or the comparison proves nothing.
   std::size_t background = 0;
@@ -174,4 +187,12 @@ TEST_CASE("Gouraud firmware equals the reference z-buffer", "[reference]") {
 
 TEST_CASE("deferred Phong firmware equals the reference shading", "[reference]") {
   for (const char* scene : {"two-triangles", "sphere", "torus"}) check_scene(scene, "phong");
+}
+
+TEST_CASE("deferred Phong with several lights equals the reference shading", "[reference]") {
+  // The light procedure runs once per light; two, three and eight lights (the accumulators
+  // saturate with many).
+  for (const char* scene : {"sphere", "torus"}) {
+    for (int lights : {2, 3, 8}) check_scene(scene, "phong", lights);
+  }
 }

@@ -13,10 +13,13 @@ using namespace pp5;
 TEST_CASE("reused empty regions equal executed ones, on any board history", "[regions]") {
   MachineConfig config = MachineConfig::defaults();
   config.set(std::vector<std::string>{"screen.width=256", "screen.height=256"});
-  const Scene scene = make_builtin_scene("two-triangles");
+  Scene scene = make_builtin_scene("two-triangles");
+  // Two lights: the empty regions run the `light` procedure of each.
+  scene.lights.push_back(scene.lights[0]);
+  scene.lights[1].direction = glm::vec3(0.0f, 0.0f, 1.0f);
   const GeometryEngine geometry(geometry_params(config), scene);
-  PacketValues frame;
-  frame.parameters = geometry.frame_parameters();
+  const FrameValues values = geometry.frame_values();
+  const PacketValues& frame = values.frame;
   for (const char* name : {"flat", "gouraud", "phong"}) {
     INFO(name);
     const Program program =
@@ -40,7 +43,7 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
     RendererBoard reusing(board_params(config)), executing(board_params(config));
     RendererBoard donor(board_params(config));
     std::vector<std::uint8_t> donor_rgb;
-    donor.run_empty_region(0, 0, program, frame, donor_rgb);
+    donor.run_empty_region(0, 0, program, values, donor_rgb);
     reusing.share_empty_region(donor);
     std::vector<std::uint8_t> a, b;
     for (const auto& [x0, busy] : regions) {
@@ -49,16 +52,18 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
       if (busy) {
         for (const auto& p : packets) executing.run(program.procedure(Procedure::triangle), p);
       }
+      executing.run_lights(program, values);
       executing.run(program.procedure(Procedure::shade), frame);
       executing.read_outputs(program, b);
       if (busy) {
         reusing.begin_region(x0, 0);
         reusing.run(program.procedure(Procedure::clear), frame);
         for (const auto& p : packets) reusing.run(program.procedure(Procedure::triangle), p);
+        reusing.run_lights(program, values);
         reusing.run(program.procedure(Procedure::shade), frame);
         reusing.read_outputs(program, a);
       } else {
-        reusing.run_empty_region(x0, 0, program, frame, a);
+        reusing.run_empty_region(x0, 0, program, values, a);
       }
       CHECK(a == b);
       CHECK(reusing.array().same_state(executing.array()));

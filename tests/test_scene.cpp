@@ -109,7 +109,8 @@ bool same_scene(const Scene& a, const Scene& b) {
   }
   return a.camera.eye == b.camera.eye && a.camera.target == b.camera.target &&
          a.camera.near_plane == b.camera.near_plane && a.camera.far_plane == b.camera.far_plane &&
-         a.light.direction == b.light.direction && a.background == b.background;
+         a.lights.size() == b.lights.size() && a.lights[0].direction == b.lights[0].direction &&
+         a.background == b.background;
 }
 
 }  // namespace
@@ -137,17 +138,19 @@ TEST_CASE("every built-in scene is well formed, lit and framed", "[scene]") {
     CHECK(scene.camera.near_plane < scene.camera.far_plane);
     CHECK(scene.camera.fov_y_degrees > 10.0f);
     CHECK(scene.camera.fov_y_degrees < 90.0f);
-    CHECK(glm::length(scene.light.direction) == Approx(1.0f).margin(1e-5));
+    REQUIRE(scene.lights.size() == 1);
+    const pp5::Light& light = scene.lights[0];
+    CHECK(glm::length(light.direction) == Approx(1.0f).margin(1e-5));
     // The light comes from in front of the object, from above, from the viewer's left.
     const glm::vec3 back = glm::normalize(scene.camera.eye - scene.camera.target);
     const glm::vec3 right = glm::normalize(glm::cross(scene.camera.up, back));
-    CHECK(glm::dot(scene.light.direction, back) > 0.0f);
-    CHECK(glm::dot(scene.light.direction, scene.camera.up) > 0.0f);
-    CHECK(glm::dot(scene.light.direction, right) < 0.0f);
-    CHECK(scene.light.ambient == Approx(0.15f));
-    CHECK(scene.light.diffuse == Approx(0.8f));
-    CHECK(scene.light.specular == Approx(0.3f));
-    CHECK(scene.light.shininess == Approx(16.0f));
+    CHECK(glm::dot(light.direction, back) > 0.0f);
+    CHECK(glm::dot(light.direction, scene.camera.up) > 0.0f);
+    CHECK(glm::dot(light.direction, right) < 0.0f);
+    CHECK(scene.ambient == Approx(0.15f));
+    CHECK(light.diffuse == Approx(0.8f));
+    CHECK(light.specular == Approx(0.3f));
+    CHECK(light.shininess == Approx(16.0f));
     for (int c = 0; c < 3; ++c) CHECK(scene.background[c] < 0.2f);
   }
 }

@@ -47,10 +47,11 @@ fs::path temp_dir() {
 
 // Records `sel` through a frame, writes the trace to a file and reads it back.
 trace::Trace record(const MachineConfig& c, const Program& p, const trace::Selection& sel,
-                    const std::string& name, int threads = 2, FrameResult* frame = nullptr) {
-  trace::Recorder rec(c, torus(), p, sel);
+                    const std::string& name, int threads = 2, FrameResult* frame = nullptr,
+                    const Scene& scene = torus()) {
+  trace::Recorder rec(c, scene, p, sel);
   for (int k = 0; k < c.renderer.count; ++k) rec.observer(k);
-  FrameResult r = simulate_frame(c, torus(), p, threads, [&](int k) { return rec.observer(k); });
+  FrameResult r = simulate_frame(c, scene, p, threads, [&](int k) { return rec.observer(k); });
   if (frame) *frame = std::move(r);
   const std::string path = (temp_dir() / name).string();
   rec.write(path);
@@ -317,6 +318,35 @@ TEST_CASE("why names the last writer - diff finds where two programs diverge", "
   trace::diff_report(phong, phong, std::nullopt, diverged);
   CHECK_FALSE(diverged);
   CHECK_THAT(trace::bitmap_report(phong), Catch::Contains("[23:0]"));
+}
+
+TEST_CASE("traces show each light's procedure, between the triangles and shade", "[trace]") {
+  const MachineConfig c = small_config();
+  Scene lit = torus();
+  lit.lights.push_back({glm::normalize(glm::vec3(1, -0.3f, 0.5f)), 0.5f, 0.4f, 16.0f});
+  trace::Selection sel;
+  sel.rects.push_back({190, 140, 1, 1});
+  FrameResult frame;
+  const trace::Trace t = record(c, load_program("phong", c), sel, "lights.pp5t", 2, &frame, lit);
+  std::vector<int> lights;
+  std::uint64_t last_triangle = 0, first_light = ~0ull, last_light = 0, first_shade = ~0ull;
+  for (const trace::Event& e : t.events) {
+    const auto proc = static_cast<Procedure>(e.ins.procedure);
+    if (proc == Procedure::triangle) last_triangle = std::max(last_triangle, e.ins.seq);
+    if (proc == Procedure::shade) first_shade = std::min(first_shade, e.ins.seq);
+    if (proc != Procedure::light) continue;
+    CHECK(e.ins.primitive == -1);
+    if (lights.empty() || lights.back() != e.ins.light) lights.push_back(e.ins.light);
+    first_light = std::min(first_light, e.ins.seq);
+    last_light = std::max(last_light, e.ins.seq);
+    CHECK(trace::packet_label(e.ins) == "light " + std::to_string(e.ins.light));
+  }
+  CHECK(lights == std::vector<int>{0, 1});
+  CHECK(last_triangle < first_light);
+  CHECK(last_light < first_shade);
+  // `why` names the light that last wrote the level.
+  const std::string why = trace::why_report(t, {190, 140});
+  CHECK_THAT(why, Catch::Contains("level") && Catch::Contains("light 1"));
 }
 
 TEST_CASE("the VCD export is accepted by GTKWave's vcd2fst", "[trace]") {

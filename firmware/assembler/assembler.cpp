@@ -176,7 +176,7 @@ class Assembler {
       fail("'proc' inside procedure '{}': missing 'end'", kProcedureNames[current_]);
     if (w.size() != 2) fail("expected 'proc NAME'");
     const int p = procedure_index(w[1]);
-    if (p < 0) fail("unknown procedure '{}': expected clear, triangle, pass or shade", w[1]);
+    if (p < 0) fail("unknown procedure '{}': expected clear, triangle, pass, light or shade", w[1]);
     if (program_.procedures[p].defined) fail("procedure '{}' is defined twice", w[1]);
     program_.procedures[p].defined = true;
     program_.procedures[p].line = line_;

@@ -8,16 +8,20 @@
 
 namespace pp5 {
 
-// Procedures the Renderer runs, in this order, for every region it renders.
-// With `option passes N` the GPs send every region's triangles N times, and the Renderer
-// runs `pass` between one pass and the next (multipass algorithms such as depth peeling).
-enum class Procedure { clear, triangle, pass, shade, count };
-inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass", "shade"};
+// Procedures the Renderer runs for every region it renders: clear; the triangles; then
+// `light` once per scene light; then shade. With `option passes N` the GPs send every
+// region's triangles N times, and the Renderer runs `pass` between one pass and the next
+// (multipass algorithms such as depth peeling). Numbered in the order they were added (trace
+// files store the number), not the order they run in.
+enum class Procedure { clear, triangle, pass, shade, light, count };
+inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass", "shade", "light"};
 inline constexpr const char* kProcedureMeaning[] = {
     "once per region, before any primitive (initialise every pixel)",
     "once per triangle binned to the region, with the triangle's expressions",
     "once per region after each pass but the last (programs with `option passes N`)",
-    "once per region, after all primitives (deferred shading)",
+    "once per region, after all primitives and lights (deferred shading)",
+    "once per region and scene light, after the last pass's triangles and before shade, with "
+    "that light's light_*, half_*, diffuse and specular (deferred lighting)",
 };
 
 // Expressions the GP can supply with a triangle packet. All are fixed point with
@@ -42,6 +46,7 @@ enum class Expression {
   slope_x,
   slope_y,
   eye_depth,
+  opacity,
   count
 };
 
@@ -78,6 +83,7 @@ inline constexpr ExpressionInfo kExpressions[] = {
      "eye-space depth (distance along the view axis), 0 at the near plane to 2^gp.depth_bits - "
      "1 at the far plane, interpolated linearly in screen space through the three vertices: "
      "not perspective-correct (threshold_eyez)"},
+    {"opacity", "the material's opacity, 0..256 (256 = opaque), interpolated (transparent)"},
 };
 static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
               static_cast<std::size_t>(Expression::count));
@@ -115,15 +121,17 @@ struct FrameParameterInfo {
   const char* meaning;
 };
 inline constexpr FrameParameterInfo kParameters[] = {
-    {"light_x", "eye-space unit vector toward the light, x times 127"},
+    {"light_x",
+     "eye-space unit vector toward the light, x times 127: the scene's first light, or in the "
+     "`light` procedure the light it runs for"},
     {"light_y", "light direction y times 127"},
     {"light_z", "light direction z times 127"},
     {"half_x", "eye-space half vector (light + view, normalised), x times 127"},
     {"half_y", "half vector y times 127"},
     {"half_z", "half vector z times 127"},
     {"ambient", "ambient reflection, 0..255 (255 = 1.0)"},
-    {"diffuse", "diffuse reflection, 0..255"},
-    {"specular", "specular reflection, 0..255"},
+    {"diffuse", "diffuse reflection, 0..255 (of the light bound: see the `light` procedure)"},
+    {"specular", "specular reflection, 0..255 (of the light bound)"},
     {"background_red", "background red, 0..255"},
     {"background_green", "background green, 0..255"},
     {"background_blue", "background blue, 0..255"},

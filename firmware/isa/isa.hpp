@@ -72,6 +72,13 @@ struct PacketValues {
   std::array<std::int64_t, static_cast<int>(Parameter::count)> parameters{};
 };
 
+// The values of a frame's region-wide procedures: `frame` for clear, pass and shade (with the
+// first light's parameters), and lights[k] for the `light` procedure of light k.
+struct FrameValues {
+  PacketValues frame;
+  std::vector<PacketValues> lights;
+};
+
 struct ExecutionContext {
   PixelArray& array;
   ExpressionEvaluator& evaluator;

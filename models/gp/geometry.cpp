@@ -16,11 +16,13 @@ struct ClipVertex {
   glm::dvec3 lit;
   glm::dvec3 base;
   glm::dvec3 normal;
+  double opacity;
 };
 
 ClipVertex mix(const ClipVertex& a, const ClipVertex& b, double t) {
   return {a.clip + (b.clip - a.clip) * t, a.lit + (b.lit - a.lit) * t,
-          a.base + (b.base - a.base) * t, a.normal + (b.normal - a.normal) * t};
+          a.base + (b.base - a.base) * t, a.normal + (b.normal - a.normal) * t,
+          a.opacity + (b.opacity - a.opacity) * t};
 }
 
 // Signed distance to clip plane k of the view volume -w <= x, y, z <= w.
@@ -63,17 +65,26 @@ GeometryEngine::GeometryEngine(const GeometryParams& params, const Scene& scene)
   view_ = glm::dmat4(view_matrix(scene.camera));
   projection_ = glm::dmat4(projection_matrix(scene.camera, aspect));
   normal_matrix_ = glm::transpose(glm::inverse(glm::dmat3(view_)));
-  light_eye_ = glm::normalize(glm::dmat3(view_) * glm::dvec3(scene.light.direction));
-  half_eye_ = glm::normalize(light_eye_ + glm::dvec3(0, 0, 1));
+  if (scene.lights.empty() || scene.lights.size() > static_cast<std::size_t>(kMaxLights)) {
+    throw std::invalid_argument(fmt::format("scene '{}' has {} lights; 1 to {} are supported",
+                                            scene.name, scene.lights.size(), kMaxLights));
+  }
+  for (const Light& l : scene.lights) {
+    light_eye_.push_back(glm::normalize(glm::dmat3(view_) * glm::dvec3(l.direction)));
+    half_eye_.push_back(glm::normalize(light_eye_.back() + glm::dvec3(0, 0, 1)));
+  }
 }
 
 glm::dvec3 GeometryEngine::light_vertex(const glm::dvec3& color, const glm::dvec3& n) const {
-  const Light& l = scene_.light;
-  const double diffuse = std::max(0.0, glm::dot(n, light_eye_));
-  const double specular = std::pow(std::max(0.0, glm::dot(n, half_eye_)), l.shininess);
-  const glm::dvec3 c =
-      color * (l.ambient + l.diffuse * diffuse) + glm::dvec3(l.specular * specular);
-  return glm::clamp(c, 0.0, 1.0);
+  // Every light's diffuse and specular term adds to the scene's ambient.
+  double level = scene_.ambient;
+  double specular = 0;
+  for (std::size_t k = 0; k < light_eye_.size(); ++k) {
+    const Light& l = scene_.lights[k];
+    level += l.diffuse * std::max(0.0, glm::dot(n, light_eye_[k]));
+    specular += l.specular * std::pow(std::max(0.0, glm::dot(n, half_eye_[k])), l.shininess);
+  }
+  return glm::clamp(color * level + glm::dvec3(specular), 0.0, 1.0);
 }
 
 void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
@@ -89,6 +100,7 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
     v[k].clip = projection_ * e;
     v[k].base = glm::dvec3(src.color);
     v[k].normal = glm::normalize(normal_matrix_ * glm::dvec3(src.normal));
+    v[k].opacity = src.opacity;
   }
   // Two-sided lighting: the surfaces of interest (the self-intersecting torus) show both
   // sides, so normals are turned toward the viewer.
@@ -141,6 +153,7 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
     s.eye_depth = poly[i].clip.w;
     s.lit_color = poly[i].lit;
     s.base_color = poly[i].base;
+    s.opacity = poly[i].opacity;
     const double n = glm::length(poly[i].normal);
     s.normal = n > 0 ? poly[i].normal / n : face;
   }
@@ -295,6 +308,9 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
     constant(Expression::slope_x, slope(a));
     constant(Expression::slope_y, slope(b));
   }
+  // Opacity 0..256 (256 = opaque), clamped like a colour so that floor() stays in range.
+  auto opacity = [&](int k) { return std::clamp(t.v[k].opacity * 256.0, 0.5, 256.49); };
+  set(Expression::opacity, {opacity(0), opacity(1), opacity(2)});
   for (int c = 0; c < 3; ++c) {
     set(static_cast<Expression>(static_cast<int>(Expression::red) + c),
         {colour(t.v[0].lit_color[c]), colour(t.v[1].lit_color[c]), colour(t.v[2].lit_color[c])});
@@ -323,19 +339,24 @@ void GeometryEngine::bin(const SetupResult& r, std::vector<int>& regions) const 
   }
 }
 
-std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::frame_parameters()
-    const {
+std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::frame_parameters(
+    int light) const {
+  if (light < 0 || light >= lights()) {
+    throw std::out_of_range(fmt::format("light {} of a scene with {}", light, lights()));
+  }
   std::array<std::int64_t, static_cast<int>(Parameter::count)> p{};
   auto at = [&](Parameter k) -> std::int64_t& { return p[static_cast<int>(k)]; };
-  at(Parameter::light_x) = std::llround(127.0 * light_eye_.x);
-  at(Parameter::light_y) = std::llround(127.0 * light_eye_.y);
-  at(Parameter::light_z) = std::llround(127.0 * light_eye_.z);
-  at(Parameter::half_x) = std::llround(127.0 * half_eye_.x);
-  at(Parameter::half_y) = std::llround(127.0 * half_eye_.y);
-  at(Parameter::half_z) = std::llround(127.0 * half_eye_.z);
-  const Light& l = scene_.light;
+  const glm::dvec3& to_light = light_eye_[static_cast<std::size_t>(light)];
+  const glm::dvec3& half = half_eye_[static_cast<std::size_t>(light)];
+  at(Parameter::light_x) = std::llround(127.0 * to_light.x);
+  at(Parameter::light_y) = std::llround(127.0 * to_light.y);
+  at(Parameter::light_z) = std::llround(127.0 * to_light.z);
+  at(Parameter::half_x) = std::llround(127.0 * half.x);
+  at(Parameter::half_y) = std::llround(127.0 * half.y);
+  at(Parameter::half_z) = std::llround(127.0 * half.z);
+  const Light& l = scene_.lights[static_cast<std::size_t>(light)];
   auto unit = [](double v) { return std::llround(std::clamp(v, 0.0, 1.0) * 255.0); };
-  at(Parameter::ambient) = unit(l.ambient);
+  at(Parameter::ambient) = unit(scene_.ambient);
   at(Parameter::diffuse) = unit(l.diffuse);
   at(Parameter::specular) = unit(l.specular);
   at(Parameter::background_red) = unit(scene_.background.r);
@@ -391,6 +412,16 @@ std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::fra
   at(Parameter::normal_epsilon_scale) =
       std::min<std::int64_t>(std::llround(d * d * s * s / 256.0), (std::int64_t{1} << 30) - 1);
   return p;
+}
+
+FrameValues GeometryEngine::frame_values() const {
+  FrameValues v;
+  v.frame.parameters = frame_parameters(0);
+  for (int k = 0; k < lights(); ++k) {
+    v.lights.emplace_back();
+    v.lights.back().parameters = frame_parameters(k);
+  }
+  return v;
 }
 
 }  // namespace pp5

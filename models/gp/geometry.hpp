@@ -46,6 +46,7 @@ struct ScreenVertex {
   glm::dvec3 lit_color;   // 0..1, lit at the vertex
   glm::dvec3 base_color;  // 0..1, unlit material
   glm::dvec3 normal;      // eye space, unit, facing the viewer
+  double opacity = 1;     // the material's, 0..1
 };
 struct ScreenTriangle {
   std::array<ScreenVertex, 3> v;
@@ -81,8 +82,15 @@ class GeometryEngine {
              SetupCounts& counts) const;
   // Regions the bounding box touches, as region indices (row-major).
   void bin(const SetupResult& r, std::vector<int>& regions) const;
-  // The frame parameters (light, reflection coefficients, background).
-  std::array<std::int64_t, static_cast<int>(Parameter::count)> frame_parameters() const;
+  // The frame parameters (a light, reflection coefficients, background), with the direction,
+  // half vector, diffuse and specular of the scene's light `light` (0-based). The Renderer
+  // binds light 0's to every procedure but `light`, which it runs once per light with that
+  // light's.
+  std::array<std::int64_t, static_cast<int>(Parameter::count)> frame_parameters(
+      int light = 0) const;
+  int lights() const { return static_cast<int>(light_eye_.size()); }
+  // The frame's and each light's values (expressions zero), from frame_parameters(k).
+  FrameValues frame_values() const;
 
   const GeometryParams& params() const { return params_; }
 
@@ -94,8 +102,8 @@ class GeometryEngine {
   glm::dmat4 view_;
   glm::dmat4 projection_;
   glm::dmat3 normal_matrix_;
-  glm::dvec3 light_eye_;
-  glm::dvec3 half_eye_;
+  std::vector<glm::dvec3> light_eye_;  // per light
+  std::vector<glm::dvec3> half_eye_;
 };
 
 }  // namespace pp5

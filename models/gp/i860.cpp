@@ -27,7 +27,15 @@ std::uint64_t clip_attributes(const GpWorkload& w) {
   if (needs_vertex_light(w)) n += 3;
   if (needs_normals(w)) n += 3;
   if (any(w, {E::base_red, E::base_green, E::base_blue})) n += 3;
+  if (any(w, {E::opacity})) n += 1;
   return n;
+}
+
+// Each light after the first: its N.L and N.H (4 adds, 6 multiplies), clamps (2 compares),
+// specular power 16 (4 squarings), scaled by its diffuse and specular and summed (2, 2).
+OpCounts extra_lights(const GpWorkload& w) {
+  const auto n = static_cast<std::uint64_t>(std::max(0, w.lights - 1));
+  return OpCounts{4 + 2 + 2, 6 + 4 + 2, 0, 0, 0, 0, 0} * n;
 }
 
 // A reciprocal or reciprocal square root: a seed (frcp/frsqr) and two Newton-Raphson steps.
@@ -90,7 +98,7 @@ OpCounts I860Work::light_vertex(const GpWorkload& w) {
   // N.L and N.H (3 multiplies, 2 adds each), clamp at 0 (2 compares), specular power 16 by
   // four squarings, then colour = material * (ambient + diffuse N.L) + specular: 3 x (2, 2).
   // Material colour: 3 loads.
-  return {4 + 2 + 6, 6 + 4 + 6, 3, 0, 0, 0, 3};
+  return OpCounts{4 + 2 + 6, 6 + 4 + 6, 3, 0, 0, 0, 3} + extra_lights(w);
 }
 
 OpCounts I860Work::clip_split(const GpWorkload& w) {
@@ -116,6 +124,7 @@ OpCounts I860Work::triangle_setup(const GpWorkload& w) {
     c += OpCounts{3 + 2, 6 + 3 + 3, 0, 0, 0, 0, 2};
     c += reciprocal();
     c += OpCounts{12, 16, 3, 0, 0, 0, 3};
+    c += extra_lights(w);
   }
   return c;
 }

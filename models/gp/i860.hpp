@@ -67,6 +67,7 @@ struct I860Params {
 struct GpWorkload {
   std::bitset<static_cast<int>(Expression::count)> expressions;
   std::uint64_t packet_words = 0;  // ring words of one triangle packet
+  int lights = 1;                  // the scene's lights, each summed into vertex and face colours
 };
 
 // Per-primitive operation counts. Each function is one stage of the GP's loop.

@@ -188,8 +188,8 @@ void Renderer::run() {
   const MachineConfig& config = machine_.config();
   const Program& program = machine_.program();
   const int gps = machine_.gp_count();
-  PacketValues frame_values;
-  frame_values.parameters = machine_.frame_parameters();
+  const FrameValues& values = machine_.frame_values();
+  const PacketValues& frame_values = values.frame;
   cursor_ = sc_core::SC_ZERO_TIME;
   open_next_stage();
   std::vector<std::vector<std::shared_ptr<const Packet>>> by_gp(gps);
@@ -274,6 +274,11 @@ void Renderer::run() {
       if (m->last) ++lasts;
     }
     if (stage.pass + 1 < program.passes) continue;
+    std::vector<std::uint64_t> light_start;
+    for (const PacketValues& light : values.lights) {
+      light_start.push_back(cycle_now());
+      charge(program.procedure(Procedure::light), light);
+    }
     const std::uint64_t shade_start = cycle_now();
     charge(program.procedure(Procedure::shade), frame_values);
     catch_up();
@@ -286,6 +291,7 @@ void Renderer::run() {
     for (auto& v : by_gp) w.triangles.insert(w.triangles.end(), v.begin(), v.end());
     w.clear_start = clear_start;
     w.pass_start = pass_start;
+    w.light_start = std::move(light_start);
     w.shade_start = shade_start;
     for (const auto& pass : starts)
       for (const auto& v : pass)
@@ -300,14 +306,15 @@ void Renderer::run() {
 }
 
 void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,
-                       const PacketValues& frame_values) const {
+                       const FrameValues& values) const {
+  const PacketValues& frame_values = values.frame;
   const auto& geometry = board.array().geometry();
   std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work_) {
     // An empty region's stream is the same every time: executed once, then reused (a traced
     // board runs every instruction, so that the trace shows them).
     if (w.triangles.empty() && !board.observed()) {
-      board.run_empty_region(w.x0, w.y0, program, frame_values, rgb);
+      board.run_empty_region(w.x0, w.y0, program, values, rgb);
       frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
       continue;
     }
@@ -326,6 +333,7 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
         board.run(program.procedure(Procedure::triangle), w.triangles[i]->values);
       }
     }
+    board.run_lights(program, values, w.region, w.light_start);
     board.begin_packet({Procedure::shade, -1, w.region, w.shade_start});
     board.run(program.procedure(Procedure::shade), frame_values);
     board.end_region(w.region);

@@ -33,7 +33,8 @@
 namespace pp5 {
 
 // The instruction stream of one region: clear, then for each of the program's passes the
-// triangles in this order (with `pass` between passes), then shade. Triangles are kept in
+// triangles in this order (with `pass` between passes), then `light` once per scene light,
+// then shade. Triangles are kept in
 // GP order, which is display-list order, whatever order their messages arrived in: no
 // instruction's cost depends on pixel data, so the order changes the image only on depth
 // ties, and this way it never changes with timing or load balancing.
@@ -46,6 +47,7 @@ struct RegionWork {
   std::uint64_t clear_start = 0;
   std::vector<std::uint64_t> triangle_start;  // pass-major: pass * triangles + i
   std::vector<std::uint64_t> pass_start;      // the 'pass' procedure before pass k + 1
+  std::vector<std::uint64_t> light_start;     // the 'light' procedure of light k
   std::uint64_t shade_start = 0;
 };
 
@@ -91,7 +93,7 @@ class Renderer : public sc_core::sc_module {
   const std::vector<RegionWork>& work() const { return work_; }
   // The functional model: runs this board's regions on its pixel array.
   void execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,
-               const PacketValues& frame_values) const;
+               const FrameValues& frame_values) const;
 
  private:
   struct Stage {

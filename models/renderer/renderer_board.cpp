@@ -19,28 +19,46 @@ void RendererBoard::materialise() const {
   lazy_ = false;
 }
 
-void RendererBoard::run_rest_of_empty(const Program& program, const PacketValues& frame_values,
+ArrayCycles RendererBoard::run_lights(const Program& program, const FrameValues& values, int region,
+                                      const std::vector<std::uint64_t>& starts) {
+  const ProcedureCode& light = program.procedure(Procedure::light);
+  ArrayCycles cycles{};
+  if (!light.defined) return cycles;
+  for (std::size_t k = 0; k < values.lights.size(); ++k) {
+    begin_packet(
+        {Procedure::light, -1, region, k < starts.size() ? starts[k] : 0, static_cast<int>(k)});
+    cycles += run(light, values.lights[k]);
+  }
+  return cycles;
+}
+
+void RendererBoard::run_rest_of_empty(const Program& program, const FrameValues& frame_values,
                                       std::vector<std::uint8_t>& rgb) {
   for (int pass = 1; pass < program.passes; ++pass) {
-    run(program.procedure(Procedure::pass), frame_values);
+    run(program.procedure(Procedure::pass), frame_values.frame);
   }
-  run(program.procedure(Procedure::shade), frame_values);
+  run_lights(program, frame_values);
+  run(program.procedure(Procedure::shade), frame_values.frame);
   read_outputs(program, rgb);
 }
 
 void RendererBoard::run_empty_region(int x0, int y0, const Program& program,
-                                     const PacketValues& frame_values,
+                                     const FrameValues& frame_values,
                                      std::vector<std::uint8_t>& rgb) {
   if (observer_) {  // a traced board shows every instruction: nothing is reused
     begin_region(x0, y0);
-    run(program.procedure(Procedure::clear), frame_values);
+    run(program.procedure(Procedure::clear), frame_values.frame);
     run_rest_of_empty(program, frame_values, rgb);
     return;
   }
   bool origin_free = true;
-  for (const QuadraticCoefficients& c : frame_values.expressions) {
-    origin_free = origin_free && c.A == 0 && c.B == 0 && c.C == 0 && c.D == 0 && c.E == 0;
-  }
+  auto zero_expressions = [&](const PacketValues& v) {
+    for (const QuadraticCoefficients& c : v.expressions) {
+      origin_free = origin_free && c.A == 0 && c.B == 0 && c.C == 0 && c.D == 0 && c.E == 0;
+    }
+  };
+  zero_expressions(frame_values.frame);
+  for (const PacketValues& v : frame_values.lights) zero_expressions(v);
   if (lazy_ && origin_free && clear_restores_.value_or(false)) {
     rgb = *empty_rgb_;
     ++empty_reused_;
@@ -48,7 +66,7 @@ void RendererBoard::run_empty_region(int x0, int y0, const Program& program,
   }
   begin_region(x0, y0);
   const bool was_kept_state = empty_after_shade_ && array_.same_state(*empty_after_shade_);
-  run(program.procedure(Procedure::clear), frame_values);
+  run(program.procedure(Procedure::clear), frame_values.frame);
   if (!origin_free) {
     run_rest_of_empty(program, frame_values, rgb);
     return;

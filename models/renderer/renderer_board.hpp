@@ -24,9 +24,10 @@ class RendererBoard;
 // Renderer, which knows the region, the primitive and when the timing pass started it.
 struct PacketContext {
   Procedure procedure = Procedure::clear;
-  int primitive = -1;  // scene triangle, or -1 for clear/shade
+  int primitive = -1;  // scene triangle, or -1 for clear, pass, light and shade
   int region = 0;
   std::uint64_t start_cycle = 0;  // simulated array cycle at which the packet starts
+  int light = -1;                 // the scene light a `light` packet runs for, else -1
 };
 
 // An opt-in observer of a board's execution (see sim/trace/). Contract: the board calls
@@ -68,9 +69,14 @@ class RendererBoard {
   // Reads the program's output fields of every pixel as 8-bit RGB, row-major.
   void read_outputs(const Program& program, std::vector<std::uint8_t>& rgb) const;
 
-  // A region no primitive touches: clear, the passes with no triangles, shade, and its
-  // outputs, as run_region would give them; see "Empty regions" below.
-  void run_empty_region(int x0, int y0, const Program& program, const PacketValues& frame_values,
+  // The program's `light` procedure once per light, light k with values.lights[k] (nothing
+  // if the program has none); an observer sees light k's packet start at starts[k] (0 if
+  // `starts` is empty).
+  ArrayCycles run_lights(const Program& program, const FrameValues& values, int region = 0,
+                         const std::vector<std::uint64_t>& starts = {});
+  // A region no primitive touches: clear, the passes with no triangles, the lights, shade,
+  // and its outputs, as run_region would give them; see "Empty regions" below.
+  void run_empty_region(int x0, int y0, const Program& program, const FrameValues& frame_values,
                         std::vector<std::uint8_t>& rgb);
   // Empty regions whose result was reused rather than executed again.
   std::uint64_t empty_regions_reused() const { return empty_reused_; }
@@ -92,9 +98,9 @@ class RendererBoard {
   ArrayCycles cycles_executed() const { return cycles_; }
 
  private:
-  // Empty regions. Their stream is the same every time (clear, the passes' procedures, shade,
-  // all with the frame's values, whose expressions are zero, so the region's origin does not
-  // matter): its result depends only on the array's state before it. So the first empty
+  // Empty regions. Their stream is the same every time (clear, the passes' procedures, the
+  // lights, shade, all with the frame's values, whose expressions are zero, so the region's origin
+  // does not matter): its result depends only on the array's state before it. So the first empty
   // region is executed for real and its states after clear and after shade and its outputs
   // are kept; a later empty region whose state after clear is the same (the clear procedure
   // initialises every field that matters, as real firmware does) takes the kept outputs, and
@@ -103,7 +109,7 @@ class RendererBoard {
   // after-shade state onto the kept after-clear state. Exact: nothing is assumed that is not
   // checked on the array's full state; the simulated timing still charges every region.
   void materialise() const;
-  void run_rest_of_empty(const Program& program, const PacketValues& frame_values,
+  void run_rest_of_empty(const Program& program, const FrameValues& frame_values,
                          std::vector<std::uint8_t>& rgb);
 
   RendererBoardParams params_;

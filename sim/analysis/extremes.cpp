@@ -83,7 +83,8 @@ struct ViewScene {
   ViewScene(int w, int h) : width(w), height(h) {
     scene.name = "extremes";
     scene.camera = Camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 90.0f, 1.0f, 100.0f};
-    scene.light = Light{{0, 0, 1}, 1.0f, 0.0f, 0.0f, 1.0f};
+    scene.ambient = 1.0f;
+    scene.lights = {Light{{0, 0, 1}, 0.0f, 0.0f, 1.0f}};
     scene.background = glm::vec3(0);
   }
   // Screen position (pixels, y down) at view distance d.

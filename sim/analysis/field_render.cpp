@@ -21,8 +21,8 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
         fmt::format("{}: the program has no field '{}' to read back", program.name, field));
   }
   const GeometryEngine geometry(geometry_params(config), scene);
-  PacketValues frame;
-  frame.parameters = geometry.frame_parameters();
+  const FrameValues values = geometry.frame_values();
+  const PacketValues& frame = values.frame;
   const auto& needed = program.procedure(Procedure::triangle).expressions;
 
   std::vector<std::vector<PacketValues>> bins(config.regions());
@@ -76,6 +76,7 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
         for (const PacketValues& v : bins[region])
           board.run(program.procedure(Procedure::triangle), v);
       }
+      board.run_lights(program, values, region);
       board.run(program.procedure(Procedure::shade), frame);
       board.read_outputs(program, rgb);
       for (int y = 0; y < rh && y0 + y < h; ++y) {

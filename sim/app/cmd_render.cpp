@@ -1,6 +1,7 @@
 // pp5sim render: one frame of a scene, its image and its reports.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -22,7 +23,7 @@ namespace {
 
 struct RenderOptions {
   std::string scene_name = "torus";
-  std::string firmware = "phong";
+  std::string firmware;  // empty: the scene file's "firmware", else phong
   std::string config_path;
   std::vector<std::string> sets;
   std::string out_dir;
@@ -32,6 +33,32 @@ struct RenderOptions {
   std::vector<std::string> params;
   std::string order = "given";
 };
+
+// What the scene asks for that the program would ignore, one stderr line each: opacity
+// reaches the pixels only through the `opacity` expression, and a program that lights pixels
+// itself (it reads light_x) but has no `light` procedure sees the first light only.
+void warn_about_ignored_scene_parts(const Scene& scene, const Program& program) {
+  const std::string name = fs::path(program.name).stem().string();
+  const bool transparent = std::any_of(scene.mesh.vertices.begin(), scene.mesh.vertices.end(),
+                                       [](const Vertex& v) { return v.opacity < 1.0f; });
+  const int opacity = static_cast<int>(Expression::opacity);
+  if (transparent && !program.procedure(Procedure::triangle).expressions.test(opacity)) {
+    std::cerr << fmt::format(
+        "warning: scene '{}' has materials with opacity < 1, but firmware '{}' has no 'opacity' "
+        "expression: the opacity is ignored (use --firmware transparent)\n",
+        scene.name, name);
+  }
+  bool reads_light = false;
+  for (const ProcedureCode& code : program.procedures) {
+    reads_light = reads_light || code.parameters.test(static_cast<int>(Parameter::light_x));
+  }
+  if (scene.lights.size() > 1 && reads_light && !program.procedure(Procedure::light).defined) {
+    std::cerr << fmt::format(
+        "warning: scene '{}' has {} lights, but firmware '{}' has no 'light' procedure: it "
+        "shades with the first light only (phong sums them all)\n",
+        scene.name, scene.lights.size(), name);
+  }
+}
 
 int run_render(RenderOptions o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
@@ -45,7 +72,11 @@ int run_render(RenderOptions o) {
   apply_display_order(scene.mesh, order);
   scene.parameters = parse_frame_parameters(o.params);
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
-  const Program program = assemble_file(resolve_firmware(o.firmware), assembler_options(config));
+  const std::string firmware = !o.firmware.empty()       ? o.firmware
+                               : !scene.firmware.empty() ? scene.firmware
+                                                         : "phong";
+  const Program program = assemble_file(resolve_firmware(firmware), assembler_options(config));
+  warn_about_ignored_scene_parts(scene, program);
   if (o.out_dir.empty()) o.out_dir = (fs::path("out") / scene.name).string();
   fs::create_directories(o.out_dir);
 
@@ -93,11 +124,9 @@ Command add_render_command(CLI::App& app) {
                    "A built-in scene (see 'pp5sim scenes'), a mesh file (.obj .ply .stl .off) or a "
                    "scene file (.json, described in README.md)")
       ->capture_default_str();
-  render
-      ->add_option("-f,--firmware", o->firmware,
-                   "Firmware program: a .pp5 file, or a name in firmware/programs "
-                   "(flat, gouraud, phong)")
-      ->capture_default_str();
+  render->add_option("-f,--firmware", o->firmware,
+                     "Firmware program: a .pp5 file, or a name in firmware/programs (flat, "
+                     "gouraud, phong, transparent) [the scene file's \"firmware\", else phong]");
   add_config_options(*render, o->config_path, o->sets);
   render->add_option("-o,--out", o->out_dir,
                      "Output folder for frame.png, config.json and stats.json [out/SCENE]");

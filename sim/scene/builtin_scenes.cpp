@@ -44,7 +44,7 @@ Scene finish_scene(std::string name, std::string description, Mesh mesh, glm::ve
   scene.description = std::move(description);
   scene.mesh = std::move(mesh);
   scene.camera = frame_mesh(scene.mesh, view_dir, kFovYDegrees, kFrameMargin);
-  scene.light = default_light(scene.camera);
+  scene.lights = {default_light(scene.camera)};
   scene.background = kBackground;
   return scene;
 }
@@ -283,7 +283,7 @@ Scene make_receding_pairs() {
   // The target is the middle pair's distance: epsilon_normal scales its slopes there.
   scene.camera = {
       {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, -11.25f}, {0.0f, 1.0f, 0.0f}, kFovYDegrees, 2.0f, 40.0f};
-  scene.light = default_light(scene.camera);
+  scene.lights = {default_light(scene.camera)};
   scene.background = kBackground;
   return scene;
 }

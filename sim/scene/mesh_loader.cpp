@@ -877,7 +877,7 @@ Scene scene_from_mesh(Mesh mesh, const std::string& name, const std::string& des
   scene.description = description;
   scene.mesh = std::move(mesh);
   scene.camera = frame_mesh(scene.mesh, glm::vec3(0.3f, 0.4f, 1.0f), 40.0f, 1.05f);
-  scene.light = default_light(scene.camera);
+  scene.lights = {default_light(scene.camera)};
   scene.background = glm::vec3(0.05f, 0.05f, 0.08f);
   return scene;
 }

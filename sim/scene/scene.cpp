@@ -115,7 +115,6 @@ Light default_light(const Camera& camera) {
   const glm::vec3 up = glm::cross(back, right);
   Light light;
   light.direction = glm::normalize(-0.6f * right + 0.7f * up + 0.8f * back);
-  light.ambient = 0.15f;
   light.diffuse = 0.8f;
   light.specular = 0.3f;
   light.shininess = 16.0f;

@@ -8,11 +8,13 @@
 
 namespace pp5 {
 
-// One mesh vertex in world space. `normal` is unit length; `color` is RGB in [0,1].
+// One mesh vertex in world space. `normal` is unit length; `color` is RGB in [0,1]; `opacity`
+// is the material's, in [0,1] (1 = opaque; only programs with the `opacity` expression use it).
 struct Vertex {
   glm::vec3 position;
   glm::vec3 normal;
   glm::vec3 color;
+  float opacity = 1.0f;
 };
 
 // An indexed triangle mesh. Every index in `triangles` is < vertices.size(). Triangles are wound
@@ -28,22 +30,29 @@ struct Camera {
   float near_plane, far_plane;
 };
 
+// A directional light. Its diffuse and specular terms add to those of the scene's other lights.
 struct Light {
-  // Unit vector from the surface toward the light, in world space (a directional light).
+  // Unit vector from the surface toward the light, in world space.
   glm::vec3 direction;
-  float ambient;
   float diffuse;
   float specular;
-  float shininess;
+  float shininess;  // the GP's exponent (Gouraud, flat); phong.pp5 uses a fixed 16
 };
+
+// Lights per scene: the Renderer runs the firmware's `light` procedure once for each.
+inline constexpr int kMaxLights = 8;
 
 struct Scene {
   std::string name;
   std::string description;
   Mesh mesh;
   Camera camera;
-  Light light;
-  glm::vec3 background;  // RGB in [0,1]
+  float ambient = 0.15f;      // ambient reflection, in [0,1], once for the whole scene
+  std::vector<Light> lights;  // 1..kMaxLights
+  glm::vec3 background;       // RGB in [0,1]
+  // The firmware the scene asks for (a program name or .pp5 path), or empty for the
+  // command's default; `pp5sim render --firmware` overrides it.
+  std::string firmware;
   // Frame-parameter overrides by name (firmware/isa/interface.hpp), e.g. highlight options
   // from `pp5sim render --param NAME=VALUE`; unknown names are rejected by the GP.
   std::map<std::string, std::int64_t> parameters;
@@ -93,8 +102,8 @@ BoundingSphere bounding_sphere(const Mesh& mesh);
 Camera frame_mesh(const Mesh& mesh, glm::vec3 view_direction, float fov_y_degrees,
                   float margin = 1.05f);
 
-// The project's standard key light, from the upper left in front of `camera`: ambient 0.15,
-// diffuse 0.8, specular 0.3, shininess 16.
+// The project's standard key light, from the upper left in front of `camera`: diffuse 0.8,
+// specular 0.3, shininess 16 (with the scene's default ambient 0.15).
 Light default_light(const Camera& camera);
 
 // Sets every vertex normal to the normalised area-weighted sum of the normals of the triangles

@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -162,6 +164,60 @@ void append(Mesh& scene_mesh, const Mesh& part, const glm::dmat4& transform, con
   }
 }
 
+// A surface's material: its colour (absent: a mesh file's own colours, or 0.8 grey) and
+// opacity.
+struct Material {
+  std::optional<glm::vec3> color;
+  float opacity = 1.0f;
+};
+
+Material parse_material(const Node& m) {
+  m.check_keys({"color", "opacity"});
+  Material out;
+  if (m.has("color")) out.color = glm::vec3(m.at("color").vec3(0.0, 1.0));
+  if (m.has("opacity")) out.opacity = static_cast<float>(m.at("opacity").number(0, 1));
+  return out;
+}
+
+// A mesh's "material" (a name from "materials" or an inline material) or its "color".
+Material mesh_material(const Node& m, const std::map<std::string, Material>& materials) {
+  if (m.has("material") && m.has("color")) {
+    m.at("color").fail("cannot be given with 'material' (give the material a 'color')");
+  }
+  if (m.has("color")) return {glm::vec3(m.at("color").vec3(0.0, 1.0)), 1.0f};
+  if (!m.has("material")) return {};
+  const Node mat = m.at("material");
+  if (mat.value.is_object()) return parse_material(mat);
+  const std::string name = mat.string();
+  const auto it = materials.find(name);
+  if (it == materials.end()) {
+    std::string known;
+    for (const auto& [k, v] : materials) known += (known.empty() ? "" : ", ") + k;
+    mat.fail(fmt::format("names an unknown material '{}' (the file's 'materials': {})", name,
+                         known.empty() ? "none" : known));
+  }
+  return it->second;
+}
+
+// One directional light; absent keys keep the standard key light's.
+Light parse_light(const Node& l, const Camera& camera, bool allow_ambient) {
+  if (allow_ambient) {
+    l.check_keys({"direction", "ambient", "diffuse", "specular", "shininess"});
+  } else {
+    l.check_keys({"direction", "diffuse", "specular", "shininess"});
+  }
+  Light light = default_light(camera);
+  if (l.has("direction")) {
+    const glm::dvec3 d = l.at("direction").vec3();
+    if (glm::length(d) == 0.0) l.at("direction").fail("must not be the zero vector");
+    light.direction = glm::vec3(glm::normalize(d));
+  }
+  if (l.has("diffuse")) light.diffuse = static_cast<float>(l.at("diffuse").number(0, 1));
+  if (l.has("specular")) light.specular = static_cast<float>(l.at("specular").number(0, 1));
+  if (l.has("shininess")) light.shininess = static_cast<float>(l.at("shininess").number(1, 1024));
+  return light;
+}
+
 }  // namespace
 
 Scene parse_scene_json(const std::string& text, const std::string& origin,
@@ -177,7 +233,8 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     throw SceneError(
         fmt::format("{}: a scene file must be a JSON object (got {})", origin, doc.type_name()));
   }
-  root.check_keys({"name", "description", "meshes", "camera", "light", "background"});
+  root.check_keys({"name", "description", "meshes", "materials", "camera", "ambient", "light",
+                   "lights", "background", "firmware"});
   if (!root.has("meshes")) throw SceneError(origin + ": missing key 'meshes' (an array of meshes)");
   const Node meshes = root.at("meshes");
   if (meshes.array().empty()) meshes.fail("must hold at least one mesh");
@@ -196,12 +253,21 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
   if (!plain) scene.name = "scene";
   scene.description = root.has("description") ? root.at("description").string()
                                               : fmt::format("scene file {}", origin);
+  std::map<std::string, Material> materials;
+  if (root.has("materials")) {
+    const Node ms = root.at("materials");
+    if (!ms.value.is_object()) {
+      ms.fail(fmt::format("must be an object of named materials (got {})", ms.value.type_name()));
+    }
+    for (const auto& item : ms.value.items())
+      materials[item.key()] = parse_material(ms.at(item.key()));
+  }
   for (std::size_t i = 0; i < meshes.value.size(); ++i) {
     const Node m = meshes.at(i);
     m.check_keys({"file", "builtin", "vertices", "triangles", "translate", "rotate_degrees",
-                  "scale", "color"});
-    const glm::vec3 color =
-        m.has("color") ? glm::vec3(m.at("color").vec3(0.0, 1.0)) : glm::vec3(0.8f);
+                  "scale", "color", "material"});
+    const Material material = mesh_material(m, materials);
+    const glm::vec3 color = material.color.value_or(glm::vec3(0.8f));
     const int sources = m.has("file") + m.has("builtin") + m.has("vertices");
     if (sources != 1) {
       m.fail("needs exactly one of 'file', 'builtin' or 'vertices' (with 'triangles')");
@@ -217,13 +283,14 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
       } catch (const std::invalid_argument& e) {
         m.at("builtin").fail(e.what());
       }
-      if (m.has("color")) {
+      if (material.color) {
         for (Vertex& v : part.vertices) v.color = color;
       }
     } else {
       if (!m.has("triangles")) m.fail("has 'vertices' but no 'triangles'");
       part = inline_mesh(m, limits, color);
     }
+    for (Vertex& v : part.vertices) v.opacity = material.opacity;
     append(scene.mesh, part, mesh_transform(m), m, limits);
   }
 
@@ -264,24 +331,44 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     scene.camera = frame_mesh(scene.mesh, glm::vec3(0.3f, 0.4f, 1.0f), 40.0f, 1.05f);
   }
 
-  scene.light = default_light(scene.camera);
-  if (root.has("light")) {
-    const Node l = root.at("light");
-    l.check_keys({"direction", "ambient", "diffuse", "specular", "shininess"});
-    if (l.has("direction")) {
-      const glm::dvec3 d = l.at("direction").vec3();
-      if (glm::length(d) == 0.0) l.at("direction").fail("must not be the zero vector");
-      scene.light.direction = glm::vec3(glm::normalize(d));
+  if (root.has("light") && root.has("lights")) {
+    root.at("lights").fail("cannot be given with 'light' (put that light in 'lights')");
+  }
+  const bool light_ambient = root.has("light") && root.at("light").has("ambient");
+  if (light_ambient && root.has("ambient")) {
+    root.at("ambient").fail("cannot be given with 'light.ambient'");
+  }
+  if (root.has("ambient")) scene.ambient = static_cast<float>(root.at("ambient").number(0, 1));
+  if (light_ambient) {
+    scene.ambient = static_cast<float>(root.at("light").at("ambient").number(0, 1));
+  }
+  if (root.has("lights")) {
+    const Node ls = root.at("lights");
+    const std::size_t n = ls.array().size();
+    if (n < 1 || n > static_cast<std::size_t>(kMaxLights)) {
+      ls.fail(fmt::format("holds {} lights; a scene has 1 to {}", n, kMaxLights));
     }
-    if (l.has("ambient")) scene.light.ambient = static_cast<float>(l.at("ambient").number(0, 1));
-    if (l.has("diffuse")) scene.light.diffuse = static_cast<float>(l.at("diffuse").number(0, 1));
-    if (l.has("specular")) scene.light.specular = static_cast<float>(l.at("specular").number(0, 1));
-    if (l.has("shininess")) {
-      scene.light.shininess = static_cast<float>(l.at("shininess").number(1, 1024));
+    for (std::size_t k = 0; k < n; ++k) {
+      scene.lights.push_back(parse_light(ls.at(k), scene.camera, false));
     }
+  } else if (root.has("light")) {
+    scene.lights = {parse_light(root.at("light"), scene.camera, true)};
+  } else {
+    scene.lights = {default_light(scene.camera)};
   }
   scene.background = root.has("background") ? glm::vec3(root.at("background").vec3(0.0, 1.0))
                                             : glm::vec3(0.05f, 0.05f, 0.08f);
+  if (root.has("firmware")) {
+    const Node f = root.at("firmware");
+    fs::path program = f.string();
+    if (program.empty()) f.fail("must name a program (e.g. \"transparent\") or a .pp5 file");
+    // A .pp5 path is relative to the scene file, like mesh files; a name is looked up in
+    // firmware/programs.
+    if (program.extension() == ".pp5" && program.is_relative()) {
+      program = fs::path(base_dir) / program;
+    }
+    scene.firmware = program.string();
+  }
   return scene;
 }
 

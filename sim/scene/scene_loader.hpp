@@ -9,22 +9,39 @@
 //        "translate": [0, 0, 0],                   or "builtin": "sphere", or inline
 //        "rotate_degrees": [0, 30, 0],             "vertices": [[x,y,z], ...] and
 //        "scale": 1.0,                             "triangles": [[i,j,k], ...];
-//        "color": [0.8, 0.3, 0.2]}                 the material's colour (RGB in 0..1)
+//        "material": "glass"}                      a name from "materials", or an inline
+//                                                  {"color": .., "opacity": ..}, or
+//                                                  "color": [r,g,b] (an opaque material);
+//                                                  none: the mesh file's colours or 0.8 grey
 //     ],
+//     "materials": {"glass": {"color": [0.6, 0.8, 1.0],   RGB in 0..1 (absent: as above)
+//                             "opacity": 0.4}},           0..1, default 1 (opaque); reaches
+//                                                         the pixels through the `opacity`
+//                                                         expression (transparent.pp5)
 //     "camera": {"eye": [..], "target": [..], "up": [0,1,0],
 //                "fov_y_degrees": 40, "near": 0.1, "far": 100},
 //        or {"view_direction": [x,y,z], "fov_y_degrees": 40} to frame the meshes;
 //        absent: framed from the front and a little above
-//     "light": {"direction": [x,y,z], "ambient": 0.15, "diffuse": 0.8,
-//               "specular": 0.3, "shininess": 16},   absent: the standard key light
+//     "ambient": 0.15,                             the scene's ambient reflection, 0..1
+//     "lights": [                                  1 to 8 directional lights, each adding
+//       {"direction": [x,y,z], "diffuse": 0.8,     its diffuse and specular terms; absent
+//        "specular": 0.3, "shininess": 16}, ...]   keys take the standard key light's
+//        or "light": {...} for one light (which may also hold "ambient"; not with "lights");
+//        neither: the standard key light
 //     "background": [r, g, b],
+//     "firmware": "transparent",                   the program `pp5sim render` uses unless
+//                                                  --firmware says otherwise (a name in
+//                                                  firmware/programs or a .pp5 path relative
+//                                                  to the scene file)
 //     "name": "...", "description": "..."
 //   }
 // Rotation applies about x, then y, then z, after scaling and before translation.
 //
-// Contract: unknown keys, wrong types and out-of-range values are SceneError whose message
-// names the file and the key's path (e.g. "meshes[1].scale"); mesh-file errors keep the
-// mesh file's own line numbers.
+// Contract: unknown keys, wrong types, out-of-range values and keys that exclude each other
+// ("light" with "lights", "ambient" with "light.ambient", "color" with "material") and
+// unknown material names are SceneError whose message names
+// the file and the key's path (e.g. "meshes[1].scale", "lights[2].diffuse"); mesh-file errors
+// keep the mesh file's own line numbers.
 #include <stdexcept>
 #include <string>
 

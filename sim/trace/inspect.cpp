@@ -41,8 +41,7 @@ Pixel choose_pixel(const Trace& t, const std::optional<Pixel>& requested) {
 
 std::string describe_event(const Trace& t, const Event& e) {
   const InstructionText& it = t.text(e.ins);
-  const std::string prim = e.ins.primitive >= 0 ? fmt::format("triangle {}", e.ins.primitive)
-                                                : std::string(kProcedureNames[e.ins.procedure]);
+  const std::string prim = packet_label(e.ins);
   return fmt::format("{} (proc {}, line {}: '{}'), micro-instruction #{} on renderer {}, cycle {}",
                      prim, kProcedureNames[e.ins.procedure], it.line, it.text, e.ins.seq,
                      e.ins.renderer, e.ins.cycle);
@@ -158,6 +157,7 @@ struct PacketState {
   std::uint32_t packet;
   std::int32_t primitive;
   std::uint8_t procedure;
+  std::string label;  // packet_label
   std::map<std::string, std::uint64_t> values;
   std::map<std::string, std::size_t> writer;  // event of the last change in this packet
 };
@@ -181,7 +181,7 @@ std::vector<PacketState> packet_states(const Trace& t, Pixel px,
     }
     if (!mine) continue;
     if (out.empty() || out.back().packet != e.ins.packet) {
-      out.push_back({e.ins.packet, e.ins.primitive, e.ins.procedure, {}, {}});
+      out.push_back({e.ins.packet, e.ins.primitive, e.ins.procedure, packet_label(e.ins), {}, {}});
     }
     out.back().values = current;
     for (const auto& [n, w] : writes) out.back().writer[n] = w;
@@ -203,7 +203,7 @@ std::string diff_report(const Trace& a, const Trace& b, std::optional<Pixel> pix
       throw TraceError(
           fmt::format("pixel {},{} is not in both traces", pixel->first, pixel->second));
     }
-    pixels = {*pixel};
+    pixels.assign(1, *pixel);
   }
   if (pixels.empty()) throw TraceError("the two traces have no selected pixel in common");
   std::set<std::string> shared, only_a, only_b;
@@ -250,9 +250,7 @@ std::string diff_report(const Trace& a, const Trace& b, std::optional<Pixel> pix
         if (va->second != vb->second) differ.push_back(n);
       }
       if (!differ.empty()) {
-        const std::string what = sa[i].primitive >= 0
-                                     ? fmt::format("triangle {}", sa[i].primitive)
-                                     : std::string(kProcedureNames[sa[i].procedure]);
+        const std::string& what = sa[i].label;
         out += fmt::format("pixel {},{}: first divergence after packet {} ({}):\n", px.first,
                            px.second, sa[i].packet, what);
         for (const std::string& n : differ) {
@@ -403,7 +401,7 @@ std::string vcd(const Trace& t) {
                        8 * text_chars - 1);
     out += fmt::format("$var wire 16 {} line [15:0] $end\n", s.line);
     out += fmt::format("$var wire 32 {} primitive [31:0] $end\n", s.primitive);
-    out += fmt::format("$var wire 2 {} procedure [1:0] $end\n", s.procedure);
+    out += fmt::format("$var wire 3 {} procedure [2:0] $end\n", s.procedure);
     out += fmt::format("$var wire 32 {} enabled_pixels [31:0] $end\n", s.enabled);
     out += fmt::format("$var wire 64 {} instruction_number [63:0] $end\n", s.number);
     out += "$upscope $end\n";
@@ -440,7 +438,7 @@ std::string vcd(const Trace& t) {
     c += ascii_bits(it.text, text_chars) + " " + s.text + "\n";
     c += binary(static_cast<std::uint64_t>(it.line), 16) + " " + s.line + "\n";
     c += binary(static_cast<std::uint32_t>(e.ins.primitive), 32) + " " + s.primitive + "\n";
-    c += binary(e.ins.procedure, 2) + " " + s.procedure + "\n";
+    c += binary(e.ins.procedure, 3) + " " + s.procedure + "\n";
     c += binary(e.ins.enabled, 32) + " " + s.enabled + "\n";
     c += binary(e.ins.seq, 64) + " " + s.number + "\n";
     changes.push_back({at, c});

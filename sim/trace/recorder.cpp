@@ -168,6 +168,7 @@ class BoardRecorder : public BoardObserver {
     InstructionRecord rec;
     rec.procedure = static_cast<std::uint8_t>(packet_.procedure);
     rec.flags = synced_ ? 0 : kFullState;
+    rec.light = static_cast<std::uint8_t>(std::max(0, packet_.light));
     rec.renderer = static_cast<std::uint16_t>(renderer_);
     rec.index = static_cast<std::uint16_t>(index);
     rec.region = static_cast<std::uint32_t>(packet_.region);

@@ -41,11 +41,17 @@ std::uint64_t fnv1a(const std::uint8_t* data, std::size_t n) {
   return h;
 }
 
+std::string packet_label(const InstructionRecord& r) {
+  if (r.primitive >= 0) return fmt::format("triangle {}", r.primitive);
+  if (r.procedure == static_cast<int>(Procedure::light)) return fmt::format("light {}", r.light);
+  return kProcedureNames[r.procedure];
+}
+
 void append(std::vector<std::uint8_t>& out, const InstructionRecord& r) {
   put<std::uint8_t>(out, kInstructionRecord);
   put(out, r.procedure);
   put(out, r.flags);
-  put<std::uint8_t>(out, 0);
+  put(out, r.light);
   put(out, r.renderer);
   put(out, r.index);
   put(out, r.region);
@@ -163,7 +169,13 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
     }
     for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
       std::vector<InstructionText> code;
-      for (const auto& i : t.header.at("firmware").at("procedures").at(kProcedureNames[p])) {
+      // Traces written before the `light` procedure existed do not list it.
+      const auto& procedures = t.header.at("firmware").at("procedures");
+      if (!procedures.contains(kProcedureNames[p])) {
+        t.procedures.emplace_back();
+        continue;
+      }
+      for (const auto& i : procedures.at(kProcedureNames[p])) {
         code.push_back({i.at("text").get<std::string>(), i.at("line").get<int>()});
       }
       t.procedures.push_back(std::move(code));
@@ -196,6 +208,7 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
       InstructionRecord i;
       i.procedure = r[1];
       i.flags = r[2];
+      i.light = r[3];
       i.renderer = get<std::uint16_t>(r + 4);
       i.index = get<std::uint16_t>(r + 6);
       i.region = get<std::uint32_t>(r + 8);

@@ -31,12 +31,13 @@ inline constexpr std::uint8_t kFullState = 1;
 
 // One executed micro-instruction of a region that holds selected pixels.
 struct InstructionRecord {
-  std::uint8_t procedure = 0;  // Procedure: clear, triangle, shade
+  std::uint8_t procedure = 0;  // Procedure: clear, triangle, pass, shade, light
   std::uint8_t flags = 0;
+  std::uint8_t light = 0;  // the scene light of a `light` instruction, else 0
   std::uint16_t renderer = 0;
   std::uint16_t index = 0;  // instruction's index in its procedure (header: text, line)
   std::uint32_t region = 0;
-  std::int32_t primitive = -1;  // scene triangle, -1 for clear and shade
+  std::int32_t primitive = -1;  // scene triangle, -1 for the other procedures
   std::uint32_t packet = 0;     // packet number within the region: 0 = clear, then triangles
   std::uint32_t enabled = 0;    // pixels with Enable = 1 after the instruction
   std::uint32_t cost = 0;       // array cycles
@@ -50,6 +51,9 @@ struct ValueRecord {
   std::uint16_t x = 0, y = 0;
   std::uint64_t value = 0;  // raw bits, zero-extended
 };
+
+// What a record's packet was: "triangle N", "light K", or the procedure's name.
+std::string packet_label(const InstructionRecord& r);
 
 // Appends records in the file's encoding (little-endian).
 void append(std::vector<std::uint8_t>& out, const InstructionRecord& r);

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Scene files with materials, lights and a firmware of their own, as `pp5sim render` meets
+# them: the scene's program unless --firmware overrides it, and a warning when a program
+# would ignore the scene's opacity or all but its first light.
+. "$(dirname "$0")/cli_lib.sh"
+data="$(dirname "$0")/data"
+small=(--set screen.width=128 --set screen.height=128)
+
+"$bin" render --scene "$data/scenes/glass_quads.json" "${small[@]}" --out "$tmp/own" \
+  >"$tmp/own.log" 2>"$tmp/own.err" || fail "render failed: $(cat "$tmp/own.err")"
+grep -q "firmware .*transparent.pp5" "$tmp/own.log" || fail "the scene's firmware was not used"
+[ -s "$tmp/own.err" ] && fail "unexpected stderr: $(cat "$tmp/own.err")"
+[ -s "$tmp/own/frame.png" ] || fail "no frame"
+
+"$bin" render --scene "$data/scenes/glass_quads.json" --firmware gouraud "${small[@]}" \
+  --out "$tmp/over" >"$tmp/over.log" 2>"$tmp/over.err" || fail "render failed: $(cat "$tmp/over.err")"
+grep -q "firmware .*gouraud.pp5" "$tmp/over.log" || fail "--firmware did not override the scene's"
+[ "$(wc -l <"$tmp/over.err")" -eq 1 ] || fail "expected a one-line warning, got: $(cat "$tmp/over.err")"
+grep -q "^warning: scene 'glass-quads' has materials with opacity < 1, but firmware 'gouraud' has no 'opacity' expression: the opacity is ignored (use --firmware transparent)$" \
+  "$tmp/over.err" || fail "wrong warning: $(cat "$tmp/over.err")"
+grep -q "opacity is ignored" "$tmp/over.log" && fail "the warning went to stdout"
+
+# An opaque scene: no warning whatever the program.
+"$bin" render --scene two-triangles --firmware phong "${small[@]}" --out "$tmp/opaque" \
+  >/dev/null 2>"$tmp/opaque.err" || fail "render failed"
+[ -s "$tmp/opaque.err" ] && fail "unexpected stderr: $(cat "$tmp/opaque.err")"
+
+# Two lights: a program that lights pixels itself without a `light` procedure sees only the
+# first; the example scene's own program (transparent) warns about nothing.
+example="$(dirname "$0")/../examples/scenes/glass.json"
+"$bin" render --scene "$example" --firmware exactmatch "${small[@]}" --out "$tmp/em" \
+  >/dev/null 2>"$tmp/em.err" || fail "render failed: $(cat "$tmp/em.err")"
+grep -q "^warning: scene 'glass' has 2 lights, but firmware 'exactmatch' has no 'light' procedure: it shades with the first light only" \
+  "$tmp/em.err" || fail "no light warning: $(cat "$tmp/em.err")"
+grep -q "opacity is ignored" "$tmp/em.err" || fail "no opacity warning: $(cat "$tmp/em.err")"
+for fw in phong gouraud; do
+  "$bin" render --scene "$example" --firmware $fw "${small[@]}" --out "$tmp/$fw" >/dev/null \
+    2>"$tmp/$fw.err" || fail "render failed"
+  grep -q "lights, but" "$tmp/$fw.err" && fail "$fw sums the lights, yet: $(cat "$tmp/$fw.err")"
+done
+"$bin" render --scene "$example" "${small[@]}" --out "$tmp/ex" >/dev/null 2>"$tmp/ex.err" \
+  || fail "example render failed: $(cat "$tmp/ex.err")"
+[ -s "$tmp/ex.err" ] && fail "unexpected stderr: $(cat "$tmp/ex.err")"
+
+printf '{"meshes": [{"builtin": "two-triangles", "material": "stone"}]}' >"$tmp/bad.json"
+expect_error "bad.json: key 'meshes\[0\].material' names an unknown material 'stone'" \
+  render --scene "$tmp/bad.json" --out "$tmp/bad"
+printf '{"meshes": [{"builtin": "two-triangles"}], "firmware": "nope"}' >"$tmp/nofw.json"
+expect_error "--firmware nope: no such file" render --scene "$tmp/nofw.json" --out "$tmp/bad"
+[ -e "$tmp/bad/frame.png" ] && fail "output after bad input"
+"$bin" render --help | grep -q "transparent) \[the scene file's \"firmware\", else phong\]" \
+  || fail "render --help does not describe the default firmware"
+echo "scene_cli: ok"
