@@ -314,8 +314,8 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
     // An empty region's stream is the same every time: executed once, then reused (a traced
     // board runs every instruction, so that the trace shows them).
     if (w.triangles.empty() && !board.observed()) {
-      board.run_empty_region(w.x0, w.y0, program, values, rgb);
-      frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
+      frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height,
+                                board.run_empty_region(w.x0, w.y0, program, values, rgb));
       continue;
     }
     board.begin_region(w.x0, w.y0);

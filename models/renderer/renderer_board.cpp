@@ -42,14 +42,15 @@ void RendererBoard::run_rest_of_empty(const Program& program, const FrameValues&
   read_outputs(program, rgb);
 }
 
-void RendererBoard::run_empty_region(int x0, int y0, const Program& program,
-                                     const FrameValues& frame_values,
-                                     std::vector<std::uint8_t>& rgb) {
+const std::vector<std::uint8_t>& RendererBoard::run_empty_region(int x0, int y0,
+                                                                 const Program& program,
+                                                                 const FrameValues& frame_values,
+                                                                 std::vector<std::uint8_t>& rgb) {
   if (observer_) {  // a traced board shows every instruction: nothing is reused
     begin_region(x0, y0);
     run(program.procedure(Procedure::clear), frame_values.frame);
     run_rest_of_empty(program, frame_values, rgb);
-    return;
+    return rgb;
   }
   bool origin_free = true;
   auto zero_expressions = [&](const PacketValues& v) {
@@ -60,23 +61,21 @@ void RendererBoard::run_empty_region(int x0, int y0, const Program& program,
   zero_expressions(frame_values.frame);
   for (const PacketValues& v : frame_values.lights) zero_expressions(v);
   if (lazy_ && origin_free && clear_restores_.value_or(false)) {
-    rgb = *empty_rgb_;
     ++empty_reused_;
-    return;
+    return *empty_rgb_;
   }
   begin_region(x0, y0);
   const bool was_kept_state = empty_after_shade_ && array_.same_state(*empty_after_shade_);
   run(program.procedure(Procedure::clear), frame_values.frame);
   if (!origin_free) {
     run_rest_of_empty(program, frame_values, rgb);
-    return;
+    return rgb;
   }
   if (empty_after_clear_ && array_.same_state(*empty_after_clear_)) {
     if (was_kept_state) clear_restores_ = true;
-    rgb = *empty_rgb_;
     lazy_ = true;
     ++empty_reused_;
-    return;
+    return *empty_rgb_;
   }
   // Nothing kept, or a different state (fields the clear procedure leaves alone hold what an
   // earlier region put there): execute, and keep this region's states instead, since the
@@ -86,6 +85,7 @@ void RendererBoard::run_empty_region(int x0, int y0, const Program& program,
   empty_after_shade_ = std::make_shared<const PixelArray>(array_);
   empty_rgb_ = std::make_shared<const std::vector<std::uint8_t>>(rgb);
   clear_restores_.reset();
+  return rgb;
 }
 
 void RendererBoard::share_empty_region(const RendererBoard& other) {

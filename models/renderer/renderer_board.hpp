@@ -75,9 +75,12 @@ class RendererBoard {
   ArrayCycles run_lights(const Program& program, const FrameValues& values, int region = 0,
                          const std::vector<std::uint64_t>& starts = {});
   // A region no primitive touches: clear, the passes with no triangles, the lights, shade,
-  // and its outputs, as run_region would give them; see "Empty regions" below.
-  void run_empty_region(int x0, int y0, const Program& program, const FrameValues& frame_values,
-                        std::vector<std::uint8_t>& rgb);
+  // and its outputs, as run_region would give them; see "Empty regions" below. Returns the
+  // outputs: `rgb` when the region was executed, the kept colours (not copied) when it was
+  // reused; valid until the next call.
+  const std::vector<std::uint8_t>& run_empty_region(int x0, int y0, const Program& program,
+                                                    const FrameValues& frame_values,
+                                                    std::vector<std::uint8_t>& rgb);
   // Empty regions whose result was reused rather than executed again.
   std::uint64_t empty_regions_reused() const { return empty_reused_; }
   // Starts from another board's kept empty region (if it has one) instead of executing a
