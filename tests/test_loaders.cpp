@@ -129,6 +129,15 @@ TEST_CASE("every bad mesh or scene file gets its own message", "[loaders]") {
       {"bad/truncated_binary.ply",
        "truncated_binary.ply: element 'face' declares 4 items, more than the 45 bytes of data can "
        "hold (truncated file?)"},
+      // assimp reads a text file that ends early as zeros and a binary one as whatever
+      // follows; the loader counts what the header and the face sizes need.
+      {"bad/truncated_ascii.ply",
+       "truncated_ascii.ply: the data ends early: the header and the face sizes need 40 numbers, "
+       "the file has 39 (truncated file?)"},
+      {"bad/truncated_face.off", "truncated_face.off: the data ends early"},
+      {"bad/truncated_quad.ply",
+       "truncated_quad.ply: the data ends early: the header and the face sizes need 65 bytes, "
+       "the file has 64"},
       {"bad/wrong_type.json", "key 'meshes[0].scale' must be a number (got string)"},
       {"bad/unknown_key.json", "unknown key 'meshes[0].colour'"},
       {"bad/no_meshes.json", "missing key 'meshes'"},

@@ -46,13 +46,59 @@ void check_limits(unsigned long long vertices, unsigned long long faces, const s
   }
 }
 
+// What a header says the data after it must at least hold, in numbers (text) or bytes
+// (binary): `fixed` for everything but the faces' vertex indices, `per_index` for each of
+// those. Checked again after the import, with the face sizes assimp read: assimp reads a text
+// file that ends early as zeros and a binary one as whatever follows, instead of failing.
+struct BodyLayout {
+  bool present = false;
+  bool text = true;
+  std::size_t offset = 0;  // where the data starts
+  unsigned long long fixed = 0;
+  unsigned per_index = 1;
+};
+
+std::size_t count_numbers(std::string_view text, bool hash_comments) {
+  std::size_t n = 0;
+  bool in_word = false, in_comment = false;
+  for (const char c : text) {
+    if (c == '\n') in_comment = false;
+    if (hash_comments && c == '#') in_comment = true;
+    const bool word = !in_comment && !std::isspace(static_cast<unsigned char>(c));
+    n += word && !in_word;
+    in_word = word;
+  }
+  return n;
+}
+
+void check_body(std::string_view data, const BodyLayout& layout, const aiScene& scene,
+                bool hash_comments, const std::string& origin) {
+  if (!layout.present) return;
+  unsigned long long indices = 0;
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    for (unsigned f = 0; f < scene.mMeshes[m]->mNumFaces; ++f) {
+      indices += scene.mMeshes[m]->mFaces[f].mNumIndices;
+    }
+  }
+  const std::string_view body = data.substr(std::min(layout.offset, data.size()));
+  const unsigned long long need = layout.fixed + indices * layout.per_index;
+  const std::size_t have = layout.text ? count_numbers(body, hash_comments) : body.size();
+  if (have < need) {
+    throw MeshError(fmt::format(
+        "{}: the data ends early: the header and the face sizes need {} {}, the file has {} "
+        "(truncated file?)",
+        origin, need, layout.text ? "numbers" : "bytes", have));
+  }
+}
+
 // Resource guards: header checks, run before assimp sees the bytes, for the formats whose
 // importer in assimp 5.2 trusts a declared count. They check counts, not the data.
 
 // OFF: assimp reserves the declared vertex and face counts (a count of 10^12 is a bad_alloc, a
 // smaller absurd one gigabytes), and reads a file that ends early as empty faces. Each vertex
 // needs at least "0 0 0\n" and each face "3 0 0 0\n".
-void check_off_header(std::string_view data, const std::string& origin, const LoadLimits& limits) {
+BodyLayout check_off_header(std::string_view data, const std::string& origin,
+                            const LoadLimits& limits) {
   std::istringstream in{std::string(data)};
   std::string line, magic;
   int line_no = 0;
@@ -75,7 +121,7 @@ void check_off_header(std::string_view data, const std::string& origin, const Lo
       counts.push_back(n);
     }
   }
-  if (counts.size() < 2) return;  // assimp reports what is missing
+  if (counts.size() < 2) return {};  // assimp reports what is missing
   const std::string where = fmt::format("{}:{}:", origin, line_no);
   check_limits(counts[0], counts[1], where, limits);
   const std::streamoff at = in.tellg();
@@ -87,13 +133,16 @@ void check_off_header(std::string_view data, const std::string& origin, const Lo
                     "can hold (truncated file?)",
                     where, counts[0], counts[1], left));
   }
+  // Three coordinates per vertex, a size per face.
+  return {true, true, consumed, 3ull * counts[0] + counts[1], 1};
 }
 
 // PLY: assimp reserves what "element NAME COUNT" declares (bad_alloc or gigabytes) and loops
 // forever on a header without "end_header". Every item of an element takes at least its
 // properties' sizes in binary (a face list at least three indices) and 2 bytes per property in
 // ASCII.
-void check_ply_header(std::string_view data, const std::string& origin, const LoadLimits& limits) {
+BodyLayout check_ply_header(std::string_view data, const std::string& origin,
+                            const LoadLimits& limits) {
   static const std::pair<const char*, int> sizes[] = {
       {"char", 1},   {"int8", 1},    {"uchar", 1},  {"uint8", 1},  {"short", 2}, {"int16", 2},
       {"ushort", 2}, {"uint16", 2},  {"int", 4},    {"int32", 4},  {"uint", 4},  {"uint32", 4},
@@ -106,22 +155,25 @@ void check_ply_header(std::string_view data, const std::string& origin, const Lo
   };
   struct Element {
     std::string name;
-    unsigned long long count = 0, min_bytes = 0;
+    unsigned long long count = 0, fixed = 0, indices = 0;  // per item
   };
   std::vector<Element> elements;
-  bool ascii = false;
-  std::size_t pos = 0;
-  for (;;) {
+  BodyLayout layout;
+  layout.present = true;
+  for (std::size_t pos = 0;;) {
     const std::size_t end = data.find('\n', pos);
     if (end == std::string_view::npos) {
       throw MeshError(origin + ": no 'end_header' line (truncated header?)");
     }
     std::istringstream words{std::string(data.substr(pos, end - pos))};
     pos = end + 1;
-    std::string key, a, b, c;
-    words >> key >> a >> b >> c;
-    if (key == "end_header") break;
-    if (key == "format") ascii = a == "ascii";
+    std::string key, a, b, c, name;
+    words >> key >> a >> b >> c >> name;
+    if (key == "end_header") {
+      layout.offset = pos;
+      break;
+    }
+    if (key == "format") layout.text = a == "ascii";
     if (key == "element") {
       char* stop = nullptr;
       const unsigned long long n = std::strtoull(b.c_str(), &stop, 10);
@@ -129,30 +181,38 @@ void check_ply_header(std::string_view data, const std::string& origin, const Lo
         throw MeshError(
             fmt::format("{}: element '{}' has count '{}', expected an integer", origin, a, b));
       }
-      elements.push_back({a, n, 0});
+      elements.push_back({a, n, 0, 0});
     }
     if (key == "property" && !elements.empty()) {
       Element& e = elements.back();
-      const bool face_list = a == "list" && e.name == "face";
-      if (ascii) {
-        e.min_bytes += face_list ? 8 : 2;
-      } else {
-        e.min_bytes += a == "list" ? size_of(b) + (face_list ? 3 * size_of(c) : 0) : size_of(a);
+      const bool list = a == "list";
+      e.fixed += layout.text ? 1 : size_of(list ? b : a);
+      // The face list's indices: at least three per face before the import.
+      if (list && e.name == "face" && (name == "vertex_indices" || name == "vertex_index")) {
+        e.indices = 1;
+        layout.per_index = layout.text ? 1 : size_of(c);
       }
     }
   }
-  std::size_t left = data.size() - pos;
+  // Text takes at least two bytes a number ("0 "), the last may lack its separator.
+  const std::size_t bytes = data.size() - layout.offset;
+  const unsigned long long room = layout.text ? (bytes + 1) / 2 : bytes;
+  unsigned long long used = 0;
   for (const Element& e : elements) {
     if (e.name == "vertex") check_limits(e.count, 0, origin + ": the header", limits);
     if (e.name == "face") check_limits(0, e.count, origin + ": the header", limits);
-    if (e.min_bytes > 0 && e.count > (left + 2) / e.min_bytes) {
+    const unsigned long long item = e.fixed + e.indices * 3 * layout.per_index;
+    if (item > 0 && e.count > (room - std::min(used, room)) / item) {
       throw MeshError(
           fmt::format("{}: element '{}' declares {} items, more than the {} bytes of data can "
                       "hold (truncated file?)",
-                      origin, e.name, e.count, left));
+                      origin, e.name, e.count,
+                      bytes - std::min<unsigned long long>(bytes, used * (layout.text ? 2 : 1))));
     }
-    left -= std::min<unsigned long long>(left, e.count * e.min_bytes);
+    used += e.count * item;
+    layout.fixed += e.count * e.fixed;
   }
+  return layout;
 }
 
 // STL: assimp checks a binary file's size against its triangle count itself, but says only
@@ -300,8 +360,9 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
                                 origin, format));
   }
   if (data.empty()) throw MeshError(fmt::format("{}: empty file, expected a mesh", origin));
-  if (format == "off") check_off_header(data, origin, limits);
-  if (format == "ply") check_ply_header(data, origin, limits);
+  BodyLayout layout;
+  if (format == "off") layout = check_off_header(data, origin, limits);
+  if (format == "ply") layout = check_ply_header(data, origin, limits);
   if (format == "stl") check_stl_header(data, origin, limits);
 
   Assimp::Importer importer;  // assimp logs nothing unless a DefaultLogger is created
@@ -311,6 +372,7 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   // before any post-processing step runs on it.
   const aiScene* scene = importer.ReadFileFromMemory(data.data(), data.size(), 0, format.c_str());
   if (!scene) throw MeshError(fmt::format("{}: {}", origin, assimp_error(importer, format)));
+  check_body(data, layout, *scene, format == "off", origin);
 
   // The four importers put every mesh under identity node transforms, so the meshes are
   // taken as they are. Every face is checked before any step of assimp's touches the data.
@@ -321,8 +383,10 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
         scene->mNumMeshes > 1 ? fmt::format("{}: mesh {}", origin, m) : origin;
     for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
       const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices == 0) {
-        throw MeshError(fmt::format("{}: face {} has no vertices (truncated file?)", where, f));
+      // OBJ's points and lines are skipped below; elsewhere a face needs three corners.
+      if (face.mNumIndices == 0 || (face.mNumIndices < 3 && format != "obj")) {
+        throw MeshError(fmt::format("{}: face {} has {} vertices, expected at least 3", where, f,
+                                    face.mNumIndices));
       }
       if (face.mNumIndices > limits.max_polygon_vertices) {
         throw MeshError(fmt::format("{}: face {} has {} vertices; the limit is {}", where, f,
