@@ -242,6 +242,17 @@ void check_stl_header(std::string_view data, const std::string& origin, const Lo
   }
 }
 
+// "" for a finite position, else which coordinate is what.
+std::string non_finite(const aiVector3D& p) {
+  for (int c = 0; c < 3; ++c) {
+    if (!std::isfinite(p[c])) {
+      return fmt::format("{} is {}, expected a finite number", "xyz"[c],
+                         std::isnan(p[c]) ? "NaN" : "infinite");
+    }
+  }
+  return "";
+}
+
 // assimp may read no file but the one in memory (an OBJ's "mtllib" names another file).
 class NoFiles : public Assimp::IOSystem {
  public:
@@ -400,24 +411,16 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
                           "vertices)",
                           where, f, i, mesh->mNumVertices));
         }
-        const aiVector3D& p = mesh->mVertices[i];
-        for (int c = 0; c < 3; ++c) {
-          if (per_face && !std::isfinite(p[c])) {
-            throw MeshError(
-                fmt::format("{}: face {}, corner {}: {} is {}, expected a finite number", where, f,
-                            k, "xyz"[c], std::isnan(p[c]) ? "NaN" : "infinite"));
-          }
+        // OBJ's and STL's vertices are face corners: name the face.
+        const std::string bad = per_face ? non_finite(mesh->mVertices[i]) : "";
+        if (!bad.empty()) {
+          throw MeshError(fmt::format("{}: face {}, corner {}: {}", where, f, k, bad));
         }
       }
     }
     for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
-      const aiVector3D& p = mesh->mVertices[i];
-      for (int c = 0; c < 3; ++c) {
-        if (!std::isfinite(p[c])) {
-          throw MeshError(fmt::format("{}: vertex {}: {} is {}, expected a finite number", where, i,
-                                      "xyz"[c], std::isnan(p[c]) ? "NaN" : "infinite"));
-        }
-      }
+      const std::string bad = non_finite(mesh->mVertices[i]);
+      if (!bad.empty()) throw MeshError(fmt::format("{}: vertex {}: {}", where, i, bad));
       if (mesh->HasVertexColors(0)) {
         const aiColor4D& col = mesh->mColors[0][i];
         if (!std::isfinite(col.r) || !std::isfinite(col.g) || !std::isfinite(col.b)) {
