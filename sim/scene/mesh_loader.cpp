@@ -34,6 +34,16 @@ std::string extension_of(const std::string& path) {
   return lower(path.substr(dot + 1));
 }
 
+// Text from a file as a message can show it: at most `max` characters, '?' for bytes that
+// are not printable ASCII.
+std::string printable(std::string word, std::size_t max = 32) {
+  if (word.size() > max) word = word.substr(0, max) + "...";
+  for (char& c : word) {
+    if (c < 0x20 || c > 0x7e) c = '?';
+  }
+  return word;
+}
+
 void check_limits(unsigned long long vertices, unsigned long long faces, const std::string& where,
                   const LoadLimits& limits) {
   if (vertices > limits.max_vertices) {
@@ -110,13 +120,18 @@ BodyLayout check_off_header(std::string_view data, const std::string& origin,
     while (counts.size() < 2 && words >> w) {
       if (magic.empty()) {
         magic = w;
+        const std::string m = lower(magic);
+        if (m.size() < 3 || m.compare(m.size() - 3, 3, "off") != 0) {
+          throw MeshError(fmt::format("{}:{}: expected 'OFF' or 'COFF' at the start, got '{}'",
+                                      origin, line_no, printable(magic)));
+        }
         continue;
       }
       char* end = nullptr;
       const long long n = std::strtoll(w.c_str(), &end, 10);
       if (*end != '\0' || n < 0) {
         throw MeshError(fmt::format("{}:{}: expected the vertex and face counts, got '{}'", origin,
-                                    line_no, w));
+                                    line_no, printable(w)));
       }
       counts.push_back(n);
     }
@@ -178,8 +193,8 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
       char* stop = nullptr;
       const unsigned long long n = std::strtoull(b.c_str(), &stop, 10);
       if (b.empty() || *stop != '\0' || b[0] == '-') {
-        throw MeshError(
-            fmt::format("{}: element '{}' has count '{}', expected an integer", origin, a, b));
+        throw MeshError(fmt::format("{}: element '{}' has count '{}', expected an integer", origin,
+                                    printable(a), printable(b)));
       }
       elements.push_back({a, n, 0, 0});
     }
@@ -285,7 +300,7 @@ std::string assimp_error(const Assimp::Importer& importer, const std::string& fo
          (what.back() == '.' || std::isspace(static_cast<unsigned char>(what.back())))) {
     what.pop_back();
   }
-  return what.empty() ? "assimp could not read it" : what;
+  return what.empty() ? "assimp could not read it" : printable(what, 300);
 }
 
 }  // namespace
