@@ -122,19 +122,18 @@ TEST_CASE("every bad mesh or scene file gets its own message", "[loaders]") {
       {"bad/truncated.stl", "need 284 bytes, but the file has 264"},
       {"bad/nan_binary.stl",
        "nan_binary.stl: face 0, corner 0: x is NaN, expected a finite number"},
-      {"bad/truncated_ascii.stl",
-       "truncated_ascii.stl: Cannot parse string \"?\" as a real number"},
+      {"bad/truncated_ascii.stl", "truncated_ascii.stl:5: unexpected end of file, expected z"},
       {"bad/inf.ply", "inf.ply: vertex 2: z is infinite, expected a finite number"},
       {"bad/truncated_header.ply", "no 'end_header' line"},
       {"bad/truncated_binary.ply",
        "truncated_binary.ply: element 'face' declares 4 items, more than the 45 bytes of data can "
        "hold (truncated file?)"},
       // assimp reads a text file that ends early as zeros and a binary one as whatever
-      // follows; the loader counts what the header and the face sizes need.
+      // follows; the loader checks OFF's lines and counts what a PLY header needs.
       {"bad/truncated_ascii.ply",
        "truncated_ascii.ply: the data ends early: the header and the face sizes need 40 numbers, "
        "the file has 39 (truncated file?)"},
-      {"bad/truncated_face.off", "truncated_face.off: the data ends early"},
+      {"bad/truncated_face.off", "truncated_face.off:10: face 3: expected 3 vertex indices"},
       {"bad/truncated_quad.ply",
        "truncated_quad.ply: the data ends early: the header and the face sizes need 65 bytes, "
        "the file has 64"},

@@ -56,7 +56,7 @@ void check_limits(unsigned long long vertices, unsigned long long faces, const s
   }
 }
 
-// What a header says the data after it must at least hold, in numbers (text) or bytes
+// What a PLY header says the data after it must at least hold, in numbers (text) or bytes
 // (binary): `fixed` for everything but the faces' vertex indices, `per_index` for each of
 // those. Checked again after the import, with the face sizes assimp read: assimp reads a text
 // file that ends early as zeros and a binary one as whatever follows, instead of failing.
@@ -68,13 +68,11 @@ struct BodyLayout {
   unsigned per_index = 1;
 };
 
-std::size_t count_numbers(std::string_view text, bool hash_comments) {
+std::size_t count_numbers(std::string_view text) {
   std::size_t n = 0;
-  bool in_word = false, in_comment = false;
+  bool in_word = false;
   for (const char c : text) {
-    if (c == '\n') in_comment = false;
-    if (hash_comments && c == '#') in_comment = true;
-    const bool word = !in_comment && !std::isspace(static_cast<unsigned char>(c));
+    const bool word = !std::isspace(static_cast<unsigned char>(c));
     n += word && !in_word;
     in_word = word;
   }
@@ -82,7 +80,7 @@ std::size_t count_numbers(std::string_view text, bool hash_comments) {
 }
 
 void check_body(std::string_view data, const BodyLayout& layout, const aiScene& scene,
-                bool hash_comments, const std::string& origin) {
+                const std::string& origin) {
   if (!layout.present) return;
   unsigned long long indices = 0;
   for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
@@ -92,7 +90,7 @@ void check_body(std::string_view data, const BodyLayout& layout, const aiScene& 
   }
   const std::string_view body = data.substr(std::min(layout.offset, data.size()));
   const unsigned long long need = layout.fixed + indices * layout.per_index;
-  const std::size_t have = layout.text ? count_numbers(body, hash_comments) : body.size();
+  const std::size_t have = layout.text ? count_numbers(body) : body.size();
   if (have < need) {
     throw MeshError(fmt::format(
         "{}: the data ends early: the header and the face sizes need {} {}, the file has {} "
@@ -101,27 +99,29 @@ void check_body(std::string_view data, const BodyLayout& layout, const aiScene& 
   }
 }
 
-// Resource guards: header checks, run before assimp sees the bytes, for the formats whose
-// importer in assimp 5.2 trusts a declared count. They check counts, not the data.
+// Guards, run before assimp sees the bytes, against what assimp 5.2 (Debian 12) does with
+// some files: allocate what a header declares, crash, hang or leak. Each says which.
 
-// OFF: assimp reserves the declared vertex and face counts (a count of 10^12 is a bad_alloc, a
-// smaller absurd one gigabytes), and reads a file that ends early as empty faces. Each vertex
-// needs at least "0 0 0\n" and each face "3 0 0 0\n".
-BodyLayout check_off_header(std::string_view data, const std::string& origin,
-                            const LoadLimits& limits) {
+// OFF: assimp 5.2 reserves the declared vertex and face counts (a count of 10^12 is a
+// bad_alloc, a smaller absurd one gigabytes): each vertex needs at least "0 0 0\n" and each face
+// "3 0 0 0\n". Its face reader also crashes (a face count that wraps around below zero) on a
+// face line whose size is not 1 to 9, clamps indices out of range to the last vertex, and
+// overruns its line buffer on lines of 4096 characters or more. So the lines are checked: the
+// vertex lines are counted, each face line must be a size from 3 to 9 and that many indices.
+void check_off(std::string_view data, const std::string& origin, const LoadLimits& limits) {
+  data = data.substr(0, data.find('\0'));  // assimp reads the text up to a NUL
   std::istringstream in{std::string(data)};
   std::string line, magic;
   int line_no = 0;
   std::vector<long long> counts;
-  while (counts.size() < 2 && std::getline(in, line)) {
+  while (counts.size() < 3 && std::getline(in, line)) {
     ++line_no;
     std::istringstream words(line.substr(0, line.find('#')));
     std::string w;
-    while (counts.size() < 2 && words >> w) {
+    while (counts.size() < 3 && words >> w) {
       if (magic.empty()) {
         magic = w;
-        const std::string m = lower(magic);
-        if (m.size() < 3 || m.compare(m.size() - 3, 3, "off") != 0) {
+        if (magic != "OFF" && magic != "COFF") {
           throw MeshError(fmt::format("{}:{}: expected 'OFF' or 'COFF' at the start, got '{}'",
                                       origin, line_no, printable(magic)));
         }
@@ -130,26 +130,73 @@ BodyLayout check_off_header(std::string_view data, const std::string& origin,
       char* end = nullptr;
       const long long n = std::strtoll(w.c_str(), &end, 10);
       if (*end != '\0' || n < 0) {
-        throw MeshError(fmt::format("{}:{}: expected the vertex and face counts, got '{}'", origin,
-                                    line_no, printable(w)));
+        throw MeshError(fmt::format("{}:{}: expected the vertex, face and edge counts, got '{}'",
+                                    origin, line_no, printable(w)));
       }
       counts.push_back(n);
     }
+    if (counts.size() == 3 && (words >> w)) {
+      throw MeshError(
+          fmt::format("{}:{}: unexpected '{}' after the counts", origin, line_no, printable(w)));
+    }
   }
-  if (counts.size() < 2) return {};  // assimp reports what is missing
+  if (counts.size() < 3) {
+    throw MeshError(
+        fmt::format("{}: unexpected end of file, expected the vertex, face and edge "
+                    "counts after '{}'",
+                    origin, magic.empty() ? "OFF" : magic));
+  }
   const std::string where = fmt::format("{}:{}:", origin, line_no);
   check_limits(counts[0], counts[1], where, limits);
   const std::streamoff at = in.tellg();
-  const std::size_t consumed = at < 0 ? data.size() : static_cast<std::size_t>(at);
-  const std::size_t left = data.size() - std::min(consumed, data.size());
-  if (static_cast<unsigned long long>(counts[0]) * 6 + counts[1] * 8ull > left + 8) {
+  std::size_t pos = at < 0 ? data.size() : static_cast<std::size_t>(at);
+  if (static_cast<unsigned long long>(counts[0]) * 6 + counts[1] * 8ull > data.size() - pos + 8) {
     throw MeshError(
         fmt::format("{} declares {} vertices and {} faces, more than the {} bytes that follow "
                     "can hold (truncated file?)",
-                    where, counts[0], counts[1], left));
+                    where, counts[0], counts[1], data.size() - pos));
   }
-  // Three coordinates per vertex, a size per face.
-  return {true, true, consumed, 3ull * counts[0] + counts[1], 1};
+  // The vertex and face lines, as assimp splits them: at '\n' or '\r', skipping empty ones.
+  for (long long item = 0; item < counts[0] + counts[1]; ++item) {
+    for (; pos < data.size() && (data[pos] == '\n' || data[pos] == '\r'); ++pos) {
+      line_no += data[pos] == '\n';
+    }
+    const std::size_t end = std::min(data.find_first_of("\r\n", pos), data.size());
+    if (pos >= data.size()) {
+      throw MeshError(fmt::format("{}:{}: unexpected end of file, expected {} {}", origin, line_no,
+                                  item < counts[0] ? "vertex" : "face",
+                                  item < counts[0] ? item : item - counts[0]));
+    }
+    if (end - pos >= 4000) {
+      throw MeshError(
+          fmt::format("{}:{}: a line of {} characters (assimp's OFF reader takes "
+                      "fewer than 4000)",
+                      origin, line_no, end - pos));
+    }
+    std::istringstream words{std::string(data.substr(pos, end - pos))};
+    pos = end;
+    if (item < counts[0]) continue;
+    unsigned long long size = 0, index = 0;
+    const bool sized = (words >> size) && size >= 3 && size <= 9;
+    for (unsigned long long k = 0; sized && k < size; ++k) {
+      if (!(words >> index)) {
+        throw MeshError(fmt::format("{}:{}: face {}: expected {} vertex indices", origin, line_no,
+                                    item - counts[0], size));
+      }
+      if (index >= static_cast<unsigned long long>(counts[0])) {
+        throw MeshError(
+            fmt::format("{}:{}: face {}: vertex index {} out of range (the file has "
+                        "{} vertices)",
+                        origin, line_no, item - counts[0], index, counts[0]));
+      }
+    }
+    if (!sized) {
+      throw MeshError(
+          fmt::format("{}:{}: face {}: expected a vertex count from 3 to 9 (assimp's "
+                      "OFF reader takes no more) and the indices",
+                      origin, line_no, item - counts[0]));
+    }
+  }
 }
 
 // PLY: assimp reserves what "element NAME COUNT" declares (bad_alloc or gigabytes) and loops
@@ -230,6 +277,74 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
   return layout;
 }
 
+// ASCII STL: assimp 5.2's reader leaks its mesh and node (about 2.5 kB, which fails the fuzz
+// target's leak check) whenever it throws halfway: a word where a number belongs, a file cut
+// short, a facet without its normal or with fewer than three vertices. It also drops a facet's
+// fourth and later vertices. So the structure is checked first: "solid NAME", then facets of
+// "facet normal N N N", "outer loop", three "vertex X Y Z", "endloop", "endfacet", then
+// "endsolid NAME"; more solids may follow.
+void check_ascii_stl(std::string_view data, const std::string& origin) {
+  std::size_t pos = 0;
+  int line = 1;
+  auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
+  auto next = [&] {
+    int lines = 0;  // counted only up to a word, so the end of the file is on the last line
+    for (; pos < data.size() && space(data[pos]); ++pos) lines += data[pos] == '\n';
+    if (pos < data.size()) line += lines;
+    const std::size_t start = pos;
+    while (pos < data.size() && !space(data[pos])) ++pos;
+    return std::string(data.substr(start, pos - start));
+  };
+  auto fail = [&](const std::string& what) {
+    throw MeshError(fmt::format("{}:{}: {}", origin, line, what));
+  };
+  auto expect = [&](const std::string& word) {
+    const std::string t = next();
+    if (t.empty()) fail(fmt::format("unexpected end of file, expected '{}'", word));
+    if (t != word) fail(fmt::format("expected '{}', got '{}'", word, printable(t)));
+  };
+  // What both strtod and assimp's fast_atof read whole: no hex, no "nan(...)".
+  auto number = [&](const char* what) {
+    const std::string t = next();
+    if (t.empty()) fail(fmt::format("unexpected end of file, expected {}", what));
+    const std::string bare = lower(t.substr(t[0] == '-' || t[0] == '+'));
+    char* end = nullptr;
+    std::strtod(t.c_str(), &end);
+    const bool numeric =
+        *end == '\0' && t.find_first_not_of("0123456789+-.eE") == std::string::npos;
+    if (!numeric && bare != "nan" && bare != "inf" && bare != "infinity") {
+      fail(fmt::format("expected {} (a number), got '{}'", what, printable(t)));
+    }
+  };
+  for (std::string word = next(); word == "solid";) {
+    const std::size_t eol = std::min(data.find('\n', pos), data.size());
+    std::string_view name = data.substr(pos, eol - pos);
+    while (!name.empty() && space(name.front())) name.remove_prefix(1);
+    std::size_t length = 0;
+    while (length < name.size() && !space(name[length])) ++length;
+    if (length >= 1024) fail("a solid's name of 1024 or more characters");
+    pos = eol;
+    for (word = next(); word == "facet"; word = next()) {
+      expect("normal");
+      for (const char* c : {"the normal's x", "the normal's y", "the normal's z"}) number(c);
+      expect("outer");
+      expect("loop");
+      for (int v = 0; v < 3; ++v) {
+        expect("vertex");
+        for (const char* c : {"x", "y", "z"}) number(c);
+      }
+      expect("endloop");
+      expect("endfacet");
+    }
+    if (word.empty()) fail("unexpected end of file, expected 'facet' or 'endsolid'");
+    if (word != "endsolid") {
+      fail(fmt::format("expected 'facet' or 'endsolid', got '{}'", printable(word)));
+    }
+    pos = std::min(data.find('\n', pos), data.size());
+    word = next();
+  }
+}
+
 // STL: assimp checks a binary file's size against its triangle count itself, but says only
 // "Failed to determine STL storage representation"; this says what is wrong.
 void check_stl_header(std::string_view data, const std::string& origin, const LoadLimits& limits) {
@@ -255,6 +370,7 @@ void check_stl_header(std::string_view data, const std::string& origin, const Lo
                     "start with 'solid'",
                     origin, data.size()));
   }
+  check_ascii_stl(data, origin);
 }
 
 // "" for a finite position, else which coordinate is what.
@@ -387,7 +503,7 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   }
   if (data.empty()) throw MeshError(fmt::format("{}: empty file, expected a mesh", origin));
   BodyLayout layout;
-  if (format == "off") layout = check_off_header(data, origin, limits);
+  if (format == "off") check_off(data, origin, limits);
   if (format == "ply") layout = check_ply_header(data, origin, limits);
   if (format == "stl") check_stl_header(data, origin, limits);
 
@@ -398,7 +514,7 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   // before any post-processing step runs on it.
   const aiScene* scene = importer.ReadFileFromMemory(data.data(), data.size(), 0, format.c_str());
   if (!scene) throw MeshError(fmt::format("{}: {}", origin, assimp_error(importer, format)));
-  check_body(data, layout, *scene, format == "off", origin);
+  check_body(data, layout, *scene, origin);
 
   // The four importers put every mesh under identity node transforms, so the meshes are
   // taken as they are. Every face is checked before any step of assimp's touches the data.
