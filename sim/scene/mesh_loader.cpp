@@ -56,6 +56,16 @@ void check_limits(unsigned long long vertices, unsigned long long faces, const s
   }
 }
 
+// What both strtod and assimp's fast_atof read whole: no hex, no "nan(...)", no "1.5x".
+bool is_number(const std::string& t) {
+  if (t.empty()) return false;
+  const std::string bare = lower(t.substr(t[0] == '-' || t[0] == '+'));
+  if (bare == "nan" || bare == "inf" || bare == "infinity") return true;
+  char* end = nullptr;
+  std::strtod(t.c_str(), &end);
+  return *end == '\0' && t.find_first_not_of("0123456789+-.eE") == std::string::npos;
+}
+
 // What a PLY header says the data after it must at least hold, in numbers (text) or bytes
 // (binary): `fixed` for everything but the faces' vertex indices, `per_index` for each of
 // those. Checked again after the import, with the face sizes assimp read: assimp reads a text
@@ -213,7 +223,7 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
     for (const auto& [name, size] : sizes) {
       if (type == name) return size;
     }
-    return 1;  // assimp rejects unknown types itself
+    return 1;
   };
   struct Element {
     std::string name;
@@ -222,8 +232,15 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
   std::vector<Element> elements;
   BodyLayout layout;
   layout.present = true;
+  auto typed = [&](const std::string& type) {
+    for (const auto& entry : sizes) {
+      if (type == entry.first) return true;
+    }
+    return false;
+  };
+  int line = 0;
   for (std::size_t pos = 0;;) {
-    const std::size_t end = data.find('\n', pos);
+    const std::size_t start = pos, end = data.find('\n', pos);
     if (end == std::string_view::npos) {
       throw MeshError(origin + ": no 'end_header' line (truncated header?)");
     }
@@ -231,9 +248,25 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
     pos = end + 1;
     std::string key, a, b, c, name;
     words >> key >> a >> b >> c >> name;
+    ++line;
     if (key == "end_header") {
       layout.offset = pos;
       break;
+    }
+    const bool list = key == "property" && a == "list";
+    const bool known =
+        line == 1 ? key == "ply"
+        : key == "format"
+            ? (a == "ascii" || a == "binary_little_endian" || a == "binary_big_endian")
+        : key == "element"  ? !b.empty() && c.empty()
+        : key == "property" ? !elements.empty() && (list ? typed(b) && typed(c) && !name.empty()
+                                                         : typed(a) && !b.empty() && c.empty())
+                            : key == "comment" || key == "obj_info";
+    if (!known) {
+      throw MeshError(
+          fmt::format("{}:{}: expected 'ply', then 'format', 'element', 'property', "
+                      "'comment' or 'end_header' lines; got '{}'",
+                      origin, line, printable(std::string(data.substr(start, end - start)))));
     }
     if (key == "format") layout.text = a == "ascii";
     if (key == "element") {
@@ -245,9 +278,8 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
       }
       elements.push_back({a, n, 0, 0});
     }
-    if (key == "property" && !elements.empty()) {
+    if (key == "property") {
       Element& e = elements.back();
-      const bool list = a == "list";
       e.fixed += layout.text ? 1 : size_of(list ? b : a);
       // The face list's indices: at least three per face before the import.
       if (list && e.name == "face" && (name == "vertex_indices" || name == "vertex_index")) {
@@ -255,6 +287,22 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
         layout.per_index = layout.text ? 1 : size_of(c);
       }
     }
+  }
+  // assimp leaks its half-built mesh when a word in an ASCII body is not a number.
+  for (std::size_t pos = layout.offset; layout.text && pos < data.size();) {
+    if (data[pos] == '\n') ++line;
+    if (std::isspace(static_cast<unsigned char>(data[pos]))) {
+      ++pos;
+      continue;
+    }
+    std::size_t end = pos;
+    while (end < data.size() && !std::isspace(static_cast<unsigned char>(data[end]))) ++end;
+    const std::string word(data.substr(pos, end - pos));
+    if (!is_number(word)) {
+      throw MeshError(
+          fmt::format("{}:{}: expected a number, got '{}'", origin, line + 1, printable(word)));
+    }
+    pos = end;
   }
   // Text takes at least two bytes a number ("0 "), the last may lack its separator.
   const std::size_t bytes = data.size() - layout.offset;
@@ -303,18 +351,10 @@ void check_ascii_stl(std::string_view data, const std::string& origin) {
     if (t.empty()) fail(fmt::format("unexpected end of file, expected '{}'", word));
     if (t != word) fail(fmt::format("expected '{}', got '{}'", word, printable(t)));
   };
-  // What both strtod and assimp's fast_atof read whole: no hex, no "nan(...)".
   auto number = [&](const char* what) {
     const std::string t = next();
     if (t.empty()) fail(fmt::format("unexpected end of file, expected {}", what));
-    const std::string bare = lower(t.substr(t[0] == '-' || t[0] == '+'));
-    char* end = nullptr;
-    std::strtod(t.c_str(), &end);
-    const bool numeric =
-        *end == '\0' && t.find_first_not_of("0123456789+-.eE") == std::string::npos;
-    if (!numeric && bare != "nan" && bare != "inf" && bare != "infinity") {
-      fail(fmt::format("expected {} (a number), got '{}'", what, printable(t)));
-    }
+    if (!is_number(t)) fail(fmt::format("expected {} (a number), got '{}'", what, printable(t)));
   };
   for (std::string word = next(); word == "solid";) {
     const std::size_t eol = std::min(data.find('\n', pos), data.size());
