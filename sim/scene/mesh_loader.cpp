@@ -332,6 +332,7 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
 // "facet normal N N N", "outer loop", three "vertex X Y Z", "endloop", "endfacet", then
 // "endsolid NAME"; more solids may follow.
 void check_ascii_stl(std::string_view data, const std::string& origin) {
+  data = data.substr(0, data.find('\0'));  // assimp reads the text up to a NUL
   std::size_t pos = 0;
   int line = 1;
   auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
@@ -356,8 +357,10 @@ void check_ascii_stl(std::string_view data, const std::string& origin) {
     if (t.empty()) fail(fmt::format("unexpected end of file, expected {}", what));
     if (!is_number(t)) fail(fmt::format("expected {} (a number), got '{}'", what, printable(t)));
   };
-  for (std::string word = next(); word == "solid";) {
+  // Like assimp: "solid" may run into the name, "endsolid" ends the line.
+  for (std::string word = next(); word.compare(0, 5, "solid") == 0;) {
     const std::size_t eol = std::min(data.find('\n', pos), data.size());
+    pos -= word.size() - 5;
     std::string_view name = data.substr(pos, eol - pos);
     while (!name.empty() && space(name.front())) name.remove_prefix(1);
     std::size_t length = 0;
