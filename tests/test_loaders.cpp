@@ -108,10 +108,11 @@ TEST_CASE("zero-area triangles are dropped and counted - non-manifold edges rend
 TEST_CASE("every bad mesh or scene file gets its own message", "[loaders]") {
   const std::pair<const char*, const char*> cases[] = {
       {"bad/empty.obj", "empty.obj: empty file"},
-      {"bad/malformed.obj", "malformed.obj: OBJ: vertex index out of range"},
+      {"bad/malformed.obj", "malformed.obj:3: expected 'v' to be followed by numbers, got 'zero'"},
       {"bad/nan.obj", "nan.obj: face 0, corner 2: z is NaN, expected a finite number"},
       {"bad/inf.obj", "inf.obj: face 0, corner 2: z is infinite, expected a finite number"},
-      {"bad/bad_index.obj", "bad_index.obj: OBJ: vertex index out of range"},
+      {"bad/bad_index.obj",
+       "bad_index.obj:4: vertex index 7 out of range (the file has 3 'v' lines)"},
       {"bad/two_corners.obj",
        "two_corners.obj: no faces found, expected at least one triangle (faces of 1 or 2 vertices, "
        "points or lines, skipped: 1)"},

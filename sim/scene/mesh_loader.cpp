@@ -388,6 +388,89 @@ void check_ascii_stl(std::string_view data, const std::string& origin) {
   }
 }
 
+// OBJ: assimp 5.2 leaks its mesh when a face names a vertex, texture coordinate or normal
+// that does not exist, so the indices are checked first, against what the file declares
+// ("v" lines of 3, 4 or 6 numbers, "vt" and "vn" lines of numbers). Positive indices may
+// point forward (as in assimp), negative ones count back from the line they are on. Lines
+// ending in '\\' continue on the next, as in assimp.
+void check_obj(std::string_view data, const std::string& origin) {
+  struct Use {
+    long long index;
+    int kind, line;
+  };
+  long long counts[3] = {0, 0, 0};  // v, vt, vn
+  std::vector<Use> uses;
+  std::string text;
+  int line = 0, first = 0;
+  for (std::size_t pos = 0; pos < data.size();) {
+    const std::size_t end = std::min(data.find('\n', pos), data.size());
+    std::string_view piece = data.substr(pos, end - pos);
+    pos = end + 1;
+    ++line;
+    if (text.empty()) first = line;
+    if (!piece.empty() && piece.back() == '\r') piece.remove_suffix(1);
+    if (!piece.empty() && piece.back() == '\\') {
+      text.append(piece.substr(0, piece.size() - 1)).push_back(' ');
+      if (pos < data.size()) continue;
+    } else {
+      text.append(piece);
+    }
+    std::istringstream words(text.substr(0, text.find('#')));
+    text.clear();
+    std::string key, word;
+    if (!(words >> key)) continue;
+    auto fail = [&](const std::string& what) {
+      throw MeshError(fmt::format("{}:{}: {}", origin, first, what));
+    };
+    if (key == "v" || key == "vt" || key == "vn") {
+      int n = 0;
+      for (; words >> word; ++n) {
+        if (!is_number(word)) {
+          fail(fmt::format("expected '{}' to be followed by numbers, got '{}'", key,
+                           printable(word)));
+        }
+      }
+      if (key == "v" && n != 3 && n != 4 && n != 6) {
+        fail(fmt::format("'v' takes x y z, x y z w or x y z r g b, got {} numbers", n));
+      }
+      ++counts[key == "v" ? 0 : key == "vt" ? 1 : 2];
+    } else if (key[0] == 'f' || key[0] == 'l' || key[0] == 'p') {
+      while (words >> word) {
+        std::istringstream parts(word + "/");
+        std::string part;
+        for (int kind = 0; kind < 3 && std::getline(parts, part, '/'); ++kind) {
+          if (part.empty() && kind > 0) continue;
+          char* stop = nullptr;
+          const long long index = std::strtoll(part.c_str(), &stop, 10);
+          if (part.empty() || *stop != '\0' || index == 0) {
+            fail(fmt::format("expected a vertex index (from 1, or negative), got '{}'",
+                             printable(word)));
+          }
+          if (index < 0 && -index > counts[kind]) {
+            fail(fmt::format("vertex index {} out of range ({} {} lines so far)", index,
+                             counts[kind],
+                             kind == 0   ? "v"
+                             : kind == 1 ? "vt"
+                                         : "vn"));
+          }
+          if (index > 0) uses.push_back({index, kind, first});
+        }
+      }
+    }
+  }
+  for (const Use& use : uses) {
+    if (use.index > counts[use.kind]) {
+      throw MeshError(
+          fmt::format("{}:{}: vertex index {} out of range (the file has {} '{}' "
+                      "lines)",
+                      origin, use.line, use.index, counts[use.kind],
+                      use.kind == 0   ? "v"
+                      : use.kind == 1 ? "vt"
+                                      : "vn"));
+    }
+  }
+}
+
 // STL: assimp checks a binary file's size against its triangle count itself, but says only
 // "Failed to determine STL storage representation"; this says what is wrong.
 void check_stl_header(std::string_view data, const std::string& origin, const LoadLimits& limits) {
@@ -549,6 +632,7 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   if (format == "off") check_off(data, origin, limits);
   if (format == "ply") layout = check_ply_header(data, origin, limits);
   if (format == "stl") check_stl_header(data, origin, limits);
+  if (format == "obj") check_obj(data, origin);
 
   Assimp::Importer importer;  // assimp logs nothing unless a DefaultLogger is created
   keep_only(importer, format);
