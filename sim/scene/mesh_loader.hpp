@@ -11,7 +11,10 @@
 //    OFF, PLY and binary STL headers declare are checked against LoadLimits and against the
 //    bytes the file actually holds before assimp sees the bytes; a file whose data ends
 //    before the header and face sizes say is refused (assimp would read it as zeros).
-//  - Only the named format's importer is used, and it may open no other file.
+//  - Only the named format's importer is used, and it may open no other file. What assimp 5.2
+//    mishandles (crashes, leaks, silent clamping; see the guards in mesh_loader.cpp) is
+//    checked before it sees the bytes: OFF's face lines, PLY's header and ASCII body, ASCII
+//    STL's structure, OBJ's indices.
 //  - Polygons with more than three vertices are triangulated by our ear clipping in the plane
 //    of their Newell normal (not by assimp), so concave polygons come out right.
 //  - Coordinates must be finite. Triangles with a repeated vertex or zero area are dropped and
