@@ -130,14 +130,15 @@ TEST_CASE("every bad mesh or scene file gets its own message", "[loaders]") {
        "truncated_binary.ply: element 'face' declares 4 items, more than the 45 bytes of data can "
        "hold (truncated file?)"},
       // assimp reads a text file that ends early as zeros and a binary one as whatever
-      // follows; the loader checks OFF's lines and counts what a PLY header needs.
+      // follows; the loader checks OFF's lines and walks a PLY body first.
       {"bad/truncated_ascii.ply",
-       "truncated_ascii.ply: the data ends early: the header and the face sizes need 40 numbers, "
-       "the file has 39 (truncated file?)"},
+       "truncated_ascii.ply:21: unexpected end of file in face 3 (truncated file?)"},
       {"bad/truncated_face.off", "truncated_face.off:10: face 3: expected 3 vertex indices"},
       {"bad/truncated_quad.ply",
-       "truncated_quad.ply: the data ends early: the header and the face sizes need 65 bytes, "
-       "the file has 64"},
+       "truncated_quad.ply: the data ends in face 0, at byte 218 of 233 (truncated file?)"},
+      // assimp would reserve what a list's count says: 2^31 indices took it 16 GB.
+      {"bad/huge_list.ply",
+       "huge_list.ply: face 0: a list of 2147483647 entries; the limit is 4096"},
       {"bad/wrong_type.json", "key 'meshes[0].scale' must be a number (got string)"},
       {"bad/unknown_key.json", "unknown key 'meshes[0].colour'"},
       {"bad/no_meshes.json", "missing key 'meshes'"},

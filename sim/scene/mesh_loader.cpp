@@ -66,49 +66,6 @@ bool is_number(const std::string& t) {
   return *end == '\0' && t.find_first_not_of("0123456789+-.eE") == std::string::npos;
 }
 
-// What a PLY header says the data after it must at least hold, in numbers (text) or bytes
-// (binary): `fixed` for everything but the faces' vertex indices, `per_index` for each of
-// those. Checked again after the import, with the face sizes assimp read: assimp reads a text
-// file that ends early as zeros and a binary one as whatever follows, instead of failing.
-struct BodyLayout {
-  bool present = false;
-  bool text = true;
-  std::size_t offset = 0;  // where the data starts
-  unsigned long long fixed = 0;
-  unsigned per_index = 1;
-};
-
-std::size_t count_numbers(std::string_view text) {
-  std::size_t n = 0;
-  bool in_word = false;
-  for (const char c : text) {
-    const bool word = !std::isspace(static_cast<unsigned char>(c));
-    n += word && !in_word;
-    in_word = word;
-  }
-  return n;
-}
-
-void check_body(std::string_view data, const BodyLayout& layout, const aiScene& scene,
-                const std::string& origin) {
-  if (!layout.present) return;
-  unsigned long long indices = 0;
-  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
-    for (unsigned f = 0; f < scene.mMeshes[m]->mNumFaces; ++f) {
-      indices += scene.mMeshes[m]->mFaces[f].mNumIndices;
-    }
-  }
-  const std::string_view body = data.substr(std::min(layout.offset, data.size()));
-  const unsigned long long need = layout.fixed + indices * layout.per_index;
-  const std::size_t have = layout.text ? count_numbers(body) : body.size();
-  if (have < need) {
-    throw MeshError(fmt::format(
-        "{}: the data ends early: the header and the face sizes need {} {}, the file has {} "
-        "(truncated file?)",
-        origin, need, layout.text ? "numbers" : "bytes", have));
-  }
-}
-
 // Guards, run before assimp sees the bytes, against what assimp 5.2 (Debian 12) does with
 // some files: allocate what a header declares, crash, hang or leak. Each says which.
 
@@ -209,12 +166,13 @@ void check_off(std::string_view data, const std::string& origin, const LoadLimit
   }
 }
 
-// PLY: assimp reserves what "element NAME COUNT" declares (bad_alloc or gigabytes) and loops
-// forever on a header without "end_header". Every item of an element takes at least its
-// properties' sizes in binary (a face list at least three indices) and 2 bytes per property in
-// ASCII.
-BodyLayout check_ply_header(std::string_view data, const std::string& origin,
-                            const LoadLimits& limits) {
+// PLY: assimp 5.2 reserves what "element NAME COUNT" declares and what a list's count says
+// (a face of 2^31 indices took 16 GB), loops forever on a header without "end_header", leaks
+// its half-built mesh when a word in an ASCII body is not a number, and reads a body that ends
+// early as zeros (text) or whatever follows (binary). So the header lines must be ones PLY
+// knows, and the body is walked as assimp will read it: every value present, every word a
+// number, every list at most max_polygon_vertices long.
+void check_ply(std::string_view data, const std::string& origin, const LoadLimits& limits) {
   static const std::pair<const char*, int> sizes[] = {
       {"char", 1},   {"int8", 1},    {"uchar", 1},  {"uint8", 1},  {"short", 2}, {"int16", 2},
       {"ushort", 2}, {"uint16", 2},  {"int", 4},    {"int32", 4},  {"uint", 4},  {"uint32", 4},
@@ -223,23 +181,22 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
     for (const auto& [name, size] : sizes) {
       if (type == name) return size;
     }
-    return 1;
+    return 0;
+  };
+  struct Property {
+    int count_size = 0, size = 0;  // count_size 0: not a list
+    bool count_signed = false;
   };
   struct Element {
     std::string name;
-    unsigned long long count = 0, fixed = 0, indices = 0;  // per item
+    unsigned long long count = 0, min_bytes = 0;
+    std::vector<Property> properties;
   };
   std::vector<Element> elements;
-  BodyLayout layout;
-  layout.present = true;
-  auto typed = [&](const std::string& type) {
-    for (const auto& entry : sizes) {
-      if (type == entry.first) return true;
-    }
-    return false;
-  };
+  bool text = true, big_endian = false;
   int line = 0;
-  for (std::size_t pos = 0;;) {
+  std::size_t pos = 0;
+  for (;;) {
     const std::size_t start = pos, end = data.find('\n', pos);
     if (end == std::string_view::npos) {
       throw MeshError(origin + ": no 'end_header' line (truncated header?)");
@@ -249,80 +206,128 @@ BodyLayout check_ply_header(std::string_view data, const std::string& origin,
     std::string key, a, b, c, name;
     words >> key >> a >> b >> c >> name;
     ++line;
-    if (key == "end_header") {
-      layout.offset = pos;
-      break;
-    }
+    if (key == "end_header") break;
     const bool list = key == "property" && a == "list";
     const bool known =
         line == 1 ? key == "ply"
         : key == "format"
             ? (a == "ascii" || a == "binary_little_endian" || a == "binary_big_endian")
-        : key == "element"  ? !b.empty() && c.empty()
-        : key == "property" ? !elements.empty() && (list ? typed(b) && typed(c) && !name.empty()
-                                                         : typed(a) && !b.empty() && c.empty())
-                            : key == "comment" || key == "obj_info";
+        : key == "element" ? !b.empty() && c.empty()
+        : key == "property"
+            ? !elements.empty() && (list ? size_of(b) > 0 && b.find("float") == std::string::npos &&
+                                               b != "double" && size_of(c) > 0 && !name.empty()
+                                         : size_of(a) > 0 && !b.empty() && c.empty())
+            : key == "comment" || key == "obj_info";
     if (!known) {
       throw MeshError(
           fmt::format("{}:{}: expected 'ply', then 'format', 'element', 'property', "
                       "'comment' or 'end_header' lines; got '{}'",
                       origin, line, printable(std::string(data.substr(start, end - start)))));
     }
-    if (key == "format") layout.text = a == "ascii";
+    if (key == "format") {
+      text = a == "ascii";
+      big_endian = a == "binary_big_endian";
+    }
     if (key == "element") {
       char* stop = nullptr;
       const unsigned long long n = std::strtoull(b.c_str(), &stop, 10);
-      if (b.empty() || *stop != '\0' || b[0] == '-') {
-        throw MeshError(fmt::format("{}: element '{}' has count '{}', expected an integer", origin,
-                                    printable(a), printable(b)));
+      if (*stop != '\0' || b[0] == '-') {
+        throw MeshError(fmt::format("{}:{}: element '{}' has count '{}', expected an integer",
+                                    origin, line, printable(a), printable(b)));
       }
-      elements.push_back({a, n, 0, 0});
+      elements.push_back({a, n, 0, {}});
     }
     if (key == "property") {
       Element& e = elements.back();
-      e.fixed += layout.text ? 1 : size_of(list ? b : a);
-      // The face list's indices: at least three per face before the import.
-      if (list && e.name == "face" && (name == "vertex_indices" || name == "vertex_index")) {
-        e.indices = 1;
-        layout.per_index = layout.text ? 1 : size_of(c);
-      }
+      e.properties.push_back(list ? Property{size_of(b), size_of(c), b[0] != 'u'}
+                                  : Property{0, size_of(a), false});
+      // Text takes at least two bytes a number ("0 "); a face's list at least 3 indices.
+      const bool face = list && e.name == "face";
+      e.min_bytes += text   ? (face ? 8 : 2)
+                     : list ? size_of(b) + (face ? 3 * size_of(c) : 0)
+                            : size_of(a);
     }
   }
-  // assimp leaks its half-built mesh when a word in an ASCII body is not a number.
-  for (std::size_t pos = layout.offset; layout.text && pos < data.size();) {
-    if (data[pos] == '\n') ++line;
-    if (std::isspace(static_cast<unsigned char>(data[pos]))) {
-      ++pos;
-      continue;
-    }
-    std::size_t end = pos;
-    while (end < data.size() && !std::isspace(static_cast<unsigned char>(data[end]))) ++end;
-    const std::string word(data.substr(pos, end - pos));
-    if (!is_number(word)) {
-      throw MeshError(
-          fmt::format("{}:{}: expected a number, got '{}'", origin, line + 1, printable(word)));
-    }
-    pos = end;
-  }
-  // Text takes at least two bytes a number ("0 "), the last may lack its separator.
-  const std::size_t bytes = data.size() - layout.offset;
-  const unsigned long long room = layout.text ? (bytes + 1) / 2 : bytes;
+  const std::size_t bytes = data.size() - pos;
   unsigned long long used = 0;
   for (const Element& e : elements) {
     if (e.name == "vertex") check_limits(e.count, 0, origin + ": the header", limits);
     if (e.name == "face") check_limits(0, e.count, origin + ": the header", limits);
-    const unsigned long long item = e.fixed + e.indices * 3 * layout.per_index;
-    if (item > 0 && e.count > (room - std::min(used, room)) / item) {
+    if (e.count > limits.max_vertices + limits.max_triangles ||
+        (e.min_bytes > 0 &&
+         e.count > (bytes + 2 - std::min<unsigned long long>(used, bytes)) / e.min_bytes)) {
       throw MeshError(
           fmt::format("{}: element '{}' declares {} items, more than the {} bytes of data can "
                       "hold (truncated file?)",
-                      origin, e.name, e.count,
-                      bytes - std::min<unsigned long long>(bytes, used * (layout.text ? 2 : 1))));
+                      origin, e.name, e.count, bytes - std::min<unsigned long long>(bytes, used)));
     }
-    used += e.count * item;
-    layout.fixed += e.count * e.fixed;
+    used += e.count * e.min_bytes;
   }
-  return layout;
+  // The body. Text: numbers separated by white space; binary: values of the declared sizes.
+  ++line;  // the body's first line
+  std::string where;
+  auto ends = [&] {
+    throw MeshError(text ? fmt::format("{}:{}: unexpected end of file in {} (truncated file?)",
+                                       origin, line, where)
+                         : fmt::format("{}: the data ends in {}, at byte {} of {} (truncated "
+                                       "file?)",
+                                       origin, where, pos, data.size()));
+  };
+  auto word = [&]() -> std::string {
+    int lines = 0;
+    for (; pos < data.size() && std::isspace(static_cast<unsigned char>(data[pos])); ++pos) {
+      lines += data[pos] == '\n';
+    }
+    if (pos >= data.size()) ends();
+    line += lines;
+    const std::size_t start = pos;
+    while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
+    std::string w(data.substr(start, pos - start));
+    if (!is_number(w)) {
+      throw MeshError(
+          fmt::format("{}:{}: {}: expected a number, got '{}'", origin, line, where, printable(w)));
+    }
+    return w;
+  };
+  auto list_size = [&](const Property& p) -> unsigned long long {
+    if (text) {
+      const std::string w = word();
+      char* stop = nullptr;
+      const long long n = std::strtoll(w.c_str(), &stop, 10);
+      return *stop == '\0' && n >= 0 ? static_cast<unsigned long long>(n) : ~0ull;
+    }
+    if (data.size() - pos < static_cast<std::size_t>(p.count_size)) ends();
+    unsigned char raw[4] = {0, 0, 0, 0};
+    for (int k = 0; k < p.count_size; ++k)
+      raw[big_endian ? p.count_size - 1 - k : k] = data[pos + k];
+    pos += p.count_size;
+    const std::uint32_t u = raw[0] | raw[1] << 8 | raw[2] << 16 | std::uint32_t{raw[3]} << 24;
+    const bool negative = p.count_signed && (raw[p.count_size - 1] & 0x80);
+    return negative ? ~0ull : u;
+  };
+  for (const Element& e : elements) {
+    for (unsigned long long item = 0; item < e.count; ++item) {
+      where = fmt::format("{} {}", printable(e.name), item);
+      for (const Property& p : e.properties) {
+        unsigned long long n = 1;
+        if (p.count_size > 0) {
+          n = list_size(p);
+          if (n > limits.max_polygon_vertices) {
+            throw MeshError(fmt::format("{}: {}: a list of {} entries; the limit is {}", origin,
+                                        where, static_cast<long long>(n),
+                                        limits.max_polygon_vertices));
+          }
+        }
+        if (text) {
+          for (unsigned long long k = 0; k < n; ++k) word();
+        } else if (n * p.size > data.size() - pos) {
+          ends();
+        } else {
+          pos += n * p.size;
+        }
+      }
+    }
+  }
 }
 
 // ASCII STL: assimp 5.2's reader leaks its mesh and node (about 2.5 kB, which fails the fuzz
@@ -628,9 +633,8 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
                                 origin, format));
   }
   if (data.empty()) throw MeshError(fmt::format("{}: empty file, expected a mesh", origin));
-  BodyLayout layout;
   if (format == "off") check_off(data, origin, limits);
-  if (format == "ply") layout = check_ply_header(data, origin, limits);
+  if (format == "ply") check_ply(data, origin, limits);
   if (format == "stl") check_stl_header(data, origin, limits);
   if (format == "obj") check_obj(data, origin);
 
@@ -641,7 +645,6 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   // before any post-processing step runs on it.
   const aiScene* scene = importer.ReadFileFromMemory(data.data(), data.size(), 0, format.c_str());
   if (!scene) throw MeshError(fmt::format("{}: {}", origin, assimp_error(importer, format)));
-  check_body(data, layout, *scene, origin);
 
   // The four importers put every mesh under identity node transforms, so the meshes are
   // taken as they are. Every face is checked before any step of assimp's touches the data.
