@@ -13,7 +13,7 @@
 //    before the header and face sizes say is refused (assimp would read it as zeros).
 //  - Only the named format's importer is used, and it may open no other file. What assimp 5.2
 //    mishandles (crashes, leaks, silent clamping; see the guards in mesh_loader.cpp) is
-//    checked before it sees the bytes: OFF's face lines, PLY's header and ASCII body, ASCII
+//    checked before it sees the bytes: OFF's face lines, PLY's header and body, ASCII
 //    STL's structure, OBJ's indices.
 //  - Polygons with more than three vertices are triangulated by our ear clipping in the plane
 //    of their Newell normal (not by assimp), so concave polygons come out right.
