@@ -334,8 +334,8 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
 // target's leak check) whenever it throws halfway: a word where a number belongs, a file cut
 // short, a facet without its normal or with fewer than three vertices. It also drops a facet's
 // fourth and later vertices. So the structure is checked first: "solid NAME", then facets of
-// "facet normal N N N", "outer loop", three "vertex X Y Z", "endloop", "endfacet", then
-// "endsolid NAME"; more solids may follow.
+// "facet normal N N N", "outer loop", three "vertex X Y Z", "endloop", "endfacet" (a normal or
+// vertex on one line), then "endsolid NAME"; more solids may follow.
 void check_ascii_stl(std::string_view data, const std::string& origin) {
   data = data.substr(0, data.find('\0'));  // assimp reads the text up to a NUL
   std::size_t pos = 0;
@@ -357,8 +357,20 @@ void check_ascii_stl(std::string_view data, const std::string& origin) {
     if (t.empty()) fail(fmt::format("unexpected end of file, expected '{}'", word));
     if (t != word) fail(fmt::format("expected '{}', got '{}'", word, printable(t)));
   };
+  // assimp reads a facet's normal and a vertex's numbers from the keyword's line, skipping
+  // only spaces and tabs.
+  auto on_line = [&](const char* what) {
+    while (pos < data.size() && (data[pos] == ' ' || data[pos] == '\t')) ++pos;
+    if (pos < data.size() && space(data[pos])) {
+      if (data.find_first_not_of(" \t\r\n\v\f", pos) == std::string_view::npos) {
+        fail(fmt::format("unexpected end of file, expected {}", what));
+      }
+      fail(fmt::format("expected {} on the same line", what));
+    }
+    return next();
+  };
   auto number = [&](const char* what) {
-    const std::string t = next();
+    const std::string t = on_line(what);
     if (t.empty()) fail(fmt::format("unexpected end of file, expected {}", what));
     if (!is_number(t)) fail(fmt::format("expected {} (a number), got '{}'", what, printable(t)));
   };
@@ -373,7 +385,7 @@ void check_ascii_stl(std::string_view data, const std::string& origin) {
     if (length >= 1024) fail("a solid's name of 1024 or more characters");
     pos = eol;
     for (word = next(); word == "facet"; word = next()) {
-      expect("normal");
+      if (on_line("'normal'") != "normal") fail("expected 'normal' after 'facet'");
       for (const char* c : {"the normal's x", "the normal's y", "the normal's z"}) number(c);
       expect("outer");
       expect("loop");
