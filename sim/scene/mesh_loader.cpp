@@ -185,7 +185,10 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
   };
   struct Property {
     int count_size = 0, size = 0;  // count_size 0: not a list
-    bool count_signed = false;
+    bool count_signed = false, integer = false;
+  };
+  auto integral = [](const std::string& type) {
+    return type.find("float") == std::string::npos && type != "double";
   };
   struct Element {
     std::string name;
@@ -206,6 +209,9 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
     std::string key, a, b, c, name;
     words >> key >> a >> b >> c >> name;
     ++line;
+    if (data.substr(start, end - start).find('\0') != std::string_view::npos) {
+      throw MeshError(fmt::format("{}:{}: a NUL byte in the header", origin, line));
+    }
     if (key == "end_header") break;
     const bool list = key == "property" && a == "list";
     const bool known =
@@ -239,8 +245,8 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
     }
     if (key == "property") {
       Element& e = elements.back();
-      e.properties.push_back(list ? Property{size_of(b), size_of(c), b[0] != 'u'}
-                                  : Property{0, size_of(a), false});
+      e.properties.push_back(list ? Property{size_of(b), size_of(c), b[0] != 'u', integral(c)}
+                                  : Property{0, size_of(a), false, integral(a)});
       // Text takes at least two bytes a number ("0 "); a face's list at least 3 indices.
       const bool face = list && e.name == "face";
       e.min_bytes += text   ? (face ? 8 : 2)
@@ -263,7 +269,8 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
     }
     used += e.count * e.min_bytes;
   }
-  // The body. Text: numbers separated by white space; binary: values of the declared sizes.
+  // The body. Binary: values of the declared sizes. Text: as assimp reads it, an item a line,
+  // its values separated by spaces or tabs, integers where the type is one.
   ++line;  // the body's first line
   std::string where;
   auto ends = [&] {
@@ -273,25 +280,39 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
                                        "file?)",
                                        origin, where, pos, data.size()));
   };
-  auto word = [&]() -> std::string {
+  auto blank = [&](char ch) { return ch == ' ' || ch == '\t'; };
+  auto word = [&](bool first, bool integer) -> std::string {
     int lines = 0;
-    for (; pos < data.size() && std::isspace(static_cast<unsigned char>(data[pos])); ++pos) {
+    for (; pos < data.size() &&
+           (blank(data[pos]) ||
+            (first && (data[pos] == '\r' || data[pos] == '\n' || data[pos] == '\f')));
+         ++pos) {
       lines += data[pos] == '\n';
     }
     if (pos >= data.size()) ends();
     line += lines;
+    if (std::isspace(static_cast<unsigned char>(data[pos]))) {
+      throw MeshError(
+          fmt::format("{}:{}: {}: the line ends before the values the header "
+                      "declares",
+                      origin, line, where));
+    }
     const std::size_t start = pos;
     while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos]))) ++pos;
     std::string w(data.substr(start, pos - start));
-    if (!is_number(w)) {
-      throw MeshError(
-          fmt::format("{}:{}: {}: expected a number, got '{}'", origin, line, where, printable(w)));
+    const std::size_t sign = w[0] == '-' || w[0] == '+';
+    const bool whole =
+        w.size() > sign && w.find_first_not_of("0123456789", sign) == std::string::npos;
+    if (integer ? !whole : !is_number(w)) {
+      throw MeshError(fmt::format("{}:{}: {}: expected {}, got '{}'", origin, line, where,
+                                  integer ? "an integer" : "a number", printable(w)));
     }
     return w;
   };
+  bool first = true;
   auto list_size = [&](const Property& p) -> unsigned long long {
     if (text) {
-      const std::string w = word();
+      const std::string w = word(first, true);
       char* stop = nullptr;
       const long long n = std::strtoll(w.c_str(), &stop, 10);
       return *stop == '\0' && n >= 0 ? static_cast<unsigned long long>(n) : ~0ull;
@@ -308,10 +329,12 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
   for (const Element& e : elements) {
     for (unsigned long long item = 0; item < e.count; ++item) {
       where = fmt::format("{} {}", printable(e.name), item);
+      first = true;
       for (const Property& p : e.properties) {
         unsigned long long n = 1;
         if (p.count_size > 0) {
           n = list_size(p);
+          first = false;
           if (n > limits.max_polygon_vertices) {
             throw MeshError(fmt::format("{}: {}: a list of {} entries; the limit is {}", origin,
                                         where, static_cast<long long>(n),
@@ -319,12 +342,18 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
           }
         }
         if (text) {
-          for (unsigned long long k = 0; k < n; ++k) word();
+          for (unsigned long long k = 0; k < n; ++k) word(first && k == 0, p.integer);
         } else if (n * p.size > data.size() - pos) {
           ends();
         } else {
           pos += n * p.size;
         }
+        if (n > 0) first = false;
+      }
+      while (text && pos < data.size() && blank(data[pos])) ++pos;
+      if (text && pos < data.size() && data[pos] != '\n' && data[pos] != '\r') {
+        throw MeshError(fmt::format("{}:{}: {}: more values on the line than the header declares",
+                                    origin, line, where));
       }
     }
   }
