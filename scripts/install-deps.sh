@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config python3
-  libsystemc-dev libglm-dev libfmt-dev catch2 nlohmann-json3-dev libcli11-dev libpng-dev
+  libsystemc-dev libglm-dev libfmt-dev catch2 nlohmann-json3-dev libcli11-dev libpng-dev libassimp-dev
   libbenchmark-dev gtkwave librsvg2-bin clang libclang-rt-dev
 )
 missing=()

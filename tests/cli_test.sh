@@ -20,7 +20,7 @@ expect_error "not a highlighting program" highlight --firmware phong --out "$tmp
 [ -e "$tmp/e" ] && fail "highlight wrote output after bad input"
 # Mesh and scene files (tests/data): each bad one names the file, the line or key.
 data="$(dirname "$0")/data"
-expect_error "nan.obj:3: z 'nan' is not a finite number" render --scene "$data/bad/nan.obj" --out "$tmp/e"
+expect_error "nan.obj: face 0, corner 2: z is NaN, expected a finite number" render --scene "$data/bad/nan.obj" --out "$tmp/e"
 expect_error "truncated.stl: binary STL declares 4 triangles" render --scene "$data/bad/truncated.stl" --out "$tmp/e"
 expect_error "limit is 4000000" render --scene "$data/bad/absurd_count.off" --out "$tmp/e"
 expect_error "key 'meshes\[0\].scale' must be a number" render --scene "$data/bad/wrong_type.json" --out "$tmp/e"

@@ -1,19 +1,28 @@
 #pragma once
-// Mesh files: Wavefront OBJ, PLY (ASCII and binary), STL (ASCII and binary) and OFF.
+// Mesh files: Wavefront OBJ, PLY (ASCII and binary), STL (ASCII and binary) and OFF, read
+// through assimp (the Open Asset Import Library, Debian's libassimp-dev), with our own checks
+// on top.
 //
 // Contract:
-//  - Every error is a MeshError whose message starts with "FILE:LINE:" (text formats) or
-//    "FILE:" plus the element and byte offset (binary formats), and says what was expected.
-//  - Nothing a file says can make the loader allocate more than the limits allow: declared
-//    counts are checked against LoadLimits and against the bytes the file actually holds
-//    before anything is reserved.
-//  - Polygons with more than three vertices are triangulated by ear clipping in the plane of
-//    their Newell normal, so concave polygons come out right.
+//  - Every error is a MeshError whose message starts with "FILE:" (or "FILE:LINE:" where a
+//    header check knows the line) and says what was wrong: assimp's own message, or ours,
+//    naming the face, corner or vertex (counted from 0) where there is one.
+//  - Nothing a file says can make the loader allocate more than the limits allow: the counts
+//    OFF, PLY and binary STL headers declare are checked against LoadLimits and against the
+//    bytes the file actually holds before assimp sees the bytes; a file whose data ends
+//    before the header and face sizes say is refused (assimp would read it as zeros).
+//  - Only the named format's importer is used, and it may open no other file. What assimp 5.2
+//    mishandles (crashes, leaks, silent clamping; see the guards in mesh_loader.cpp) is
+//    checked before it sees the bytes: OFF's face lines, PLY's header and body, ASCII
+//    STL's structure, OBJ's indices.
+//  - Polygons with more than three vertices are triangulated by our ear clipping in the plane
+//    of their Newell normal (not by assimp), so concave polygons come out right.
 //  - Coordinates must be finite. Triangles with a repeated vertex or zero area are dropped and
 //    counted (they would cover no pixel); edges shared by more than two triangles
-//    (non-manifold) are counted and rendered as they are.
-//  - Vertex normals are always recomputed (compute_smooth_normals); vertex colours come from
-//    the file where it has them, otherwise from `default_color`.
+//    (non-manifold) are counted and rendered as they are. OBJ points and lines are skipped.
+//  - OBJ and STL corners at identical positions become one vertex; PLY and OFF keep the
+//    file's vertices. Vertex normals are always recomputed (compute_smooth_normals); vertex
+//    colours come from the file where it has them, otherwise from `default_color`.
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -40,7 +49,7 @@ struct MeshLoadReport {
   std::size_t triangulated = 0;        // faces with more than three vertices
   std::size_t dropped_degenerate = 0;  // repeated vertex or zero area
   std::size_t non_manifold_edges = 0;  // edges used by more than two triangles
-  std::size_t ignored_statements = 0;  // OBJ statements that do not describe geometry
+  std::size_t ignored_statements = 0;  // OBJ points and lines (faces of 1 or 2 vertices)
 };
 
 // The formats by file extension (case-insensitive): .obj .ply .stl .off.
