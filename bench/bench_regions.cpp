@@ -7,6 +7,7 @@
 // the counter sim_ms is the 4096 x 4096 machine's frame time.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <string>
 
 #include "firmware/assembler/assembler.hpp"
@@ -15,20 +16,25 @@
 
 namespace {
 
-// A sphere placed so that a 90-degree camera at the origin sees it inside screen pixels
-// [8, 120] of a square screen `width` pixels wide.
+// A sphere that a camera at the origin sees inside screen pixels [8, 120] of a square screen
+// `width` pixels wide, i.e. within the top-left region and nowhere else, at any width. The
+// field of view is narrow (2 degrees) so that perspective does not stretch the sphere near
+// the screen's corner: it is the same 112-pixel disc on every screen.
 pp5::Scene sphere_in_first_region(int width) {
   pp5::Scene scene = pp5::make_builtin_scene("sphere");
   const pp5::BoundingSphere b = pp5::bounding_sphere(scene.mesh);
-  const double d = 10.0;                 // view distance of the centre
-  const double pixel = 2.0 * d / width;  // world size of a pixel at that distance
-  const double radius = 56.0 * pixel;    // 112 pixels across
-  const double cx = -d + 64.0 * pixel, cy = d - 64.0 * pixel;
+  const double fov_degrees = 2.0;
+  const double d = 100.0;                                           // view distance of the centre
+  const double half = d * std::tan(glm::radians(fov_degrees / 2));  // half the screen there
+  const double pixel = 2.0 * half / width;  // world size of a pixel at that distance
+  const double radius = 56.0 * pixel;       // 112 pixels across
+  const double cx = -half + 64.0 * pixel, cy = half - 64.0 * pixel;
   for (pp5::Vertex& v : scene.mesh.vertices) {
     v.position = glm::vec3((v.position - b.center) / b.radius * static_cast<float>(radius) +
                            glm::vec3(static_cast<float>(cx), static_cast<float>(cy), -d));
   }
-  scene.camera = pp5::Camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, 90.0f, 1.0f, 20.0f};
+  scene.camera =
+      pp5::Camera{{0, 0, 0}, {0, 0, -1}, {0, 1, 0}, static_cast<float>(fov_degrees), 50.0f, 200.0f};
   scene.lights = {pp5::default_light(scene.camera)};
   return scene;
 }
