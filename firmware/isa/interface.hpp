@@ -4,6 +4,7 @@
 // per-frame constants it sends. The assembler accepts only these names; the GP computes
 // only the expressions that a program's procedures use.
 #include <cstddef>
+#include <iterator>
 #include <string_view>
 
 namespace pp5 {
@@ -20,9 +21,11 @@ inline constexpr const char* kProcedureMeaning[] = {
     "once per triangle binned to the region, with the triangle's expressions",
     "once per region after each pass but the last (programs with `option passes N`)",
     "once per region, after all primitives and lights (deferred shading)",
-    "once per region and scene light, after the last pass's triangles and before shade, with "
-    "that light's light_*, half_*, diffuse and specular (deferred lighting)",
+    ("once per region and scene light, after the last pass's triangles and before shade, "
+     "with that light's light_*, half_*, diffuse and specular (deferred lighting)"),
 };
+static_assert(std::size(kProcedureNames) == static_cast<std::size_t>(Procedure::count));
+static_assert(std::size(kProcedureMeaning) == static_cast<std::size_t>(Procedure::count));
 
 // Expressions the GP can supply with a triangle packet. All are fixed point with
 // evaluator.fraction_bits fraction bits and are evaluated at pixel centres.
