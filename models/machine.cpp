@@ -118,6 +118,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
   for (int k = 0; k < gps; ++k) {
     const int first = static_cast<int>(n * k / gps);
     const int last = static_cast<int>(n * (k + 1) / gps);
+    if (last > first) ++busy_gps_;
     gps_.push_back(
         std::make_unique<GraphicsProcessor>(fmt_name("gp", k).c_str(), k, first, last, *this));
   }

@@ -100,6 +100,9 @@ class Machine : public sc_core::sc_module {
   Renderer& renderer(int k) { return *renderers_[k]; }
   GraphicsProcessor& gp(int k) { return *gps_[k]; }
   int gp_count() const { return static_cast<int>(gps_.size()); }
+  // GPs whose share of the display list is not empty: only these take part in the frame
+  // (the others, when there are fewer triangles than GPs, do nothing and send nothing).
+  int busy_gp_count() const { return busy_gps_; }
   int renderer_count() const { return static_cast<int>(renderers_.size()); }
 
   // Ring stops: GPs first, then Renderers, then the frame buffer.
@@ -166,8 +169,9 @@ class Machine : public sc_core::sc_module {
   bool dynamic_ = false;
   std::vector<int> owner_;        // region -> Renderer, -1 until claimed
   std::vector<int> bin_senders_;  // region -> GPs with packets for it
-  int next_region_ = 0;           // dynamic: the next unclaimed region
-  std::vector<int> claimed_;      // static: regions each Renderer has claimed so far
+  int busy_gps_ = 0;
+  int next_region_ = 0;       // dynamic: the next unclaimed region
+  std::vector<int> claimed_;  // static: regions each Renderer has claimed so far
   sc_core::sc_event input_changed_;
   bool timeline_on_ = false;
   std::vector<TimelineSlice> slices_;

@@ -64,6 +64,12 @@ void GraphicsProcessor::spend(GpClocks clocks) {
 }
 
 void GraphicsProcessor::run() {
+  // With fewer triangles than GPs, a GP may have none: it takes no part in the frame, and
+  // the Renderers expect no bin map from it (Machine::busy_gp_count).
+  if (first_ == last_) {
+    begin(GpActivity::done);
+    return;
+  }
   const MachineConfig& config = machine_.config();
   const GeometryEngine& geometry = machine_.geometry();
   const ProcedureCode& triangle = machine_.program().procedure(Procedure::triangle);

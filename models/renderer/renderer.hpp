@@ -107,7 +107,7 @@ class Renderer : public sc_core::sc_module {
   // as soon as the maps are in, but the next opens only once the Renderer starts on it, so
   // a run of empty regions is not all claimed at once.
   void advance();
-  bool maps_complete() const { return maps_delivered_ == machine_.gp_count(); }
+  bool maps_complete() const { return maps_delivered_ == machine_.busy_gp_count(); }
   // Waits until every bin map has arrived; the wait is the GPs' (before the last map was
   // asked for) and the ring's (after).
   void wait_for_bin_maps();
