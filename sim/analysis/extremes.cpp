@@ -660,8 +660,10 @@ std::vector<ExtremeCase> scene_extreme_cases(const MachineConfig& config, const 
         drawn.overflow, scene.mesh.triangles.size());
     if (drawn.overflow > 0) {
       c.observed +=
-          ": steep depth gradients far from the screen origin make the constant term "
-          "C = z0 - A x0 - B y0 exceed the coefficient width; they leave holes";
+          ": a triangle nearly edge-on to the screen has a depth gradient A or B too large "
+          "for the coefficient width (the constant term is sent modulo 2^coefficient_bits, "
+          "which is exact, but the gradient itself must fit); each leaves a hole. More "
+          "evaluator.coefficient_bits (with result_bits), or fewer gp.depth_bits, would keep them";
     }
     c.pass = drawn.overflow == 0;
     cases.push_back(c);
