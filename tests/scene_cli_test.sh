@@ -50,4 +50,13 @@ expect_error "--firmware nope: no such file" render --scene "$tmp/nofw.json" --o
 [ -e "$tmp/bad/frame.png" ] && fail "output after bad input"
 "$bin" render --help | grep -q "transparent) \[the scene file's \"firmware\", else phong\]" \
   || fail "render --help does not describe the default firmware"
+# trace and sweep take scene files too, with the scene's program by default.
+"$bin" trace record --scene "$data/scenes/glass_quads.json" "${small[@]}" --pixel 64,64 \
+  --out "$tmp/glass.pp5t" >"$tmp/trace.log" 2>&1 || fail "trace failed: $(cat "$tmp/trace.log")"
+grep -q "scene 'glass-quads'.*firmware .*transparent" "$tmp/trace.log" \
+  || fail "trace did not use the scene's firmware: $(cat "$tmp/trace.log")"
+"$bin" sweep --scene "$data/scenes/glass_quads.json" "${small[@]}" --grid renderer.count=1,2 \
+  --out "$tmp/sweep" >"$tmp/sweep.log" 2>&1 || fail "sweep failed: $(cat "$tmp/sweep.log")"
+grep -q '"firmware": ".*transparent' "$tmp/sweep/renderer.count-2/stats.json" \
+  || fail "sweep did not use the scene's firmware"
 echo "scene_cli: ok"

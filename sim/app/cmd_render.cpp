@@ -72,10 +72,7 @@ int run_render(RenderOptions o) {
   apply_display_order(scene.mesh, order);
   scene.parameters = parse_frame_parameters(o.params);
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
-  const std::string firmware = !o.firmware.empty()       ? o.firmware
-                               : !scene.firmware.empty() ? scene.firmware
-                                                         : "phong";
-  const Program program = assemble_file(resolve_firmware(firmware), assembler_options(config));
+  const Program program = assemble_file(firmware_for(o.firmware, scene), assembler_options(config));
   warn_about_ignored_scene_parts(scene, program);
   if (o.out_dir.empty()) o.out_dir = (fs::path("out") / scene.name).string();
   fs::create_directories(o.out_dir);

@@ -23,6 +23,7 @@
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/scene/scene.hpp"
+#include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
 
 namespace fs = std::filesystem;
@@ -39,7 +40,7 @@ struct Axis {
 struct SweepOptions {
   std::vector<std::string> grid;
   std::string scene_name = "torus";
-  std::string firmware = "phong";
+  std::string firmware;  // empty: the scene file's "firmware", else phong
   std::string config_path;
   std::vector<std::string> sets;
   std::string out_dir = "out/sweep";
@@ -143,8 +144,8 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
     scene_options.tessellation_u = o.tessellation[0];
     scene_options.tessellation_v = o.tessellation[1];
   }
-  const Scene scene = make_builtin_scene(o.scene_name, scene_options);
-  const std::string firmware = resolve_firmware(o.firmware);
+  const Scene scene = load_scene(o.scene_name, scene_options);
+  const std::string firmware = firmware_for(o.firmware, scene);
   for (const MachineConfig& c : configs) assemble_file(firmware, assembler_options(c));
 
   fs::create_directories(o.out_dir);
@@ -159,7 +160,7 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
                                           return k;
                                         }()},
                                        {"scene", o.scene_name},
-                                       {"firmware", o.firmware}}
+                                       {"firmware", firmware}}
                                 .dump(2) +
                             "\n");
   for (std::size_t i = 0; i < runs.size(); ++i) {
@@ -491,8 +492,12 @@ Command add_sweep_command(CLI::App& app) {
   sweep->add_option("-g,--grid", o->grid,
                     "A swept parameter, KEY=V1,V2,... (repeatable; every combination runs), e.g. "
                     "--grid gp.count=1,2,4,8,16,32 --grid renderer.count=1,2,4,8,16");
-  sweep->add_option("-s,--scene", o->scene_name, "Built-in scene")->capture_default_str();
-  sweep->add_option("-f,--firmware", o->firmware, "Firmware program")->capture_default_str();
+  sweep
+      ->add_option("-s,--scene", o->scene_name,
+                   "Scene: a built-in name, a mesh file or a scene file")
+      ->capture_default_str();
+  sweep->add_option("-f,--firmware", o->firmware,
+                    "Firmware program [the scene file's \"firmware\", else phong]");
   add_config_options(*sweep, o->config_path, o->sets);
   sweep->add_option("-o,--out", o->out_dir, "Folder for sweep.json and one folder per run")
       ->capture_default_str();

@@ -11,6 +11,7 @@
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
 #include "sim/scene/scene.hpp"
+#include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
 #include "sim/trace/inspect.hpp"
 #include "sim/trace/recorder.hpp"
@@ -26,18 +27,19 @@ namespace {
 // What to simulate: the same choices as `pp5sim render`.
 struct RunOptions {
   std::string scene_name = "torus";
-  std::string firmware = "phong";
+  std::string firmware;  // empty: the scene file's "firmware", else phong
   std::string config_path;
   std::vector<std::string> sets;
   int threads = default_threads();
   std::vector<int> tessellation;
 
   void add(CLI::App& c) {
-    c.add_option("-s,--scene", scene_name, "Built-in scene: torus, two-triangles, sphere")
+    c.add_option("-s,--scene", scene_name,
+                 "Scene: a built-in name (pp5sim scenes), a mesh file or a scene file")
         ->capture_default_str();
     c.add_option("-f,--firmware", firmware,
-                 "Firmware program: a .pp5 file, or flat, gouraud, phong")
-        ->capture_default_str();
+                 "Firmware program: a .pp5 file, or a name in firmware/programs [the scene "
+                 "file's \"firmware\", else phong]");
     add_config_options(c, config_path, sets);
     c.add_option("-j,--threads", threads, "Host threads (the trace is identical for any number)")
         ->check(CLI::Range(1, 256));
@@ -50,7 +52,7 @@ struct RunOptions {
       so.tessellation_u = tessellation[0];
       so.tessellation_v = tessellation[1];
     }
-    return make_builtin_scene(scene_name, so);
+    return load_scene(scene_name, so);
   }
 };
 
@@ -73,7 +75,7 @@ int run_record(const RecordOptions& o) {
   const MachineConfig config = load_config(o.run.config_path, o.run.sets);
   const Scene scene = o.run.scene();
   const Program program =
-      assemble_file(resolve_firmware(o.run.firmware), assembler_options(config));
+      assemble_file(firmware_for(o.run.firmware, scene), assembler_options(config));
   trace::Selection sel;
   for (const auto& p : o.pixels) {
     const trace::Rect r = trace::parse_rect(p, "--pixel");
@@ -89,7 +91,7 @@ int run_record(const RecordOptions& o) {
   if (!o.frames.empty()) sel.frames = trace::parse_range(o.frames, "--frames");
   trace::Recorder recorder(config, scene, program, sel);
   const std::string out =
-      o.out.empty() ? (fs::path("out") / o.run.scene_name / "trace.pp5t").string() : o.out;
+      o.out.empty() ? (fs::path("out") / scene.name / "trace.pp5t").string() : o.out;
   if (fs::path(out).has_parent_path()) fs::create_directories(fs::path(out).parent_path());
 
   for (int k = 0; k < config.renderer.count; ++k) recorder.observer(k);
@@ -282,7 +284,7 @@ Command add_trace_command(CLI::App& app) {
          if (region < 0) throw std::runtime_error("snapshot: give --region or --pixel");
          const Scene scene = so->run.scene();
          const Program program =
-             assemble_file(resolve_firmware(so->run.firmware), assembler_options(config));
+             assemble_file(firmware_for(so->run.firmware, scene), assembler_options(config));
          std::optional<std::uint64_t> after;
          if (so->after >= 0) after = static_cast<std::uint64_t>(so->after);
          trace::SnapshotTaker taker(config, program, region, after);
@@ -292,8 +294,7 @@ Command add_trace_command(CLI::App& app) {
          for (const auto& f : so->png) trace::field_image(s, f);  // check names
          const std::string path =
              so->out.empty()
-                 ? (fs::path("out") / so->run.scene_name / fmt::format("region-{}.pp5m", region))
-                       .string()
+                 ? (fs::path("out") / scene.name / fmt::format("region-{}.pp5m", region)).string()
                  : so->out;
          if (fs::path(path).has_parent_path()) {
            fs::create_directories(fs::path(path).parent_path());

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "sim/config/machine_config.hpp"
+#include "sim/scene/scene.hpp"
 
 namespace pp5 {
 
@@ -32,6 +33,9 @@ Command add_extremes_command(CLI::App& app);
 
 // A firmware argument is a path, or the name of a program in firmware/programs.
 std::string resolve_firmware(const std::string& name);
+// The program a command runs on `scene`: --firmware when given (`option` not empty), else the
+// scene file's "firmware", else phong; resolved as resolve_firmware does.
+std::string firmware_for(const std::string& option, const Scene& scene);
 
 // The defaults, or a JSON file, then the --set KEY=VALUE overrides.
 MachineConfig load_config(const std::string& path, const std::vector<std::string>& sets);

@@ -25,6 +25,12 @@ std::string resolve_firmware(const std::string& name) {
       fmt::join(names, " ")));
 }
 
+std::string firmware_for(const std::string& option, const Scene& scene) {
+  return resolve_firmware(!option.empty()           ? option
+                          : !scene.firmware.empty() ? scene.firmware
+                                                    : "phong");
+}
+
 MachineConfig load_config(const std::string& path, const std::vector<std::string>& sets) {
   MachineConfig config = path.empty() ? MachineConfig::defaults() : MachineConfig::from_file(path);
   config.set(sets);
