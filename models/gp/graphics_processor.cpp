@@ -153,7 +153,7 @@ void GraphicsProcessor::run() {
     open_stages.clear();
     for (int k = 0; k < machine_.renderer_count(); ++k) {
       const int s = machine_.renderer(k).open_stage(n);
-      if (s >= 0 && !done[s] && machine_.owner_of_region(s % n) == k) open_stages.push_back(s);
+      if (s >= 0 && !done[s]) open_stages.push_back(s);  // a region it claimed: its owner
     }
     std::sort(open_stages.begin(), open_stages.end());
     int pick = -1;

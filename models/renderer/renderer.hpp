@@ -75,9 +75,8 @@ class Renderer : public sc_core::sc_module {
   SC_HAS_PROCESS(Renderer);
   Renderer(sc_core::sc_module_name name, int index, Machine& machine);
 
-  // The stage open for input, and room in the queue.
-  bool accepts(int region, int pass) const { return open_region_ == region && open_pass_ == pass; }
-  // The (region, pass) stage open for input as pass * regions + region, or -1 when none is.
+  // The (region, pass) stage open for input as pass * regions + region, or -1 when none is
+  // (the region is always one this Renderer claimed); then room in its queue.
   int open_stage(int regions) const {
     return open_region_ < 0 ? -1 : open_pass_ * regions + open_region_;
   }
