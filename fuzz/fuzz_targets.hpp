@@ -14,7 +14,7 @@
 #include <string_view>
 
 #include "firmware/assembler/assembler.hpp"
-#include "sim/config/machine_config.hpp"
+#include "models/config/machine_config.hpp"
 #include "sim/scene/mesh_loader.hpp"
 #include "sim/scene/scene_loader.hpp"
 

@@ -27,11 +27,11 @@
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
+#include "models/config/machine_config.hpp"
+#include "models/display_list/scene.hpp"
+#include "models/frame_buffer/image.hpp"
 #include "models/gp/geometry.hpp"
 #include "models/gp/i860.hpp"
-#include "sim/config/machine_config.hpp"
-#include "sim/image/png_writer.hpp"
-#include "sim/scene/scene.hpp"
 
 namespace pp5 {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "firmware/assembler/assembler.hpp"
-#include "sim/config/machine_config.hpp"
+#include "models/config/machine_config.hpp"
 #include "sim/image/png_writer.hpp"
 #include "sim/scene/scene.hpp"
 

@@ -9,7 +9,7 @@
 #include <set>
 #include <string>
 
-#include "sim/config/machine_config.hpp"
+#include "models/config/machine_config.hpp"
 
 using namespace pp5;
 using nlohmann::json;

@@ -7,6 +7,7 @@
 #include "models/gp/geometry.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "sim/scene/scene.hpp"
 
 using namespace pp5;
 

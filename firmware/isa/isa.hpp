@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "common/units.hpp"
 #include "firmware/isa/interface.hpp"
-#include "models/common/units.hpp"
 #include "models/evaluator/evaluator.hpp"
 #include "models/pixel_array/pixel_array.hpp"
 

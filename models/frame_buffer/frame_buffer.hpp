@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "sim/image/png_writer.hpp"
+#include "models/frame_buffer/image.hpp"
 
 namespace pp5 {
 

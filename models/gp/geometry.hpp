@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "firmware/isa/isa.hpp"
-#include "sim/scene/scene.hpp"
+#include "models/display_list/scene.hpp"
 
 namespace pp5 {
 

@@ -11,7 +11,7 @@
 #include <systemc>
 #include <vector>
 
-#include "models/common/units.hpp"
+#include "common/units.hpp"
 #include "models/machine.hpp"
 
 namespace pp5 {

@@ -20,8 +20,8 @@
 #include <cstdint>
 #include <string>
 
+#include "common/units.hpp"
 #include "firmware/isa/interface.hpp"
-#include "models/common/units.hpp"
 
 namespace pp5 {
 

@@ -26,7 +26,7 @@
 #include <systemc>
 #include <vector>
 
-#include "models/common/units.hpp"
+#include "common/units.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
 

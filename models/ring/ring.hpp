@@ -14,7 +14,7 @@
 #include <systemc>
 #include <vector>
 
-#include "models/common/units.hpp"
+#include "common/units.hpp"
 
 namespace pp5 {
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
-#include "sim/config/machine_config.hpp"
+#include "models/config/machine_config.hpp"
 #include "sim/image/png_writer.hpp"
 #include "sim/scene/scene.hpp"
 

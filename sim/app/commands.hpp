@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/config/machine_config.hpp"
+#include "models/config/machine_config.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {

@@ -1,17 +1,10 @@
 #pragma once
 
-#include <cstdint>
 #include <string>
-#include <vector>
+
+#include "models/frame_buffer/image.hpp"
 
 namespace pp5 {
-
-// An 8-bit-per-channel RGB image: row-major, top row first, 3 bytes per pixel, no padding, so
-// rgb.size() == width * height * 3 for any image that write_png accepts.
-struct RgbImage {
-  int width = 0, height = 0;
-  std::vector<std::uint8_t> rgb;
-};
 
 // Writes `image` as an 8-bit RGB PNG. The data go to `path + ".tmp"` first, which is then renamed
 // onto `path`, so a reader never sees a half-written file. On any failure (bad image dimensions,

@@ -9,15 +9,6 @@
 
 namespace pp5 {
 
-glm::mat4 view_matrix(const Camera& camera) {
-  return glm::lookAt(camera.eye, camera.target, camera.up);
-}
-
-glm::mat4 projection_matrix(const Camera& camera, float aspect) {
-  return glm::perspective(glm::radians(camera.fov_y_degrees), aspect, camera.near_plane,
-                          camera.far_plane);
-}
-
 BoundingSphere bounding_sphere(const Mesh& mesh) {
   if (mesh.vertices.empty()) return {glm::vec3(0.0f), 0.0f};
   glm::vec3 lo(std::numeric_limits<float>::max());

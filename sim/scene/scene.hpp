@@ -1,62 +1,15 @@
 #pragma once
+// Scenes as the host builds them: the built-in scenes, framing a mesh with a camera, the
+// default light and smooth normals. The display list itself (what the GPs read) is
+// models/display_list/scene.hpp.
 
-#include <cstdint>
 #include <glm/glm.hpp>
-#include <map>
 #include <string>
 #include <vector>
 
+#include "models/display_list/scene.hpp"
+
 namespace pp5 {
-
-// One mesh vertex in world space. `normal` is unit length; `color` is RGB in [0,1]; `opacity`
-// is the material's, in [0,1] (1 = opaque; only programs with the `opacity` expression use it).
-struct Vertex {
-  glm::vec3 position;
-  glm::vec3 normal;
-  glm::vec3 color;
-  float opacity = 1.0f;
-};
-
-// An indexed triangle mesh. Every index in `triangles` is < vertices.size(). Triangles are wound
-// counter-clockwise around their front side, consistently across each connected surface.
-struct Mesh {
-  std::vector<Vertex> vertices;
-  std::vector<glm::uvec3> triangles;
-};
-
-struct Camera {
-  glm::vec3 eye, target, up;
-  float fov_y_degrees;
-  float near_plane, far_plane;
-};
-
-// A directional light. Its diffuse and specular terms add to those of the scene's other lights.
-struct Light {
-  // Unit vector from the surface toward the light, in world space.
-  glm::vec3 direction;
-  float diffuse;
-  float specular;
-  float shininess;  // the GP's exponent (Gouraud, flat); phong.pp5 uses a fixed 16
-};
-
-// Lights per scene: the Renderer runs the firmware's `light` procedure once for each.
-inline constexpr int kMaxLights = 8;
-
-struct Scene {
-  std::string name;
-  std::string description;
-  Mesh mesh;
-  Camera camera;
-  float ambient = 0.15f;      // ambient reflection, in [0,1], once for the whole scene
-  std::vector<Light> lights;  // 1..kMaxLights
-  glm::vec3 background;       // RGB in [0,1]
-  // The firmware the scene asks for (a program name or .pp5 path), or empty for the
-  // command's default; `pp5sim render --firmware` overrides it.
-  std::string firmware;
-  // Frame-parameter overrides by name (firmware/isa/interface.hpp), e.g. highlight options
-  // from `pp5sim render --param NAME=VALUE`; unknown names are rejected by the GP.
-  std::map<std::string, std::int64_t> parameters;
-};
 
 // Tessellation overrides; 0 keeps the scene's default. For the torus, u runs along the knot and v
 // around the revolution; for the sphere, u runs around the equator and v from pole to pole. The
@@ -79,11 +32,6 @@ std::vector<std::string> builtin_scene_names();
 //   crossing-quads: 4 triangles, 8 vertices.
 //   receding-pairs: 10 triangles, 30 vertices; a fixed camera at the origin looking down -z.
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
-
-// Right-handed view and OpenGL-convention projection (clip z in [-w,w]), as glm::lookAt and
-// glm::perspective build them.
-glm::mat4 view_matrix(const Camera& camera);
-glm::mat4 projection_matrix(const Camera& camera, float aspect);
 
 struct BoundingSphere {
   glm::vec3 center;

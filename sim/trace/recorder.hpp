@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
+#include "models/config/machine_config.hpp"
 #include "models/renderer/renderer_board.hpp"
-#include "sim/config/machine_config.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5::trace {

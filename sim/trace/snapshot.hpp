@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
+#include "models/config/machine_config.hpp"
 #include "models/renderer/renderer_board.hpp"
-#include "sim/config/machine_config.hpp"
 #include "sim/image/png_writer.hpp"
 
 namespace pp5::trace {

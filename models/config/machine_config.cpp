@@ -1,4 +1,4 @@
-#include "sim/config/machine_config.hpp"
+#include "models/config/machine_config.hpp"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>

@@ -1,0 +1,67 @@
+#pragma once
+// The host's display list: meshes with their materials, the camera, the lights and the frame's
+// parameter overrides. The GPs read it (models/gp); sim/scene builds and loads it.
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace pp5 {
+
+// One mesh vertex in world space. `normal` is unit length; `color` is RGB in [0,1]; `opacity`
+// is the material's, in [0,1] (1 = opaque; only programs with the `opacity` expression use it).
+struct Vertex {
+  glm::vec3 position;
+  glm::vec3 normal;
+  glm::vec3 color;
+  float opacity = 1.0f;
+};
+
+// An indexed triangle mesh. Every index in `triangles` is < vertices.size(). Triangles are wound
+// counter-clockwise around their front side, consistently across each connected surface.
+struct Mesh {
+  std::vector<Vertex> vertices;
+  std::vector<glm::uvec3> triangles;
+};
+
+struct Camera {
+  glm::vec3 eye, target, up;
+  float fov_y_degrees;
+  float near_plane, far_plane;
+};
+
+// A directional light. Its diffuse and specular terms add to those of the scene's other lights.
+struct Light {
+  // Unit vector from the surface toward the light, in world space.
+  glm::vec3 direction;
+  float diffuse;
+  float specular;
+  float shininess;  // the GP's exponent (Gouraud, flat); phong.pp5 uses a fixed 16
+};
+
+// Lights per scene: the Renderer runs the firmware's `light` procedure once for each.
+inline constexpr int kMaxLights = 8;
+
+struct Scene {
+  std::string name;
+  std::string description;
+  Mesh mesh;
+  Camera camera;
+  float ambient = 0.15f;      // ambient reflection, in [0,1], once for the whole scene
+  std::vector<Light> lights;  // 1..kMaxLights
+  glm::vec3 background;       // RGB in [0,1]
+  // The firmware the scene asks for (a program name or .pp5 path), or empty for the
+  // command's default; `pp5sim render --firmware` overrides it.
+  std::string firmware;
+  // Frame-parameter overrides by name (firmware/isa/interface.hpp), e.g. highlight options
+  // from `pp5sim render --param NAME=VALUE`; unknown names are rejected by the GP.
+  std::map<std::string, std::int64_t> parameters;
+};
+
+// Right-handed view and OpenGL-convention projection (clip z in [-w,w]), as glm::lookAt and
+// glm::perspective build them.
+glm::mat4 view_matrix(const Camera& camera);
+glm::mat4 projection_matrix(const Camera& camera, float aspect);
+
+}  // namespace pp5
