@@ -7,6 +7,9 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <unordered_map>
+
+#include "common/read_file.hpp"
 
 namespace pp5 {
 
@@ -75,7 +78,9 @@ class Assembler {
   }
 
   Program run(const std::string& source) {
-    std::istringstream in(source);
+    // A UTF-8 byte-order mark, as some editors write one, is not part of the program.
+    const bool bom = source.compare(0, 3, "\xEF\xBB\xBF") == 0;
+    std::istringstream in(bom ? source.substr(3) : source);
     std::string raw;
     int line = 0;
     while (std::getline(in, raw)) {
@@ -137,6 +142,7 @@ class Assembler {
       if (w[3] != "signed") fail("expected 'signed' after the width, got '{}'", w[3]);
       is_signed = true;
     }
+    field_by_name_.emplace(name, static_cast<int>(program_.fields.size()));
     program_.fields.push_back({name, static_cast<int>(width), is_signed, line_});
   }
 
@@ -185,10 +191,8 @@ class Assembler {
   }
 
   int field_index(const std::string& name) const {
-    for (std::size_t k = 0; k < program_.fields.size(); ++k) {
-      if (program_.fields[k].name == name) return static_cast<int>(k);
-    }
-    return -1;
+    const auto it = field_by_name_.find(name);
+    return it == field_by_name_.end() ? -1 : it->second;
   }
 
   // NAME, NAME[hi:lo] or NAME[bit].
@@ -313,7 +317,8 @@ class Assembler {
       // The transfer moves the whole first operand: every block it covers must exist.
       const int blocks = options_.backing_store_bits / options_.block_bits;
       const int used = (p.uses[0].width + options_.block_bits - 1) / options_.block_bits;
-      if (literal + used > blocks) {
+      // Compared without adding to the literal, which may be near 2^63.
+      if (literal > blocks - used) {
         fail("backing-store blocks {}..{} are past the end of the store ({} blocks)", literal,
              literal + used - 1, blocks);
       }
@@ -346,7 +351,8 @@ class Assembler {
   // A literal written into (or combined with) a field must be representable in its width,
   // read as unsigned or as two's complement; anything else would be silently truncated.
   void check_literal_fits(const ParsedInstruction& p, const InstructionInfo& info) {
-    if (info.operands[0] != 'F' || std::string(info.operands).size() != 2) return;
+    // A block number (bsld's second operand) is an address, not a value for the field.
+    if (info.operands[0] != 'F' || std::string(info.operands) != std::string("F") + "V") return;
     const Operand& o = p.ins.operands[1];
     if (o.kind != Operand::Kind::literal || p.uses[0].field < 0) return;
     const int w = p.uses[0].width;
@@ -413,12 +419,20 @@ class Assembler {
     std::vector<bool> spilled(fields.size(), false);
     int resident = 0;
     for (const auto& f : fields) resident += f.width;
+    // The instructions that use each field: spilling a field changes only their staging need,
+    // and no need ever shrinks as more fields spill, so the staging area is a running maximum
+    // (linear in the program, not fields x instructions).
+    std::vector<std::vector<const ParsedInstruction*>> users(fields.size());
+    for (const auto& code : parsed_) {
+      for (const auto& p : code) {
+        for (const FieldUse& u : p.uses) {
+          if (u.field >= 0 && (users[u.field].empty() || users[u.field].back() != &p))
+            users[u.field].push_back(&p);
+        }
+      }
+    }
     int staging = 0;
     for (int next = static_cast<int>(fields.size()) - 1;; --next) {
-      staging = 0;
-      for (const auto& code : parsed_) {
-        for (const auto& p : code) staging = std::max(staging, staging_need(p, spilled));
-      }
       if (resident + staging <= options_.memory_bits) break;
       if (!program_.spill_allowed) {
         std::string table;
@@ -436,6 +450,8 @@ class Assembler {
       }
       spilled[next] = true;
       resident -= fields[next].width;
+      for (const ParsedInstruction* p : users[next])
+        staging = std::max(staging, staging_need(*p, spilled));
     }
     int lo = 0;
     int block = explicit_end_block_;  // spilled fields go after blocks the program uses itself
@@ -530,6 +546,7 @@ class Assembler {
   std::array<int, 3> output_fields_{};
   std::array<std::vector<ParsedInstruction>, static_cast<int>(Procedure::count)> parsed_;
   int explicit_end_block_ = 0;  // one past the last block that explicit bsld/bsst use
+  std::unordered_map<std::string, int> field_by_name_;
 };
 
 }  // namespace
@@ -547,11 +564,13 @@ Program assemble(const std::string& source, const std::string& name,
 }
 
 Program assemble_file(const std::string& path, const AssemblerOptions& options) {
-  std::ifstream in(path);
-  if (!in) throw AssemblyError(path + ": cannot open the firmware program");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return assemble(buffer.str(), path, options);
+  std::string source;
+  try {
+    source = read_regular_file(path, kMaxProgramBytes, "a firmware program");
+  } catch (const FileError& e) {
+    throw AssemblyError(e.what());
+  }
+  return assemble(source, path, options);
 }
 
 std::string listing(const Program& program, const TimingParams& timing) {

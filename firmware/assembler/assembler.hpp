@@ -11,6 +11,7 @@
 // with the message "FILE:LINE: what was expected".
 #include <array>
 #include <bitset>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -51,6 +52,8 @@ struct ProcedureCode {
 
 // The most passes a program may ask for; each pass resends every triangle.
 inline constexpr int kMaxPasses = 64;
+// The largest program file read (16 MiB, some hundred thousand lines).
+inline constexpr std::uint64_t kMaxProgramBytes = 16ull << 20;
 
 struct Program {
   std::string name;  // file name or label, for messages and reports

@@ -18,6 +18,8 @@
 #include <utility>
 #include <vector>
 
+#include "common/read_file.hpp"
+
 namespace pp5 {
 
 namespace {
@@ -832,22 +834,17 @@ Mesh load_mesh(const std::string& path, MeshLoadReport* report, const LoadLimits
   if (!is_mesh_file(path)) {
     throw MeshError(fmt::format("{}: not a mesh file (expected .obj, .ply, .stl or .off)", path));
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw MeshError(fmt::format("{}: cannot open the file", path));
-  // Refuse files larger than any mesh within the limits could be, before reading them.
-  in.seekg(0, std::ios::end);
-  const auto size = static_cast<std::uint64_t>(std::max<std::streamoff>(0, in.tellg()));
-  in.seekg(0);
+  // Files larger than any mesh within the limits could be are refused before they are read;
+  // FIFOs, devices and directories are refused outright (common/read_file.hpp).
   const std::uint64_t max_bytes = 200ull * (limits.max_vertices + limits.max_triangles) + 4096;
-  if (size > max_bytes) {
-    throw MeshError(
-        fmt::format("{}: {} bytes is larger than a mesh within the limits ({} "
-                    "vertices, {} triangles) can be",
-                    path, size, limits.max_vertices, limits.max_triangles));
+  std::string data;
+  try {
+    data = read_regular_file(path, max_bytes, "a mesh file",
+                             fmt::format("a mesh within the limits ({} vertices, {} triangles)",
+                                         limits.max_vertices, limits.max_triangles));
+  } catch (const FileError& e) {
+    throw MeshError(e.what());
   }
-  std::string data(size, '\0');
-  in.read(data.data(), static_cast<std::streamsize>(size));
-  if (!in) throw MeshError(fmt::format("{}: read error", path));
   if (data.empty()) throw MeshError(fmt::format("{}: empty file, expected a mesh", path));
   return parse_mesh(data, ext, path, report, limits, default_color);
 }

@@ -14,6 +14,8 @@
 #include <set>
 #include <sstream>
 
+#include "common/read_file.hpp"
+
 namespace fs = std::filesystem;
 
 namespace pp5 {
@@ -373,12 +375,15 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
 }
 
 Scene load_scene_file(const std::string& path, const LoadLimits& limits) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(fmt::format("{}: cannot open the scene file", path));
-  std::ostringstream text;
-  text << in.rdbuf();
+  std::string text;
+  try {
+    // A scene file names its meshes; 16 MiB is far beyond any such list.
+    text = read_regular_file(path, 16ull << 20, "a scene file (JSON)");
+  } catch (const FileError& e) {
+    throw SceneError(e.what());
+  }
   const std::string base = fs::path(path).parent_path().string();
-  return parse_scene_json(text.str(), path, base.empty() ? "." : base, limits);
+  return parse_scene_json(text, path, base.empty() ? "." : base, limits);
 }
 
 Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {

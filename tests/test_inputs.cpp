@@ -1,0 +1,131 @@
+// Inputs that must never hang, exhaust memory or be misread (issue 18): non-regular files,
+// oversized files, block numbers near 2^63, byte-order marks, programs with tens of
+// thousands of fields.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "common/read_file.hpp"
+#include "firmware/assembler/assembler.hpp"
+
+namespace fs = std::filesystem;
+using namespace pp5;
+
+namespace {
+
+const std::string kProgram =
+    "field z 24\n"
+    "field flag 1\n"
+    "field red 8\n"
+    "field green 8\n"
+    "field blue 8\n"
+    "output red green blue\n"
+    "proc triangle\n"
+    "  eall\n";
+
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A fresh path in the temporary directory, removed when the test ends.
+struct TempPath {
+  fs::path path;
+  explicit TempPath(const std::string& stem)
+      : path(fs::temp_directory_path() /
+             (stem + "-" + std::to_string(::getpid()) + "-" +
+              std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()))) {}
+  ~TempPath() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("only regular files are read, and never more than the cap", "[inputs]") {
+  SECTION("a FIFO is refused at once, not waited on") {
+    TempPath fifo("pp5-fifo");
+    REQUIRE(::mkfifo(fifo.path.c_str(), 0600) == 0);
+    CHECK(message_of([&] { read_regular_file(fifo.path, 1000, "a test file"); }) ==
+          fifo.path.string() + ": is a FIFO, expected a test file (a regular file)");
+    CHECK_THROWS_WITH(assemble_file(fifo.path, {}),
+                      Catch::Contains("is a FIFO, expected a firmware program"));
+  }
+  SECTION("a character device such as /dev/zero is refused, not read forever") {
+    CHECK_THROWS_WITH(read_regular_file("/dev/zero", 1000, "a test file"),
+                      "/dev/zero: is a character device, expected a test file (a regular file)");
+    CHECK_THROWS_WITH(assemble_file("/dev/zero", {}), Catch::Contains("character device"));
+  }
+  SECTION("a directory") {
+    CHECK_THROWS_WITH(assemble_file(fs::temp_directory_path(), {}),
+                      Catch::Contains("is a directory, expected a firmware program"));
+  }
+  SECTION("a missing file names the OS reason") {
+    CHECK_THROWS_WITH(read_regular_file("/nonexistent/x.pp5", 10, "a firmware program"),
+                      Catch::Contains("No such file or directory"));
+  }
+  SECTION("a file over the cap is refused before it is read") {
+    TempPath big("pp5-big");
+    std::ofstream(big.path) << std::string(2000, 'x');
+    CHECK_THROWS_WITH(
+        read_regular_file(big.path, 1000, "a test file"),
+        Catch::Contains("2000 bytes is larger than a test file can be (at most 1000 bytes)"));
+    CHECK(read_regular_file(big.path, 2000, "a test file").size() == 2000);
+  }
+}
+
+TEST_CASE("backing-store block numbers near 2^63 are refused, not wrapped", "[inputs]") {
+  CHECK_THROWS_WITH(assemble(kProgram + "  bsst z, 9223372036854775800\nend\n", "big", {}),
+                    Catch::Contains("big:9: backing-store blocks 9223372036854775800") &&
+                        Catch::Contains("past the end of the store (128 blocks)"));
+  CHECK_THROWS_WITH(assemble(kProgram + "  bsld z, 9223372036854775807\nend\n", "big", {}),
+                    Catch::Contains("past the end of the store"));
+}
+
+TEST_CASE("a block number is not a value that must fit the field", "[inputs]") {
+  // bsld into a 1-bit field from block 5: 5 is an address, not a constant for the field.
+  const Program p = assemble(kProgram + "  bsld flag, 5\n  bsst flag, 127\nend\n", "ok", {});
+  CHECK(p.procedure(Procedure::triangle).code.size() == 3);
+  // A constant that does not fit is still refused where it is a value.
+  CHECK_THROWS_WITH(assemble(kProgram + "  mov flag, 5\nend\n", "bad", {}),
+                    Catch::Contains("constant 5 does not fit the 1-bit destination"));
+}
+
+TEST_CASE("a UTF-8 byte-order mark before a program is skipped", "[inputs]") {
+  const Program with = assemble("\xEF\xBB\xBF" + kProgram + "end\n", "bom", {});
+  const Program without = assemble(kProgram + "end\n", "plain", {});
+  CHECK(with.fields.size() == without.fields.size());
+  CHECK(with.bits_used() == without.bits_used());
+}
+
+TEST_CASE("a program of tens of thousands of fields assembles in linear time", "[inputs]") {
+  // 40,000 one-bit fields, most spilled to a large backing store, each used once: the
+  // layout used to recompute every instruction's staging need for every spilled field.
+  std::string source = "option spill\nfield red 8\nfield green 8\nfield blue 8\n";
+  const int n = 40000;
+  for (int k = 0; k < n; ++k) source += "field f" + std::to_string(k) + " 1\n";
+  source += "output red green blue\nproc triangle\n";
+  for (int k = 0; k + 1 < n; k += 2)
+    source += "  and f" + std::to_string(k) + ", f" + std::to_string(k + 1) + "\n";
+  source += "end\n";
+  AssemblerOptions o;
+  o.backing_store_bits = 1 << 16;
+  o.block_bits = 1;
+  // No clock is read here (tests assert no wall-clock times): the quadratic layout took
+  // minutes on this program, the linear one a fraction of a second, which ctest's time
+  // limit tells apart.
+  const Program p = assemble(source, "wide", o);
+  CHECK(p.fields.size() == static_cast<std::size_t>(n + 3));
+  CHECK(p.bits_used() <= o.memory_bits);
+}
