@@ -13,6 +13,7 @@
 
 #include "common/read_file.hpp"
 #include "firmware/assembler/assembler.hpp"
+#include "sim/scene/mesh_loader.hpp"
 
 namespace fs = std::filesystem;
 using namespace pp5;
@@ -128,4 +129,51 @@ TEST_CASE("a program of tens of thousands of fields assembles in linear time", "
   const Program p = assemble(source, "wide", o);
   CHECK(p.fields.size() == static_cast<std::size_t>(n + 3));
   CHECK(p.bits_used() <= o.memory_bits);
+}
+
+TEST_CASE("mesh files: what exporters write is read, what cannot be filled is reported",
+          "[inputs][mesh]") {
+  SECTION("a PLY header line without the 'comment' keyword is a comment") {
+    const std::string ply =
+        "ply\nformat ascii 1.0\nCreated by SomeExporter 2.1\nelement vertex 3\n"
+        "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+        "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    MeshLoadReport report;
+    const Mesh mesh = parse_mesh(ply, "ply", "exporter.ply", &report);
+    CHECK(mesh.triangles.size() == 1);
+    // The keywords PLY knows are still checked.
+    std::string bad = ply;
+    bad.replace(bad.find("element face 1"), 14, "element face x");
+    CHECK_THROWS_WITH(parse_mesh(bad, "ply", "bad.ply"),
+                      Catch::Contains("element 'face' has count 'x'"));
+  }
+  SECTION("UTF-16 text is named as such") {
+    const std::string utf16le("\xFF\xFEv\0 \0", 6);
+    CHECK_THROWS_WITH(parse_mesh(utf16le, "obj", "wide.obj"),
+                      "wide.obj: UTF-16 text (it starts with a UTF-16 byte-order mark); save it "
+                      "as UTF-8 or ASCII");
+    const std::string no_bom("v\0 \0", 4);
+    CHECK_THROWS_WITH(parse_mesh(no_bom, "obj", "wide.obj"), Catch::Contains("UTF-16 text"));
+  }
+  SECTION("a face that visits a vertex again is refused, not stacked") {
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 1 2 3 1 2 3 1 2 3\n";
+    CHECK_THROWS_WITH(parse_mesh(obj, "obj", "stack.obj"),
+                      "stack.obj: face 0 visits vertex 0 4 times (12 corners); a face must be a "
+                      "polygon that visits each vertex once");
+  }
+  SECTION("a corner repeated at once is a collapsed edge, merged") {
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2 3 1\n";
+    MeshLoadReport report;
+    const Mesh mesh = parse_mesh(obj, "obj", "collapsed.obj", &report);
+    CHECK(mesh.triangles.size() == 1);
+    CHECK(report.collapsed_corners == 1);
+    CHECK(report.dropped_degenerate == 0);
+  }
+  SECTION("an empty face line is counted, not lost") {
+    const std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf\nf 1 2 3\n";
+    MeshLoadReport report;
+    const Mesh mesh = parse_mesh(obj, "obj", "empty-f.obj", &report);
+    CHECK(mesh.triangles.size() == 1);
+    CHECK(report.ignored_statements == 1);
+  }
 }

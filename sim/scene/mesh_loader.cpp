@@ -225,7 +225,9 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
             ? !elements.empty() && (list ? size_of(b) > 0 && b.find("float") == std::string::npos &&
                                                b != "double" && size_of(c) > 0 && !name.empty()
                                          : size_of(a) > 0 && !b.empty() && c.empty())
-            : key == "comment" || key == "obj_info";
+            // Any other line is a comment, as assimp reads it: some exporters write their
+            // name there without the 'comment' keyword. An empty line too.
+            : key != "ply" && key != "end_header";
     if (!known) {
       throw MeshError(
           fmt::format("{}:{}: expected 'ply', then 'format', 'element', 'property', "
@@ -441,7 +443,10 @@ void check_ascii_stl(std::string_view data, const std::string& origin) {
 // ("v" lines of 3, 4 or 6 numbers, "vt" and "vn" lines of numbers). Positive indices may
 // point forward (as in assimp), negative ones count back from the line they are on. Lines
 // ending in '\\' continue on the next, as in assimp.
-void check_obj(std::string_view data, const std::string& origin) {
+// Returns the face statements with no vertex at all (an empty `f` line), which assimp drops
+// without a word: they are counted as ignored statements.
+std::size_t check_obj(std::string_view data, const std::string& origin) {
+  std::size_t empty_faces = 0;
   struct Use {
     long long index;
     int kind, line;
@@ -483,7 +488,9 @@ void check_obj(std::string_view data, const std::string& origin) {
       }
       ++counts[key == "v" ? 0 : key == "vt" ? 1 : 2];
     } else if (key[0] == 'f' || key[0] == 'l' || key[0] == 'p') {
+      bool any = false;
       while (words >> word) {
+        any = true;
         std::istringstream parts(word + "/");
         std::string part;
         for (int kind = 0; kind < 3 && std::getline(parts, part, '/'); ++kind) {
@@ -504,6 +511,7 @@ void check_obj(std::string_view data, const std::string& origin) {
           if (index > 0) uses.push_back({index, kind, first});
         }
       }
+      if (!any && key == "f") ++empty_faces;
     }
   }
   for (const Use& use : uses) {
@@ -517,6 +525,7 @@ void check_obj(std::string_view data, const std::string& origin) {
                                       : "vn"));
     }
   }
+  return empty_faces;
 }
 
 // STL: assimp checks a binary file's size against its triangle count itself, but says only
@@ -676,10 +685,25 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
                                 origin, format));
   }
   if (data.empty()) throw MeshError(fmt::format("{}: empty file, expected a mesh", origin));
+  // Text saved as UTF-16 (some Windows tools do) reads as words with NULs between them.
+  if (data.size() >= 2 &&
+      ((data[0] == '\xFF' && data[1] == '\xFE') || (data[0] == '\xFE' && data[1] == '\xFF'))) {
+    throw MeshError(fmt::format(
+        "{}: UTF-16 text (it starts with a UTF-16 byte-order mark); save it as UTF-8 or ASCII",
+        origin));
+  }
+  if ((format == "obj" || format == "off") && data.size() >= 2 &&
+      (data[0] == '\0' || data[1] == '\0')) {
+    throw MeshError(
+        fmt::format("{}: a NUL byte at the start of a text format (UTF-16 text without a "
+                    "byte-order mark?); save it as UTF-8 or ASCII",
+                    origin));
+  }
+  std::size_t empty_faces = 0;
   if (format == "off") check_off(data, origin, limits);
   if (format == "ply") check_ply(data, origin, limits);
   if (format == "stl") check_stl_header(data, origin, limits);
-  if (format == "obj") check_obj(data, origin);
+  if (format == "obj") empty_faces = check_obj(data, origin);
 
   Assimp::Importer importer;  // assimp logs nothing unless a DefaultLogger is created
   keep_only(importer, format);
@@ -745,6 +769,7 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   }
 
   MeshLoadReport r;
+  r.ignored_statements = empty_faces;
   Mesh out;
   std::vector<glm::vec3> positions;
   std::vector<unsigned> polygon;
@@ -779,6 +804,34 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
       ++r.polygons;
       polygon.assign(face.mIndices, face.mIndices + face.mNumIndices);
       for (unsigned& i : polygon) i += base;
+      // A corner repeated at once (1 2 2 3, or the last equal to the first) is a collapsed
+      // edge: dropped, and the face counted as degenerate if that leaves fewer than three.
+      // A vertex visited again later (1 2 3 1 2 3 ...) makes no polygon that can be filled:
+      // triangulating it would stack triangles on one another, so it is refused.
+      {
+        std::vector<unsigned> kept;
+        for (std::size_t k = 0; k < polygon.size(); ++k) {
+          if (kept.empty() || kept.back() != polygon[k]) kept.push_back(polygon[k]);
+        }
+        while (kept.size() > 1 && kept.back() == kept.front()) kept.pop_back();
+        if (kept.size() < polygon.size()) ++r.collapsed_corners;
+        std::vector<unsigned> sorted = kept;
+        std::sort(sorted.begin(), sorted.end());
+        const auto again = std::adjacent_find(sorted.begin(), sorted.end());
+        if (again != sorted.end()) {
+          const auto times = std::count(kept.begin(), kept.end(), *again);
+          throw MeshError(fmt::format(
+              "{}: face {} visits vertex {} {} times ({} corners); a face must be a polygon "
+              "that visits each vertex once",
+              scene->mNumMeshes > 1 ? fmt::format("{}: mesh {}", origin, m) : origin, f,
+              *again - base, times, face.mNumIndices));
+        }
+        if (kept.size() < 3) {
+          ++r.dropped_degenerate;
+          continue;
+        }
+        polygon.swap(kept);
+      }
       triangles.clear();
       if (polygon.size() == 3) {
         triangles.emplace_back(polygon[0], polygon[1], polygon[2]);

@@ -49,7 +49,8 @@ struct MeshLoadReport {
   std::size_t triangulated = 0;        // faces with more than three vertices
   std::size_t dropped_degenerate = 0;  // repeated vertex or zero area
   std::size_t non_manifold_edges = 0;  // edges used by more than two triangles
-  std::size_t ignored_statements = 0;  // OBJ points and lines (faces of 1 or 2 vertices)
+  std::size_t ignored_statements = 0;  // OBJ points, lines and empty faces (0 to 2 vertices)
+  std::size_t collapsed_corners = 0;   // faces with a corner repeated at once (1 2 2 3), merged
 };
 
 // The formats by file extension (case-insensitive): .obj .ply .stl .off.

@@ -397,9 +397,13 @@ Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {
     return scene_from_mesh(
         std::move(mesh), p.stem().string(),
         fmt::format("mesh file {} ({} faces, {} triangulated, {} degenerate dropped, {} "
-                    "non-manifold edges)",
+                    "non-manifold edges{})",
                     name_or_path, report.polygons, report.triangulated, report.dropped_degenerate,
-                    report.non_manifold_edges));
+                    report.non_manifold_edges,
+                    report.ignored_statements
+                        ? fmt::format(", {} points, lines and empty faces ignored",
+                                      report.ignored_statements)
+                        : ""));
   }
   try {
     return make_builtin_scene(name_or_path, options);
