@@ -9,6 +9,7 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/output/output_set.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {
@@ -33,8 +34,5 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
 // The bit-budget table and the headline figures, as printed after a run.
 std::string bit_budget_table(const Program& program, const TimingParams& timing);
 std::string summary(const FrameResult& result, const Program& program, const TimingParams& timing);
-
-// Writes `text` to `path` through a temporary file and a rename.
-void write_file_atomically(const std::string& path, const std::string& text);
 
 }  // namespace pp5

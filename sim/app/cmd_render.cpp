@@ -74,17 +74,20 @@ int run_render(RenderOptions o) {
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(firmware_for(o.firmware, scene), assembler_options(config));
   warn_about_ignored_scene_parts(scene, program);
-  if (o.out_dir.empty()) o.out_dir = (fs::path("out") / scene.name).string();
-  fs::create_directories(o.out_dir);
+  if (o.out_dir.empty()) o.out_dir = default_output_folder(scene.name);
+  const bool replacing = prepare_output_folder(o.out_dir, "--out");
 
   nlohmann::json timeline;
   const FrameResult result = simulate_frame(config, scene, program, o.threads, {},
                                             o.timeline.empty() ? nullptr : &timeline);
+  // All of the run's outputs, or none of them (sim/output/output_set.hpp).
   const fs::path dir(o.out_dir);
-  write_png((dir / "frame.png").string(), result.image);
-  write_file_atomically((dir / "config.json").string(), config.to_json().dump(2) + "\n");
-  write_file_atomically((dir / "stats.json").string(), result.stats.dump(2) + "\n");
-  if (!o.timeline.empty()) write_file_atomically(o.timeline, timeline.dump() + "\n");
+  OutputSet outputs;
+  outputs.add((dir / "frame.png").string(), encode_png(result.image));
+  outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
+  outputs.add((dir / "stats.json").string(), result.stats.dump(2) + "\n");
+  if (!o.timeline.empty()) outputs.add(o.timeline, timeline.dump() + "\n");
+  outputs.commit();
 
   std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n{}\n\n", scene.name,
                            scene.mesh.triangles.size(), program.name, scene.description);
@@ -103,7 +106,8 @@ int run_render(RenderOptions o) {
         "evaluator.coefficient_bits = {} (see 'pp5sim extremes')\n",
         setup["coefficient_overflow"].get<std::uint64_t>(), config.evaluator.coefficient_bits);
   }
-  std::cout << fmt::format("\nwrote {}/frame.png, {}/config.json, {}/stats.json\n", o.out_dir,
+  std::cout << fmt::format("\n{} {}/frame.png, {}/config.json, {}/stats.json\n",
+                           replacing ? "wrote (replacing the previous run's)" : "wrote", o.out_dir,
                            o.out_dir, o.out_dir);
   if (!o.timeline.empty()) {
     std::cout << fmt::format("wrote {} (open it in ui.perfetto.dev)\n", o.timeline);
@@ -126,7 +130,8 @@ Command add_render_command(CLI::App& app) {
                      "gouraud, phong, transparent) [the scene file's \"firmware\", else phong]");
   add_config_options(*render, o->config_path, o->sets);
   render->add_option("-o,--out", o->out_dir,
-                     "Output folder for frame.png, config.json and stats.json [out/SCENE]");
+                     "Output folder for frame.png, config.json and stats.json [out/SCENE]; a "
+                     "later run into the same folder replaces them");
   render
       ->add_option("-j,--threads", o->threads,
                    "Host threads for the pixel arrays (results are identical for any number)")

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "sim/app/commands.hpp"
+#include "sim/output/output_set.hpp"
 
 int main(int argc, char** argv) {
   using namespace pp5;
@@ -25,6 +26,8 @@ int main(int argc, char** argv) {
   };
 
   CLI11_PARSE(app, argc, argv);
+  // An interrupted run removes the temporary files of its outputs (sim/output).
+  install_signal_cleanup();
 
   try {
     for (const auto& command : commands) {

@@ -10,6 +10,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "sim/output/output_set.hpp"
+
 namespace pp5 {
 namespace {
 
@@ -32,40 +34,45 @@ class PngImageGuard {
 
 }  // namespace
 
-void write_png(const std::string& path, const RgbImage& image) {
+std::string encode_png(const RgbImage& image, const std::string& what) {
   constexpr const char* kWhat = "cannot write PNG";
   if (image.width <= 0 || image.height <= 0) {
-    fail(kWhat, path, fmt::format("invalid size {}x{}", image.width, image.height));
+    fail(kWhat, what, fmt::format("invalid size {}x{}", image.width, image.height));
   }
   // Computed in size_t, where the product of two positive ints cannot overflow.
   const auto expected =
       static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 3u;
   if (image.rgb.size() != expected) {
-    fail(kWhat, path,
+    fail(kWhat, what,
          fmt::format("pixel buffer holds {} bytes, a {}x{} RGB image needs {}", image.rgb.size(),
                      image.width, image.height, expected));
   }
-
-  const std::string tmp = path + ".tmp";
   png_image png{};
   png.version = PNG_IMAGE_VERSION;
   png.width = static_cast<png_uint_32>(image.width);
   png.height = static_cast<png_uint_32>(image.height);
   png.format = PNG_FORMAT_RGB;
-  bool ok = false;
-  {
-    PngImageGuard guard(png);
-    ok = png_image_write_to_file(&png, tmp.c_str(), /*convert_to_8bit=*/0, image.rgb.data(),
-                                 /*row_stride=*/0, /*colormap=*/nullptr) != 0;
+  PngImageGuard guard(png);
+  // First the size libpng needs, then the encoding into a buffer of that size.
+  png_alloc_size_t size = 0;
+  if (png_image_write_to_memory(&png, nullptr, &size, /*convert_to_8bit=*/0, image.rgb.data(),
+                                /*row_stride=*/0, /*colormap=*/nullptr) == 0) {
+    fail(kWhat, what, png.message[0] != '\0' ? png.message : "libpng reported an error");
   }
-  if (!ok) {
-    std::remove(tmp.c_str());
-    fail(kWhat, path, png.message[0] != '\0' ? png.message : "libpng reported an error");
+  std::string bytes(size, '\0');
+  if (png_image_write_to_memory(&png, bytes.data(), &size, 0, image.rgb.data(), 0, nullptr) == 0) {
+    fail(kWhat, what, png.message[0] != '\0' ? png.message : "libpng reported an error");
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(tmp.c_str());
-    fail(kWhat, path, fmt::format("rename from '{}' failed: {}", tmp, std::strerror(err)));
+  bytes.resize(size);
+  return bytes;
+}
+
+void write_png(const std::string& path, const RgbImage& image) {
+  const std::string bytes = encode_png(image, path);
+  try {
+    write_file_atomically(path, bytes);
+  } catch (const OutputError& e) {
+    throw std::runtime_error(std::string("cannot write PNG: ") + e.what());
   }
 }
 

@@ -6,6 +6,10 @@
 
 namespace pp5 {
 
+// `image` as the bytes of an 8-bit RGB PNG file; std::runtime_error naming `what` on a bad
+// image or a libpng error.
+std::string encode_png(const RgbImage& image, const std::string& what = "image");
+
 // Writes `image` as an 8-bit RGB PNG. The data go to `path + ".tmp"` first, which is then renamed
 // onto `path`, so a reader never sees a half-written file. On any failure (bad image dimensions,
 // unwritable directory, libpng error, failed rename) the temporary file is removed, `path` is left

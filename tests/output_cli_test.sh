@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# A run writes all its outputs or none (issue 18): concurrent runs into one folder, an
+# interrupted run, outputs whose place is wrong, non-regular input files.
+. "$(dirname "$0")/cli_lib.sh"
+small=(--set screen.width=128 --set screen.height=128 --set gp.count=2 --set renderer.count=1)
+leftovers() { find "$1" \( -name '.*.??????' -o -name '*.tmp' \) 2>/dev/null | head -1; }
+
+# Two runs into the same folder at once: both succeed, each with a complete set of its own,
+# and no temporary is left.
+"$bin" render --scene torus "${small[@]}" --out "$tmp/same" >"$tmp/a.log" 2>&1 &
+a=$!
+"$bin" render --scene sphere "${small[@]}" --out "$tmp/same" >"$tmp/b.log" 2>&1 &
+b=$!
+wait $a || fail "first concurrent run failed: $(cat "$tmp/a.log")"
+wait $b || fail "second concurrent run failed: $(cat "$tmp/b.log")"
+for f in frame.png config.json stats.json; do [ -s "$tmp/same/$f" ] || fail "no $f"; done
+[ -z "$(leftovers "$tmp/same")" ] || fail "temporary left: $(leftovers "$tmp/same")"
+
+# Interrupted runs leave no temporary files, whenever the signal comes.
+for delay in 0.05 0.1 0.2 0.3; do
+  "$bin" render --scene torus --out "$tmp/int" --timeline "$tmp/int/t.json" >/dev/null 2>&1 &
+  pid=$!
+  sleep "$delay"
+  kill -INT $pid 2>/dev/null
+  wait $pid
+done
+[ -z "$(leftovers "$tmp/int")" ] || fail "an interrupted run left $(leftovers "$tmp/int")"
+
+# Outputs whose place is wrong are refused before anything is written.
+expect_error "the folder $tmp/missing does not exist" render --scene two-triangles "${small[@]}" \
+  --out "$tmp/tl" --timeline "$tmp/missing/t.json"
+[ -e "$tmp/tl/frame.png" ] && fail "frame.png written although the timeline could not be"
+expect_error "frame.png: named twice" render --scene two-triangles "${small[@]}" --out "$tmp/tl" \
+  --timeline "$tmp/tl/frame.png"
+touch "$tmp/file"
+expect_error "--out $tmp/file: is a file, expected an output folder" render --scene two-triangles \
+  --out "$tmp/file"
+mkdir -p "$tmp/dirs/frame.png"
+expect_error "frame.png: is a folder, expected a file to write" render --scene two-triangles \
+  "${small[@]}" --out "$tmp/dirs"
+[ -e "$tmp/dirs/stats.json" ] && fail "stats.json written beside a frame that could not be"
+# A name too long for a ".tmp" suffix is still written (the temporary's name is shorter).
+long="$tmp/$(printf 'x%.0s' $(seq 1 250)).json"
+"$bin" render --scene two-triangles "${small[@]}" --out "$tmp/long" --timeline "$long" >/dev/null \
+  || fail "a 251-character timeline name was refused"
+
+# A mesh named "...obj" gets out/scene, not out/.. (run in a scratch folder).
+mkdir -p "$tmp/cwd"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > "$tmp/cwd/...obj"
+(cd "$tmp/cwd" && "$bin" render --scene ...obj "${small[@]}" >/dev/null) || fail "...obj failed"
+[ -s "$tmp/cwd/out/scene/frame.png" ] || fail "...obj did not write out/scene/frame.png"
+
+# FIFOs and devices as inputs are refused at once, not read.
+mkfifo "$tmp/fifo.obj" "$tmp/fifo.json" "$tmp/fifo.pp5"
+# (Each under `timeout`, so that a regression fails instead of hanging the suite.)
+pp5sim="$bin"
+bin=timeout
+expect_error "fifo.obj: is a FIFO" 10 "$pp5sim" render --scene "$tmp/fifo.obj" --out "$tmp/f"
+expect_error "fifo.json: is a FIFO" 10 "$pp5sim" render --scene "$tmp/fifo.json" --out "$tmp/f"
+expect_error "fifo.pp5: is a FIFO" 10 "$pp5sim" render --firmware "$tmp/fifo.pp5" --out "$tmp/f"
+expect_error "/dev/zero: is a character device" 10 "$pp5sim" asm /dev/zero
+bin="$pp5sim"
+echo "output_cli: all checks passed"
