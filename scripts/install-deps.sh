@@ -1,17 +1,33 @@
 #!/usr/bin/env bash
-# Installs pp5sim's build and test dependencies from Debian 12's packages.
+# Installs what one job of scripts/pp5 needs from Debian 12's packages, and nothing more:
+#   scripts/install-deps.sh run        build and render
+#   scripts/install-deps.sh test       + the test suite's tools (Catch2, python3, gtkwave's
+#                                      vcd2fst, rsvg-convert)
+#   scripts/install-deps.sh sanitize   the same as test (gcc's sanitizers come with gcc)
+#   scripts/install-deps.sh fuzz       + clang and its fuzzing runtime
+#   scripts/install-deps.sh bench      + Google Benchmark
+#   scripts/install-deps.sh all        everything above
 set -euo pipefail
-packages=(
-  build-essential cmake ninja-build pkg-config python3
-  libsystemc-dev libglm-dev libfmt-dev catch2 nlohmann-json3-dev libcli11-dev libpng-dev libassimp-dev
-  libbenchmark-dev gtkwave librsvg2-bin clang libclang-rt-dev
-)
+group="${1:-all}"
+run=(build-essential cmake ninja-build pkg-config
+     libsystemc-dev libglm-dev libfmt-dev nlohmann-json3-dev libcli11-dev libpng-dev libassimp-dev)
+test=(catch2 python3 gtkwave librsvg2-bin)
+fuzz=(clang libclang-rt-dev)
+bench=(libbenchmark-dev)
+case "$group" in
+  run) packages=("${run[@]}") ;;
+  test|sanitize) packages=("${run[@]}" "${test[@]}") ;;
+  fuzz) packages=("${run[@]}" "${fuzz[@]}") ;;
+  bench) packages=("${run[@]}" "${bench[@]}") ;;
+  all) packages=("${run[@]}" "${test[@]}" "${fuzz[@]}" "${bench[@]}") ;;
+  *) echo "usage: scripts/install-deps.sh run|test|sanitize|fuzz|bench|all" >&2; exit 2 ;;
+esac
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all packages present"
+  echo "install-deps: all packages for '$group' present"
   exit 0
 fi
 SUDO=""

@@ -81,3 +81,23 @@ TEST_CASE("the scene report fails what is wrong and names it", "[extremes]") {
   CHECK(open[2].observed.find("not checked") != std::string::npos);
   CHECK_FALSE(is_closed(load_scene("two-triangles").mesh));
 }
+
+TEST_CASE("with too few fraction bits, depth precision fails and no other case does",
+          "[extremes]") {
+  // Issue 18: with 8 fraction bits the depth-precision case passed while reporting errors of
+  // 3 z-units, and the coefficient-width case failed because its too-steep triangle fits.
+  MachineConfig c = small(1280, 1024);
+  c.set("evaluator.fraction_bits=8");
+  for (const ExtremeCase& e : synthetic_extreme_cases(c, 2)) {
+    INFO(e.name << ": " << e.observed);
+    if (e.name == "depth precision") {
+      CHECK_FALSE(e.pass);
+      CHECK_THAT(e.observed, Catch::Contains("errs by up to 3 z-units"));
+    } else {
+      CHECK(e.pass);
+    }
+    if (e.name == "coefficient width") {
+      CHECK_THAT(e.observed, Catch::Contains("no triangle is too steep on this machine"));
+    }
+  }
+}

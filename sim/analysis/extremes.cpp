@@ -255,7 +255,17 @@ ExtremeCase depth_precision_case(const MachineConfig& config, int threads) {
       "evaluator.fraction_bits = {}",
       rows, config.evaluator.fraction_bits);
   if (!fits) out.observed += " (some widths exceed the evaluator's and were skipped)";
-  out.pass = at_need <= 1 && worst_fewer > 1;
+  // The model's property (enough fraction bits give at most 1 z-unit, fewer give more) and
+  // this machine's: the configured fraction bits must be enough for its screen.
+  const bool enough = config.evaluator.fraction_bits >= need;
+  if (!enough) {
+    out.observed += fmt::format(
+        "; with {} fraction bits this machine's depth errs by up to {} z-units (fewer than the "
+        "{} needed)",
+        config.evaluator.fraction_bits,
+        depth_precision_error(config, n, config.evaluator.fraction_bits), need);
+  }
+  out.pass = at_need <= 1 && worst_fewer > 1 && enough;
   return out;
 }
 
@@ -395,23 +405,42 @@ std::vector<ExtremeCase> synthetic_extreme_cases(const MachineConfig& base, int 
         wide_drawn += wide.image.rgb[3 * (static_cast<std::size_t>(y) * kScreen + x)] > 0;
       }
     }
-    // A sixteenth of a pixel wide with the same depth span: the gradient itself, about 2^42
-    // per pixel, does not fit.
-    ViewScene w(kScreen, kScreen);
-    w.triangle(w.at(230.4375, 40.0, 1.5), w.at(230.5625, 220.0, 1.5), w.at(230.4375, 130.0, 90.0));
-    const Drawn steep = draw_flat(config, w.scene, threads);
+    // Narrower with the same depth span, until the gradient itself does not fit the
+    // coefficients (a sixteenth of a pixel with the defaults: about 2^42 per pixel). With
+    // fewer fraction bits or wider coefficients even the thinnest triangle the GP can snap
+    // (two sub-pixel steps across a pixel centre) may fit: then no triangle can overflow and
+    // there is nothing to drop.
+    Drawn steep;
+    double width = 0;
+    for (int k = 1; k <= config.gp.subpixel_bits && steep.overflow == 0; ++k) {
+      width = 2 * std::ldexp(1.0, -k);
+      ViewScene w(kScreen, kScreen);
+      w.triangle(w.at(230.5 - width / 2, 40.0, 1.5), w.at(230.5 + width / 2, 220.0, 1.5),
+                 w.at(230.5 - width / 2, 130.0, 90.0));
+      steep = draw_flat(config, w.scene, threads);
+    }
+    std::uint64_t steep_drawn = 0;
+    for (std::uint8_t b : steep.image.rgb) steep_drawn += b > 0;
     ExtremeCase c;
     c.name = "coefficient width";
-    c.expected =
-        "a triangle edge-on to the screen at x = 230 has a constant term far beyond the 40-bit "
-        "coefficients; sent modulo 2^40, which the evaluator's wrapping sums make exact, it is "
+    c.expected = fmt::format(
+        "a triangle edge-on to the screen at x = 230 has a constant term far beyond the {0}-bit "
+        "coefficients; sent modulo 2^{0}, which the evaluator's wrapping sums make exact, it is "
         "drawn and nothing is dropped. A triangle so thin that its depth gradient itself does "
         "not fit is dropped and counted in stats.json setup.coefficient_overflow and the render "
-        "summary, never drawn with wrapped values";
-    c.observed = fmt::format(
-        "steep triangle: {} dropped, {} pixels drawn right of x = 200; too steep: {} dropped",
-        wide.overflow, wide_drawn, steep.overflow);
-    c.pass = wide.overflow == 0 && wide_drawn > 0 && steep.overflow == 1;
+        "summary, never drawn with wrapped values",
+        config.evaluator.coefficient_bits);
+    c.observed = fmt::format("steep triangle: {} dropped, {} pixels drawn right of x = 200; ",
+                             wide.overflow, wide_drawn);
+    c.observed += steep.overflow > 0
+                      ? fmt::format("too steep ({} pixel wide): {} dropped, {} pixels drawn", width,
+                                    steep.overflow, steep_drawn)
+                      : fmt::format(
+                            "no triangle is too steep on this machine: even one {} pixel wide "
+                            "(the thinnest that {} sub-pixel bits snap) has a gradient that fits",
+                            width, config.gp.subpixel_bits);
+    c.pass = wide.overflow == 0 && wide_drawn > 0 && steep.overflow <= 1 &&
+             (steep.overflow == 0 || steep_drawn == 0);
     cases.push_back(c);
   }
 

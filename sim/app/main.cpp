@@ -1,9 +1,79 @@
 // pp5sim: the command-line program. Each subcommand is in its own file (see commands.hpp).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <iostream>
+#include <new>
+#include <string>
+#include <vector>
 
 #include "sim/app/commands.hpp"
 #include "sim/output/output_set.hpp"
+
+namespace {
+
+// Levenshtein distance, for "did you mean" on a mistyped command or option.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// The closest of `names` to `word`, if it is close enough to be a typo.
+std::string closest(const std::string& word, const std::vector<std::string>& names) {
+  std::string best;
+  std::size_t best_distance = 3;  // at most two edits
+  for (const std::string& n : names) {
+    const std::size_t d = edit_distance(word, n);
+    if (d < best_distance && d < std::max<std::size_t>(2, n.size() / 2)) {
+      best = n;
+      best_distance = d;
+    }
+  }
+  return best;
+}
+
+// A parse error as a sentence with a suggestion, instead of CLI11's own exit codes (105-114).
+int report_parse_error(const CLI::App& app, const CLI::ParseError& e, int argc, char** argv) {
+  std::string hint;
+  std::vector<std::string> commands;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+    commands.push_back(sub->get_name());
+  // The subcommand that was given, if any: its options are the ones to suggest.
+  const CLI::App* active = &app;
+  for (const CLI::App* sub : app.get_subcommands()) active = sub;
+  std::vector<std::string> options;
+  for (const CLI::Option* o : active->get_options()) {
+    for (const std::string& name : o->get_lnames()) options.push_back("--" + name);
+  }
+  for (int k = 1; k < argc && hint.empty(); ++k) {
+    const std::string word = argv[k];
+    if (word.rfind("--", 0) == 0) {
+      const std::string name = word.substr(0, word.find('='));
+      if (std::find(options.begin(), options.end(), name) != options.end()) continue;
+      const std::string near = closest(name, options);
+      if (!near.empty()) hint = "unknown option '" + name + "'; did you mean '" + near + "'?";
+    } else if (k == 1 && word[0] != '-' &&
+               std::find(commands.begin(), commands.end(), word) == commands.end()) {
+      const std::string near = closest(word, commands);
+      hint =
+          "unknown command '" + word + "'" + (near.empty() ? "" : "; did you mean '" + near + "'?");
+    }
+  }
+  std::cerr << "pp5sim: error: " << (hint.empty() ? std::string(e.what()) : hint) << "\n"
+            << "run 'pp5sim --help' (or 'pp5sim COMMAND --help') for the usage\n";
+  return 2;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace pp5;
@@ -11,6 +81,7 @@ int main(int argc, char** argv) {
       "pp5sim: a cycle-approximate simulator of the Pixel-Planes 5 graphics machine.\n"
       "With no subcommand it renders the built-in torus with the Phong firmware."};
   app.require_subcommand(0, 1);
+  app.set_version_flag("--version", std::string("pp5sim ") + PP5_VERSION);
 
   const Command render = add_render_command(app);
   const std::vector<Command> commands = {
@@ -25,7 +96,17 @@ int main(int argc, char** argv) {
       add_extremes_command(app),
   };
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    return report_parse_error(app, e, argc, argv);
+  }
   // An interrupted run removes the temporary files of its outputs (sim/output).
   install_signal_cleanup();
 
@@ -34,6 +115,11 @@ int main(int argc, char** argv) {
       if (*command.app) return command.run();
     }
     return render.run();  // no subcommand: render with the defaults
+  } catch (const std::bad_alloc&) {
+    std::cerr << "pp5sim: error: out of memory: the run needs more memory than the host could "
+                 "give; make the scene, the screen, renderer.backing_store_bits or the sweep "
+                 "smaller\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "pp5sim: error: " << e.what() << "\n";
     return 1;
