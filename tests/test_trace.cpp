@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <set>
 
 #include "firmware/assembler/assembler.hpp"
@@ -258,8 +259,24 @@ TEST_CASE("truncated and corrupted trace files are rejected with a message", "[t
   version[8] = 9;
   CHECK_THROWS_WITH(trace::parse_trace(version, "v.pp5t"), Catch::Contains("version 9"));
 
-  // Records with a valid checksum but impossible contents.
+  // A header with a valid checksum but an impossible field map (issue 18).
   const trace::Trace t = trace::parse_trace(good, "good.pp5t");
+  {
+    nlohmann::json h = t.header;
+    h["firmware"]["fields"][0]["lo"] = 5000;
+    CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
+                      Catch::Contains("outside the") && Catch::Contains("bits of pixel memory"));
+    h = t.header;
+    h["firmware"]["fields"][0]["width"] = 65;
+    CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
+                      Catch::Contains("a field is 1..64 bits wide"));
+    h = t.header;
+    h["firmware"]["memory_bits"] = 1 << 30;
+    CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
+                      Catch::Contains("expected 1..1024"));
+  }
+
+  // Records with a valid checksum but impossible contents.
   std::vector<std::uint8_t> recs;
   trace::append(recs, trace::ValueRecord{0, 1, 1, 5});
   CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(t.header, recs, 1), "v.pp5t"),
@@ -399,6 +416,28 @@ TEST_CASE("snapshots: a region's memory at a chosen point, files and images", "[
   bytes[bytes.size() / 2] ^= 4;
   write_file_atomically(path, bytes);
   CHECK_THROWS_WITH(trace::read_snapshot(path), Catch::Contains("checksum mismatch"));
+
+  // Forged headers, checksum recomputed (issue 18): the reader checks their meaning.
+  auto forged = [&](const std::function<void(nlohmann::json&)>& edit) {
+    trace::Snapshot f = s;
+    edit(f.header);
+    trace::write_snapshot(path, f);
+    return path;
+  };
+  CHECK_THROWS_WITH(trace::read_snapshot(
+                        forged([](nlohmann::json& h) { h["firmware"]["fields"][0]["lo"] = 200; })),
+                    Catch::Contains("outside the") && Catch::Contains("bits of pixel memory"));
+  CHECK_THROWS_WITH(trace::read_snapshot(forged(
+                        [](nlohmann::json& h) { h["firmware"]["fields"][0]["width"] = 1000; })),
+                    Catch::Contains("outside the"));
+  CHECK_THROWS_WITH(trace::read_snapshot(forged(
+                        [](nlohmann::json& h) { h["firmware"]["fields"][0]["lo"] = "low"; })),
+                    Catch::Contains("bad field map"));
+  CHECK_THROWS_WITH(trace::read_snapshot(forged([](nlohmann::json& h) { h["width"] = 1 << 30; })),
+                    Catch::Contains("outside what a Renderer can be"));
+  CHECK_THROWS_WITH(trace::read_snapshot(forged([](nlohmann::json& h) { h["memory_bits"] = -3; })),
+                    Catch::Contains("outside what a Renderer can be"));
+  CHECK_NOTHROW(trace::read_snapshot(forged([](nlohmann::json&) {})));
 
   trace::SnapshotTaker never(c, p, static_cast<int>(e.ins.region), 999999999);
   simulate_frame(c, torus(), p, 2, [&](int k) { return never.observer(k); });

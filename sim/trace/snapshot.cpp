@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "common/read_file.hpp"
 #include "sim/simulation.hpp"
 #include "sim/trace/recorder.hpp"
 #include "sim/trace/trace_file.hpp"
@@ -131,9 +132,13 @@ void write_snapshot(const std::string& path, const Snapshot& s) {
 }
 
 Snapshot read_snapshot(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw TraceError(fmt::format("{}: cannot open", path));
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string bytes;
+  try {
+    // The largest region (1024 x 1024 pixels of 1024 bits) is 128 MiB of planes.
+    bytes = read_regular_file(path, (128ull << 20) + (1ull << 20), "a pp5sim snapshot");
+  } catch (const FileError& e) {
+    throw TraceError(e.what());
+  }
   const auto* d = reinterpret_cast<const std::uint8_t*>(bytes.data());
   const std::size_t n = bytes.size();
   if (n < 8 || std::memcmp(d, kSnapMagic, 8) != 0) {
@@ -169,10 +174,38 @@ Snapshot read_snapshot(const std::string& path) {
   } catch (const nlohmann::json::exception& e) {
     throw TraceError(fmt::format("{}: bad header at byte 16: {}", path, e.what()));
   }
-  if (s.width <= 0 || s.height <= 0 || s.width % 64 || s.memory_bits <= 0 ||
-      payload != static_cast<std::uint64_t>(s.memory_bits) * s.words() * 8) {
+  // The header's meaning, not only its bytes: a forged header (with its checksum
+  // recomputed) must not make a reader index past the planes.
+  if (s.width < 64 || s.width > 1024 || s.width % 64 || s.height < 1 || s.height > 1024 ||
+      s.memory_bits < 1 || s.memory_bits > 1024) {
+    throw TraceError(fmt::format(
+        "{}: header at byte 16: a {} x {} region of {} bits is outside what a Renderer can be "
+        "(width 64..1024 in steps of 64, height 1..1024, 1..1024 bits)",
+        path, s.width, s.height, s.memory_bits));
+  }
+  if (payload != static_cast<std::uint64_t>(s.memory_bits) * s.words() * 8) {
     throw TraceError(
         fmt::format("{}: header's geometry does not match the {} bytes of planes", path, payload));
+  }
+  try {
+    const nlohmann::json& fields = s.header.at("firmware").at("fields");
+    if (!fields.is_array())
+      throw TraceError(fmt::format("{}: 'firmware.fields' is not a list", path));
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      const nlohmann::json& f = fields[k];
+      const std::string name = f.at("name").get<std::string>();
+      const int lo = f.at("lo").get<int>();
+      const int width = f.at("width").get<int>();
+      f.at("signed").get<bool>();
+      if (width < 1 || width > 64 || lo < -1 || (lo >= 0 && lo + width > s.memory_bits)) {
+        throw TraceError(fmt::format(
+            "{}: header's field {} ('{}') has bits [{}, {}), outside the {} bits of pixel memory "
+            "(and a field is 1..64 bits wide; lo -1 marks a spilled field)",
+            path, k, name, lo, lo + width, s.memory_bits));
+      }
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw TraceError(fmt::format("{}: bad field map in the header: {}", path, e.what()));
   }
   s.planes.resize(payload / 8);
   for (std::size_t i = 0; i < s.planes.size(); ++i) s.planes[i] = get(d + at + 8 * i, 8);

@@ -7,6 +7,7 @@
 #include <iterator>
 #include <set>
 
+#include "common/read_file.hpp"
 #include "firmware/isa/interface.hpp"
 #include "sim/simulation.hpp"
 
@@ -107,9 +108,14 @@ std::int64_t Trace::as_number(int field, std::uint64_t raw) const {
 }
 
 Trace read_trace(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw TraceError(fmt::format("{}: cannot open", path));
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string bytes;
+  try {
+    // Read whole: a trace larger than 4 GiB is to be windowed when recorded (--after,
+    // --before, fewer pixels), not loaded.
+    bytes = read_regular_file(path, 4ull << 30, "a pp5sim trace");
+  } catch (const FileError& e) {
+    throw TraceError(e.what());
+  }
   return parse_trace(bytes, path);
 }
 
@@ -162,10 +168,25 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
   t.path = name;
   try {
     t.header = nlohmann::json::parse(bytes.begin() + kPreambleBytes, bytes.begin() + header_end);
+    // The field map's meaning, not only its syntax: a forged header (checksum recomputed)
+    // must not make a reader shift or index out of range.
+    const int memory_bits = t.header.at("firmware").at("memory_bits").get<int>();
+    if (memory_bits < 1 || memory_bits > 1024) {
+      throw TraceError(fmt::format("{}: header: firmware.memory_bits = {}, expected 1..1024", name,
+                                   memory_bits));
+    }
     for (const auto& f : t.header.at("firmware").at("fields")) {
       t.fields.push_back({f.at("name").get<std::string>(), f.at("lo").get<int>(),
                           f.at("width").get<int>(), f.at("signed").get<bool>(),
                           f.at("traced").get<bool>()});
+      const FieldInfo& fi = t.fields.back();
+      if (fi.width < 1 || fi.width > 64 || fi.lo < -1 ||
+          (fi.lo >= 0 && fi.lo + fi.width > memory_bits)) {
+        throw TraceError(fmt::format(
+            "{}: header: field '{}' has bits [{}, {}), outside the {} bits of pixel memory (a "
+            "field is 1..64 bits wide; lo -1 marks a spilled field)",
+            name, fi.name, fi.lo, fi.lo + fi.width, memory_bits));
+      }
     }
     for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
       std::vector<InstructionText> code;
