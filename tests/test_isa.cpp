@@ -600,6 +600,12 @@ TEST_CASE("every registered backend runs the instruction table as the bit-sliced
         CHECK(backend->read(p, f) == ref.array.read(p, f));
         CHECK(backend->read_signed(p, f) == ref.array.read_signed(p, f));
       }
+      // The interface's generic whole-memory read (for backends that hold no bit-planes)
+      // agrees with the backend's own.
+      std::vector<std::uint64_t> own, generic;
+      backend->read_memory_planes(own);
+      backend->PixelBackend::read_memory_planes(generic);
+      CHECK(own == generic);
       std::vector<std::uint64_t> values(static_cast<std::size_t>(ref.array.pixels()));
       backend->read_field(Field{10, 33, false}, values.data());
       for (int p = 0; p < ref.array.pixels(); ++p) {
