@@ -5,6 +5,8 @@
 // the state that direct bit-sliced PixelArray / ExpressionEvaluator operations give.
 #include <catch2/catch.hpp>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <random>
 #include <set>
 #include <stdexcept>
@@ -689,4 +691,26 @@ TEST_CASE("an unknown pixel backend is a clear error", "[isa][backend]") {
   CHECK_THROWS_WITH(RendererBoard(board), Catch::Contains("unknown pixel backend 'nonesuch'"));
   board.backend = "bit";
   CHECK(std::string(RendererBoard(board).array().name()) == "bit");
+}
+
+TEST_CASE("firmware/ includes nothing from models/ or sim/", "[isa][backend]") {
+  // The instruction set is the interface the models implement; an include the other way
+  // would make firmware depend on one model again.
+  int files = 0;
+  for (const auto& entry :
+       std::filesystem::recursive_directory_iterator(PP5_SOURCE_DIR "/firmware")) {
+    const std::string ext = entry.path().extension().string();
+    if (ext != ".hpp" && ext != ".cpp") continue;
+    ++files;
+    std::ifstream in(entry.path());
+    std::string line;
+    int number = 0;
+    while (std::getline(in, line)) {
+      ++number;
+      INFO(entry.path().string() << ":" << number << ": " << line);
+      CHECK(line.rfind("#include \"models/", 0) == std::string::npos);
+      CHECK(line.rfind("#include \"sim/", 0) == std::string::npos);
+    }
+  }
+  CHECK(files >= 6);
 }
