@@ -64,9 +64,8 @@ const Workload& workload() {
 
 // The loop of RendererBoard::run before the observer hook, kept here as the yardstick.
 ArrayCycles baseline_run(RendererBoard& board, const ProcedureCode& procedure,
-                         const PacketValues& values, const TimingParams& timing,
-                         std::vector<Word>& scratch) {
-  ExecutionContext ctx{board.array(), board.evaluator(), values, timing.fraction_bits, scratch};
+                         const PacketValues& values, const TimingParams& timing) {
+  ExecutionContext ctx{board.array(), values};
   ArrayCycles cycles{};
   for (const Instruction& ins : procedure.code) {
     const InstructionInfo& info = instruction_info(ins.op);
@@ -76,14 +75,14 @@ ArrayCycles baseline_run(RendererBoard& board, const ProcedureCode& procedure,
   return cycles;
 }
 
-void region_baseline(RendererBoard& board, std::vector<Word>& scratch) {
+void region_baseline(RendererBoard& board) {
   const Workload& w = workload();
   const TimingParams t = timing_params(w.config);
-  ArrayCycles c = baseline_run(board, w.program.procedure(Procedure::clear), w.frame, t, scratch);
+  ArrayCycles c = baseline_run(board, w.program.procedure(Procedure::clear), w.frame, t);
   for (const auto& v : w.triangles) {
-    c += baseline_run(board, w.program.procedure(Procedure::triangle), v, t, scratch);
+    c += baseline_run(board, w.program.procedure(Procedure::triangle), v, t);
   }
-  c += baseline_run(board, w.program.procedure(Procedure::shade), w.frame, t, scratch);
+  c += baseline_run(board, w.program.procedure(Procedure::shade), w.frame, t);
   benchmark::DoNotOptimize(c);
 }
 
@@ -103,9 +102,8 @@ void region_run(RendererBoard& board) {
 
 void BM_RegionBaseline(benchmark::State& state) {
   RendererBoard board(board_params(workload().config));
-  std::vector<Word> scratch(static_cast<std::size_t>(Bits::kMaxBits) * board.array().words());
   board.begin_region(0, 0);
-  for (auto _ : state) region_baseline(board, scratch);
+  for (auto _ : state) region_baseline(board);
 }
 BENCHMARK(BM_RegionBaseline)->Unit(benchmark::kMicrosecond);
 
@@ -135,14 +133,13 @@ BENCHMARK(BM_RegionTracingOnePixel)->Unit(benchmark::kMicrosecond);
 
 void BM_TracingOffVsBaseline(benchmark::State& state) {
   RendererBoard a(board_params(workload().config)), b(board_params(workload().config));
-  std::vector<Word> scratch(static_cast<std::size_t>(Bits::kMaxBits) * a.array().words());
   a.begin_region(0, 0);
   b.begin_region(0, 0);
   using clock = std::chrono::steady_clock;
   double base = 0, off = 0;
   for (auto _ : state) {
     const auto t0 = clock::now();
-    region_baseline(a, scratch);
+    region_baseline(a);
     const auto t1 = clock::now();
     region_run(b);
     const auto t2 = clock::now();

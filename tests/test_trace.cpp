@@ -78,7 +78,7 @@ TEST_CASE("replaying a trace reconstructs the selected pixels' memory exactly", 
   const Program p = load_program("phong", c);
   FrameResult frame;
   const trace::Trace t = record(c, p, patch(), "replay.pp5t", 2, &frame);
-  // The region's whole pixel memory at its end, copied from the PixelArray itself.
+  // The region's whole pixel memory at its end, as the board's pixel backend holds it.
   const int region = (136 / 128) * c.regions_x() + 184 / 128;
   REQUIRE(region == 4);
   trace::SnapshotTaker taker(c, p, region, std::nullopt);

@@ -134,8 +134,8 @@ class Assembler {
       fail("field name '{}' is a frame parameter's name", name);
     }
     std::int64_t width = 0;
-    if (!parse_integer(w[2], width) || width < 1 || width > Bits::kMaxBits) {
-      fail("field width must be an integer from 1 to {} (got '{}')", Bits::kMaxBits, w[2]);
+    if (!parse_integer(w[2], width) || width < 1 || width > kMaxFieldBits) {
+      fail("field width must be an integer from 1 to {} (got '{}')", kMaxFieldBits, w[2]);
     }
     bool is_signed = false;
     if (w.size() == 4) {

@@ -11,17 +11,14 @@ namespace {
 
 int width_of(const Operand& o) { return o.kind == Operand::Kind::field ? o.field.width : 0; }
 
-Bits source_bits(const Operand& o, ExecutionContext& ctx) {
-  if (o.kind == Operand::Kind::field) return ctx.array.bits_of(o.field);
-  return ctx.array.bits_of_constant(constant_value(o, ctx.values));
+// The ALU source an operand stands for: a field, or a literal or frame parameter broadcast.
+Source source_of(const Operand& o, const PacketValues& values) {
+  if (o.kind == Operand::Kind::field) return Source::of(o.field);
+  return Source::of(constant_value(o, values));
 }
 
-// The integer bits [fraction_bits, fraction_bits + width) of an expression, as planes.
-Bits expression_bits(const Operand& expr, int width, bool is_signed, ExecutionContext& ctx) {
-  const WordRange range = ctx.array.active_words();
-  ctx.evaluator.planes(ctx.values.expressions[expr.index], ctx.fraction_bits, width, range,
-                       ctx.scratch.data());
-  return ctx.array.bits_of_planes(ctx.scratch.data(), width, is_signed);
+const QuadraticCoefficients& expression_of(const Operand& o, const PacketValues& values) {
+  return values.expressions[o.index];
 }
 
 ArrayCycles one(const Instruction&, const TimingParams&, const PacketValues&) {
@@ -42,15 +39,15 @@ std::vector<InstructionInfo> make_table() {
   using X = ExecutionContext;
   return {
       {Opcode::eall, "eall", false, "", "eall", "E <- 1 in every pixel", "1", one,
-       [](const I&, X& c) { c.array.enable_all(); }},
+       [](const I&, X& c) { c.pixels.enable_all(); }},
       {Opcode::epush, "epush", false, "", "epush",
        "push E on the pixel's enable stack (start of a conditional)", "1", one,
-       [](const I&, X& c) { c.array.push_enable(); }},
+       [](const I&, X& c) { c.pixels.push_enable(); }},
       {Opcode::epop, "epop", false, "", "epop", "E <- pop (end of a conditional)", "1", one,
-       [](const I&, X& c) { c.array.pop_enable(); }},
+       [](const I&, X& c) { c.pixels.pop_enable(); }},
       {Opcode::eelse, "eelse", false, "", "eelse",
        "E <- top & ~E: the pixels of the enclosing condition that the current one excluded", "1",
-       one, [](const I&, X& c) { c.array.else_enable(); }},
+       one, [](const I&, X& c) { c.pixels.else_enable(); }},
 
       {Opcode::qtest, "qtest", true, "E", "qtest.cond expr",
        "E <- E & (expr cond 0); every result bit streams through the comparator",
@@ -59,10 +56,7 @@ std::vector<InstructionInfo> make_table() {
          return ArrayCycles(t.result_bits + t.evaluator_latency);
        },
        [](const I& i, X& c) {
-         const WordRange range = c.array.active_words();
-         c.evaluator.test_plane(c.values.expressions[i.operands[0].index],
-                                static_cast<Condition>(i.condition), range, c.scratch.data());
-         c.array.and_enable(c.scratch.data());
+         c.pixels.qtest(expression_of(i.operands[0], c.values), i.condition);
        }},
       {Opcode::qload, "qload", false, "FE", "qload dst, expr",
        "dst <- floor(expr) modulo 2^width(dst)",
@@ -71,9 +65,7 @@ std::vector<InstructionInfo> make_table() {
          return ArrayCycles(t.fraction_bits + width_of(i.operands[0]) + t.evaluator_latency);
        },
        [](const I& i, X& c) {
-         const Field& d = i.operands[0].field;
-         const Bits v = expression_bits(i.operands[1], d.width, d.is_signed, c);
-         c.array.assign(d, v);
+         c.pixels.qload(i.operands[0].field, expression_of(i.operands[1], c.values));
        }},
       {Opcode::qcmp, "qcmp", true, "RE", "qcmp.cond field, expr",
        "E <- E & (floor(expr) cond field), expr taken to width(field) with field's signedness",
@@ -82,26 +74,22 @@ std::vector<InstructionInfo> make_table() {
          return ArrayCycles(t.fraction_bits + width_of(i.operands[0]) + t.evaluator_latency + 1);
        },
        [](const I& i, X& c) {
-         const Field& f = i.operands[0].field;
-         const Bits v = expression_bits(i.operands[1], f.width, f.is_signed, c);
-         c.array.compare(v, c.array.bits_of(f), i.condition);
+         c.pixels.qcmp(i.operands[0].field, expression_of(i.operands[1], c.values), i.condition);
        }},
 
       {Opcode::mov, "mov", false, "FV", "mov dst, src", "dst <- src", "width(dst)", dst_width,
        [](const I& i, X& c) {
-         c.array.assign(i.operands[0].field, source_bits(i.operands[1], c));
+         c.pixels.mov(i.operands[0].field, source_of(i.operands[1], c.values));
        }},
       {Opcode::add, "add", false, "FV", "add dst, src", "dst <- dst + src modulo 2^width(dst)",
        "width(dst)", dst_width,
        [](const I& i, X& c) {
-         const Field& d = i.operands[0].field;
-         c.array.add(d, c.array.bits_of(d), source_bits(i.operands[1], c));
+         c.pixels.add(i.operands[0].field, source_of(i.operands[1], c.values));
        }},
       {Opcode::sub, "sub", false, "FV", "sub dst, src", "dst <- dst - src modulo 2^width(dst)",
        "width(dst)", dst_width,
        [](const I& i, X& c) {
-         const Field& d = i.operands[0].field;
-         c.array.sub(d, c.array.bits_of(d), source_bits(i.operands[1], c));
+         c.pixels.sub(i.operands[0].field, source_of(i.operands[1], c.values));
        }},
       {Opcode::cmp, "cmp", true, "RV", "cmp.cond a, b",
        "E <- E & (a cond b), exact for any widths and signedness", "max(width(a), width(b)) + 1",
@@ -109,28 +97,24 @@ std::vector<InstructionInfo> make_table() {
          return ArrayCycles(std::max(width_of(i.operands[0]), width_of(i.operands[1])) + 1);
        },
        [](const I& i, X& c) {
-         c.array.compare(c.array.bits_of(i.operands[0].field), source_bits(i.operands[1], c),
-                         i.condition);
+         c.pixels.compare(i.operands[0].field, source_of(i.operands[1], c.values), i.condition);
        }},
       {Opcode::and_, "and", false, "FV", "and dst, src", "dst <- dst & src", "width(dst)",
        dst_width,
        [](const I& i, X& c) {
-         const Field& d = i.operands[0].field;
-         c.array.logic(d, c.array.bits_of(d), source_bits(i.operands[1], c), Logic::and_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::and_);
        }},
       {Opcode::or_, "or", false, "FV", "or dst, src", "dst <- dst | src", "width(dst)", dst_width,
        [](const I& i, X& c) {
-         const Field& d = i.operands[0].field;
-         c.array.logic(d, c.array.bits_of(d), source_bits(i.operands[1], c), Logic::or_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::or_);
        }},
       {Opcode::xor_, "xor", false, "FV", "xor dst, src", "dst <- dst ^ src", "width(dst)",
        dst_width,
        [](const I& i, X& c) {
-         const Field& d = i.operands[0].field;
-         c.array.logic(d, c.array.bits_of(d), source_bits(i.operands[1], c), Logic::xor_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::xor_);
        }},
       {Opcode::not_, "not", false, "F", "not dst", "dst <- ~dst", "width(dst)", dst_width,
-       [](const I& i, X& c) { c.array.invert(i.operands[0].field); }},
+       [](const I& i, X& c) { c.pixels.invert(i.operands[0].field); }},
       {Opcode::mul, "mul", false, "FRR", "mul dst, a, b",
        "dst <- a * b modulo 2^width(dst), by shift-and-add over the bits of b; dst must not "
        "overlap a or b",
@@ -145,8 +129,7 @@ std::vector<InstructionInfo> make_table() {
          return ArrayCycles(cycles);
        },
        [](const I& i, X& c) {
-         c.array.multiply(i.operands[0].field, c.array.bits_of(i.operands[1].field),
-                          c.array.bits_of(i.operands[2].field));
+         c.pixels.multiply(i.operands[0].field, i.operands[1].field, i.operands[2].field);
        }},
       {Opcode::mac, "mac", false, "FRK", "mac dst, a, k",
        "dst <- dst + a * k modulo 2^width(dst), k a broadcast constant; dst must not overlap a",
@@ -161,8 +144,8 @@ std::vector<InstructionInfo> make_table() {
          return ArrayCycles(cycles);
        },
        [](const I& i, X& c) {
-         c.array.multiply_accumulate(i.operands[0].field, c.array.bits_of(i.operands[1].field),
-                                     constant_value(i.operands[2], c.values));
+         c.pixels.multiply_accumulate(i.operands[0].field, i.operands[1].field,
+                                      constant_value(i.operands[2], c.values));
        }},
 
       {Opcode::bsld, "bsld", false, "FB", "bsld dst, block",
@@ -173,7 +156,7 @@ std::vector<InstructionInfo> make_table() {
          return ArrayCycles(static_cast<std::uint64_t>(blocks) * t.backing_store_cycles_per_block);
        },
        [](const I& i, X& c) {
-         c.array.load_from_backing(i.operands[0].field, static_cast<int>(i.operands[1].literal));
+         c.pixels.load_from_backing(i.operands[0].field, static_cast<int>(i.operands[1].literal));
        }},
       {Opcode::bsst, "bsst", false, "RB", "bsst src, block",
        "backing store from block `block` on <- src (every pixel, ignoring E)",
@@ -183,7 +166,7 @@ std::vector<InstructionInfo> make_table() {
          return ArrayCycles(static_cast<std::uint64_t>(blocks) * t.backing_store_cycles_per_block);
        },
        [](const I& i, X& c) {
-         c.array.store_to_backing(i.operands[0].field, static_cast<int>(i.operands[1].literal));
+         c.pixels.store_to_backing(i.operands[0].field, static_cast<int>(i.operands[1].literal));
        }},
   };
 }

@@ -5,16 +5,19 @@
 // `pp5sim isa` documents it; nothing about an instruction is written anywhere else.
 //
 // Every instruction is bit-serial: it runs over its operands LSB first, one array cycle per
-// bit, on all pixel processors at once; memory writes happen only where Enable = 1.
+// bit, on all pixel processors at once; memory writes happen only where Enable = 1. The
+// cost formulas charge that; the executors carry out the effect through the PixelBackend
+// interface (firmware/isa/backend.hpp), one call per instruction, so any backend runs
+// firmware.
 #include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "common/units.hpp"
+#include "firmware/isa/backend.hpp"
 #include "firmware/isa/interface.hpp"
-#include "models/evaluator/evaluator.hpp"
-#include "models/pixel_array/pixel_array.hpp"
+#include "firmware/isa/types.hpp"
 
 namespace pp5 {
 
@@ -79,12 +82,11 @@ struct FrameValues {
   std::vector<PacketValues> lights;
 };
 
+// What an executor acts on: the board's pixel backend, with the packet's values bound to
+// the procedure's expression and parameter operands.
 struct ExecutionContext {
-  PixelArray& array;
-  ExpressionEvaluator& evaluator;
+  PixelBackend& pixels;
   const PacketValues& values;
-  int fraction_bits;
-  std::vector<Word>& scratch;  // at least 64 planes of the array's words
 };
 
 struct InstructionInfo {

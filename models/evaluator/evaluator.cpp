@@ -259,21 +259,6 @@ void word_sign_zero(const RowSeed& s, int result_bits, Word* lt, Word* eq) {
 
 }  // namespace
 
-QuadraticCoefficients QuadraticCoefficients::linear(std::int64_t a, std::int64_t b,
-                                                    std::int64_t c) {
-  QuadraticCoefficients q;
-  q.D = a;
-  q.E = b;
-  q.F = c;
-  return q;
-}
-
-QuadraticCoefficients QuadraticCoefficients::constant(std::int64_t c) {
-  QuadraticCoefficients q;
-  q.F = c;
-  return q;
-}
-
 ExpressionEvaluator::ExpressionEvaluator(EvaluatorParams params, int region_width,
                                          int region_height)
     : params_(params), width_(region_width), height_(region_height) {

@@ -11,29 +11,14 @@
 // Values are exact modulo 2^result_bits and read as two's complement of that width. Arithmetic is
 // carried out on the int64 coefficients as given: the model does not truncate coefficients that do
 // not fit() in coefficient_bits; callers that care about hardware fidelity must check fits().
+// QuadraticCoefficients, EvaluatorParams and Condition (value <cond> 0, on the wrapped
+// value) are the instruction set's types (firmware/isa/types.hpp).
 #include <cstdint>
 
+#include "firmware/isa/types.hpp"
 #include "models/common/bitplane.hpp"
 
 namespace pp5 {
-
-// value = A x^2 + B x y + C y^2 + D x + E y + F
-struct QuadraticCoefficients {
-  std::int64_t A = 0, B = 0, C = 0, D = 0, E = 0, F = 0;
-
-  bool is_linear() const { return A == 0 && B == 0 && C == 0; }
-  // a x + b y + c, stored in D, E, F.
-  static QuadraticCoefficients linear(std::int64_t a, std::int64_t b, std::int64_t c);
-  static QuadraticCoefficients constant(std::int64_t c);
-};
-
-struct EvaluatorParams {
-  int coefficient_bits = 40;  // signed width of every coefficient the tree accepts (2..62)
-  int result_bits = 40;       // width of the delivered result (2..64); wraps modulo 2^result_bits
-};
-
-// value <cond> 0, on the wrapped (result_bits wide, two's complement) value.
-enum class Condition { lt, le, eq, ne, ge, gt };
 
 class ExpressionEvaluator {
  public:

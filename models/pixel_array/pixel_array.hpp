@@ -1,5 +1,8 @@
 #pragma once
-// The Renderer board's SIMD array of bit-serial pixel processors, stored bit-sliced.
+// The Renderer board's SIMD array of bit-serial pixel processors, stored bit-sliced: the
+// pixel memory of the "bit" backend (models/pixel_array/bit_sliced_backend.hpp). Its
+// geometry and operand types (Field, Compare, Logic) are the instruction set's
+// (firmware/isa/types.hpp).
 //
 // Each pixel processor has `memory_bits` bits of local memory, a 1-bit ALU with a carry
 // register, an Enable register E and a stack of saved Enable values for nested
@@ -19,38 +22,20 @@
 #include <cstdint>
 #include <vector>
 
+#include "firmware/isa/types.hpp"
 #include "models/common/bitplane.hpp"
 
 namespace pp5 {
 
-struct PixelArrayGeometry {
-  int width = 128;                // pixel processors per row; a multiple of 64
-  int height = 128;               // rows
-  int memory_bits = 208;          // local memory per pixel processor
-  int enable_stack_depth = 8;     // saved Enable values for nested conditionals
-  int backing_store_bits = 4096;  // slow memory per pixel processor; 0 = none
-  int block_bits = 32;            // backing-store transfer unit
-};
-
-// Bits [lo, lo + width) of every pixel's local memory.
-struct Field {
-  int lo = 0;
-  int width = 0;
-  bool is_signed = false;
-};
-
 // A source operand seen as a stream of bit-planes, LSB first; bits at or above `width`
 // read `extension` (the zero plane, or the operand's own sign plane).
 struct Bits {
-  static constexpr int kMaxBits = 64;
+  static constexpr int kMaxBits = kMaxFieldBits;
   std::array<const Word*, kMaxBits> plane{};
   int width = 0;
   const Word* extension = nullptr;
   const Word* bit(int i) const { return i < width ? plane[i] : extension; }
 };
-
-enum class Compare { lt, le, eq, ne, ge, gt };
-enum class Logic { and_, or_, xor_ };
 
 class PixelArray {
  public:

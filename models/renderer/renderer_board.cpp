@@ -1,21 +1,24 @@
 #include "models/renderer/renderer_board.hpp"
 
+#include "models/pixel_array/backends.hpp"
+
 namespace pp5 {
 
 RendererBoard::RendererBoard(const RendererBoardParams& params)
     : params_(params),
-      array_(params.array),
-      evaluator_(params.evaluator, params.array.width, params.array.height),
-      scratch_(static_cast<std::size_t>(Bits::kMaxBits) * array_.words(), 0) {}
+      array_(make_pixel_backend(params.backend, PixelBackendParams{params.array, params.evaluator,
+                                                                   params.timing.fraction_bits})) {}
 
 void RendererBoard::begin_region(int x0, int y0) {
   materialise();
-  evaluator_.set_origin(x0, y0);
+  array_->set_origin(x0, y0);
 }
 
+// Logically const: the board's state is the same before and after, only where it is held
+// changes (the backend object itself is not const-qualified through the unique_ptr).
 void RendererBoard::materialise() const {
   if (!lazy_) return;
-  array_ = *empty_after_shade_;
+  array_->copy_state_from(*empty_after_shade_);
   lazy_ = false;
 }
 
@@ -65,13 +68,13 @@ const std::vector<std::uint8_t>& RendererBoard::run_empty_region(int x0, int y0,
     return *empty_rgb_;
   }
   begin_region(x0, y0);
-  const bool was_kept_state = empty_after_shade_ && array_.same_state(*empty_after_shade_);
+  const bool was_kept_state = empty_after_shade_ && array_->same_state(*empty_after_shade_);
   run(program.procedure(Procedure::clear), frame_values.frame);
   if (!origin_free) {
     run_rest_of_empty(program, frame_values, rgb);
     return rgb;
   }
-  if (empty_after_clear_ && array_.same_state(*empty_after_clear_)) {
+  if (empty_after_clear_ && array_->same_state(*empty_after_clear_)) {
     if (was_kept_state) clear_restores_ = true;
     lazy_ = true;
     ++empty_reused_;
@@ -80,9 +83,9 @@ const std::vector<std::uint8_t>& RendererBoard::run_empty_region(int x0, int y0,
   // Nothing kept, or a different state (fields the clear procedure leaves alone hold what an
   // earlier region put there): execute, and keep this region's states instead, since the
   // next empty region on this board will most likely start from them.
-  empty_after_clear_ = std::make_shared<const PixelArray>(array_);
+  empty_after_clear_ = array_->clone();
   run_rest_of_empty(program, frame_values, rgb);
-  empty_after_shade_ = std::make_shared<const PixelArray>(array_);
+  empty_after_shade_ = array_->clone();
   empty_rgb_ = std::make_shared<const std::vector<std::uint8_t>>(rgb);
   clear_restores_.reset();
   return rgb;
@@ -97,7 +100,7 @@ void RendererBoard::share_empty_region(const RendererBoard& other) {
 
 ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValues& values) {
   materialise();
-  ExecutionContext ctx{array_, evaluator_, values, params_.timing.fraction_bits, scratch_};
+  ExecutionContext ctx{*array_, values};
   if (observer_) observer_->begin_packet(packet_, procedure, *this);
   ArrayCycles cycles{};
   int index = 0;
@@ -118,12 +121,14 @@ ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValue
 
 void RendererBoard::read_outputs(const Program& program, std::vector<std::uint8_t>& rgb) const {
   materialise();
-  const int n = array_.pixels();
+  const int n = array_->pixels();
   rgb.resize(static_cast<std::size_t>(n) * 3);
+  field_values_.resize(static_cast<std::size_t>(n));
   for (int c = 0; c < 3; ++c) {
-    const Field& f = program.outputs[c];
+    array_->read_field(program.outputs[c], field_values_.data());
     for (int p = 0; p < n; ++p) {
-      rgb[static_cast<std::size_t>(p) * 3 + c] = static_cast<std::uint8_t>(array_.read(p, f));
+      rgb[static_cast<std::size_t>(p) * 3 + c] =
+          static_cast<std::uint8_t>(field_values_[static_cast<std::size_t>(p)]);
     }
   }
 }

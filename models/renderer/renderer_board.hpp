@@ -1,20 +1,22 @@
 #pragma once
-// The functional half of a Renderer board, as plain C++: the pixel array, the expression
-// evaluator and the controller that feeds a procedure's micro-instructions to them.
+// The functional half of a Renderer board, as plain C++: a pixel backend (the pixel array
+// and its expression evaluator, firmware/isa/backend.hpp) and the controller that feeds a
+// procedure's micro-instructions to it.
 //
 // Contract: every pixel value comes from executing instructions of the firmware's
-// instruction table on the PixelArray; run() returns the cycles those instructions cost,
-// the same figure the Renderer module charges in simulated time.
+// instruction table on the board's pixel backend, built by name from the registry
+// (models/pixel_array/backends.hpp); run() returns the cycles those instructions cost, the
+// same figure the Renderer module charges in simulated time, whatever the backend.
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
 #include "firmware/isa/interface.hpp"
 #include "firmware/isa/isa.hpp"
-#include "models/evaluator/evaluator.hpp"
-#include "models/pixel_array/pixel_array.hpp"
+#include "firmware/isa/types.hpp"
 
 namespace pp5 {
 
@@ -33,8 +35,9 @@ struct PacketContext {
 // An opt-in observer of a board's execution (see sim/trace/). Contract: the board calls
 // begin_packet before each packet's first instruction, after_instruction after each
 // instruction has executed (with its index in the procedure and its cost), and end_region
-// after a region's shade procedure. With no observer the board's only extra work is one
-// predictable branch per instruction.
+// after a region's shade procedure. Observers see the board's pixels through the
+// PixelBackend interface (board.array()), whatever the backend. With no observer the
+// board's only extra work is one predictable branch per instruction.
 class BoardObserver {
  public:
   virtual ~BoardObserver() = default;
@@ -49,10 +52,12 @@ struct RendererBoardParams {
   PixelArrayGeometry array;
   EvaluatorParams evaluator;
   TimingParams timing;
+  std::string backend = "bit";  // a name in pixel_backends()
 };
 
 class RendererBoard {
  public:
+  // Throws std::invalid_argument for an unknown backend name.
   explicit RendererBoard(const RendererBoardParams& params);
 
   // Points the evaluator at a region; pixel memory keeps whatever it held (as the hardware
@@ -88,15 +93,15 @@ class RendererBoard {
   // all whose state after clear matches (checked, as for the board's own).
   void share_empty_region(const RendererBoard& other);
 
-  PixelArray& array() {
+  // The board's pixel array, as the backend that models it.
+  PixelBackend& array() {
     materialise();
-    return array_;
+    return *array_;
   }
-  const PixelArray& array() const {
+  const PixelBackend& array() const {
     materialise();
-    return array_;
+    return *array_;
   }
-  ExpressionEvaluator& evaluator() { return evaluator_; }
   std::uint64_t instructions_executed() const { return instructions_; }
   ArrayCycles cycles_executed() const { return cycles_; }
 
@@ -116,15 +121,14 @@ class RendererBoard {
                          std::vector<std::uint8_t>& rgb);
 
   RendererBoardParams params_;
-  mutable PixelArray array_;
+  std::unique_ptr<PixelBackend> array_;
   mutable bool lazy_ = false;  // array_'s true state is *empty_after_shade_
-  std::shared_ptr<const PixelArray> empty_after_clear_;
-  std::shared_ptr<const PixelArray> empty_after_shade_;
+  std::shared_ptr<const PixelBackend> empty_after_clear_;
+  std::shared_ptr<const PixelBackend> empty_after_shade_;
   std::shared_ptr<const std::vector<std::uint8_t>> empty_rgb_;
   std::optional<bool> clear_restores_;  // clear(after shade) == after clear
   std::uint64_t empty_reused_ = 0;
-  ExpressionEvaluator evaluator_;
-  std::vector<Word> scratch_;
+  mutable std::vector<std::uint64_t> field_values_;  // read_outputs' buffer
   BoardObserver* observer_ = nullptr;
   PacketContext packet_;
 

@@ -164,7 +164,7 @@ class BoardRecorder : public BoardObserver {
       synced_ = false;
       return;
     }
-    const PixelArray& array = board.array();
+    const PixelBackend& array = board.array();
     InstructionRecord rec;
     rec.procedure = static_cast<std::uint8_t>(packet_.procedure);
     rec.flags = synced_ ? 0 : kFullState;

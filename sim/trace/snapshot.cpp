@@ -35,7 +35,7 @@ std::uint64_t Snapshot::read(int pixel, int lo, int w) const {
   std::uint64_t v = 0;
   const int word = pixel / 64, bit = pixel % 64;
   for (int b = 0; b < w; ++b) {
-    const Word plane_word = planes[static_cast<std::size_t>(lo + b) * words() + word];
+    const std::uint64_t plane_word = planes[static_cast<std::size_t>(lo + b) * words() + word];
     v |= ((plane_word >> bit) & 1) << b;
   }
   return v;
@@ -61,12 +61,12 @@ class SnapshotTaker::Board : public BoardObserver {
 
  private:
   void take(const RendererBoard& b) {
-    const PixelArray& a = b.array();
+    const PixelBackend& a = b.array();
     Snapshot& s = t_.snap_;
     s.width = a.width();
     s.height = a.height();
     s.memory_bits = a.geometry().memory_bits;
-    s.planes.assign(a.plane(0), a.plane(0) + static_cast<std::size_t>(s.memory_bits) * a.words());
+    a.read_memory_planes(s.planes);
     t_.taken_ = true;
   }
   SnapshotTaker& t_;
@@ -126,7 +126,7 @@ void write_snapshot(const std::string& path, const Snapshot& s) {
   put32(out, static_cast<std::uint32_t>(h.size()));
   out += h;
   put64(out, static_cast<std::uint64_t>(s.planes.size()) * 8);
-  for (Word w : s.planes) put64(out, w);
+  for (std::uint64_t w : s.planes) put64(out, w);
   put64(out, fnv1a(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
   write_file_atomically(path, out);
 }

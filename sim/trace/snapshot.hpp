@@ -20,7 +20,7 @@ struct Snapshot {
   nlohmann::json header;  // config, firmware field map, region, point
   int region = 0;
   int width = 0, height = 0, memory_bits = 0;
-  std::vector<Word> planes;  // memory_bits planes of width * height / 64 words
+  std::vector<std::uint64_t> planes;  // memory_bits planes of width * height / 64 words
 
   int words() const { return width * height / 64; }
   std::uint64_t read(int pixel, int lo, int width) const;  // raw bits of one field

@@ -1,0 +1,26 @@
+#include "firmware/isa/backend.hpp"
+
+namespace pp5 {
+
+std::int64_t PixelBackend::read_signed(int pixel, const Field& field) const {
+  const std::uint64_t v = read(pixel, field);
+  if (!field.is_signed || field.width >= 64) return static_cast<std::int64_t>(v);
+  const std::uint64_t sign = std::uint64_t{1} << (field.width - 1);
+  return static_cast<std::int64_t>((v ^ sign) - sign);
+}
+
+// Generic: one 1-bit field at a time. A backend that holds bit-planes copies them instead.
+void PixelBackend::read_memory_planes(std::vector<std::uint64_t>& planes) const {
+  const int n = pixels();
+  const int words = (n + 63) / 64;
+  const int bits = geometry().memory_bits;
+  planes.assign(static_cast<std::size_t>(bits) * words, 0);
+  std::vector<std::uint64_t> values(static_cast<std::size_t>(n));
+  for (int b = 0; b < bits; ++b) {
+    read_field(Field{b, 1, false}, values.data());
+    std::uint64_t* plane = &planes[static_cast<std::size_t>(b) * words];
+    for (int p = 0; p < n; ++p) plane[p / 64] |= (values[p] & 1) << (p % 64);
+  }
+}
+
+}  // namespace pp5

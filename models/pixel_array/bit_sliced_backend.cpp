@@ -1,0 +1,94 @@
+#include "models/pixel_array/bit_sliced_backend.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace pp5 {
+
+BitSlicedBackend::BitSlicedBackend(const PixelBackendParams& params)
+    : array_(params.array),
+      evaluator_(params.evaluator, params.array.width, params.array.height),
+      fraction_bits_(params.fraction_bits),
+      scratch_(static_cast<std::size_t>(Bits::kMaxBits) * array_.words(), 0) {}
+
+Bits BitSlicedBackend::source_bits(const Source& src) const {
+  return src.is_field ? array_.bits_of(src.field) : array_.bits_of_constant(src.constant);
+}
+
+Bits BitSlicedBackend::expression_bits(const QuadraticCoefficients& expr, const Field& as) {
+  evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data());
+  return array_.bits_of_planes(scratch_.data(), as.width, as.is_signed);
+}
+
+void BitSlicedBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
+  evaluator_.test_plane(expr, cond, array_.active_words(), scratch_.data());
+  array_.and_enable(scratch_.data());
+}
+
+void BitSlicedBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
+  const Bits v = expression_bits(expr, dst);
+  array_.assign(dst, v);
+}
+
+void BitSlicedBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) {
+  const Bits v = expression_bits(expr, field);
+  array_.compare(v, array_.bits_of(field), cond);
+}
+
+void BitSlicedBackend::mov(const Field& dst, const Source& src) {
+  array_.assign(dst, source_bits(src));
+}
+
+void BitSlicedBackend::add(const Field& dst, const Source& src) {
+  array_.add(dst, array_.bits_of(dst), source_bits(src));
+}
+
+void BitSlicedBackend::sub(const Field& dst, const Source& src) {
+  array_.sub(dst, array_.bits_of(dst), source_bits(src));
+}
+
+void BitSlicedBackend::logic(const Field& dst, const Source& src, Logic op) {
+  array_.logic(dst, array_.bits_of(dst), source_bits(src), op);
+}
+
+void BitSlicedBackend::compare(const Field& a, const Source& b, Compare cond) {
+  array_.compare(array_.bits_of(a), source_bits(b), cond);
+}
+
+void BitSlicedBackend::multiply(const Field& dst, const Field& a, const Field& b) {
+  array_.multiply(dst, array_.bits_of(a), array_.bits_of(b));
+}
+
+void BitSlicedBackend::multiply_accumulate(const Field& dst, const Field& a, std::int64_t k) {
+  array_.multiply_accumulate(dst, array_.bits_of(a), k);
+}
+
+void BitSlicedBackend::read_field(const Field& field, std::uint64_t* out) const {
+  const int n = array_.pixels();
+  for (int p = 0; p < n; ++p) out[p] = array_.read(p, field);
+}
+
+void BitSlicedBackend::read_memory_planes(std::vector<std::uint64_t>& planes) const {
+  const std::size_t n = static_cast<std::size_t>(geometry().memory_bits) * array_.words();
+  planes.assign(array_.plane(0), array_.plane(0) + n);
+}
+
+std::unique_ptr<PixelBackend> BitSlicedBackend::clone() const {
+  return std::make_unique<BitSlicedBackend>(*this);
+}
+
+bool BitSlicedBackend::same_state(const PixelBackend& other) const {
+  const auto* o = dynamic_cast<const BitSlicedBackend*>(&other);
+  return o != nullptr && array_.same_state(o->array_);
+}
+
+void BitSlicedBackend::copy_state_from(const PixelBackend& other) {
+  const auto* o = dynamic_cast<const BitSlicedBackend*>(&other);
+  if (o == nullptr || o->geometry() != geometry()) {
+    throw std::invalid_argument(std::string("bit backend: cannot take the state of a '") +
+                                other.name() + "' backend of another kind or geometry");
+  }
+  array_ = o->array_;
+}
+
+}  // namespace pp5
