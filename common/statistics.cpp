@@ -7,8 +7,9 @@ namespace pp5 {
 
 namespace {
 
+// An array index, written without leading zeros ("gp.01" would be a second name for gp.1).
 bool is_index(const std::string& component) {
-  if (component.empty()) return false;
+  if (component.empty() || (component.size() > 1 && component[0] == '0')) return false;
   for (char c : component) {
     if (c < '0' || c > '9') return false;
   }
@@ -111,13 +112,16 @@ void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
     if (index_.count(parent)) {
       throw std::invalid_argument("statistic '" + name + "': '" + parent + "' is a value");
     }
-    if (is_index(parts[k + 1])) {
-      const auto it = parents_.find(parent);
-      const std::size_t have = it == parents_.end() ? 0 : it->second;
-      if (std::stoull(parts[k + 1]) > have) {
-        throw std::invalid_argument("statistic '" + name + "': indices of '" + parent +
-                                    "' must be registered from 0 without gaps");
-      }
+    const bool index = is_index(parts[k + 1]);
+    const auto it = parents_.find(parent);
+    if (it != parents_.end() && it->second.array != index) {
+      throw std::invalid_argument("statistic '" + name + "': '" + parent + "' is " +
+                                  (it->second.array ? "an array" : "a group of names"));
+    }
+    const std::size_t have = it == parents_.end() ? 0 : it->second.elements;
+    if (index && std::stoull(parts[k + 1]) > have) {
+      throw std::invalid_argument("statistic '" + name + "': indices of '" + parent +
+                                  "' must be registered from 0 without gaps");
     }
   }
   const std::string pattern = stat_pattern(name);
@@ -134,9 +138,10 @@ void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
   parent.clear();
   for (std::size_t k = 0; k + 1 < parts.size(); ++k) {
     parent += (k ? "." : "") + parts[k];
-    std::size_t& count = parents_[parent];
-    if (is_index(parts[k + 1])) {
-      count = std::max<std::size_t>(count, std::stoull(parts[k + 1]) + 1);
+    Group& group = parents_[parent];
+    group.array = is_index(parts[k + 1]);
+    if (group.array) {
+      group.elements = std::max<std::size_t>(group.elements, std::stoull(parts[k + 1]) + 1);
     }
   }
   index_.emplace(name, entries_.size());
@@ -183,7 +188,7 @@ std::string Statistics::text(const std::string& name) const {
 std::size_t Statistics::elements(const std::string& name) const {
   const auto it = parents_.find(name);
   if (it == parents_.end()) throw std::out_of_range("no group of statistics '" + name + "'");
-  return it->second;
+  return it->second.elements;
 }
 
 void Statistics::freeze() {

@@ -5,19 +5,20 @@
 // --describe` lists what is registered.
 //
 // Contract:
-//  - A name is a dotted path of components made of [a-z0-9_]. A component of digits only is an
-//    array index: "renderer.3.busy_cycles" is stats.json's renderer[3].busy_cycles. The
-//    indices of one array are registered densely from 0; everything else is an object key.
+//  - A name is a dotted path of components made of [a-z0-9_]. A component of digits only (no
+//    leading zero) is an array index: "renderer.3.busy_cycles" is stats.json's
+//    renderer[3].busy_cycles. The indices of one array are registered densely from 0;
+//    everything else is an object key, and one parent is either an array or an object.
 //  - A name is registered once; a name that is both a value and the parent of another
 //    ("ring" and "ring.words") is refused. Registering checks the name and throws
-//    std::invalid_argument.
+//    std::invalid_argument, and a refused name changes nothing.
 //  - Each statistic has one kind: integer (std::int64_t), real (double) or text. Reading it as
 //    another kind, or reading a name nobody registered, throws std::out_of_range with the name.
 //  - Getters are called when a value is read, and by freeze(), which calls each exactly once
 //    and keeps the values; after freeze() the registered objects may be destroyed. A frozen
 //    registry is what a run hands back (FrameResult::stats).
 //  - The pattern of a name replaces each index by "N" ("renderer.N.busy_cycles"); every
-//    statistic of one pattern has the same kind, unit and description (register_* checks).
+//    statistic of one pattern has the same kind, unit and description (add_* checks).
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -102,9 +103,14 @@ class Statistics {
 
   std::vector<Entry> entries_;
   std::unordered_map<std::string, std::size_t> index_;
-  // Every proper prefix of a registered name (its parents), with how many direct array
-  // elements it has, to refuse a value that is also a parent and to answer elements().
-  std::unordered_map<std::string, std::size_t> parents_;
+  // Every proper prefix of a registered name (its parents): an array (its children are
+  // indices, `elements` of them) or a group of names, to refuse a value that is also a parent
+  // or a parent that would be both, and to answer elements().
+  struct Group {
+    bool array = false;
+    std::size_t elements = 0;
+  };
+  std::unordered_map<std::string, Group> parents_;
   // The first statistic of each pattern.
   std::unordered_map<std::string, std::size_t> patterns_;
 };

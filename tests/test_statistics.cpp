@@ -106,6 +106,13 @@ TEST_CASE("statistics: names are checked when registered", "[statistics]") {
                     Catch::Contains("non-empty"));
   CHECK_THROWS_WITH(s.add_integer("0.x", stat_unit::count, "X", one),
                     Catch::Contains("not an array"));
+  CHECK_THROWS_WITH(s.add_integer("gp.name", stat_unit::count, "X", one),
+                    Catch::Contains("'gp' is an array"));
+  CHECK_THROWS_WITH(s.add_integer("ring.0", stat_unit::count, "X", one),
+                    Catch::Contains("'ring' is a group of names"));
+  // "gp.00" is not index 0 but a name, and gp is an array.
+  CHECK_THROWS_WITH(s.add_integer("gp.00.packets", stat_unit::count, "Packets", one),
+                    Catch::Contains("'gp' is an array"));
   // A refused name leaves nothing behind.
   CHECK(s.elements("gp") == 1);
   CHECK_FALSE(s.contains("ring.words.high"));
