@@ -10,6 +10,7 @@
 #include <fstream>
 #include <systemc>
 
+#include "firmware/assembler/program_statistics.hpp"
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/graphics_processor.hpp"
 #include "models/machine.hpp"
@@ -94,53 +95,100 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 namespace {
 
-double mean_of(const nlohmann::json& units, const char* key) {
+double mean_of(const Statistics& s, const std::string& array, const char* key) {
+  const std::size_t n = s.elements(array);
   double sum = 0;
-  for (const auto& u : units) sum += u[key].get<double>();
-  return units.empty() ? 0 : sum / static_cast<double>(units.size());
+  for (std::size_t k = 0; k < n; ++k) sum += s.real(fmt::format("{}.{}.{}", array, k, key));
+  return n == 0 ? 0 : sum / static_cast<double>(n);
 }
-double max_of(const nlohmann::json& units, const char* key) {
+double max_of(const Statistics& s, const std::string& array, const char* key) {
   double m = 0;
-  for (const auto& u : units) m = std::max(m, u[key].get<double>());
+  for (std::size_t k = 0; k < s.elements(array); ++k)
+    m = std::max(m, s.real(fmt::format("{}.{}.{}", array, k, key)));
   return m;
 }
+
+// The frame time split along the critical path (timing.*).
+struct FrameAttribution {
+  int critical_renderer = 0;
+  double gp_seconds = 0;
+  double ring_seconds = 0;
+  double renderer_seconds = 0;
+  double unattributed_seconds = 0;
+  std::string bottleneck;
+};
 
 // Splits the frame time along the critical path: the Renderer whose last region reaches the
 // frame buffer last. Its time is its array's work (Renderers), its waits for messages no GP
 // had asked for yet (GPs), its waits for messages still crossing the ring, its blocked
 // shipping and the final region's trip to the frame buffer (ring).
-nlohmann::json frame_attribution(Machine& machine, double frame_seconds, const nlohmann::json& s) {
+FrameAttribution frame_attribution(Machine& machine, double frame_seconds) {
   const MachineConfig& config = machine.config();
+  FrameAttribution a;
   int critical = 0;
   for (int k = 1; k < machine.renderer_count(); ++k) {
     if (machine.renderer(k).stats().finished > machine.renderer(critical).stats().finished)
       critical = k;
   }
   const RendererStats& st = machine.renderer(critical).stats();
-  const double renderer = (st.busy.count + st.stall.count) / config.renderer.clock_hz +
-                          st.waiting_renderers.to_seconds();
-  const double gps = st.waiting_gp.to_seconds();
-  const double ring = st.waiting_ring.to_seconds() + st.waiting_ship.to_seconds() +
-                      (st.finished - st.computed).to_seconds();
-  const double other = std::max(0.0, frame_seconds - renderer - gps - ring);
-  std::string bottleneck = "Renderers";
-  double top = renderer;
-  if (gps > top) bottleneck = "GPs", top = gps;
-  if (ring > top) bottleneck = "ring", top = ring;
-  return {{"critical_renderer", critical},
-          {"gp_seconds", gps},
-          {"ring_seconds", ring},
-          {"renderer_seconds", renderer},
-          {"unattributed_seconds", other},
-          {"bottleneck", bottleneck},
-          {"gp_utilisation_mean", mean_of(s["gp"], "utilisation")},
-          {"gp_utilisation_max", max_of(s["gp"], "utilisation")},
-          {"renderer_utilisation_mean", mean_of(s["renderer"], "utilisation")},
-          {"renderer_utilisation_max", max_of(s["renderer"], "utilisation")},
-          {"ring_utilisation", s["ring"]["utilisation"].get<double>()},
-          {"ring_channel_utilisation_max", max_of(s["ring"]["channels"], "utilisation")},
-          {"gp_code", config.gp.code},
-          {"balancing", config.renderer.balancing}};
+  a.critical_renderer = critical;
+  a.renderer_seconds = (st.busy.count + st.stall.count) / config.renderer.clock_hz +
+                       st.waiting_renderers.to_seconds();
+  a.gp_seconds = st.waiting_gp.to_seconds();
+  a.ring_seconds = st.waiting_ring.to_seconds() + st.waiting_ship.to_seconds() +
+                   (st.finished - st.computed).to_seconds();
+  a.unattributed_seconds =
+      std::max(0.0, frame_seconds - a.renderer_seconds - a.gp_seconds - a.ring_seconds);
+  a.bottleneck = "Renderers";
+  double top = a.renderer_seconds;
+  if (a.gp_seconds > top) a.bottleneck = "GPs", top = a.gp_seconds;
+  if (a.ring_seconds > top) a.bottleneck = "ring", top = a.ring_seconds;
+  return a;
+}
+
+// Registers timing.*: the attribution `a` (which must outlive the reads) and the utilisation
+// figures, which read the units' statistics already registered in `s`.
+void register_timing_statistics(Statistics& s, const FrameAttribution& a,
+                                const MachineConfig& config) {
+  namespace u = stat_unit;
+  s.add_integer("timing.critical_renderer", u::index,
+                "The Renderer whose last region reached the frame buffer last",
+                [&a] { return std::int64_t{a.critical_renderer}; });
+  s.add_real("timing.gp_seconds", u::seconds,
+             "Of the frame time on the critical path: waiting for GPs that were computing",
+             [&a] { return a.gp_seconds; });
+  s.add_real("timing.ring_seconds", u::seconds,
+             "Of the frame time on the critical path: waiting for the ring (messages crossing, "
+             "blocked shipping, the last region's trip to the frame buffer)",
+             [&a] { return a.ring_seconds; });
+  s.add_real("timing.renderer_seconds", u::seconds,
+             "Of the frame time on the critical path: the Renderer's own busy and stalled "
+             "cycles, and waiting for other Renderers",
+             [&a] { return a.renderer_seconds; });
+  s.add_real("timing.unattributed_seconds", u::seconds,
+             "Of the frame time on the critical path: what none of the above explains",
+             [&a] { return a.unattributed_seconds; });
+  s.add_text("timing.bottleneck", u::name,
+             "The largest of gp_seconds, ring_seconds and renderer_seconds: GPs, ring or Renderers",
+             [&a] { return a.bottleneck; });
+  s.add_real("timing.gp_utilisation_mean", u::ratio, "Mean of gp.N.utilisation",
+             [&s] { return mean_of(s, "gp", "utilisation"); });
+  s.add_real("timing.gp_utilisation_max", u::ratio, "Largest gp.N.utilisation",
+             [&s] { return max_of(s, "gp", "utilisation"); });
+  s.add_real("timing.renderer_utilisation_mean", u::ratio, "Mean of renderer.N.utilisation",
+             [&s] { return mean_of(s, "renderer", "utilisation"); });
+  s.add_real("timing.renderer_utilisation_max", u::ratio, "Largest renderer.N.utilisation",
+             [&s] { return max_of(s, "renderer", "utilisation"); });
+  s.add_real("timing.ring_utilisation", u::ratio, "ring.utilisation, repeated here",
+             [&s] { return s.real("ring.utilisation"); });
+  s.add_real("timing.ring_channel_utilisation_max", u::ratio, "Largest ring.channels.N.utilisation",
+             [&s] { return max_of(s, "ring.channels", "utilisation"); });
+  const std::string gp_code = config.gp.code;
+  s.add_text("timing.gp_code", u::name, "gp.code of the run: assembly or compiled",
+             [gp_code] { return gp_code; });
+  const std::string balancing = config.renderer.balancing;
+  s.add_text("timing.balancing", u::name, "renderer.balancing of the run: static or dynamic",
+             [balancing] { return balancing; });
 }
 
 }  // namespace
@@ -164,140 +212,116 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   FrameBuffer& fb = machine->frame_buffer();
   result.image = fb.take_image();
   result.frame_seconds = fb.frame_complete().to_seconds();
-  const auto triangles = scene.mesh.triangles.size();
+  const double frame_seconds = result.frame_seconds;
+  const auto triangles = static_cast<std::int64_t>(scene.mesh.triangles.size());
   result.triangles_per_second =
-      result.frame_seconds > 0 ? static_cast<double>(triangles) / result.frame_seconds : 0;
+      frame_seconds > 0 ? static_cast<double>(triangles) / frame_seconds : 0;
 
-  using nlohmann::json;
-  json& s = result.stats;
+  // Each unit registers its own statistics; the frame-level figures below are registered here,
+  // where they are computed. Everything is read once, by freeze(), before the machine goes.
+  namespace u = stat_unit;
+  Statistics& s = result.stats;
+  const std::string scene_name = scene.name;
+  const std::string program_name = program.name;
+  s.add_text("frame.scene", u::name, "The scene's name", [scene_name] { return scene_name; });
+  s.add_text("frame.firmware", u::name, "The firmware program (the path it was assembled from)",
+             [program_name] { return program_name; });
+  s.add_integer("frame.triangles", u::count, "Triangles in the display list",
+                [triangles] { return triangles; });
+  fb.register_statistics(s);
   const double array_hz = config.renderer.clock_hz;
-  const auto frame_array_cycles =
-      static_cast<std::uint64_t>(std::llround(result.frame_seconds * array_hz));
-  s["frame"] = {
-      {"scene", scene.name},
-      {"firmware", program.name},
-      {"triangles", triangles},
-      {"simulated_seconds", result.frame_seconds},
-      {"array_cycles", frame_array_cycles},
-      {"projected_triangles_per_second", result.triangles_per_second},
-      {"projected_frames_per_second", result.frame_seconds > 0 ? 1.0 / result.frame_seconds : 0},
-  };
-  SetupCounts setup;
-  json gps = json::array();
-  std::uint64_t packets = 0;
+  s.add_integer("frame.array_cycles", u::array_cycles,
+                "The frame time in Renderer array cycles (rounded)", [frame_seconds, array_hz] {
+                  return static_cast<std::int64_t>(
+                      static_cast<std::uint64_t>(std::llround(frame_seconds * array_hz)));
+                });
+  const double triangles_per_second = result.triangles_per_second;
+  s.add_real("frame.projected_triangles_per_second", u::per_second,
+             "Triangles per second the real machine would reach: triangles / frame time",
+             [triangles_per_second] { return triangles_per_second; });
+  s.add_real("frame.projected_frames_per_second", u::per_second, "1 / frame time",
+             [frame_seconds] { return frame_seconds > 0 ? 1.0 / frame_seconds : 0; });
+
+  std::vector<const GraphicsProcessor*> gps;
   for (int k = 0; k < machine->gp_count(); ++k) {
-    const GpStats& g = machine->gp(k).stats();
-    gps.push_back({{"busy_clocks", g.busy.count},
-                   {"geometry_clocks", g.geometry.count},
-                   {"utilisation", g.busy.seconds(config.gp.clock_hz) / result.frame_seconds},
-                   {"triangles_in", g.triangles_in},
-                   {"packets", g.packets},
-                   {"messages", g.messages},
-                   {"operations",
-                    {{"fadd", g.ops.fadd},
-                     {"fmul", g.ops.fmul},
-                     {"load", g.ops.load},
-                     {"store", g.ops.store},
-                     {"integer", g.ops.integer},
-                     {"branch", g.ops.branch},
-                     {"chains", g.ops.chains}}},
-                   {"waiting_for_stage_seconds", g.waiting_stage.to_seconds()},
-                   {"waiting_for_queue_seconds", g.waiting_queue.to_seconds()},
-                   {"sending_seconds", g.waiting_ring.to_seconds()},
-                   {"geometry_done_seconds", g.geometry_done.to_seconds()},
-                   {"finished_seconds", g.finished.to_seconds()}});
-    packets += g.packets;
-    setup.clipped_away += g.setup.clipped_away;
-    setup.degenerate += g.setup.degenerate;
-    setup.no_pixels += g.setup.no_pixels;
-    setup.overflow += g.setup.overflow;
-    setup.clip_splits += g.setup.clip_splits;
-    setup.culled += g.setup.culled;
+    machine->gp(k).register_statistics(s, frame_seconds);
+    gps.push_back(&machine->gp(k));
   }
-  s["gp"] = gps;
   // With frames pipelined, as on the real machine, the GPs transform frame n + 1 while the
   // ring and Renderers finish frame n: the period is the longer of the two phases.
-  double geometry_end = 0;
-  double gp_busy = 0;
-  for (int k = 0; k < machine->gp_count(); ++k) {
-    const GpStats& g = machine->gp(k).stats();
-    geometry_end = std::max(geometry_end, g.geometry_done.to_seconds());
-    gp_busy = std::max(gp_busy, g.busy.seconds(config.gp.clock_hz));
-  }
-  const double pipelined = std::max(gp_busy, result.frame_seconds - geometry_end);
-  s["frame"]["pipelined_frame_seconds"] = pipelined;
-  s["frame"]["pipelined_triangles_per_second"] =
-      pipelined > 0 ? static_cast<double>(triangles) / pipelined : 0;
-  std::uint64_t geometry_clocks = 0;
-  for (const auto& g : gps) geometry_clocks += g["geometry_clocks"].get<std::uint64_t>();
-  s["frame"]["gp_clocks_per_triangle"] =
-      triangles ? std::round(static_cast<double>(geometry_clocks) / triangles) : 0.0;
-  s["setup"] = {{"packets", packets},
-                {"clipped_away", setup.clipped_away},
-                {"clip_splits", setup.clip_splits},
-                {"culled", setup.culled},
-                {"degenerate", setup.degenerate},
-                {"no_pixel_centres", setup.no_pixels},
-                {"coefficient_overflow", setup.overflow}};
-  json renderers = json::array();
-  std::uint64_t instructions = 0;
-  std::uint64_t busy_cycles = 0;
-  std::vector<std::uint64_t> per_region(config.regions(), 0);
-  for (int k = 0; k < machine->renderer_count(); ++k) {
-    const Renderer& r = machine->renderer(k);
-    const RendererStats& st = r.stats();
-    renderers.push_back({{"busy_cycles", st.busy.count},
-                         {"backing_store_stall_cycles", st.stall.count},
-                         {"utilisation", st.busy.seconds(array_hz) / result.frame_seconds},
-                         {"waiting_for_gps_seconds", st.waiting_gp.to_seconds()},
-                         {"waiting_for_ring_seconds", st.waiting_ring.to_seconds()},
-                         {"waiting_for_other_renderers_seconds", st.waiting_renderers.to_seconds()},
-                         {"blocked_shipping_seconds", st.waiting_ship.to_seconds()},
-                         {"regions", st.regions},
-                         {"packets", st.packets},
-                         {"messages", st.messages},
-                         {"queue_peak_words", st.queue_peak_words},
-                         {"micro_instructions", st.instructions},
-                         {"computed_seconds", st.computed.to_seconds()},
-                         {"finished_seconds", st.finished.to_seconds()}});
-    instructions += st.instructions;
-    busy_cycles += st.busy.count;
-    for (const RegionWork& w : r.work()) per_region[w.region] = w.triangles.size();
-  }
-  s["renderer"] = renderers;
-  s["renderers_total"] = {{"busy_cycles", busy_cycles}, {"micro_instructions", instructions}};
-  s["primitives_per_region"] = per_region;
-  const Ring& ring = machine->ring();
-  json channels = json::array();
-  for (const RingCycles& c : ring.busy()) {
-    channels.push_back({{"busy_cycles", c.count},
-                        {"utilisation", c.seconds(config.ring.clock_hz) / result.frame_seconds}});
-  }
-  const double ring_capacity_words =
-      config.ring.channels * config.ring.clock_hz * result.frame_seconds;
-  s["ring"] = {
-      {"messages", ring.messages()},
-      {"words", ring.words()},
-      {"bandwidth_bits_per_second", ring.bandwidth_bits_per_second()},
-      {"utilisation",
-       ring_capacity_words > 0 ? static_cast<double>(ring.words()) / ring_capacity_words : 0},
-      {"contention_cycles", ring.contention().count},
-      {"channels", channels}};
-  s["timing"] = frame_attribution(*machine, result.frame_seconds, s);
-  s["pixel_memory"] = {{"bits", program.memory_bits},
-                       {"used", program.bits_used()},
-                       {"resident", program.resident_bits},
-                       {"staging", program.staging_bits}};
-  s["host"] = {
-      {"seconds", host_seconds},
-      {"timing_seconds", timing_seconds},
-      {"pixel_seconds", pixel_seconds},
-      {"threads", threads},
-      {"simulated_array_cycles_per_host_second",
-       host_seconds > 0 ? static_cast<double>(busy_cycles) / host_seconds : 0},
+  const double gp_hz = config.gp.clock_hz;
+  auto pipelined = [&s, frame_seconds, gp_hz] {
+    double geometry_end = 0;
+    double gp_busy = 0;
+    for (std::size_t k = 0; k < s.elements("gp"); ++k) {
+      const std::string p = fmt::format("gp.{}.", k);
+      geometry_end = std::max(geometry_end, s.real(p + "geometry_done_seconds"));
+      gp_busy = std::max(gp_busy, static_cast<double>(s.integer(p + "busy_clocks")) / gp_hz);
+    }
+    return std::max(gp_busy, frame_seconds - geometry_end);
   };
+  s.add_real("frame.pipelined_frame_seconds", u::seconds,
+             "Frame period with frames pipelined (the GPs on frame n + 1 while the ring and "
+             "Renderers finish frame n): the longer of the GPs' busiest time and the frame "
+             "time after the last GP's geometry",
+             pipelined);
+  s.add_real("frame.pipelined_triangles_per_second", u::per_second,
+             "triangles / pipelined_frame_seconds", [pipelined, triangles] {
+               const double period = pipelined();
+               return period > 0 ? static_cast<double>(triangles) / period : 0;
+             });
+  s.add_real("frame.gp_clocks_per_triangle", u::gp_clocks,
+             "geometry_clocks summed over the GPs per display-list triangle (rounded)",
+             [&s, triangles] {
+               std::int64_t geometry_clocks = 0;
+               for (std::size_t k = 0; k < s.elements("gp"); ++k)
+                 geometry_clocks += s.integer(fmt::format("gp.{}.geometry_clocks", k));
+               return triangles ? std::round(static_cast<double>(geometry_clocks) /
+                                             static_cast<double>(triangles))
+                                : 0.0;
+             });
+  register_setup_statistics(s, gps);
+
+  std::vector<const Renderer*> renderers;
+  for (int k = 0; k < machine->renderer_count(); ++k) {
+    machine->renderer(k).register_statistics(s, frame_seconds);
+    renderers.push_back(&machine->renderer(k));
+  }
+  register_renderer_totals(s, renderers, config.regions());
+  machine->ring().register_statistics(s, frame_seconds);
+  const FrameAttribution attribution = frame_attribution(*machine, frame_seconds);
+  register_timing_statistics(s, attribution, config);
+  register_program_statistics(s, program);
+
+  s.add_real("host.seconds", u::host_seconds, "Host time of the whole frame (timing + pixels)",
+             [host_seconds] { return host_seconds; });
+  s.add_real("host.timing_seconds", u::host_seconds,
+             "Host time of the timing model (the SystemC run)",
+             [timing_seconds] { return timing_seconds; });
+  s.add_real("host.pixel_seconds", u::host_seconds,
+             "Host time executing the firmware on the pixel arrays",
+             [pixel_seconds] { return pixel_seconds; });
+  s.add_integer("host.threads", u::count, "Host threads for the pixel arrays (--threads)",
+                [threads] { return std::int64_t{threads}; });
+  s.add_real("host.simulated_array_cycles_per_host_second", u::per_second,
+             "renderers_total.busy_cycles per host second (per host second, not simulated)",
+             [&s, host_seconds] {
+               return host_seconds > 0
+                          ? static_cast<double>(s.integer("renderers_total.busy_cycles")) /
+                                host_seconds
+                          : 0;
+             });
+  s.freeze();
+  result.stats_json = s.to_json();
   machine.reset();
   return result;
+}
+
+std::vector<StatisticInfo> describe_statistics(const std::string& program_path) {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=128", "screen.height=128", "gp.count=1", "renderer.count=1"});
+  const Program program = assemble_file(program_path, assembler_options(config));
+  return simulate_frame(config, make_builtin_scene("two-triangles"), program, 1).stats.describe();
 }
 
 std::string bit_budget_table(const Program& program, const TimingParams& timing) {
@@ -328,44 +352,42 @@ std::string bit_budget_table(const Program& program, const TimingParams& timing)
 }
 
 std::string summary(const FrameResult& r, const Program& program, const TimingParams& timing) {
-  const auto& s = r.stats;
+  const Statistics& s = r.stats;
   std::string out = bit_budget_table(program, timing);
   out += fmt::format("\nframe: {} triangles, {} packets, simulated {:.3f} ms ({} array cycles)\n",
-                     s["frame"]["triangles"].get<std::uint64_t>(),
-                     s["setup"]["packets"].get<std::uint64_t>(), r.frame_seconds * 1e3,
-                     s["frame"]["array_cycles"].get<std::uint64_t>());
+                     s.integer("frame.triangles"), s.integer("setup.packets"),
+                     r.frame_seconds * 1e3, s.integer("frame.array_cycles"));
   out += fmt::format("projected throughput: {:.0f} triangles/s, {:.1f} frames/s\n",
                      r.triangles_per_second, r.frame_seconds > 0 ? 1.0 / r.frame_seconds : 0.0);
   out += fmt::format(
       "pipelined (GPs on the next frame while the Renderers finish this one): {:.3f} ms, {:.0f} "
       "triangles/s\n",
-      s["frame"]["pipelined_frame_seconds"].get<double>() * 1e3,
-      s["frame"]["pipelined_triangles_per_second"].get<double>());
-  const auto& t = s["timing"];
+      s.real("frame.pipelined_frame_seconds") * 1e3,
+      s.real("frame.pipelined_triangles_per_second"));
   const double f = r.frame_seconds > 0 ? r.frame_seconds : 1;
+  const double gp = s.real("timing.gp_seconds");
+  const double ring = s.real("timing.ring_seconds");
+  const double renderer = s.real("timing.renderer_seconds");
   out += fmt::format(
       "frame time on the critical path (renderer{}): GPs {:.3f} ms ({:.0f}%), ring {:.3f} ms "
       "({:.0f}%), Renderers {:.3f} ms ({:.0f}%)\n",
-      t["critical_renderer"].get<int>(), t["gp_seconds"].get<double>() * 1e3,
-      100 * t["gp_seconds"].get<double>() / f, t["ring_seconds"].get<double>() * 1e3,
-      100 * t["ring_seconds"].get<double>() / f, t["renderer_seconds"].get<double>() * 1e3,
-      100 * t["renderer_seconds"].get<double>() / f);
-  out += fmt::format("bottleneck: {}\n", t["bottleneck"].get<std::string>());
+      s.integer("timing.critical_renderer"), gp * 1e3, 100 * gp / f, ring * 1e3, 100 * ring / f,
+      renderer * 1e3, 100 * renderer / f);
+  out += fmt::format("bottleneck: {}\n", s.text("timing.bottleneck"));
   out += fmt::format(
       "utilisation: GPs {:.0f}% mean, {:.0f}% max ({} code, {} i860 clocks per triangle); ring "
       "{:.0f}% of {:.2f} Gb/s, busiest channel {:.0f}%; Renderers {:.0f}% mean, {:.0f}% max "
       "({} balancing)\n",
-      100 * t["gp_utilisation_mean"].get<double>(), 100 * t["gp_utilisation_max"].get<double>(),
-      t["gp_code"].get<std::string>(), s["frame"]["gp_clocks_per_triangle"].get<double>(),
-      100 * t["ring_utilisation"].get<double>(),
-      s["ring"]["bandwidth_bits_per_second"].get<double>() / 1e9,
-      100 * t["ring_channel_utilisation_max"].get<double>(),
-      100 * t["renderer_utilisation_mean"].get<double>(),
-      100 * t["renderer_utilisation_max"].get<double>(), t["balancing"].get<std::string>());
+      100 * s.real("timing.gp_utilisation_mean"), 100 * s.real("timing.gp_utilisation_max"),
+      s.text("timing.gp_code"), s.real("frame.gp_clocks_per_triangle"),
+      100 * s.real("timing.ring_utilisation"), s.real("ring.bandwidth_bits_per_second") / 1e9,
+      100 * s.real("timing.ring_channel_utilisation_max"),
+      100 * s.real("timing.renderer_utilisation_mean"),
+      100 * s.real("timing.renderer_utilisation_max"), s.text("timing.balancing"));
   out += fmt::format("host: {:.2f} s ({:.2f} s timing, {:.2f} s pixels), {:.3g} array cycles/s\n",
-                     s["host"]["seconds"].get<double>(), s["host"]["timing_seconds"].get<double>(),
-                     s["host"]["pixel_seconds"].get<double>(),
-                     s["host"]["simulated_array_cycles_per_host_second"].get<double>());
+                     s.real("host.seconds"), s.real("host.timing_seconds"),
+                     s.real("host.pixel_seconds"),
+                     s.real("host.simulated_array_cycles_per_host_second"));
   return out;
 }
 

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "common/statistics.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
 #include "sim/image/png_writer.hpp"
@@ -18,7 +19,11 @@ class BoardObserver;
 
 struct FrameResult {
   RgbImage image;
-  nlohmann::json stats;
+  // Every module's statistics, frozen at the end of the frame: read them by name as typed
+  // values (stats.real("frame.simulated_seconds")); `pp5sim stats --describe` lists them.
+  Statistics stats;
+  // The same as stats.json's document (stats.to_json()), to write and to compare whole.
+  nlohmann::json stats_json;
   double frame_seconds = 0;         // simulated
   double triangles_per_second = 0;  // projected for the real machine
 };
@@ -30,6 +35,13 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
                            int threads,
                            const std::function<BoardObserver*(int renderer)>& observe = {},
                            nlohmann::json* timeline = nullptr);
+
+// What every statistic of a run is (its name pattern, kind, unit and description), in
+// registration order: the statistics a frame of the smallest machine registers, which are
+// those of any run with the indices of gp, renderer, ring.channels and primitives_per_region
+// written N.
+// `program_path` is a firmware program (any: the statistics do not depend on it).
+std::vector<StatisticInfo> describe_statistics(const std::string& program_path);
 
 // The bit-budget table and the headline figures, as printed after a run.
 std::string bit_budget_table(const Program& program, const TimingParams& timing);

@@ -38,6 +38,16 @@ for f in frame.png config.json stats.json; do [ -s "$tmp/ok/$f" ] || fail "missi
 grep -q "of 208 bits" "$tmp/ok.log" || fail "no bit-budget table"
 grep -q "projected throughput" "$tmp/ok.log" || fail "no throughput"
 ls "$tmp/ok" | grep -q tmp && fail "temporary file left behind"
+# What stats.json holds: every statistic described, and a written file printed with units.
+"$bin" stats --describe >"$tmp/describe.md" || fail "stats --describe failed"
+grep -q '^| `renderer.N.busy_cycles` | integer | array cycles | ' "$tmp/describe.md" \
+  || fail "stats --describe: no renderer.N.busy_cycles row"
+"$bin" stats "$tmp/ok/stats.json" >"$tmp/stats.txt" || fail "stats FILE failed"
+grep -q '^setup.packets = [0-9]* count$' "$tmp/stats.txt" || fail "stats FILE: no setup.packets"
+grep -q '^timing.bottleneck = ' "$tmp/stats.txt" || fail "stats FILE: no timing.bottleneck"
+expect_error "give --describe or a stats.json file" stats
+printf '{"frame": {"bogus": 1}}' > "$tmp/bogus.json"
+expect_error "'frame.bogus' is not a statistic" stats "$tmp/bogus.json"
 "$bin" highlight --scenes two-triangles --firmware exactmatch epsilon --speed-scene '' \
   --set screen.width=256 --set screen.height=256 --out "$tmp/hl" >"$tmp/hl.log" 2>&1 \
   || fail "highlight failed: $(cat "$tmp/hl.log")"

@@ -220,9 +220,8 @@ TEST_CASE("each light's procedure is charged on every region", "[lights]") {
   const MachineConfig config = small_config();
   Scene scene = make_builtin_scene("sphere");
   auto busy = [&](const Program& program) {
-    return simulate_frame(config, scene, program, 2)
-        .stats["renderers_total"]["busy_cycles"]
-        .get<std::uint64_t>();
+    return test::count(simulate_frame(config, scene, program, 2).stats,
+                       "renderers_total.busy_cycles");
   };
   for (const char* name : {"phong", "gouraud"}) {
     INFO(name);

@@ -1,5 +1,7 @@
 // Whole-machine behaviour: determinism across runs and host threads, and the timing of
 // each unit at its earliest legal cycle.
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 
 #include "firmware/assembler/assembler.hpp"
@@ -24,9 +26,9 @@ TEST_CASE("frames and statistics are identical across runs and host thread count
   const FrameResult again = simulate_frame(config, scene, program, 1);
   CHECK(one.image.rgb == four.image.rgb);
   CHECK(one.image.rgb == again.image.rgb);
-  CHECK(without_host(one.stats) == without_host(four.stats));
-  CHECK(without_host(one.stats) == without_host(again.stats));
-  CHECK(one.stats["frame"]["array_cycles"].get<std::uint64_t>() > 0);
+  CHECK(without_host(one.stats_json) == without_host(four.stats_json));
+  CHECK(without_host(one.stats_json) == without_host(again.stats_json));
+  CHECK(one.stats.integer("frame.array_cycles") > 0);
 }
 
 TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[machine]") {
@@ -45,7 +47,9 @@ TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[
       procedure_cost(program.procedure(Procedure::clear), timing, none).count;
   const std::uint64_t tri =
       procedure_cost(program.procedure(Procedure::triangle), timing, none).count;
-  const auto per_region = r.stats["primitives_per_region"].get<std::vector<std::uint64_t>>();
+  std::vector<std::uint64_t> per_region;
+  for (std::size_t k = 0; k < r.stats.elements("primitives_per_region"); ++k)
+    per_region.push_back(test::count(r.stats, "primitives_per_region." + std::to_string(k)));
   std::vector<std::uint64_t> expected(config.renderer.count, 0);
   std::uint64_t packets = 0;
   for (std::size_t region = 0; region < per_region.size(); ++region) {
@@ -55,9 +59,9 @@ TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[
                                                 config.renderer.backing_store_cycles_per_block;
     packets += per_region[region];
   }
-  CHECK(packets == r.stats["setup"]["packets"].get<std::uint64_t>());
+  CHECK(packets == test::count(r.stats, "setup.packets"));
   for (int k = 0; k < config.renderer.count; ++k) {
-    CHECK(r.stats["renderer"][k]["busy_cycles"].get<std::uint64_t>() == expected[k]);
+    CHECK(test::count(r.stats, fmt::format("renderer.{}.busy_cycles", k)) == expected[k]);
     // A Renderer cannot finish before it has spent its cycles.
     CHECK(r.frame_seconds >= static_cast<double>(expected[k]) / config.renderer.clock_hz);
   }
@@ -72,7 +76,7 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   const Scene scene = make_builtin_scene("two-triangles");
   const Program program = load_program("flat", config);
   const FrameResult r = simulate_frame(config, scene, program, 1);
-  REQUIRE(r.stats["setup"]["packets"].get<std::uint64_t>() == 2);
+  REQUIRE(r.stats.integer("setup.packets") == 2);
 
   // The critical path, unit by unit: the GP transforms and sets up both triangles (the i860
   // cost model's clocks), sends its bin map (a header word and one bit for the one region),
@@ -92,7 +96,7 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   const double gp_clocks =
       static_cast<double>(i860.clocks(I860Work::triangle(workload, 1, 1, 1), 1).count) * 2 +
       2.0 * static_cast<double>(i860.clocks(I860Work::send_bin(), 0).count);
-  CHECK(r.stats["gp"][0]["busy_clocks"].get<double>() == gp_clocks);
+  CHECK(static_cast<double>(r.stats.integer("gp.0.busy_clocks")) == gp_clocks);
   const double map_words = 2;
   const double bin_words = 1 + 2 * packet_words;
   const TimingParams timing = timing_params(config);
@@ -170,6 +174,5 @@ end
   }
   CHECK(covered > 1000);
   // Each pass's bins cross the ring again, so the multipass frame carries more words.
-  CHECK(three.stats["ring"]["words"].get<std::uint64_t>() >
-        one.stats["ring"]["words"].get<std::uint64_t>());
+  CHECK(three.stats.integer("ring.words") > one.stats.integer("ring.words"));
 }

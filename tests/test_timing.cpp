@@ -1,6 +1,8 @@
 // Timing of the whole machine: the i860 cost model and its calibration, the ring's
 // bandwidth and latency at the earliest legal cycle, the Renderer's instruction queue,
 // backing-store overlap and load balancing, and the timeline.
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <map>
 #define SC_INCLUDE_DYNAMIC_PROCESSES
@@ -169,11 +171,11 @@ TEST_CASE("static and dynamic balancing render identical images - dynamic is det
   const FrameResult again = simulate_frame(config, scene, program, 3);
   CHECK(fixed.image.rgb == dynamic.image.rgb);
   CHECK(dynamic.image.rgb == again.image.rgb);
-  CHECK(without_host(dynamic.stats) == without_host(again.stats));
+  CHECK(without_host(dynamic.stats_json) == without_host(again.stats_json));
   // The same work, differently spread: the Renderers' total busy cycles agree.
-  CHECK(fixed.stats["renderers_total"]["busy_cycles"] ==
-        dynamic.stats["renderers_total"]["busy_cycles"]);
-  CHECK(dynamic.stats["timing"]["balancing"] == "dynamic");
+  CHECK(fixed.stats.integer("renderers_total.busy_cycles") ==
+        dynamic.stats.integer("renderers_total.busy_cycles"));
+  CHECK(dynamic.stats.text("timing.balancing") == "dynamic");
 }
 
 TEST_CASE("a small instruction queue stalls the GPs, never changes the image",
@@ -190,10 +192,12 @@ TEST_CASE("a small instruction queue stalls the GPs, never changes the image",
   const FrameResult tight = simulate_frame(config, scene, program, 2);
   CHECK(roomy.image.rgb == tight.image.rgb);
   double stalled = 0;
-  for (const auto& g : tight.stats["gp"]) stalled += g["waiting_for_queue_seconds"].get<double>();
+  for (std::size_t k = 0; k < tight.stats.elements("gp"); ++k)
+    stalled += tight.stats.real(fmt::format("gp.{}.waiting_for_queue_seconds", k));
   CHECK(stalled > 0);
-  for (const auto& r : tight.stats["renderer"]) CHECK(r["queue_peak_words"].get<int>() <= 128);
-  CHECK(tight.stats["ring"]["messages"].get<int>() > roomy.stats["ring"]["messages"].get<int>());
+  for (std::size_t k = 0; k < tight.stats.elements("renderer"); ++k)
+    CHECK(tight.stats.integer(fmt::format("renderer.{}.queue_peak_words", k)) <= 128);
+  CHECK(tight.stats.integer("ring.messages") > roomy.stats.integer("ring.messages"));
   CHECK(tight.frame_seconds >= roomy.frame_seconds);
   // A queue smaller than one packet is a configuration error that names the key.
   config.set(std::vector<std::string>{"renderer.queue_words=64", "ring.word_bits=16"});
@@ -221,8 +225,8 @@ TEST_CASE("overlapped backing-store transfers are faster and change no pixel",
   const FrameResult serial = simulate_frame(config, scene, program, 2);
   CHECK(overlapped.image.rgb == serial.image.rgb);
   CHECK(overlapped.frame_seconds < serial.frame_seconds);
-  CHECK(overlapped.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>() <
-        serial.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>());
+  CHECK(overlapped.stats.integer("renderers_total.busy_cycles") <
+        serial.stats.integer("renderers_total.busy_cycles"));
 }
 
 TEST_CASE("overlapped shipping lets a Renderer start its next region early", "[timing][renderer]") {
@@ -238,8 +242,8 @@ TEST_CASE("overlapped shipping lets a Renderer start its next region early", "[t
   const FrameResult blocking = simulate_frame(config, scene, program, 1);
   CHECK(overlapped.image.rgb == blocking.image.rgb);
   CHECK(overlapped.frame_seconds < blocking.frame_seconds);
-  CHECK(blocking.stats["renderer"][0]["blocked_shipping_seconds"].get<double>() > 0);
-  CHECK(overlapped.stats["renderer"][0]["blocked_shipping_seconds"].get<double>() == 0);
+  CHECK(blocking.stats.real("renderer.0.blocked_shipping_seconds") > 0);
+  CHECK(overlapped.stats.real("renderer.0.blocked_shipping_seconds") == 0);
 }
 
 TEST_CASE("the frame time is attributed to GPs, ring and Renderers, and the timeline nests",
@@ -253,17 +257,19 @@ TEST_CASE("the frame time is attributed to GPs, ring and Renderers, and the time
   const Program program = load_program("phong", config);
   nlohmann::json timeline;
   const FrameResult r = simulate_frame(config, scene, program, 2, {}, &timeline);
-  const auto& t = r.stats["timing"];
-  const double sum = t["gp_seconds"].get<double>() + t["ring_seconds"].get<double>() +
-                     t["renderer_seconds"].get<double>();
+  const Statistics& s = r.stats;
+  const double sum = s.real("timing.gp_seconds") + s.real("timing.ring_seconds") +
+                     s.real("timing.renderer_seconds");
   CHECK(sum == Approx(r.frame_seconds).epsilon(1e-6));
-  CHECK(t["unattributed_seconds"].get<double>() < 1e-9);
-  const std::string bottleneck = t["bottleneck"];
+  CHECK(s.real("timing.unattributed_seconds") < 1e-9);
+  const std::string bottleneck = s.text("timing.bottleneck");
   CHECK((bottleneck == "GPs" || bottleneck == "ring" || bottleneck == "Renderers"));
   // Utilisation can never exceed 1.
-  for (const auto& g : r.stats["gp"]) CHECK(g["utilisation"].get<double>() <= 1.0);
-  for (const auto& c : r.stats["ring"]["channels"]) CHECK(c["utilisation"].get<double>() <= 1.0);
-  for (const auto& x : r.stats["renderer"]) CHECK(x["utilisation"].get<double>() <= 1.0);
+  for (const std::string array : {"gp", "ring.channels", "renderer"}) {
+    REQUIRE(s.elements(array) > 0);
+    for (std::size_t k = 0; k < s.elements(array); ++k)
+      CHECK(s.real(fmt::format("{}.{}.utilisation", array, k)) <= 1.0);
+  }
 
   // The timeline: complete slices per (pid, tid) track that never partially overlap.
   REQUIRE(timeline.contains("traceEvents"));
@@ -275,7 +281,7 @@ TEST_CASE("the frame time is attributed to GPs, ring and Renderers, and the time
         {e["ts"].get<double>(), e["ts"].get<double>() + e["dur"].get<double>()});
     ring_slices += e["pid"].get<int>() == 2;
   }
-  CHECK(ring_slices == r.stats["ring"]["messages"].get<int>());
+  CHECK(ring_slices == s.integer("ring.messages"));
   for (auto& [track, slices] : tracks) {
     std::sort(slices.begin(), slices.end(), [](auto& a, auto& b) {
       return a.first < b.first || (a.first == b.first && a.second > b.second);
@@ -297,7 +303,7 @@ TEST_CASE("the bottleneck named is the resource that was starved", "[timing][rep
                                         "renderer.count=4"});
     config.set(sets);
     const FrameResult r = simulate_frame(config, scene, load_program("phong", config), 2);
-    return r.stats["timing"]["bottleneck"].get<std::string>();
+    return r.stats.text("timing.bottleneck");
   };
   CHECK(bottleneck({"gp.code=compiled"}) == "GPs");
   CHECK(bottleneck({"ring.channels=1", "ring.clock_hz=2e6"}) == "ring");
@@ -317,12 +323,12 @@ TEST_CASE("coefficient loading: hidden when double-buffered, charged in full whe
   config.set("evaluator.double_buffered=0");
   const FrameResult serial = simulate_frame(config, scene, program, 1);
   CHECK(buffered.image.rgb == serial.image.rgb);
-  const auto packets = buffered.stats["setup"]["packets"].get<std::uint64_t>();
+  const auto packets = test::count(buffered.stats, "setup.packets");
   const int expressions =
       static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
   const std::uint64_t coefficient_words = expressions * 3 * 2;  // 40-bit coefficients: 2 words
-  CHECK(serial.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>() -
-            buffered.stats["renderers_total"]["busy_cycles"].get<std::uint64_t>() ==
+  CHECK(test::count(serial.stats, "renderers_total.busy_cycles") -
+            test::count(buffered.stats, "renderers_total.busy_cycles") ==
         packets * coefficient_words);
   CHECK(serial.frame_seconds > buffered.frame_seconds);
 }
@@ -350,17 +356,19 @@ TEST_CASE("a region no primitive touches waits for no bin message", "[timing]") 
     INFO(balancing);
     config.renderer.balancing = balancing;
     const FrameResult r = simulate_frame(config, scene, program, 1);
-    REQUIRE(r.stats["setup"]["packets"].get<std::uint64_t>() == 1);
+    REQUIRE(r.stats.integer("setup.packets") == 1);
     // Only the GP holding the triangle takes part: its bin map and its one bin. The other
     // three have no share of the display list and send nothing.
     std::uint64_t gp_messages = 0;
-    for (const auto& g : r.stats["gp"]) gp_messages += g["messages"].get<std::uint64_t>();
+    for (std::size_t k = 0; k < r.stats.elements("gp"); ++k)
+      gp_messages += test::count(r.stats, fmt::format("gp.{}.messages", k));
     CHECK(gp_messages == 1 + 1);
     std::uint64_t renderer_messages = 0, regions = 0, most = 0;
-    for (const auto& k : r.stats["renderer"]) {
-      renderer_messages += k["messages"].get<std::uint64_t>();
-      regions += k["regions"].get<std::uint64_t>();
-      most = std::max(most, k["regions"].get<std::uint64_t>());
+    for (std::size_t k = 0; k < r.stats.elements("renderer"); ++k) {
+      const std::string p = fmt::format("renderer.{}.", k);
+      renderer_messages += test::count(r.stats, p + "messages");
+      regions += test::count(r.stats, p + "regions");
+      most = std::max(most, test::count(r.stats, p + "regions"));
     }
     CHECK(renderer_messages == 1);
     CHECK(regions == 16);

@@ -9,6 +9,8 @@
 
 namespace pp5 {
 
+class Statistics;
+
 class FrameBuffer : public sc_core::sc_module {
  public:
   FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions);
@@ -28,6 +30,8 @@ class FrameBuffer : public sc_core::sc_module {
   sc_core::sc_time frame_complete() const { return last_; }
   int regions_received() const { return received_; }
   const std::vector<sc_core::sc_time>& arrivals() const { return arrival_; }
+  // Registers frame.simulated_seconds (models/frame_buffer/frame_buffer_statistics.cpp).
+  void register_statistics(Statistics& stats) const;
 
  private:
   RgbImage image_;

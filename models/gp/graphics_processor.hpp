@@ -16,6 +16,8 @@
 
 namespace pp5 {
 
+class Statistics;
+
 struct GpStats {
   GpClocks busy{};                     // clocks computing (geometry and starting messages)
   GpClocks geometry{};                 // of which transform, clip, light, set-up, binning
@@ -49,6 +51,8 @@ class GraphicsProcessor : public sc_core::sc_module {
   GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last, Machine& machine);
 
   const GpStats& stats() const { return stats_; }
+  // Registers gp.INDEX.* (models/gp/gp_statistics.cpp); read once the frame has run.
+  void register_statistics(Statistics& stats, double frame_seconds) const;
   // How the GP spent [from, to): so that a Renderer's wait for this GP can be attributed.
   GpActivityTimes activity(sc_core::sc_time from, sc_core::sc_time to) const;
 
@@ -71,5 +75,8 @@ class GraphicsProcessor : public sc_core::sc_module {
   std::vector<std::pair<sc_core::sc_time, GpActivity>> activity_{
       {sc_core::SC_ZERO_TIME, GpActivity::compute}};
 };
+
+// Registers setup.*: the packets and the set-up counts summed over `gps`.
+void register_setup_statistics(Statistics& stats, std::vector<const GraphicsProcessor*> gps);
 
 }  // namespace pp5

@@ -32,6 +32,8 @@
 
 namespace pp5 {
 
+class Statistics;
+
 // The instruction stream of one region: clear, then for each of the program's passes the
 // triangles in this order (with `pass` between passes), then `light` once per scene light,
 // then shade. Triangles are kept in
@@ -89,6 +91,9 @@ class Renderer : public sc_core::sc_module {
   void deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arrival);
 
   const RendererStats& stats() const { return stats_; }
+  // Registers renderer.INDEX.* (models/renderer/renderer_statistics.cpp); read once the frame
+  // has run.
+  void register_statistics(Statistics& stats, double frame_seconds) const;
   const std::vector<RegionWork>& work() const { return work_; }
   // The functional model: runs this board's regions on its pixel array.
   void execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,
@@ -141,5 +146,10 @@ class Renderer : public sc_core::sc_module {
   RendererStats stats_;
   std::vector<RegionWork> work_;
 };
+
+// Registers renderers_total.* (sums over `renderers`) and primitives_per_region.R for each of
+// the `regions` screen regions.
+void register_renderer_totals(Statistics& stats, std::vector<const Renderer*> renderers,
+                              int regions);
 
 }  // namespace pp5

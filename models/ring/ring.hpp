@@ -18,6 +18,8 @@
 
 namespace pp5 {
 
+class Statistics;
+
 struct RingParams {
   int channels = 8;
   int word_bits = 32;
@@ -69,6 +71,8 @@ class Ring : public sc_core::sc_module {
   double bandwidth_bits_per_second() const {
     return params_.channels * params_.word_bits * params_.clock_hz;
   }
+  // Registers ring.* (models/ring/ring_statistics.cpp); read once the frame has run.
+  void register_statistics(Statistics& stats, double frame_seconds) const;
 
  private:
   RingParams params_;

@@ -127,7 +127,7 @@ Drawn draw_flat(const MachineConfig& config, const Scene& scene, int threads) {
                   fmt::arg("far", (1ull << config.gp.depth_bits) - 1));
   const Program program = assemble(source, "extremes-flat", assembler_options(config));
   const FrameResult r = simulate_frame(config, scene, program, threads);
-  return {r.image, r.stats["setup"]["coefficient_overflow"].get<std::uint64_t>()};
+  return {r.image, static_cast<std::uint64_t>(r.stats.integer("setup.coefficient_overflow"))};
 }
 
 std::string counts_text(const CoverageCheck& c) {
@@ -341,11 +341,13 @@ Coverage coverage_counts(const MachineConfig& config, const Scene& scene, int th
   c.height = r.image.height;
   c.count.resize(static_cast<std::size_t>(c.width) * c.height);
   for (std::size_t p = 0; p < c.count.size(); ++p) c.count[p] = r.image.rgb[p * 3];
-  const auto& s = r.stats["setup"];
-  c.overflow = s["coefficient_overflow"].get<std::uint64_t>();
-  c.degenerate = s["degenerate"].get<std::uint64_t>();
-  c.no_pixels = s["no_pixel_centres"].get<std::uint64_t>();
-  c.clipped_away = s["clipped_away"].get<std::uint64_t>();
+  auto count = [&r](const char* name) {
+    return static_cast<std::uint64_t>(r.stats.integer(std::string("setup.") + name));
+  };
+  c.overflow = count("coefficient_overflow");
+  c.degenerate = count("degenerate");
+  c.no_pixels = count("no_pixel_centres");
+  c.clipped_away = count("clipped_away");
   return c;
 }
 

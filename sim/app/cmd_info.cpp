@@ -1,14 +1,17 @@
-// The reference subcommands: pp5sim isa, asm, config and scenes.
+// The reference subcommands: pp5sim isa, asm, config, stats and scenes.
 #include <fmt/format.h>
 
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "firmware/assembler/assembler.hpp"
 #include "firmware/isa/isa.hpp"
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
 
 namespace pp5 {
 
@@ -32,6 +35,45 @@ std::string isa_reference() {
     out += fmt::format("- `{}`: {}\n", kProcedureNames[k], kProcedureMeaning[k]);
   }
   return out;
+}
+
+std::string value_text(const StatValue& v) {
+  if (const auto* text = std::get_if<std::string>(&v)) return *text;
+  if (const auto* integer = std::get_if<std::int64_t>(&v)) return std::to_string(*integer);
+  return fmt::format("{:.9g}", std::get<double>(v));
+}
+
+struct StatsOptions {
+  bool describe = false;
+  std::string file;
+};
+
+// `pp5sim stats FILE`: every statistic of a written stats.json with its unit; a name the
+// simulator does not register (a file from another version) is an error.
+int print_stats_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path));
+  Statistics file;
+  try {
+    file = Statistics::from_json(nlohmann::json::parse(in));
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: {}", path, e.what()));
+  }
+  std::map<std::string, StatisticInfo> described;
+  for (StatisticInfo& i : describe_statistics(resolve_firmware("phong")))
+    described.emplace(i.name, std::move(i));
+  for (const StatisticInfo& i : file.infos()) {
+    const auto it = described.find(stat_pattern(i.name));
+    if (it == described.end()) {
+      throw std::runtime_error(
+          fmt::format("{}: '{}' is not a statistic of this pp5sim", path, i.name));
+    }
+    // Text (a name) has no unit to print.
+    const bool text = it->second.kind == StatKind::text;
+    std::cout << fmt::format("{} = {}{}{}\n", i.name, value_text(file.value(i.name)),
+                             text ? "" : " ", text ? "" : it->second.unit);
+  }
+  return 0;
 }
 
 struct ConfigOptions {
@@ -88,6 +130,29 @@ Command add_config_command(CLI::App& app) {
             }
             std::cout << "\nConfidence: P published (SIGGRAPH 1989), S secondary source, A "
                          "assumption.\n";
+            return 0;
+          }};
+}
+
+Command add_stats_command(CLI::App& app) {
+  auto o = std::make_shared<StatsOptions>();
+  auto* cmd = app.add_subcommand(
+      "stats",
+      "Describe the statistics a run writes to stats.json, or print a stats.json file "
+      "with units");
+  cmd->add_flag("--describe", o->describe,
+                "A table of every statistic: name (N: an index), kind, unit, meaning");
+  cmd->add_option("file", o->file, "A stats.json to print, one statistic a line with its unit");
+  return {cmd, [o] {
+            if (o->describe == !o->file.empty()) {
+              throw std::runtime_error("stats: give --describe or a stats.json file (one of them)");
+            }
+            if (!o->file.empty()) return print_stats_file(o->file);
+            std::cout << "| statistic | kind | unit | meaning |\n|---|---|---|---|\n";
+            for (const StatisticInfo& i : describe_statistics(resolve_firmware("phong"))) {
+              std::cout << fmt::format("| `{}` | {} | {} | {} |\n", i.name, stat_kind_name(i.kind),
+                                       i.unit, markdown_cell(i.description));
+            }
             return 0;
           }};
 }

@@ -85,7 +85,7 @@ int run_render(RenderOptions o) {
   OutputSet outputs;
   outputs.add((dir / "frame.png").string(), encode_png(result.image));
   outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
-  outputs.add((dir / "stats.json").string(), result.stats.dump(2) + "\n");
+  outputs.add((dir / "stats.json").string(), result.stats_json.dump(2) + "\n");
   if (!o.timeline.empty()) outputs.add(o.timeline, timeline.dump() + "\n");
   outputs.commit();
 
@@ -93,18 +93,18 @@ int run_render(RenderOptions o) {
                            scene.mesh.triangles.size(), program.name, scene.description);
   std::cout << summary(result, program, timing_params(config));
   // What set-up dropped, so that no triangle disappears silently.
-  const auto& setup = result.stats["setup"];
+  const Statistics& stats = result.stats;
+  const std::int64_t overflow = stats.integer("setup.coefficient_overflow");
   std::cout << fmt::format(
       "set-up dropped: {} clipped away, {} zero-area, {} without a pixel centre, {} with a "
       "coefficient overflow\n",
-      setup["clipped_away"].get<std::uint64_t>(), setup["degenerate"].get<std::uint64_t>(),
-      setup["no_pixel_centres"].get<std::uint64_t>(),
-      setup["coefficient_overflow"].get<std::uint64_t>());
-  if (setup["coefficient_overflow"].get<std::uint64_t>() > 0) {
+      stats.integer("setup.clipped_away"), stats.integer("setup.degenerate"),
+      stats.integer("setup.no_pixel_centres"), overflow);
+  if (overflow > 0) {
     std::cout << fmt::format(
         "warning: {} triangles were not drawn because a coefficient did not fit "
         "evaluator.coefficient_bits = {} (see 'pp5sim extremes')\n",
-        setup["coefficient_overflow"].get<std::uint64_t>(), config.evaluator.coefficient_bits);
+        overflow, config.evaluator.coefficient_bits);
   }
   std::cout << fmt::format("\n{} {}/frame.png, {}/config.json, {}/stats.json\n",
                            replacing ? "wrote (replacing the previous run's)" : "wrote", o.out_dir,

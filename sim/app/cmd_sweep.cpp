@@ -185,11 +185,10 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
     const FrameResult r = simulate_frame(configs[i], scene, program, o.threads);
     fs::create_directories(dir);
     write_file_atomically((dir / "config.json").string(), configs[i].to_json().dump(2) + "\n");
-    write_file_atomically((dir / "stats.json").string(), r.stats.dump(2) + "\n");
+    write_file_atomically((dir / "stats.json").string(), r.stats_json.dump(2) + "\n");
     std::cerr << fmt::format("[{}/{}] {}: {:.3f} ms, {:.0f} triangles/s, bottleneck {}\n", i + 1,
                              runs.size(), dir.filename().string(), r.frame_seconds * 1e3,
-                             r.triangles_per_second,
-                             r.stats["timing"]["bottleneck"].get<std::string>());
+                             r.triangles_per_second, r.stats.text("timing.bottleneck"));
   }
   if (!o.print_commands) {
     std::cout << fmt::format("{} runs in {}; next: pp5sim sweep aggregate {} -o sweep.csv\n",
@@ -208,20 +207,29 @@ nlohmann::json read_json(const fs::path& path) {
   }
 }
 
-// The metrics of one run, as CSV columns.
-const std::vector<std::pair<std::string, std::vector<std::string>>>& metric_columns() {
-  static const std::vector<std::pair<std::string, std::vector<std::string>>> columns = {
-      {"frame_seconds", {"frame", "simulated_seconds"}},
-      {"triangles_per_second", {"frame", "projected_triangles_per_second"}},
-      {"pipelined_triangles_per_second", {"frame", "pipelined_triangles_per_second"}},
-      {"gp_clocks_per_triangle", {"frame", "gp_clocks_per_triangle"}},
-      {"bottleneck", {"timing", "bottleneck"}},
-      {"gp_seconds", {"timing", "gp_seconds"}},
-      {"ring_seconds", {"timing", "ring_seconds"}},
-      {"renderer_seconds", {"timing", "renderer_seconds"}},
-      {"gp_utilisation", {"timing", "gp_utilisation_mean"}},
-      {"ring_utilisation", {"timing", "ring_utilisation"}},
-      {"renderer_utilisation", {"timing", "renderer_utilisation_mean"}},
+// A written run's statistics, to read by name.
+Statistics read_statistics(const fs::path& path) {
+  try {
+    return Statistics::from_json(read_json(path));
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(fmt::format("{}: {}", path.string(), e.what()));
+  }
+}
+
+// The metrics of one run, as CSV columns: (column, statistic).
+const std::vector<std::pair<std::string, std::string>>& metric_columns() {
+  static const std::vector<std::pair<std::string, std::string>> columns = {
+      {"frame_seconds", "frame.simulated_seconds"},
+      {"triangles_per_second", "frame.projected_triangles_per_second"},
+      {"pipelined_triangles_per_second", "frame.pipelined_triangles_per_second"},
+      {"gp_clocks_per_triangle", "frame.gp_clocks_per_triangle"},
+      {"bottleneck", "timing.bottleneck"},
+      {"gp_seconds", "timing.gp_seconds"},
+      {"ring_seconds", "timing.ring_seconds"},
+      {"renderer_seconds", "timing.renderer_seconds"},
+      {"gp_utilisation", "timing.gp_utilisation_mean"},
+      {"ring_utilisation", "timing.ring_utilisation"},
+      {"renderer_utilisation", "timing.renderer_utilisation_mean"},
   };
   return columns;
 }
@@ -230,6 +238,12 @@ std::string csv_value(const nlohmann::json& v) {
   if (v.is_string()) return v.get<std::string>();
   if (v.is_number_integer()) return std::to_string(v.get<long long>());
   return fmt::format("{:.9g}", v.get<double>());
+}
+
+std::string csv_value(const StatValue& v) {
+  if (const auto* text = std::get_if<std::string>(&v)) return *text;
+  if (const auto* integer = std::get_if<std::int64_t>(&v)) return std::to_string(*integer);
+  return fmt::format("{:.9g}", std::get<double>(v));
 }
 
 int run_aggregate(const SweepOptions& o) {
@@ -246,7 +260,7 @@ int run_aggregate(const SweepOptions& o) {
   std::string csv;
   std::vector<std::pair<std::vector<double>, std::string>> sorted_rows;
   for (const auto& k : keys) csv += k + ",";
-  for (const auto& [name, path] : metric_columns()) csv += name + ",";
+  for (const auto& [column, name] : metric_columns()) csv += column + ",";
   csv.back() = '\n';
   int rows = 0;
   int missing = 0;
@@ -258,7 +272,7 @@ int run_aggregate(const SweepOptions& o) {
       continue;
     }
     const nlohmann::json config = read_json(run / "config.json");
-    const nlohmann::json stats = read_json(run / "stats.json");
+    const Statistics stats = read_statistics(run / "stats.json");
     std::string row;
     std::vector<double> order;
     for (const auto& k : keys) {
@@ -267,17 +281,12 @@ int run_aggregate(const SweepOptions& o) {
       order.push_back(v.is_number() ? v.get<double>() : 0.0);
       row += csv_value(v) + ",";
     }
-    for (const auto& [name, path] : metric_columns()) {
-      const nlohmann::json* v = &stats;
-      for (const auto& p : path) {
-        if (!v->contains(p)) {
-          throw std::runtime_error(fmt::format("{}: no '{}' in stats.json (from an older pp5sim?)",
-                                               (run / "stats.json").string(),
-                                               fmt::join(path, ".")));
-        }
-        v = &(*v)[p];
+    for (const auto& [column, name] : metric_columns()) {
+      if (!stats.contains(name)) {
+        throw std::runtime_error(fmt::format("{}: no '{}' in stats.json (from an older pp5sim?)",
+                                             (run / "stats.json").string(), name));
       }
-      row += csv_value(*v) + ",";
+      row += csv_value(stats.value(name)) + ",";
     }
     row.back() = '\n';
     sorted_rows.push_back({order, row});

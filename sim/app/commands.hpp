@@ -23,6 +23,7 @@ Command add_render_command(CLI::App& app);
 Command add_isa_command(CLI::App& app);
 Command add_asm_command(CLI::App& app);
 Command add_config_command(CLI::App& app);
+Command add_stats_command(CLI::App& app);
 Command add_scenes_command(CLI::App& app);
 Command add_sweep_command(CLI::App& app);
 Command add_trace_command(CLI::App& app);

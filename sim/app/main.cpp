@@ -89,6 +89,7 @@ int main(int argc, char** argv) {
       add_isa_command(app),
       add_asm_command(app),
       add_config_command(app),
+      add_stats_command(app),
       add_scenes_command(app),
       add_sweep_command(app),
       add_trace_command(app),

@@ -1,0 +1,270 @@
+#include "common/statistics.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace pp5 {
+
+namespace {
+
+// An array index, written without leading zeros ("gp.01" would be a second name for gp.1).
+bool is_index(const std::string& component) {
+  if (component.empty() || (component.size() > 1 && component[0] == '0')) return false;
+  for (char c : component) {
+    if (c < '0' || c > '9') return false;
+  }
+  return true;
+}
+
+std::vector<std::string> components(const std::string& name) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t dot = name.find('.', start);
+    out.push_back(name.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+    if (dot == std::string::npos) return out;
+    start = dot + 1;
+  }
+}
+
+void check_name(const std::string& name) {
+  for (const std::string& c : components(name)) {
+    bool ok = !c.empty();
+    for (char ch : c)
+      ok = ok && ((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_');
+    if (!ok) {
+      throw std::invalid_argument("statistic '" + name +
+                                  "': components must be non-empty and of [a-z0-9_]");
+    }
+  }
+  if (is_index(components(name).front())) {
+    throw std::invalid_argument("statistic '" + name + "': the document itself is not an array");
+  }
+}
+
+StatKind kind_of(const StatValue& v) { return static_cast<StatKind>(v.index()); }
+
+nlohmann::json json_of(const StatValue& v) {
+  switch (kind_of(v)) {
+    case StatKind::integer:
+      return std::get<std::int64_t>(v);
+    case StatKind::real:
+      return std::get<double>(v);
+    case StatKind::text:
+      break;
+  }
+  return std::get<std::string>(v);
+}
+
+}  // namespace
+
+const char* stat_kind_name(StatKind kind) {
+  switch (kind) {
+    case StatKind::integer:
+      return "integer";
+    case StatKind::real:
+      return "real";
+    case StatKind::text:
+      break;
+  }
+  return "text";
+}
+
+std::string stat_pattern(const std::string& name) {
+  std::string out;
+  for (const std::string& c : components(name)) {
+    if (!out.empty()) out += '.';
+    out += is_index(c) ? std::string("N") : c;
+  }
+  return out;
+}
+
+void Statistics::add_integer(const std::string& name, const char* unit, const char* description,
+                             std::function<std::int64_t()> get) {
+  add({name, StatKind::integer, unit, description},
+      [get = std::move(get)]() -> StatValue { return get(); });
+}
+
+void Statistics::add_real(const std::string& name, const char* unit, const char* description,
+                          std::function<double()> get) {
+  add({name, StatKind::real, unit, description},
+      [get = std::move(get)]() -> StatValue { return get(); });
+}
+
+void Statistics::add_text(const std::string& name, const char* unit, const char* description,
+                          std::function<std::string()> get) {
+  add({name, StatKind::text, unit, description},
+      [get = std::move(get)]() -> StatValue { return get(); });
+}
+
+void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
+  const std::string& name = info.name;
+  check_name(name);
+  if (index_.count(name)) throw std::invalid_argument("statistic '" + name + "' registered twice");
+  if (parents_.count(name)) {
+    throw std::invalid_argument("statistic '" + name + "' is already a group of statistics");
+  }
+  const std::vector<std::string> parts = components(name);
+  // Check everything before changing anything, so that a refused name leaves no trace.
+  std::string parent;
+  for (std::size_t k = 0; k + 1 < parts.size(); ++k) {
+    parent += (k ? "." : "") + parts[k];
+    if (index_.count(parent)) {
+      throw std::invalid_argument("statistic '" + name + "': '" + parent + "' is a value");
+    }
+    const bool index = is_index(parts[k + 1]);
+    const auto it = parents_.find(parent);
+    if (it != parents_.end() && it->second.array != index) {
+      throw std::invalid_argument("statistic '" + name + "': '" + parent + "' is " +
+                                  (it->second.array ? "an array" : "a group of names"));
+    }
+    const std::size_t have = it == parents_.end() ? 0 : it->second.elements;
+    if (index && std::stoull(parts[k + 1]) > have) {
+      throw std::invalid_argument("statistic '" + name + "': indices of '" + parent +
+                                  "' must be registered from 0 without gaps");
+    }
+  }
+  const std::string pattern = stat_pattern(name);
+  const auto first = patterns_.find(pattern);
+  if (first != patterns_.end()) {
+    const StatisticInfo& e = entries_[first->second].info;
+    if (e.kind != info.kind || e.unit != info.unit || e.description != info.description) {
+      throw std::invalid_argument("statistic '" + name + "' differs from '" + e.name +
+                                  "' in kind, unit or description");
+    }
+  } else {
+    patterns_.emplace(pattern, entries_.size());
+  }
+  parent.clear();
+  for (std::size_t k = 0; k + 1 < parts.size(); ++k) {
+    parent += (k ? "." : "") + parts[k];
+    Group& group = parents_[parent];
+    group.array = is_index(parts[k + 1]);
+    if (group.array) {
+      group.elements = std::max<std::size_t>(group.elements, std::stoull(parts[k + 1]) + 1);
+    }
+  }
+  index_.emplace(name, entries_.size());
+  entries_.push_back({std::move(info), std::move(get), {}, false});
+}
+
+const Statistics::Entry& Statistics::entry(const std::string& name) const {
+  const auto it = index_.find(name);
+  if (it == index_.end()) {
+    throw std::out_of_range("no statistic '" + name + "' (pp5sim stats --describe lists them)");
+  }
+  return entries_[it->second];
+}
+
+StatValue Statistics::value(const std::string& name) const { return read(entry(name)); }
+
+const StatisticInfo& Statistics::info(const std::string& name) const { return entry(name).info; }
+
+namespace {
+
+template <class T>
+T typed(const StatValue& v, const std::string& name, StatKind want) {
+  if (kind_of(v) != want) {
+    throw std::out_of_range("statistic '" + name + "' is " + stat_kind_name(kind_of(v)) + ", not " +
+                            stat_kind_name(want));
+  }
+  return std::get<T>(v);
+}
+
+}  // namespace
+
+std::int64_t Statistics::integer(const std::string& name) const {
+  return typed<std::int64_t>(value(name), name, StatKind::integer);
+}
+
+double Statistics::real(const std::string& name) const {
+  return typed<double>(value(name), name, StatKind::real);
+}
+
+std::string Statistics::text(const std::string& name) const {
+  return typed<std::string>(value(name), name, StatKind::text);
+}
+
+std::size_t Statistics::elements(const std::string& name) const {
+  const auto it = parents_.find(name);
+  if (it == parents_.end()) throw std::out_of_range("no group of statistics '" + name + "'");
+  return it->second.elements;
+}
+
+void Statistics::freeze() {
+  for (Entry& e : entries_) {
+    if (e.frozen) continue;
+    e.value = e.get();
+    e.frozen = true;
+    e.get = nullptr;
+  }
+}
+
+nlohmann::json Statistics::to_json() const {
+  nlohmann::json doc = nlohmann::json::object();
+  for (const Entry& e : entries_) {
+    nlohmann::json* at = &doc;
+    for (const std::string& c : components(e.info.name)) {
+      // Dense registration (checked by add) means an index is at most the array's size.
+      at = is_index(c) ? &(*at)[std::stoull(c)] : &(*at)[c];
+    }
+    *at = json_of(read(e));
+  }
+  return doc;
+}
+
+Statistics Statistics::from_json(const nlohmann::json& document) {
+  Statistics s;
+  std::function<void(const nlohmann::json&, const std::string&)> walk =
+      [&](const nlohmann::json& v, const std::string& name) {
+        if (v.is_object() || v.is_array()) {
+          if (v.is_array()) {
+            for (std::size_t k = 0; k < v.size(); ++k) walk(v[k], name + "." + std::to_string(k));
+          } else {
+            for (const auto& [key, child] : v.items())
+              walk(child, name.empty() ? key : name + "." + key);
+          }
+          return;
+        }
+        StatValue value;
+        if (v.is_number_unsigned()) {
+          value = static_cast<std::int64_t>(v.get<std::uint64_t>());
+        } else if (v.is_number_integer()) {
+          value = v.get<std::int64_t>();
+        } else if (v.is_number_float()) {
+          value = v.get<double>();
+        } else if (v.is_string()) {
+          value = v.get<std::string>();
+        } else {
+          throw std::invalid_argument("statistic '" + name + "': not a number or text");
+        }
+        s.add({name, kind_of(value), "", ""}, nullptr);
+        Entry& e = s.entries_.back();
+        e.value = std::move(value);
+        e.frozen = true;
+      };
+  if (!document.is_object()) throw std::invalid_argument("statistics: not a JSON object");
+  walk(document, "");
+  return s;
+}
+
+std::vector<StatisticInfo> Statistics::describe() const {
+  std::vector<StatisticInfo> out;
+  for (std::size_t k = 0; k < entries_.size(); ++k) {
+    std::string pattern = stat_pattern(entries_[k].info.name);
+    if (patterns_.at(pattern) != k) continue;  // not the pattern's first statistic
+    StatisticInfo i = entries_[k].info;
+    i.name = std::move(pattern);
+    out.push_back(std::move(i));
+  }
+  return out;
+}
+
+std::vector<StatisticInfo> Statistics::infos() const {
+  std::vector<StatisticInfo> out;
+  out.reserve(entries_.size());
+  for (const Entry& e : entries_) out.push_back(e.info);
+  return out;
+}
+
+}  // namespace pp5

@@ -1,0 +1,99 @@
+// The statistics of the Graphics Processors and of set-up, registered from GpStats (see
+// common/statistics.hpp for the registry's contract).
+#include <string>
+
+#include "common/statistics.hpp"
+#include "models/gp/graphics_processor.hpp"
+
+namespace pp5 {
+
+namespace {
+std::int64_t integer(std::uint64_t v) { return static_cast<std::int64_t>(v); }
+}  // namespace
+
+void GraphicsProcessor::register_statistics(Statistics& stats, double frame_seconds) const {
+  namespace u = stat_unit;
+  const std::string p = "gp." + std::to_string(index_) + ".";
+  const GpStats& g = stats_;
+  const double clock_hz = machine_.config().gp.clock_hz;
+  stats.add_integer(p + "busy_clocks", u::gp_clocks,
+                    "Clocks computing: geometry, and starting its ring messages",
+                    [&g] { return integer(g.busy.count); });
+  stats.add_integer(p + "geometry_clocks", u::gp_clocks,
+                    "Of busy_clocks, those of transform, clip, light, set-up and binning",
+                    [&g] { return integer(g.geometry.count); });
+  stats.add_real(
+      p + "utilisation", u::ratio, "busy_clocks as a fraction of the frame time",
+      [&g, clock_hz, frame_seconds] { return g.busy.seconds(clock_hz) / frame_seconds; });
+  stats.add_integer(p + "triangles_in", u::count, "Scene triangles this GP transformed",
+                    [&g] { return integer(g.triangles_in); });
+  stats.add_integer(p + "packets", u::count,
+                    "Triangle packets it sent (one per region a triangle touches)",
+                    [&g] { return integer(g.packets); });
+  stats.add_integer(p + "messages", u::count,
+                    "Ring messages it sent: its bin map and its bins' messages",
+                    [&g] { return integer(g.messages); });
+  const std::pair<const char*, const std::uint64_t OpCounts::*> ops[] = {
+      {"fadd", &OpCounts::fadd},    {"fmul", &OpCounts::fmul},       {"load", &OpCounts::load},
+      {"store", &OpCounts::store},  {"integer", &OpCounts::integer}, {"branch", &OpCounts::branch},
+      {"chains", &OpCounts::chains}};
+  const char* const meaning[] = {
+      "i860 floating-point adder operations of the geometry (add, subtract, compare, convert)",
+      "i860 floating-point multiplier operations of the geometry (reciprocal seeds included)",
+      "i860 loads of the geometry",
+      "i860 stores of the geometry",
+      "i860 core integer and logic operations of the geometry",
+      "i860 branches of the geometry",
+      "Dependent floating-point chains of the geometry (each fills and drains a pipeline)"};
+  for (std::size_t k = 0; k < std::size(ops); ++k) {
+    const auto field = ops[k].second;
+    stats.add_integer(p + "operations." + ops[k].first, u::count, meaning[k],
+                      [&g, field] { return integer(g.ops.*field); });
+  }
+  stats.add_real(p + "waiting_for_stage_seconds", u::seconds,
+                 "Waiting for a Renderer to open the (region, pass) stage of its next bin",
+                 [&g] { return g.waiting_stage.to_seconds(); });
+  stats.add_real(p + "waiting_for_queue_seconds", u::seconds,
+                 "Waiting for room in a Renderer's instruction queue",
+                 [&g] { return g.waiting_queue.to_seconds(); });
+  stats.add_real(p + "sending_seconds", u::seconds, "Waiting for its ring interface to send",
+                 [&g] { return g.waiting_ring.to_seconds(); });
+  stats.add_real(p + "geometry_done_seconds", u::seconds,
+                 "When it finished the geometry of its share of the display list",
+                 [&g] { return g.geometry_done.to_seconds(); });
+  stats.add_real(p + "finished_seconds", u::seconds, "When it sent its last message",
+                 [&g] { return g.finished.to_seconds(); });
+}
+
+void register_setup_statistics(Statistics& stats, std::vector<const GraphicsProcessor*> gps) {
+  namespace u = stat_unit;
+  auto sum = [gps](auto get) {
+    return [gps, get] {
+      std::uint64_t total = 0;
+      for (const GraphicsProcessor* gp : gps) total += get(gp->stats());
+      return integer(total);
+    };
+  };
+  stats.add_integer("setup.packets", u::count,
+                    "Triangle packets all GPs sent (one per triangle and region it touches)",
+                    sum([](const GpStats& g) { return g.packets; }));
+  stats.add_integer("setup.clipped_away", u::count,
+                    "Triangles dropped wholly outside the view volume",
+                    sum([](const GpStats& g) { return g.setup.clipped_away; }));
+  stats.add_integer("setup.clip_splits", u::count, "Extra triangles made by clipping",
+                    sum([](const GpStats& g) { return g.setup.clip_splits; }));
+  stats.add_integer("setup.culled", u::count, "Back-facing triangles dropped (gp.cull_back_faces)",
+                    sum([](const GpStats& g) { return g.setup.culled; }));
+  stats.add_integer("setup.degenerate", u::count,
+                    "Triangles dropped with zero area after snapping to the sub-pixel grid",
+                    sum([](const GpStats& g) { return g.setup.degenerate; }));
+  stats.add_integer("setup.no_pixel_centres", u::count,
+                    "Triangles dropped that cover no pixel centre",
+                    sum([](const GpStats& g) { return g.setup.no_pixels; }));
+  stats.add_integer("setup.coefficient_overflow", u::count,
+                    "Triangles dropped because a coefficient did not fit "
+                    "evaluator.coefficient_bits",
+                    sum([](const GpStats& g) { return g.setup.overflow; }));
+}
+
+}  // namespace pp5
