@@ -114,7 +114,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
   }
   // The host spreads the display list over the GPs in contiguous blocks, so that the
   // concatenation of the GPs' bins is in display-list order.
-  const auto n = static_cast<long long>(scene.mesh.triangles.size());
+  const auto n = static_cast<long long>(geometry_.display_list().size());
   for (int k = 0; k < gps; ++k) {
     const int first = static_cast<int>(n * k / gps);
     const int last = static_cast<int>(n * (k + 1) / gps);

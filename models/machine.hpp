@@ -42,7 +42,9 @@ class FrameBuffer;
 
 // One procedure invocation sent from a GP to a Renderer.
 struct Packet {
-  int primitive = -1;  // scene triangle, or -1 for clear/shade
+  Procedure procedure = Procedure::triangle;  // the procedure it runs: its kind's
+  int kind = 0;                               // index in primitive_kinds() (models/gp)
+  int primitive = -1;                         // display-list index, or -1 for clear/shade
   std::uint64_t words = 0;
   PacketValues values;
 };
