@@ -142,8 +142,8 @@ class Machine : public sc_core::sc_module {
     if (timeline_on_) slices_.push_back({unit, index, std::move(name), start, end});
   }
   const std::vector<TimelineSlice>& slices() const { return slices_; }
-  // Ring words of a packet carrying `expressions` linear expressions.
-  std::uint64_t packet_words(int expressions) const;
+  // Ring words of a packet carrying `expressions`, each by its form (models/gp/expressions.hpp).
+  std::uint64_t packet_words(const ExpressionSet& expressions) const;
   std::uint64_t region_words() const;
 
   // Runs every board's recorded instruction streams on its pixel array, on `threads` host

@@ -178,3 +178,26 @@ TEST_CASE("primitive kinds: the triangle kind runs the triangle procedure on the
   CHECK(k.store == t.store);
   CHECK(k.chains == t.chains);
 }
+
+TEST_CASE("packet words follow the forms: a header, then 1, 3 or 6 coefficients each",
+          "[gp_registry]") {
+  ExpressionSet edges;
+  for (Expression e : {Expression::edge0, Expression::edge1, Expression::edge2}) {
+    edges.set(static_cast<int>(e));
+  }
+  CHECK(coefficient_words(40, 32) == 2);
+  CHECK(coefficient_words(32, 32) == 1);
+  CHECK(packet_words(ExpressionSet{}, 2) == 1);
+  CHECK(packet_words(edges, 2) == 1 + 3 * 3 * 2);
+  ExpressionSet flat = edges;
+  for (Expression e : {Expression::flat_red, Expression::flat_green, Expression::flat_blue}) {
+    flat.set(static_cast<int>(e));
+  }
+  CHECK(packet_words(flat, 2) == 1 + (3 * 3 + 3 * 1) * 2);
+  CHECK(packet_words(flat, 1) == 1 + 3 * 3 + 3 * 1);
+  ExpressionSet slopes = edges;
+  slopes.set(static_cast<int>(Expression::depth));
+  slopes.set(static_cast<int>(Expression::slope_x));
+  slopes.set(static_cast<int>(Expression::slope_y));
+  CHECK(packet_words(slopes, 2) == 1 + (4 * 3 + 2 * 1) * 2);
+}

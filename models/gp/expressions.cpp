@@ -237,9 +237,12 @@ int coefficient_words(int coefficient_bits, int word_bits) {
 }
 
 std::uint64_t packet_words(const ExpressionSet& set, int coefficient_words) {
-  // A header word naming the procedure, then three coefficients per expression.
-  return 1 + static_cast<std::uint64_t>(set.count()) * 3 *
-                 static_cast<std::uint64_t>(coefficient_words);
+  // A header word naming the procedure, then each expression's coefficients by its form.
+  std::uint64_t n = 0;
+  for (const ExpressionEntry& e : kRegistry) {
+    if (set.test(static_cast<int>(e.id))) n += static_cast<std::uint64_t>(coefficients(e.form));
+  }
+  return 1 + n * static_cast<std::uint64_t>(coefficient_words);
 }
 
 }  // namespace pp5

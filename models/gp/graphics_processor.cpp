@@ -89,7 +89,7 @@ void GraphicsProcessor::run() {
   for (const PrimitiveKind* k : primitive_kinds()) {
     GpWorkload w = machine_.gp_workload();
     w.expressions = machine_.program().procedure(k->procedure()).expressions;
-    w.packet_words = machine_.packet_words(static_cast<int>(w.expressions.count()));
+    w.packet_words = machine_.packet_words(w.expressions);
     kinds.push_back({k, k->start(geometry), w});
   }
 

@@ -137,8 +137,9 @@ OpCounts I860Work::expression_setup(Expression e) {
 }
 
 OpCounts I860Work::pack(const GpWorkload& w) {
-  // Every word of the packet is stored once (a 40-bit coefficient is two words); the header
-  // names the procedure; a counter and pointer per packet.
+  // Every word of the packet is stored once (a 40-bit coefficient is two words; a constant
+  // sends one coefficient, a linear expression three, a quadratic six); the header names the
+  // procedure; a counter and pointer per packet.
   return {0, 0, 0, w.packet_words, 3, 0, 0};
 }
 
