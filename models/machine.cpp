@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "models/frame_buffer/frame_buffer.hpp"
+#include "models/gp/expressions.hpp"
 #include "models/gp/graphics_processor.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
@@ -94,7 +95,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);
   workload_.expressions = triangle.expressions;
   workload_.lights = geometry_.lights();
-  workload_.packet_words = packet_words(static_cast<int>(triangle.expressions.count()));
+  workload_.packet_words = packet_words(triangle.expressions);
   if (workload_.packet_words + 1 > static_cast<std::uint64_t>(config.renderer.queue_words)) {
     throw std::runtime_error(fmt::format(
         "key 'renderer.queue_words' = {} is too small: one triangle packet of '{}' takes {} "
@@ -114,7 +115,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
   }
   // The host spreads the display list over the GPs in contiguous blocks, so that the
   // concatenation of the GPs' bins is in display-list order.
-  const auto n = static_cast<long long>(scene.mesh.triangles.size());
+  const auto n = static_cast<long long>(geometry_.display_list().size());
   for (int k = 0; k < gps; ++k) {
     const int first = static_cast<int>(n * k / gps);
     const int last = static_cast<int>(n * (k + 1) / gps);
@@ -160,11 +161,9 @@ std::string Machine::fmt_name(const char* base, int k) {
   return std::string(base) + std::to_string(k);
 }
 
-std::uint64_t Machine::packet_words(int expressions) const {
-  const int per_coefficient =
-      (config_.evaluator.coefficient_bits + config_.ring.word_bits - 1) / config_.ring.word_bits;
-  // A header word naming the procedure, then three coefficients per linear expression.
-  return 1 + static_cast<std::uint64_t>(expressions) * 3 * per_coefficient;
+std::uint64_t Machine::packet_words(const ExpressionSet& expressions) const {
+  return pp5::packet_words(
+      expressions, coefficient_words(config_.evaluator.coefficient_bits, config_.ring.word_bits));
 }
 
 std::uint64_t Machine::region_words() const {

@@ -42,7 +42,9 @@ class FrameBuffer;
 
 // One procedure invocation sent from a GP to a Renderer.
 struct Packet {
-  int primitive = -1;  // scene triangle, or -1 for clear/shade
+  Procedure procedure = Procedure::triangle;  // the procedure it runs: its kind's
+  int kind = 0;                               // index in primitive_kinds() (models/gp)
+  int primitive = -1;                         // display-list index, or -1 for clear/shade
   std::uint64_t words = 0;
   PacketValues values;
 };
@@ -140,8 +142,8 @@ class Machine : public sc_core::sc_module {
     if (timeline_on_) slices_.push_back({unit, index, std::move(name), start, end});
   }
   const std::vector<TimelineSlice>& slices() const { return slices_; }
-  // Ring words of a packet carrying `expressions` linear expressions.
-  std::uint64_t packet_words(int expressions) const;
+  // Ring words of a packet carrying `expressions`, each by its form (models/gp/expressions.hpp).
+  std::uint64_t packet_words(const ExpressionSet& expressions) const;
   std::uint64_t region_words() const;
 
   // Runs every board's recorded instruction streams on its pixel array, on `threads` host

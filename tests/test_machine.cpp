@@ -84,11 +84,10 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   // Renderer, which ran clear while it waited, loads the first packet's coefficients, runs two
   // triangle packets, copies the colours
   // to the backing store, and the ring carries the region one hop to the frame buffer.
-  const int expressions =
-      static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
-  const int per_coefficient =
-      (config.evaluator.coefficient_bits + config.ring.word_bits - 1) / config.ring.word_bits;
-  const double packet_words = 1 + expressions * 3 * per_coefficient;
+  // A header word, then flat's three edges and depth (3 coefficients each) and three
+  // face-lit colours (constants, 1 each), of two 32-bit words per 40-bit coefficient.
+  REQUIRE(program.procedure(Procedure::triangle).expressions.count() == 7);
+  const double packet_words = 1 + (4 * 3 + 3 * 1) * 2;
   GpWorkload workload;
   workload.expressions = program.procedure(Procedure::triangle).expressions;
   workload.packet_words = static_cast<std::uint64_t>(packet_words);

@@ -9,6 +9,7 @@
 #include <systemc>
 
 #include "firmware/assembler/assembler.hpp"
+#include "models/gp/expressions.hpp"
 #include "models/gp/i860.hpp"
 #include "models/machine.hpp"
 #include "models/ring/ring.hpp"
@@ -26,9 +27,8 @@ GpWorkload phong_workload(const MachineConfig& c) {
   const Program program = load_program("phong", c);
   GpWorkload w;
   w.expressions = program.procedure(Procedure::triangle).expressions;
-  const int per_coefficient =
-      (c.evaluator.coefficient_bits + c.ring.word_bits - 1) / c.ring.word_bits;
-  w.packet_words = 1 + w.expressions.count() * 3 * per_coefficient;
+  w.packet_words = packet_words(w.expressions,
+                                coefficient_words(c.evaluator.coefficient_bits, c.ring.word_bits));
   return w;
 }
 

@@ -7,6 +7,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "models/gp/expressions.hpp"
+#include "models/gp/primitive_kind.hpp"
+
 namespace pp5 {
 
 namespace {
@@ -51,15 +54,10 @@ std::int64_t floor_div(std::int64_t a, std::int64_t b) {
 
 std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b); }
 
-bool fits(std::int64_t v, int bits) {
-  const std::int64_t limit = std::int64_t{1} << (bits - 1);
-  return v >= -limit && v < limit;
-}
-
 }  // namespace
 
 GeometryEngine::GeometryEngine(const GeometryParams& params, const Scene& scene)
-    : params_(params), scene_(scene) {
+    : params_(params), scene_(scene), display_list_(make_display_list(scene)) {
   const float aspect =
       static_cast<float>(params.screen_width) / static_cast<float>(params.screen_height);
   view_ = glm::dmat4(view_matrix(scene.camera));
@@ -162,24 +160,26 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
   }
 }
 
-bool GeometryEngine::setup(const ScreenTriangle& t,
-                           const std::bitset<static_cast<int>(Expression::count)>& needed,
-                           SetupResult& out, SetupCounts& counts) const {
+bool GeometryEngine::setup(const ScreenTriangle& t, const ExpressionSet& needed, SetupResult& out,
+                           SetupCounts& counts) const {
   const int s = params_.subpixel_bits;
-  const std::int64_t scale = std::int64_t{1} << s;
-  const std::int64_t half = scale / 2;
-  std::array<std::int64_t, 3> xs{};
-  std::array<std::int64_t, 3> ys{};
+  SetupContext c{params_, scene_.camera, t};
+  c.scale = std::int64_t{1} << s;
+  c.half = c.scale / 2;
   for (int k = 0; k < 3; ++k) {
-    xs[k] = std::llround(t.v[k].position.x * static_cast<double>(scale));
-    ys[k] = std::llround(t.v[k].position.y * static_cast<double>(scale));
+    c.xs[k] = std::llround(t.v[k].position.x * static_cast<double>(c.scale));
+    c.ys[k] = std::llround(t.v[k].position.y * static_cast<double>(c.scale));
   }
-  const std::int64_t area2 = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (xs[2] - xs[0]) * (ys[1] - ys[0]);
-  if (area2 == 0) {
+  const auto& xs = c.xs;
+  const auto& ys = c.ys;
+  c.area2 = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (xs[2] - xs[0]) * (ys[1] - ys[0]);
+  if (c.area2 == 0) {
     ++counts.degenerate;
     return false;
   }
   // Pixel X is covered only if its centre X * scale + half lies within the triangle's span.
+  const std::int64_t scale = c.scale;
+  const std::int64_t half = c.half;
   const std::int64_t x_lo = *std::min_element(xs.begin(), xs.end());
   const std::int64_t x_hi = *std::max_element(xs.begin(), xs.end());
   const std::int64_t y_lo = *std::min_element(ys.begin(), ys.end());
@@ -195,137 +195,31 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
     return false;
   }
 
-  PacketValues& pv = out.values;
-  const int cb = params_.coefficient_bits;
-  const std::int64_t sigma = area2 > 0 ? 1 : -1;
-  for (int e = 0; e < 3; ++e) {
-    if (!needed.test(static_cast<int>(Expression::edge0) + e)) continue;
-    const int a = e;
-    const int b = (e + 1) % 3;
-    const std::int64_t dx = xs[b] - xs[a];
-    const std::int64_t dy = ys[b] - ys[a];
-    const std::int64_t A = -sigma * dy * scale;
-    const std::int64_t B = sigma * dx * scale;
-    std::int64_t C = sigma * (dx * (half - ys[a]) - dy * (half - xs[a]));
-    // Top-left rule: a pixel centre exactly on the edge belongs to this triangle only if
-    // the edge is a left edge (inside lies to its right) or a top edge.
-    if (!(A > 0 || (A == 0 && B > 0))) C -= 1;
-    if (!fits(A, cb) || !fits(B, cb) || !fits(C, cb)) {
+  // What every attribute plane shares: the vertices in pixel-index coordinates.
+  c.f_scale = std::ldexp(1.0, params_.fraction_bits);
+  for (int k = 0; k < 3; ++k) {
+    c.u[k] = static_cast<double>(xs[k] - half) / static_cast<double>(scale);
+    c.w[k] = static_cast<double>(ys[k] - half) / static_cast<double>(scale);
+  }
+  c.det = (c.u[1] - c.u[0]) * (c.w[2] - c.w[0]) - (c.u[2] - c.u[0]) * (c.w[1] - c.w[0]);
+  c.depth_max = std::ldexp(1.0, params_.depth_bits) - 1.0;
+  if (needs_adjacency(needed)) c.adjacency = &adjacency();
+
+  // Only what the program uses, each from its registry entry, in enum order.
+  for (const ExpressionEntry& e : expression_registry()) {
+    const int k = static_cast<int>(e.id);
+    if (!needed.test(k)) continue;
+    if (!e.compute(c, out.values.expressions[static_cast<std::size_t>(k)])) {
       ++counts.overflow;
       return false;
     }
-    pv.expressions[static_cast<int>(Expression::edge0) + e] =
-        QuadraticCoefficients::linear(A, B, C);
-  }
-
-  // Attribute planes through the snapped vertices, in pixel-index coordinates (the centre of
-  // pixel X is at X + 0.5, so a vertex at x sits at index coordinate x - 0.5).
-  const double f_scale = std::ldexp(1.0, params_.fraction_bits);
-  std::array<double, 3> u{};
-  std::array<double, 3> w{};
-  for (int k = 0; k < 3; ++k) {
-    u[k] = static_cast<double>(xs[k] - half) / static_cast<double>(scale);
-    w[k] = static_cast<double>(ys[k] - half) / static_cast<double>(scale);
-  }
-  const double det = (u[1] - u[0]) * (w[2] - w[0]) - (u[2] - u[0]) * (w[1] - w[0]);
-  bool overflow = false;
-  // The gradient (per pixel in x and y) of the plane through the three vertices' values.
-  auto gradient = [&](const std::array<double, 3>& f) {
-    return std::pair<double, double>{
-        ((f[1] - f[0]) * (w[2] - w[0]) - (f[2] - f[0]) * (w[1] - w[0])) / det,
-        ((f[2] - f[0]) * (u[1] - u[0]) - (f[1] - f[0]) * (u[2] - u[0])) / det};
-  };
-  auto plane = [&](std::array<double, 3> f) {
-    const auto [a, b] = gradient(f);
-    const double A = std::nearbyint(a * f_scale);
-    const double B = std::nearbyint(b * f_scale);
-    const double limit = std::ldexp(1.0, cb - 1);
-    if (!(std::fabs(A) < limit && std::fabs(B) < limit)) {
-      overflow = true;
-      return QuadraticCoefficients{};
-    }
-    const auto Ai = static_cast<std::int64_t>(A);
-    const auto Bi = static_cast<std::int64_t>(B);
-    // C makes the value exact (to rounding) at the first vertex: C = f0 - A u0 - B v0, with
-    // the products formed exactly in integers.
-    const __int128 f0 = static_cast<__int128>(std::llround(f[0] * f_scale)) * scale;
-    const __int128 num = f0 - static_cast<__int128>(Ai) * (xs[0] - half) -
-                         static_cast<__int128>(Bi) * (ys[0] - half);
-    __int128 C = (num >= 0 ? num + scale / 2 : num - scale / 2) / scale;
-    // C is sent modulo 2^coefficient_bits when the evaluator's sums wrap at no more bits
-    // than that: every pixel then still gets A x + B y + C exactly modulo 2^result_bits, and
-    // inside the triangle, where the attribute lies within its range, that is its exact
-    // value. A steep plane far from the screen's origin needs this: its C is far beyond the
-    // width while the values it yields are not. (Edge functions are never wrapped: their
-    // sign matters at every pixel.)
-    const __int128 span = static_cast<__int128>(1) << cb;
-    if (params_.result_bits <= cb) {
-      C = ((C % span) + span) % span;
-      if (C >= span / 2) C -= span;
-    }
-    if (C >= span / 2 || C < -span / 2) {
-      overflow = true;
-      return QuadraticCoefficients{};
-    }
-    return QuadraticCoefficients::linear(Ai, Bi, static_cast<std::int64_t>(C));
-  };
-  auto set = [&](Expression e, std::array<double, 3> f) {
-    if (needed.test(static_cast<int>(e))) pv.expressions[static_cast<int>(e)] = plane(f);
-  };
-  auto constant = [&](Expression e, double value) {
-    if (needed.test(static_cast<int>(e))) {
-      pv.expressions[static_cast<int>(e)] =
-          // A multiplication, not a shift: constants may be negative.
-          QuadraticCoefficients::constant(std::llround(value) *
-                                          (std::int64_t{1} << params_.fraction_bits));
-    }
-  };
-  const double depth_max = std::ldexp(1.0, params_.depth_bits) - 1.0;
-  auto depth = [&](int k) { return std::clamp(t.v[k].depth * depth_max, 0.5, depth_max - 1.5); };
-  auto colour = [&](double c) { return std::clamp(c * 255.0, 0.5, 255.49); };
-  set(Expression::depth, {depth(0), depth(1), depth(2)});
-  if (needed.test(static_cast<int>(Expression::eye_depth))) {
-    // Eye-space depth mapped linearly from [near, far] to the depth range, then a plane
-    // through the three vertices in screen space: exact at the vertices, but eye depth is
-    // not affine in screen space under perspective, so inside the triangle it is not the
-    // surface's true eye depth (no perspective correction).
-    const Camera& cam = scene_.camera;
-    const double span = static_cast<double>(cam.far_plane) - static_cast<double>(cam.near_plane);
-    auto eye = [&](int k) {
-      const double v = (t.v[k].eye_depth - static_cast<double>(cam.near_plane)) / span;
-      return std::clamp(v * depth_max, 0.5, depth_max - 1.5);
-    };
-    set(Expression::eye_depth, {eye(0), eye(1), eye(2)});
-  }
-  if (needed.test(static_cast<int>(Expression::slope_x)) ||
-      needed.test(static_cast<int>(Expression::slope_y))) {
-    // The depth plane's gradient, in depth units per pixel, quantised for the firmware.
-    const auto [a, b] = gradient({depth(0), depth(1), depth(2)});
-    auto slope = [](double g) {
-      return std::clamp(std::nearbyint(std::ldexp(g, -kSlopeShift)),
-                        -static_cast<double>(kSlopeLimit), static_cast<double>(kSlopeLimit));
-    };
-    constant(Expression::slope_x, slope(a));
-    constant(Expression::slope_y, slope(b));
-  }
-  // Opacity 0..256 (256 = opaque), clamped like a colour so that floor() stays in range.
-  auto opacity = [&](int k) { return std::clamp(t.v[k].opacity * 256.0, 0.5, 256.49); };
-  set(Expression::opacity, {opacity(0), opacity(1), opacity(2)});
-  for (int c = 0; c < 3; ++c) {
-    set(static_cast<Expression>(static_cast<int>(Expression::red) + c),
-        {colour(t.v[0].lit_color[c]), colour(t.v[1].lit_color[c]), colour(t.v[2].lit_color[c])});
-    set(static_cast<Expression>(static_cast<int>(Expression::base_red) + c),
-        {colour(t.v[0].base_color[c]), colour(t.v[1].base_color[c]), colour(t.v[2].base_color[c])});
-    set(static_cast<Expression>(static_cast<int>(Expression::nx) + c),
-        {127.0 * t.v[0].normal[c], 127.0 * t.v[1].normal[c], 127.0 * t.v[2].normal[c]});
-    constant(static_cast<Expression>(static_cast<int>(Expression::flat_red) + c),
-             std::clamp(t.flat_color[c], 0.0, 1.0) * 255.0);
-  }
-  if (overflow) {
-    ++counts.overflow;
-    return false;
   }
   return true;
+}
+
+const MeshAdjacency& GeometryEngine::adjacency() const {
+  std::call_once(adjacency_once_, [this] { adjacency_ = build_mesh_adjacency(scene_.mesh); });
+  return adjacency_;
 }
 
 void GeometryEngine::bin(const SetupResult& r, std::vector<int>& regions) const {

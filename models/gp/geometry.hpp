@@ -17,9 +17,12 @@
 #include <array>
 #include <bitset>
 #include <glm/glm.hpp>
+#include <mutex>
 #include <vector>
 
 #include "firmware/isa/isa.hpp"
+#include "models/display_list/display_list.hpp"
+#include "models/display_list/mesh_adjacency.hpp"
 #include "models/display_list/scene.hpp"
 
 namespace pp5 {
@@ -64,6 +67,9 @@ struct SetupCounts {
   std::uint64_t culled = 0;        // back-facing, dropped (GeometryParams::cull_back_faces)
 };
 
+// The expressions a procedure uses (ProcedureCode::expressions): what the GP computes.
+using ExpressionSet = std::bitset<static_cast<int>(Expression::count)>;
+
 struct SetupResult {
   PacketValues values;
   int x_min = 0, x_max = -1, y_min = 0, y_max = -1;  // pixel-centre bounding box, inclusive
@@ -77,8 +83,9 @@ class GeometryEngine {
   void transform(int index, std::vector<ScreenTriangle>& out, SetupCounts& counts) const;
   // Coefficients of the expressions in `needed`; false (and counted) if the triangle has no
   // pixels or a coefficient does not fit.
-  bool setup(const ScreenTriangle& t,
-             const std::bitset<static_cast<int>(Expression::count)>& needed, SetupResult& out,
+  // The coefficients are computed by the expression registry's entries
+  // (models/gp/expressions.hpp) from one SetupContext.
+  bool setup(const ScreenTriangle& t, const ExpressionSet& needed, SetupResult& out,
              SetupCounts& counts) const;
   // Regions the bounding box touches, as region indices (row-major).
   void bin(const SetupResult& r, std::vector<int>& regions) const;
@@ -93,6 +100,12 @@ class GeometryEngine {
   FrameValues frame_values() const;
 
   const GeometryParams& params() const { return params_; }
+  const Scene& scene() const { return scene_; }
+  // The scene's primitives of every registered kind (models/gp/primitive_kind.hpp).
+  const DisplayList& display_list() const { return display_list_; }
+  // The scene mesh's face/face adjacency, built on the first call (thread-safe) and kept:
+  // only scenes whose program needs an expression that reads it pay for it.
+  const MeshAdjacency& adjacency() const;
 
  private:
   glm::dvec3 light_vertex(const glm::dvec3& color, const glm::dvec3& normal) const;
@@ -104,6 +117,9 @@ class GeometryEngine {
   glm::dmat3 normal_matrix_;
   std::vector<glm::dvec3> light_eye_;  // per light
   std::vector<glm::dvec3> half_eye_;
+  DisplayList display_list_;
+  mutable std::once_flag adjacency_once_;
+  mutable MeshAdjacency adjacency_;
 };
 
 }  // namespace pp5

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <iterator>
 
+#include "models/gp/primitive_kind.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -72,41 +73,57 @@ void GraphicsProcessor::run() {
   }
   const MachineConfig& config = machine_.config();
   const GeometryEngine& geometry = machine_.geometry();
-  const ProcedureCode& triangle = machine_.program().procedure(Procedure::triangle);
-  const GpWorkload& workload = machine_.gp_workload();
-  const std::uint64_t words = workload.packet_words;
+  const DisplayList& display_list = geometry.display_list();
+  // The message loop below sizes messages by one packet length, the machine workload's (the
+  // triangle procedure's): while the triangle is the only kind, every packet has it.
+  const std::uint64_t words = machine_.gp_workload().packet_words;
+
+  // Per registered kind: this GP's worker, the expressions its procedure uses and the
+  // workload the cost model charges (the machine's, with that procedure's expressions).
+  struct KindState {
+    const PrimitiveKind* kind;
+    std::unique_ptr<PrimitiveWorker> worker;
+    GpWorkload workload;
+  };
+  std::vector<KindState> kinds;
+  for (const PrimitiveKind* k : primitive_kinds()) {
+    GpWorkload w = machine_.gp_workload();
+    w.expressions = machine_.program().procedure(k->procedure()).expressions;
+    w.packet_words = machine_.packet_words(w.expressions);
+    kinds.push_back({k, k->start(geometry), w});
+  }
 
   // A bin per region: the packets this GP sends it, in display-list order. With a multipass
   // program the same packets go out once per pass.
   std::vector<std::vector<std::shared_ptr<const Packet>>> bins(config.regions());
-  std::vector<ScreenTriangle> screen;
   std::vector<int> regions;
   for (int i = first_; i < last_; ++i) {
-    screen.clear();
-    geometry.transform(i, screen, stats_.setup);
+    const PrimitiveRef ref = display_list.at(i);
+    KindState& k = kinds[static_cast<std::size_t>(ref.kind)];
+    PrimitiveTally tally;
+    tally.pieces = k.worker->transform(ref.index, stats_.setup);
     ++stats_.triangles_in;
-    int setups = 0;
-    int binned = 0;
-    for (const ScreenTriangle& t : screen) {
+    for (int piece = 0; piece < tally.pieces; ++piece) {
       ++stats_.screen_triangles;
-      ++setups;
+      ++tally.setups;
       SetupResult result;
-      if (!geometry.setup(t, triangle.expressions, result, stats_.setup)) continue;
+      if (!k.worker->setup(piece, k.workload.expressions, result, stats_.setup)) continue;
       auto packet = std::make_shared<Packet>();
+      packet->procedure = k.kind->procedure();
+      packet->kind = ref.kind;
       packet->primitive = i;
-      packet->words = words;
+      packet->words = k.workload.packet_words;
       packet->values = result.values;
       packet->values.parameters = machine_.frame_parameters();
       regions.clear();
-      geometry.bin(result, regions);
+      k.worker->bin(result, regions);
       for (int r : regions) {
         bins[r].push_back(packet);
         ++stats_.packets;
-        ++binned;
+        ++tally.regions;
       }
     }
-    const OpCounts ops =
-        I860Work::triangle(workload, static_cast<int>(screen.size()), setups, binned);
+    const OpCounts ops = k.kind->operations(k.workload, tally);
     stats_.ops += ops;
     stats_.geometry += machine_.i860().clocks(ops, 1);
   }

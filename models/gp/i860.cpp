@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "models/gp/expressions.hpp"
+
 namespace pp5 {
 
 namespace {
@@ -130,29 +132,14 @@ OpCounts I860Work::triangle_setup(const GpWorkload& w) {
 }
 
 OpCounts I860Work::expression_setup(Expression e) {
-  switch (e) {
-    case E::edge0:
-    case E::edge1:
-    case E::edge2:
-      // A = dy, B = -dx on integer positions; C = x0 y1 - x1 y0 (2 integer multiplies in
-      // the FP unit, 1 subtract); the top-left rule adjusts C (compare, branch, add).
-      return {1 + 1, 2, 0, 0, 2 + 2, 1, 1};
-    case E::flat_red:
-    case E::flat_green:
-    case E::flat_blue:
-      // A constant: C = the face-lit value, converted to fixed point.
-      return {1, 1, 0, 0, 0, 0, 0};
-    default:
-      // A linear attribute: d1 = a1 - a0, d2 = a2 - a0; A = (d1 ey2 - d2 ey1) / area and
-      // B likewise (3 multiplies, 1 subtract each); C = a0 - A x0 - B y0; scale to fixed
-      // point (3 multiplies) and convert (3); clamp at the vertices (3 compares, 1 branch).
-      return {2 + 1 + 1 + 2 + 3 + 3, 3 + 3 + 2 + 3, 3, 0, 2, 1, 1};
-  }
+  // Each expression's count is its registry entry's (models/gp/expressions.cpp).
+  return expression_entry(e).cost;
 }
 
 OpCounts I860Work::pack(const GpWorkload& w) {
-  // Every word of the packet is stored once (a 40-bit coefficient is two words); the header
-  // names the procedure; a counter and pointer per packet.
+  // Every word of the packet is stored once (a 40-bit coefficient is two words; a constant
+  // sends one coefficient, a linear expression three, a quadratic six); the header names the
+  // procedure; a counter and pointer per packet.
   return {0, 0, 0, w.packet_words, 3, 0, 0};
 }
 

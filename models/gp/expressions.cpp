@@ -1,0 +1,248 @@
+#include "models/gp/expressions.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pp5 {
+
+namespace {
+
+using E = Expression;
+using F = ExpressionForm;
+
+bool fits(std::int64_t v, int bits) {
+  const std::int64_t limit = std::int64_t{1} << (bits - 1);
+  return v >= -limit && v < limit;
+}
+
+// Edge e runs from vertex e to vertex (e + 1) % 3: A x + B y + C >= 0 inside, on pixel
+// indices, from the snapped vertices, so coefficients are exact integers and two triangles
+// sharing the edge get exactly opposite functions.
+template <int e>
+bool edge(const SetupContext& c, QuadraticCoefficients& out) {
+  const int a = e;
+  const int b = (e + 1) % 3;
+  const std::int64_t sigma = c.area2 > 0 ? 1 : -1;
+  const std::int64_t dx = c.xs[b] - c.xs[a];
+  const std::int64_t dy = c.ys[b] - c.ys[a];
+  const std::int64_t A = -sigma * dy * c.scale;
+  const std::int64_t B = sigma * dx * c.scale;
+  std::int64_t C = sigma * (dx * (c.half - c.ys[a]) - dy * (c.half - c.xs[a]));
+  // Top-left rule: a pixel centre exactly on the edge belongs to this triangle only if the
+  // edge is a left edge (inside lies to its right) or a top edge.
+  if (!(A > 0 || (A == 0 && B > 0))) C -= 1;
+  const int cb = c.params.coefficient_bits;
+  if (!fits(A, cb) || !fits(B, cb) || !fits(C, cb)) return false;
+  out = QuadraticCoefficients::linear(A, B, C);
+  return true;
+}
+
+bool depth(const SetupContext& c, QuadraticCoefficients& out) {
+  return c.plane({c.depth(0), c.depth(1), c.depth(2)}, out);
+}
+
+bool eye_depth(const SetupContext& c, QuadraticCoefficients& out) {
+  // Eye-space depth mapped linearly from [near, far] to the depth range, then a plane
+  // through the three vertices in screen space: exact at the vertices, but eye depth is not
+  // affine in screen space under perspective, so inside the triangle it is not the
+  // surface's true eye depth (no perspective correction).
+  const double near = static_cast<double>(c.camera.near_plane);
+  const double span = static_cast<double>(c.camera.far_plane) - near;
+  auto eye = [&](int k) {
+    const double v = (c.triangle.v[k].eye_depth - near) / span;
+    return std::clamp(v * c.depth_max, 0.5, c.depth_max - 1.5);
+  };
+  return c.plane({eye(0), eye(1), eye(2)}, out);
+}
+
+// Colours 0..255, clamped half a unit inside so that floor() stays in range.
+double colour(double v) { return std::clamp(v * 255.0, 0.5, 255.49); }
+
+template <int channel>
+bool lit_colour(const SetupContext& c, QuadraticCoefficients& out) {
+  const auto& v = c.triangle.v;
+  return c.plane({colour(v[0].lit_color[channel]), colour(v[1].lit_color[channel]),
+                  colour(v[2].lit_color[channel])},
+                 out);
+}
+
+template <int channel>
+bool base_colour(const SetupContext& c, QuadraticCoefficients& out) {
+  const auto& v = c.triangle.v;
+  return c.plane({colour(v[0].base_color[channel]), colour(v[1].base_color[channel]),
+                  colour(v[2].base_color[channel])},
+                 out);
+}
+
+template <int axis>
+bool normal(const SetupContext& c, QuadraticCoefficients& out) {
+  const auto& v = c.triangle.v;
+  return c.plane({127.0 * v[0].normal[axis], 127.0 * v[1].normal[axis], 127.0 * v[2].normal[axis]},
+                 out);
+}
+
+template <int channel>
+bool flat_colour(const SetupContext& c, QuadraticCoefficients& out) {
+  out = c.constant(std::clamp(c.triangle.flat_color[channel], 0.0, 1.0) * 255.0);
+  return true;
+}
+
+// The depth plane's gradient along x (axis 0) or y (axis 1), in depth units per pixel,
+// quantised for the firmware: units of 2^kSlopeShift, clamped to +-kSlopeLimit.
+template <int axis>
+bool slope(const SetupContext& c, QuadraticCoefficients& out) {
+  const auto g = c.gradient({c.depth(0), c.depth(1), c.depth(2)});
+  const double v = axis == 0 ? g.first : g.second;
+  out = c.constant(std::clamp(std::nearbyint(std::ldexp(v, -kSlopeShift)),
+                              -static_cast<double>(kSlopeLimit), static_cast<double>(kSlopeLimit)));
+  return true;
+}
+
+bool opacity(const SetupContext& c, QuadraticCoefficients& out) {
+  // Opacity 0..256 (256 = opaque), clamped like a colour so that floor() stays in range.
+  auto o = [&](int k) { return std::clamp(c.triangle.v[k].opacity * 256.0, 0.5, 256.49); };
+  return c.plane({o(0), o(1), o(2)}, out);
+}
+
+// i860 operations of one expression's set-up (docs/timing.md):
+// An edge: A = dy, B = -dx on integer positions; C = x0 y1 - x1 y0 (2 integer multiplies in
+// the FP unit, 1 subtract); the top-left rule adjusts C (compare, branch, add).
+constexpr OpCounts kEdgeCost{1 + 1, 2, 0, 0, 2 + 2, 1, 1};
+// A linear attribute: d1 = a1 - a0, d2 = a2 - a0; A = (d1 ey2 - d2 ey1) / area and B
+// likewise (3 multiplies, 1 subtract each); C = a0 - A x0 - B y0; scale to fixed point (3
+// multiplies) and convert (3); clamp at the vertices (3 compares, 1 branch).
+constexpr OpCounts kPlaneCost{2 + 1 + 1 + 2 + 3 + 3, 3 + 3 + 2 + 3, 3, 0, 2, 1, 1};
+// A constant: C = the face-lit value, converted to fixed point.
+constexpr OpCounts kConstantCost{1, 1, 0, 0, 0, 0, 0};
+// A depth slope is a constant, but it is the depth plane's gradient: the same work as a
+// plane's A or B, quantised and clamped, so it costs what an attribute plane costs.
+constexpr OpCounts kSlopeCost = kPlaneCost;
+
+constexpr std::array<ExpressionEntry, static_cast<int>(Expression::count)> kRegistry = {{
+    {E::edge0, F::linear, kEdgeCost, false, edge<0>},
+    {E::edge1, F::linear, kEdgeCost, false, edge<1>},
+    {E::edge2, F::linear, kEdgeCost, false, edge<2>},
+    {E::depth, F::linear, kPlaneCost, false, depth},
+    {E::red, F::linear, kPlaneCost, false, lit_colour<0>},
+    {E::green, F::linear, kPlaneCost, false, lit_colour<1>},
+    {E::blue, F::linear, kPlaneCost, false, lit_colour<2>},
+    {E::nx, F::linear, kPlaneCost, false, normal<0>},
+    {E::ny, F::linear, kPlaneCost, false, normal<1>},
+    {E::nz, F::linear, kPlaneCost, false, normal<2>},
+    {E::flat_red, F::constant, kConstantCost, false, flat_colour<0>},
+    {E::flat_green, F::constant, kConstantCost, false, flat_colour<1>},
+    {E::flat_blue, F::constant, kConstantCost, false, flat_colour<2>},
+    {E::base_red, F::linear, kPlaneCost, false, base_colour<0>},
+    {E::base_green, F::linear, kPlaneCost, false, base_colour<1>},
+    {E::base_blue, F::linear, kPlaneCost, false, base_colour<2>},
+    {E::slope_x, F::constant, kSlopeCost, false, slope<0>},
+    {E::slope_y, F::constant, kSlopeCost, false, slope<1>},
+    {E::eye_depth, F::linear, kPlaneCost, false, eye_depth},
+    {E::opacity, F::linear, kPlaneCost, false, opacity},
+}};
+
+constexpr bool in_enum_order() {
+  for (std::size_t k = 0; k < kRegistry.size(); ++k) {
+    if (static_cast<std::size_t>(kRegistry[k].id) != k) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+const char* expression_form_name(ExpressionForm form) {
+  switch (form) {
+    case F::constant:
+      return "constant";
+    case F::linear:
+      return "linear";
+    case F::quadratic:
+      return "quadratic";
+  }
+  return "?";
+}
+
+int coefficients(ExpressionForm form) {
+  switch (form) {
+    case F::constant:
+      return 1;
+    case F::linear:
+      return 3;
+    case F::quadratic:
+      return 6;
+  }
+  return 6;
+}
+
+std::pair<double, double> SetupContext::gradient(const std::array<double, 3>& f) const {
+  return {((f[1] - f[0]) * (w[2] - w[0]) - (f[2] - f[0]) * (w[1] - w[0])) / det,
+          ((f[2] - f[0]) * (u[1] - u[0]) - (f[1] - f[0]) * (u[2] - u[0])) / det};
+}
+
+bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& out) const {
+  const int cb = params.coefficient_bits;
+  const auto [a, b] = gradient(f);
+  const double A = std::nearbyint(a * f_scale);
+  const double B = std::nearbyint(b * f_scale);
+  const double limit = std::ldexp(1.0, cb - 1);
+  if (!(std::fabs(A) < limit && std::fabs(B) < limit)) return false;
+  const auto Ai = static_cast<std::int64_t>(A);
+  const auto Bi = static_cast<std::int64_t>(B);
+  // C makes the value exact (to rounding) at the first vertex: C = f0 - A u0 - B v0, with
+  // the products formed exactly in integers.
+  const __int128 f0 = static_cast<__int128>(std::llround(f[0] * f_scale)) * scale;
+  const __int128 num =
+      f0 - static_cast<__int128>(Ai) * (xs[0] - half) - static_cast<__int128>(Bi) * (ys[0] - half);
+  __int128 C = (num >= 0 ? num + scale / 2 : num - scale / 2) / scale;
+  // C is sent modulo 2^coefficient_bits when the evaluator's sums wrap at no more bits than
+  // that: every pixel then still gets A x + B y + C exactly modulo 2^result_bits, and inside
+  // the triangle, where the attribute lies within its range, that is its exact value. A
+  // steep plane far from the screen's origin needs this: its C is far beyond the width
+  // while the values it yields are not. (Edge functions are never wrapped: their sign
+  // matters at every pixel.)
+  const __int128 span = static_cast<__int128>(1) << cb;
+  if (params.result_bits <= cb) {
+    C = ((C % span) + span) % span;
+    if (C >= span / 2) C -= span;
+  }
+  if (C >= span / 2 || C < -span / 2) return false;
+  out = QuadraticCoefficients::linear(Ai, Bi, static_cast<std::int64_t>(C));
+  return true;
+}
+
+QuadraticCoefficients SetupContext::constant(double value) const {
+  // A multiplication, not a shift: constants may be negative.
+  return QuadraticCoefficients::constant(std::llround(value) *
+                                         (std::int64_t{1} << params.fraction_bits));
+}
+
+double SetupContext::depth(int k) const {
+  return std::clamp(triangle.v[k].depth * depth_max, 0.5, depth_max - 1.5);
+}
+
+const std::array<ExpressionEntry, static_cast<int>(Expression::count)>& expression_registry() {
+  static_assert(in_enum_order(), "expression registry entries must follow the Expression enum");
+  return kRegistry;
+}
+
+bool needs_adjacency(const ExpressionSet& set) {
+  for (const ExpressionEntry& e : kRegistry) {
+    if (e.needs_adjacency && set.test(static_cast<int>(e.id))) return true;
+  }
+  return false;
+}
+
+int coefficient_words(int coefficient_bits, int word_bits) {
+  return (coefficient_bits + word_bits - 1) / word_bits;
+}
+
+std::uint64_t packet_words(const ExpressionSet& set, int coefficient_words) {
+  // A header word naming the procedure, then each expression's coefficients by its form.
+  std::uint64_t n = 0;
+  for (const ExpressionEntry& e : kRegistry) {
+    if (set.test(static_cast<int>(e.id))) n += static_cast<std::uint64_t>(coefficients(e.form));
+  }
+  return 1 + n * static_cast<std::uint64_t>(coefficient_words);
+}
+
+}  // namespace pp5
