@@ -32,6 +32,7 @@
 #include "models/frame_buffer/image.hpp"
 #include "models/gp/geometry.hpp"
 #include "models/gp/i860.hpp"
+#include "models/renderer/packet.hpp"
 
 namespace pp5 {
 
@@ -39,13 +40,6 @@ class GraphicsProcessor;
 class Renderer;
 class Ring;
 class FrameBuffer;
-
-// One procedure invocation sent from a GP to a Renderer.
-struct Packet {
-  int primitive = -1;  // scene triangle, or -1 for clear/shade
-  std::uint64_t words = 0;
-  PacketValues values;
-};
 
 // Part of a GP's bin for one (region, pass), as one ring message into a Renderer's queue.
 struct BinMessage {

@@ -313,7 +313,7 @@ std::string bit_budget_table(const Program& program, const TimingParams& timing)
   }
   out += fmt::format("{:<16} {:>5}  of {} bits ({:.0f}%)\n", "total", program.bits_used(),
                      program.memory_bits, 100.0 * program.bits_used() / program.memory_bits);
-  const PacketValues none{};
+  const OwnedValues none{};
   for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
     const ProcedureCode& code = program.procedures[k];
     if (code.spill_transfers == 0) continue;

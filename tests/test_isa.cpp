@@ -164,7 +164,7 @@ TEST_CASE("disassembly re-assembles to the same instructions", "[isa]") {
 
 TEST_CASE("cycle costs follow the documented formulas", "[isa]") {
   const TimingParams t = unusual_timing();
-  PacketValues values;
+  OwnedValues values;
   values.parameters[static_cast<int>(Parameter::diffuse)] = 0b1011;  // bits 0, 1, 3
   values.parameters[static_cast<int>(Parameter::specular)] = -6;     // |k| bits 1, 2
 
@@ -269,7 +269,7 @@ TEST_CASE("the Renderer board charges the table's costs", "[isa]") {
   RendererBoard board(params);
   board.begin_region(0, 0);
 
-  PacketValues values;
+  OwnedValues values;
   const char* const names[] = {"light_x", "light_y", "light_z", "half_x",  "half_y",
                                "half_z",  "ambient", "diffuse", "specular"};
   std::int64_t k = 13;
@@ -301,7 +301,7 @@ TEST_CASE("the Renderer board charges the table's costs", "[isa]") {
   CHECK(board.instructions_executed() == instructions);
 
   // mac costs follow the parameters a packet binds: other values, other cost.
-  PacketValues zero;
+  const OwnedValues zero;
   CHECK(procedure_cost(p.procedure(Procedure::light), params.timing, zero).count <
         procedure_cost(p.procedure(Procedure::light), params.timing, values).count);
 }

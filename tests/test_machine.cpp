@@ -39,7 +39,7 @@ TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[
   const Program program = load_program("flat", config);  // no data-dependent costs
   const FrameResult r = simulate_frame(config, scene, program, 2);
   const TimingParams timing = timing_params(config);
-  const PacketValues none{};
+  const OwnedValues none{};
   const std::uint64_t overhead = config.renderer.packet_overhead_cycles;
   const std::uint64_t clear =
       procedure_cost(program.procedure(Procedure::clear), timing, none).count;
@@ -96,7 +96,7 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   const double map_words = 2;
   const double bin_words = 1 + 2 * packet_words;
   const TimingParams timing = timing_params(config);
-  const PacketValues none{};
+  const OwnedValues none{};
   const double clear_cycles =
       config.renderer.packet_overhead_cycles +
       procedure_cost(program.procedure(Procedure::clear), timing, none).count;

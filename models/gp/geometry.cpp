@@ -195,7 +195,7 @@ bool GeometryEngine::setup(const ScreenTriangle& t,
     return false;
   }
 
-  PacketValues& pv = out.values;
+  PacketExpressions& pv = out.values;
   const int cb = params_.coefficient_bits;
   const std::int64_t sigma = area2 > 0 ? 1 : -1;
   for (int e = 0; e < 3; ++e) {

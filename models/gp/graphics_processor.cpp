@@ -93,10 +93,11 @@ void GraphicsProcessor::run() {
       SetupResult result;
       if (!geometry.setup(t, triangle.expressions, result, stats_.setup)) continue;
       auto packet = std::make_shared<Packet>();
+      packet->procedure = Procedure::triangle;
+      packet->kind = 0;
       packet->primitive = i;
       packet->words = words;
       packet->values = result.values;
-      packet->values.parameters = machine_.frame_parameters();
       regions.clear();
       geometry.bin(result, regions);
       for (int r : regions) {

@@ -9,6 +9,7 @@
 
 #include "models/gp/geometry.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 
 namespace pp5 {
@@ -22,10 +23,10 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
   }
   const GeometryEngine geometry(geometry_params(config), scene);
   const FrameValues values = geometry.frame_values();
-  const PacketValues& frame = values.frame;
+  const RegionStream stream(program, values);
   const auto& needed = program.procedure(Procedure::triangle).expressions;
 
-  std::vector<std::vector<PacketValues>> bins(config.regions());
+  std::vector<std::vector<std::shared_ptr<const Packet>>> bins(config.regions());
   FieldFrame out;
   SetupCounts counts;
   std::vector<ScreenTriangle> screen;
@@ -36,11 +37,13 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
     for (const ScreenTriangle& t : screen) {
       SetupResult r;
       if (!geometry.setup(t, needed, r, counts)) continue;
-      r.values.parameters = frame.parameters;
+      auto packet = std::make_shared<Packet>();
+      packet->primitive = i;
+      packet->values = r.values;
       regions.clear();
       geometry.bin(r, regions);
       for (int region : regions) {
-        bins[region].push_back(r.values);
+        bins[region].push_back(packet);
         ++out.packets;
       }
     }
@@ -70,14 +73,7 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
       const int x0 = (region % across) * rw;
       const int y0 = (region / across) * rh;
       board.begin_region(x0, y0);
-      board.run(program.procedure(Procedure::clear), frame);
-      for (int pass = 0; pass < program.passes; ++pass) {
-        if (pass > 0) board.run(program.procedure(Procedure::pass), frame);
-        for (const PacketValues& v : bins[region])
-          board.run(program.procedure(Procedure::triangle), v);
-      }
-      board.run_lights(program, values, region);
-      board.run(program.procedure(Procedure::shade), frame);
+      stream.for_each(bins[region], [&](const RegionStep& step) { board.run_step(step, region); });
       board.read_outputs(program, rgb);
       for (int y = 0; y < rh && y0 + y < h; ++y) {
         for (int x = 0; x < rw && x0 + x < w; ++x) {
