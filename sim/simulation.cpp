@@ -13,6 +13,7 @@
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/graphics_processor.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/execute_pixels.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 #include "sim/kernel.hpp"
@@ -156,7 +157,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   if (timeline) *timeline = timeline_document(*machine);
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  machine->execute_pixels(threads, observe);
+  execute_pixels(*machine, threads, observe);
   const double pixel_seconds = seconds_since(t1);
   const double host_seconds = seconds_since(t0);
 

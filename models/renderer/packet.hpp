@@ -1,6 +1,6 @@
 #pragma once
 // What a GP sends a Renderer: one procedure invocation per packet (ring messages carry runs
-// of them, see BinMessage in models/machine.hpp).
+// of them, see BinMessage in models/ring/ring.hpp).
 //
 // Contract:
 //  - A packet names the procedure it runs and the primitive kind that made it; the Renderer

@@ -23,7 +23,7 @@ void Renderer::reserve_room(std::uint64_t words) {
   stats_.queue_peak_words = std::max(stats_.queue_peak_words, queued_words_);
 }
 
-void Renderer::deliver(std::shared_ptr<const BinMessage> message) {
+void Renderer::receive_bin(std::shared_ptr<const BinMessage> message) {
   const bool last = message->last;
   queue_.push_back(std::move(message));
   if (last) {
@@ -33,10 +33,10 @@ void Renderer::deliver(std::shared_ptr<const BinMessage> message) {
   arrived_.notify(sc_core::SC_ZERO_TIME);
 }
 
-void Renderer::deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arrival) {
+void Renderer::receive_bin_map(const BinMapArrival& map) {
   ++maps_delivered_;
-  maps_requested_ = std::max(maps_requested_, requested);
-  maps_arrival_ = std::max(maps_arrival_, arrival);
+  maps_requested_ = std::max(maps_requested_, map.requested);
+  maps_arrival_ = std::max(maps_arrival_, map.arrival);
   if (maps_complete()) {
     maps_complete_.notify(sc_core::SC_ZERO_TIME);
     advance();
@@ -45,7 +45,7 @@ void Renderer::deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arri
 
 void Renderer::advance() {
   if (open_region_ < 0 || !maps_complete()) return;
-  const int senders = machine_.bin_senders(open_region_);
+  const int senders = machine_.scheduler().bin_senders(open_region_);
   if (lasts_delivered_ == senders && (senders > 0 || open_started_)) open_next_stage();
 }
 
@@ -68,11 +68,11 @@ void Renderer::open_next_stage() {
   } else {
     // The last pass of the region is all in the queue: take the next region now, so that
     // its bins flow in while this one finishes.
-    open_region_ = machine_.claim_region(index_);
+    open_region_ = machine_.scheduler().claim_region(index_);
     open_pass_ = open_region_ >= 0 ? 0 : -1;
   }
   if (open_region_ >= 0) stages_.push_back({open_region_, open_pass_});
-  machine_.input_changed().notify(sc_core::SC_ZERO_TIME);
+  machine_.scheduler().input_changed().notify(sc_core::SC_ZERO_TIME);
 }
 
 void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values) {
@@ -169,17 +169,17 @@ void Renderer::ship(int region) {
     stats_.busy += copy;
     catch_up();
     machine_.add_slice(Unit::renderer, index_, "copy out", t0, cursor_);
-    const RingBooking b = ring.reserve(from, to, words, ship_free_);
+    const RingBooking b = ring.send_region(from, to, words, region, ship_free_);
     ship_free_ = b.end;
-    machine_.frame_buffer().region_arrived(region, b.arrival);
     stats_.finished = std::max(stats_.finished, b.arrival);
   } else {
     catch_up();
     const sc_core::sc_time t0 = sc_core::sc_time_stamp();
-    ring.transfer(from, to, words);
+    // The region is handed to the frame buffer at booking; the array waits for its arrival.
+    const RingBooking b = ring.send_region(from, to, words, region);
+    wait(b.arrival - sc_core::sc_time_stamp());
     stats_.waiting_ship += sc_core::sc_time_stamp() - t0;
     cursor_ = sc_core::sc_time_stamp();
-    machine_.frame_buffer().region_arrived(region, cursor_);
     stats_.finished = std::max(stats_.finished, cursor_);
   }
 }
@@ -220,7 +220,7 @@ void Renderer::run() {
     stream.before_pass(stage.pass, charge_step);
     catch_up();
     if (!maps_complete() || maps_arrival_ > sc_core::sc_time_stamp()) wait_for_bin_maps();
-    const int senders = machine_.bin_senders(stage.region);
+    const int senders = machine_.scheduler().bin_senders(stage.region);
     int lasts = 0;
     while (lasts < senders) {
       catch_up();
@@ -270,7 +270,7 @@ void Renderer::run() {
             t0, cursor_);
       }
       queued_words_ -= m->words;
-      machine_.input_changed().notify(sc_core::SC_ZERO_TIME);
+      machine_.scheduler().input_changed().notify(sc_core::SC_ZERO_TIME);
       if (m->last) ++lasts;
     }
     if (stage.pass + 1 < program.passes) continue;

@@ -30,6 +30,7 @@
 #include "models/machine.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "models/ring/ring.hpp"
 
 namespace pp5 {
 
@@ -68,7 +69,7 @@ struct RendererStats {
   sc_core::sc_time finished;  // when its last region reached the frame buffer
 };
 
-class Renderer : public sc_core::sc_module {
+class Renderer : public sc_core::sc_module, public RingEndpoint {
  public:
   SC_HAS_PROCESS(Renderer);
   Renderer(sc_core::sc_module_name name, int index, Machine& machine);
@@ -81,10 +82,11 @@ class Renderer : public sc_core::sc_module {
   bool has_room(std::uint64_t words) const { return queued_words_ + words <= capacity_; }
   // A GP takes room for its next message (after has_room), before it starts sending.
   void reserve_room(std::uint64_t words);
-  // A GP's message has been booked on the ring; it is in the queue from its arrival on.
-  void deliver(std::shared_ptr<const BinMessage> message);
-  // A GP's bin map has been booked on the ring (Machine::bin_senders has its regions).
-  void deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arrival);
+  // Through the ring: a GP's message has been booked; it is in the queue from its arrival on.
+  void receive_bin(std::shared_ptr<const BinMessage> message) override;
+  // Through the ring: a GP's bin map has been booked (RegionScheduler::bin_senders has its
+  // regions).
+  void receive_bin_map(const BinMapArrival& map) override;
 
   const RendererStats& stats() const { return stats_; }
   const std::vector<RegionWork>& work() const { return work_; }
