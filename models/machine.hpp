@@ -76,10 +76,8 @@ class Machine : public sc_core::sc_module {
   const Scene& scene() const { return scene_; }
   const GeometryEngine& geometry() const { return geometry_; }
   const TimingParams& timing() const { return timing_; }
-  const std::array<std::int64_t, static_cast<int>(Parameter::count)>& frame_parameters() const {
-    return frame_values_.frame.parameters;
-  }
-  // The values of clear, pass and shade, and of each light's `light` procedure.
+  // The values of clear, pass and shade, and of each light's `light` procedure; a packet
+  // binds frame.parameters when it runs (RegionStream); it never carries them.
   const FrameValues& frame_values() const { return frame_values_; }
 
   Ring& ring() { return *ring_; }

@@ -39,7 +39,9 @@ struct RegionStep {
   const Packet* packet;  // the packet it runs, or null for clear, pass, light and shade
   int pass;              // the pass it belongs to (clear: 0, the `pass` before pass k: k,
                          // light and shade: the last)
-  int index;             // the packet's index among the region's packets, else -1
+  int index;             // the packet's index among the region's packets; -1 for steps
+                         // without a packet, and in the timing loop, which meets packets in
+                         // arrival order before their place is known
   int light;             // the scene light a `light` step runs for, else -1
 };
 
