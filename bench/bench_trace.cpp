@@ -1,5 +1,5 @@
 // Host cost of the tracing hook. One iteration runs one region's worth of the Phong firmware
-// on a 128 x 128 board: clear, 64 small triangles, shade.
+// on a 128 x 128 board: its region stream over 64 small triangles and one light.
 //   RegionBaseline        the board's instruction loop as it was before the hook existed
 //                         (execute and cost each instruction from the table), here verbatim;
 //   RegionTracingOff      RendererBoard::run with no observer: what every frame pays;
@@ -15,6 +15,7 @@
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/trace/recorder.hpp"
 
@@ -25,24 +26,27 @@ using namespace pp5;
 struct Workload {
   MachineConfig config = MachineConfig::defaults();
   Program program;
-  PacketValues frame;
-  std::vector<PacketValues> triangles;
+  FrameValues frame;  // one light, with the frame's parameters
+  std::vector<Packet> triangles;
 
   Workload()
       : program(assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/phong.pp5",
                               assembler_options(config))) {
     const std::int64_t one = std::int64_t{1} << config.evaluator.fraction_bits;
-    frame.parameters[static_cast<int>(Parameter::light_z)] = 127;
-    frame.parameters[static_cast<int>(Parameter::half_z)] = 127;
-    frame.parameters[static_cast<int>(Parameter::ambient)] = 40;
-    frame.parameters[static_cast<int>(Parameter::diffuse)] = 200;
-    frame.parameters[static_cast<int>(Parameter::specular)] = 100;
+    ParameterValues& p = frame.frame.parameters;
+    p[static_cast<int>(Parameter::light_z)] = 127;
+    p[static_cast<int>(Parameter::half_z)] = 127;
+    p[static_cast<int>(Parameter::ambient)] = 40;
+    p[static_cast<int>(Parameter::diffuse)] = 200;
+    p[static_cast<int>(Parameter::specular)] = 100;
+    frame.lights.push_back(frame.frame);
     // 64 right triangles of 12-pixel legs spread over the region, at decreasing depth.
     for (int k = 0; k < 64; ++k) {
       const int x0 = (k % 8) * 15 + 2, y0 = (k / 8) * 15 + 2;
-      PacketValues v = frame;
+      Packet v;
+      v.primitive = k;
       auto e = [&](Expression x) -> QuadraticCoefficients& {
-        return v.expressions[static_cast<int>(x)];
+        return v.values.expressions[static_cast<int>(x)];
       };
       e(Expression::edge0) = QuadraticCoefficients::linear(one, 0, -x0 * one);
       e(Expression::edge1) = QuadraticCoefficients::linear(0, one, -y0 * one);
@@ -78,24 +82,19 @@ ArrayCycles baseline_run(RendererBoard& board, const ProcedureCode& procedure,
 void region_baseline(RendererBoard& board) {
   const Workload& w = workload();
   const TimingParams t = timing_params(w.config);
-  ArrayCycles c = baseline_run(board, w.program.procedure(Procedure::clear), w.frame, t);
-  for (const auto& v : w.triangles) {
-    c += baseline_run(board, w.program.procedure(Procedure::triangle), v, t);
-  }
-  c += baseline_run(board, w.program.procedure(Procedure::shade), w.frame, t);
+  ArrayCycles c{};
+  RegionStream(w.program, w.frame).for_each(w.triangles, [&](const RegionStep& step) {
+    c += baseline_run(board, step.code, step.values, t);
+  });
   benchmark::DoNotOptimize(c);
 }
 
 void region_run(RendererBoard& board) {
   const Workload& w = workload();
-  board.begin_packet({Procedure::clear, -1, 0, 0});
-  ArrayCycles c = board.run(w.program.procedure(Procedure::clear), w.frame);
-  for (std::size_t k = 0; k < w.triangles.size(); ++k) {
-    board.begin_packet({Procedure::triangle, static_cast<int>(k), 0, 0});
-    c += board.run(w.program.procedure(Procedure::triangle), w.triangles[k]);
-  }
-  board.begin_packet({Procedure::shade, -1, 0, 0});
-  c += board.run(w.program.procedure(Procedure::shade), w.frame);
+  ArrayCycles c{};
+  RegionStream(w.program, w.frame).for_each(w.triangles, [&](const RegionStep& step) {
+    c += board.run_step(step);
+  });
   board.end_region(0);
   benchmark::DoNotOptimize(c);
 }

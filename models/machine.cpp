@@ -2,9 +2,7 @@
 
 #include <fmt/format.h>
 
-#include <atomic>
 #include <stdexcept>
-#include <thread>
 
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/expressions.hpp"
@@ -86,10 +84,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       timing_(timing_params(config)),
       frame_values_(geometry_.frame_values()),
       i860_(i860_params(config)),
-      dynamic_(config.renderer.balancing == "dynamic"),
-      owner_(config.regions(), -1),
-      bin_senders_(config.regions(), 0),
-      claimed_(config.renderer.count, 0) {
+      scheduler_(config.regions(), config.renderer.count, config.renderer.balancing == "dynamic") {
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);
@@ -123,28 +118,15 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
     gps_.push_back(
         std::make_unique<GraphicsProcessor>(fmt_name("gp", k).c_str(), k, first, last, *this));
   }
+  // The stops are numbered once every unit exists. GPs receive nothing.
+  for (int k = 0; k < renderers; ++k) {
+    ring_->attach(renderer_stop(k), *renderers_[k]);
+    renderer_stops_.push_back(renderer_stop(k));
+  }
+  ring_->attach(frame_buffer_stop(), *frame_buffer_);
 }
 
 Machine::~Machine() = default;
-
-int Machine::claim_region(int renderer) {
-  int region = -1;
-  if (dynamic_) {
-    if (next_region_ < config_.regions()) region = next_region_++;
-  } else {
-    const int r = renderer + claimed_[renderer] * renderer_count();
-    if (r < config_.regions()) {
-      region = r;
-      ++claimed_[renderer];
-    }
-  }
-  if (region >= 0) owner_[region] = renderer;
-  return region;
-}
-
-void Machine::add_bin_senders(const std::vector<int>& regions) {
-  for (int r : regions) ++bin_senders_[r];
-}
 
 std::uint64_t Machine::bin_map_words() const {
   const auto bits = static_cast<std::uint64_t>(config_.regions());
@@ -170,35 +152,6 @@ std::uint64_t Machine::region_words() const {
   const std::uint64_t bits = static_cast<std::uint64_t>(config_.renderer.region_width) *
                              config_.renderer.region_height * config_.frame_buffer.bits_per_pixel;
   return (bits + config_.ring.word_bits - 1) / config_.ring.word_bits;
-}
-
-void Machine::execute_pixels(int threads,
-                             const std::function<BoardObserver*(int renderer)>& observe) {
-  RendererBoardParams params = board_params(config_);
-  // Only the bits the program declares are allocated and processed: fields beyond them would
-  // be refused by the pixel array's bounds checks, never silently dropped.
-  params.array.memory_bits = std::max(1, program_.bits_used());
-  // One empty region, executed before the boards start, serves every board whose state
-  // after clear matches it (RendererBoard::run_empty_region checks); the rest of the boards'
-  // regions run as recorded.
-  RendererBoard first(params);
-  std::vector<std::uint8_t> empty_rgb;
-  first.run_empty_region(0, 0, program_, frame_values_, empty_rgb);
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    for (int k = next++; k < renderer_count(); k = next++) {
-      if (renderers_[k]->work().empty()) continue;  // a Renderer the frame did not use
-      RendererBoard board(params);
-      if (observe) board.set_observer(observe(k));
-      board.share_empty_region(first);
-      renderers_[k]->execute(board, program_, *frame_buffer_, frame_values_);
-    }
-  };
-  const int n = std::max(1, std::min(threads, renderer_count()));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < n; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
 }
 
 }  // namespace pp5

@@ -17,11 +17,15 @@
 // GP has sent its last message of the current one, so its queue never holds a message it
 // cannot eventually consume.
 //
+// Units talk through the ring (models/ring/ring.hpp): each unit that receives messages is
+// attached at its stop; region ownership and the bin senders live in the RegionScheduler.
+// Machine builds and wires the units and holds what they share; it runs nothing itself.
+//
 // Timing and function are separated: no instruction's cost depends on pixel data, so the
 // modules advance simulated time from the instruction table alone, and record each
 // region's packets; after the simulation each Renderer's board executes its regions'
-// instruction streams on its pixel array (execute_pixels), in parallel across boards.
-#include <functional>
+// instruction streams on its pixel array (execute_pixels, models/renderer/execute_pixels.hpp),
+// in parallel across boards.
 #include <memory>
 #include <systemc>
 #include <vector>
@@ -32,6 +36,8 @@
 #include "models/frame_buffer/image.hpp"
 #include "models/gp/geometry.hpp"
 #include "models/gp/i860.hpp"
+#include "models/renderer/packet.hpp"
+#include "models/renderer/region_scheduler.hpp"
 
 namespace pp5 {
 
@@ -39,27 +45,6 @@ class GraphicsProcessor;
 class Renderer;
 class Ring;
 class FrameBuffer;
-
-// One procedure invocation sent from a GP to a Renderer.
-struct Packet {
-  Procedure procedure = Procedure::triangle;  // the procedure it runs: its kind's
-  int kind = 0;                               // index in primitive_kinds() (models/gp)
-  int primitive = -1;                         // display-list index, or -1 for clear/shade
-  std::uint64_t words = 0;
-  PacketValues values;
-};
-
-// Part of a GP's bin for one (region, pass), as one ring message into a Renderer's queue.
-struct BinMessage {
-  int region = 0;
-  int pass = 0;
-  int gp = 0;
-  bool last = false;  // the GP's final message for this (region, pass)
-  std::vector<std::shared_ptr<const Packet>> packets;
-  std::uint64_t words = 0;
-  sc_core::sc_time requested;  // the GP asked the ring for it
-  sc_core::sc_time arrival;    // fully in the Renderer's queue
-};
 
 // One slice of activity for the timeline (Chrome trace-event format, see simulation.cpp).
 enum class Unit { gp, ring, renderer, frame_buffer };
@@ -91,10 +76,8 @@ class Machine : public sc_core::sc_module {
   const Scene& scene() const { return scene_; }
   const GeometryEngine& geometry() const { return geometry_; }
   const TimingParams& timing() const { return timing_; }
-  const std::array<std::int64_t, static_cast<int>(Parameter::count)>& frame_parameters() const {
-    return frame_values_.frame.parameters;
-  }
-  // The values of clear, pass and shade, and of each light's `light` procedure.
+  // The values of clear, pass and shade, and of each light's `light` procedure; a packet
+  // binds frame.parameters when it runs (RegionStream); it never carries them.
   const FrameValues& frame_values() const { return frame_values_; }
 
   Ring& ring() { return *ring_; }
@@ -113,22 +96,13 @@ class Machine : public sc_core::sc_module {
   int frame_buffer_stop() const { return gp_count() + renderer_count(); }
   int ring_stops() const { return frame_buffer_stop() + 1; }
 
-  // The next region for Renderer k (static: r mod count == k; dynamic: the next unclaimed),
-  // or -1 when there is none. Records the owner and wakes GPs waiting for an open stage.
-  int claim_region(int renderer);
-  // The Renderer that claimed `region`, or -1 if none has yet.
-  int owner_of_region(int region) const { return owner_[region]; }
-  // The bin maps: each GP, when its geometry is done, tells every Renderer which regions it
-  // has packets for. A Renderer waits for a region's bins from those GPs only, so a region no
-  // primitive touches waits for no message at all. A Renderer may read bin_senders() only
-  // once every GP's map has reached it.
-  void add_bin_senders(const std::vector<int>& regions);
-  int bin_senders(int region) const { return bin_senders_[region]; }
+  // Which Renderer renders which region, and which GPs send it packets.
+  RegionScheduler& scheduler() { return scheduler_; }
+  const RegionScheduler& scheduler() const { return scheduler_; }
+  // The Renderers' ring stops, in Renderer order: where a bin map goes.
+  const std::vector<int>& renderer_stops() const { return renderer_stops_; }
   // Words of one bin map on the ring: a header word and one bit per region.
   std::uint64_t bin_map_words() const;
-  bool dynamic_balancing() const { return dynamic_; }
-  // Notified whenever a Renderer opens a stage for input or frees queue space.
-  sc_core::sc_event& input_changed() { return input_changed_; }
 
   // The GP cost model and what the firmware asks of each triangle.
   const I860Model& i860() const { return i860_; }
@@ -146,13 +120,6 @@ class Machine : public sc_core::sc_module {
   std::uint64_t packet_words(const ExpressionSet& expressions) const;
   std::uint64_t region_words() const;
 
-  // Runs every board's recorded instruction streams on its pixel array, on `threads` host
-  // threads, and stores the results in the frame buffer's image. Deterministic: each
-  // board executes its own regions in order, whatever the thread count.
-  // `observe`, if given, returns an observer (or null) for Renderer k's board; see
-  // BoardObserver. Each board's observer is called from one host thread only.
-  void execute_pixels(int threads, const std::function<BoardObserver*(int renderer)>& observe = {});
-
  private:
   static std::string fmt_name(const char* base, int k);
 
@@ -168,13 +135,9 @@ class Machine : public sc_core::sc_module {
   std::vector<std::unique_ptr<GraphicsProcessor>> gps_;
   I860Model i860_;
   GpWorkload workload_;
-  bool dynamic_ = false;
-  std::vector<int> owner_;        // region -> Renderer, -1 until claimed
-  std::vector<int> bin_senders_;  // region -> GPs with packets for it
+  RegionScheduler scheduler_;
+  std::vector<int> renderer_stops_;
   int busy_gps_ = 0;
-  int next_region_ = 0;       // dynamic: the next unclaimed region
-  std::vector<int> claimed_;  // static: regions each Renderer has claimed so far
-  sc_core::sc_event input_changed_;
   bool timeline_on_ = false;
   std::vector<TimelineSlice> slices_;
 };

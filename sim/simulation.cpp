@@ -14,6 +14,7 @@
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/graphics_processor.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/execute_pixels.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 #include "sim/kernel.hpp"
@@ -204,7 +205,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   if (timeline) *timeline = timeline_document(*machine);
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  machine->execute_pixels(threads, observe);
+  execute_pixels(*machine, threads, observe);
   const double pixel_seconds = seconds_since(t1);
   const double host_seconds = seconds_since(t0);
 
@@ -337,7 +338,7 @@ std::string bit_budget_table(const Program& program, const TimingParams& timing)
   }
   out += fmt::format("{:<16} {:>5}  of {} bits ({:.0f}%)\n", "total", program.bits_used(),
                      program.memory_bits, 100.0 * program.bits_used() / program.memory_bits);
-  const PacketValues none{};
+  const OwnedValues none{};
   for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
     const ProcedureCode& code = program.procedures[k];
     if (code.spill_transfers == 0) continue;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
+#include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 
 using namespace pp5;
@@ -127,8 +128,8 @@ RendererBoardParams board_params(int memory_bits) {
   return p;
 }
 
-PacketValues spill_test_values(int variant) {
-  PacketValues v;
+OwnedValues spill_test_values(int variant) {
+  OwnedValues v;
   const std::int64_t one = std::int64_t{1} << TimingParams{}.fraction_bits;
   v.expressions[static_cast<int>(Expression::red)] =
       QuadraticCoefficients::linear(one * (1 + variant), 3 * one, 0);
@@ -142,16 +143,21 @@ PacketValues spill_test_values(int variant) {
   return v;
 }
 
-// Runs clear, two triangles and shade; returns the output pixels and adds up the cycles.
+// Runs a region's stream over two triangles (no lights); returns the output pixels and adds
+// up the cycles.
 std::vector<std::uint8_t> run_spill_test(const Program& program, int memory_bits,
                                          std::uint64_t& cycles) {
   RendererBoard board(board_params(memory_bits));
   board.begin_region(0, 0);
+  FrameValues frame;
+  frame.frame = spill_test_values(0);
+  std::vector<Packet> packets(2);
+  packets[0].values.expressions = spill_test_values(0).expressions;
+  packets[1].values.expressions = spill_test_values(1).expressions;
   cycles = 0;
-  cycles += board.run(program.procedure(Procedure::clear), spill_test_values(0)).count;
-  cycles += board.run(program.procedure(Procedure::triangle), spill_test_values(0)).count;
-  cycles += board.run(program.procedure(Procedure::triangle), spill_test_values(1)).count;
-  cycles += board.run(program.procedure(Procedure::shade), spill_test_values(0)).count;
+  RegionStream(program, frame).for_each(packets, [&](const RegionStep& step) {
+    cycles += board.run_step(step).count;
+  });
   std::vector<std::uint8_t> rgb;
   board.read_outputs(program, rgb);
   return rgb;
@@ -562,7 +568,7 @@ TEST_CASE("a spilled program computes the same pixels as a resident one", "[asse
 
   // Spilling costs exactly its transfers (triangle runs twice).
   const TimingParams timing;
-  const PacketValues values = spill_test_values(0);
+  const OwnedValues values = spill_test_values(0);
   std::uint64_t transfer_cycles = 0;
   for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
     const int runs = proc == static_cast<int>(Procedure::triangle) ? 2 : 1;

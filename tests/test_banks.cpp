@@ -15,6 +15,7 @@
 #include "models/gp/geometry.hpp"
 #include "models/gp/i860.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/analysis/intersections.hpp"
@@ -69,32 +70,30 @@ struct Bench {
     return t;
   }
   // Packets for `program`, in order; triangles with no pixels are dropped.
-  std::vector<PacketValues> packets(const Program& program,
-                                    const std::vector<ScreenTriangle>& tris) const {
+  std::vector<Packet> packets(const Program& program,
+                              const std::vector<ScreenTriangle>& tris) const {
     const GeometryEngine engine(gp, scene);
-    std::vector<PacketValues> out;
+    std::vector<Packet> out;
     SetupCounts counts;
     for (const ScreenTriangle& t : tris) {
       SetupResult r;
       if (!engine.setup(t, program.procedure(Procedure::triangle).expressions, r, counts)) continue;
-      r.values.parameters = engine.frame_parameters();
-      out.push_back(r.values);
+      Packet packet;
+      packet.primitive = static_cast<int>(out.size());
+      packet.values = r.values;
+      out.push_back(packet);
     }
     return out;
   }
-  // Runs the program and returns its flag field for every pixel.
+  // Runs the program's region stream over `stream` and returns its flag field for every pixel.
   std::vector<std::uint64_t> flags(const Program& program,
-                                   const std::vector<PacketValues>& stream) const {
+                                   const std::vector<Packet>& stream) const {
     RendererBoard board(board_params(config));
-    PacketValues frame;
-    frame.parameters = GeometryEngine(gp, scene).frame_parameters();
+    const FrameValues values = GeometryEngine(gp, scene).frame_values();
     board.begin_region(0, 0);
-    board.run(program.procedure(Procedure::clear), frame);
-    for (int pass = 0; pass < program.passes; ++pass) {
-      if (pass > 0) board.run(program.procedure(Procedure::pass), frame);
-      for (const PacketValues& v : stream) board.run(program.procedure(Procedure::triangle), v);
-    }
-    board.run(program.procedure(Procedure::shade), frame);
+    RegionStream(program, values).for_each(stream, [&](const RegionStep& step) {
+      board.run_step(step);
+    });
     const FieldDecl* f = program.find_field("iflag");
     REQUIRE(f != nullptr);
     std::vector<std::uint64_t> out(128 * 128);
@@ -104,16 +103,17 @@ struct Bench {
   }
 };
 
-bool covers(const PacketValues& v, int x, int y) {
+bool covers(const Packet& v, int x, int y) {
   for (int e = 0; e < 3; ++e) {
-    if (floor_value(v.expressions[static_cast<int>(Expression::edge0) + e], x, y, 0) < 0)
+    if (floor_value(v.values.expressions[static_cast<int>(Expression::edge0) + e], x, y, 0) < 0)
       return false;
   }
   return true;
 }
 
-std::int64_t depth_at(const PacketValues& v, int x, int y, int frac) {
-  return floor_value(v.expressions[static_cast<int>(Expression::depth)], x, y, frac) & 0xFFFFFF;
+std::int64_t depth_at(const Packet& v, int x, int y, int frac) {
+  return floor_value(v.values.expressions[static_cast<int>(Expression::depth)], x, y, frac) &
+         0xFFFFFF;
 }
 
 }  // namespace
@@ -140,7 +140,7 @@ TEST_CASE("exactMatch flags exactly the pixels where two polygons share the mini
       tris.push_back(Bench::triangle(a, c, d, z, z, z));
     }
   }
-  std::vector<PacketValues> stream = b.packets(program, tris);
+  std::vector<Packet> stream = b.packets(program, tris);
   REQUIRE(stream.size() > 16);
   std::size_t flagged_total = 0;
   for (int order = 0; order < 6; ++order) {
@@ -151,7 +151,7 @@ TEST_CASE("exactMatch flags exactly the pixels where two polygons share the mini
         // P4: two different polygons attain the minimum depth over those covering the pixel.
         std::int64_t best = 0xFFFFFF;
         int at_best = 0;
-        for (const PacketValues& v : stream) {
+        for (const Packet& v : stream) {
           if (!covers(v, x, y)) continue;
           const std::int64_t z = depth_at(v, x, y, frac);
           if (z < best) {
@@ -235,8 +235,8 @@ TEST_CASE("epsilon is zero for parallel planes and near-parallel planes do not o
       REQUIRE(stream.size() == 2);
       const auto flags = b.flags(program, stream);
       // The integer model of the test: dz^2 < epsilon_scale * ((a2-a1)^2 + (b2-b1)^2).
-      auto slope = [&](const PacketValues& v, Expression e) {
-        return v.expressions[static_cast<int>(e)].F >> frac;
+      auto slope = [&](const Packet& v, Expression e) {
+        return v.values.expressions[static_cast<int>(e)].F >> frac;
       };
       const __int128 da =
           slope(stream[1], Expression::slope_x) - slope(stream[0], Expression::slope_x);

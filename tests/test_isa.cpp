@@ -173,7 +173,7 @@ TEST_CASE("disassembly re-assembles to the same instructions", "[isa]") {
 
 TEST_CASE("cycle costs follow the documented formulas", "[isa]") {
   const TimingParams t = unusual_timing();
-  PacketValues values;
+  OwnedValues values;
   values.parameters[static_cast<int>(Parameter::diffuse)] = 0b1011;  // bits 0, 1, 3
   values.parameters[static_cast<int>(Parameter::specular)] = -6;     // |k| bits 1, 2
 
@@ -278,7 +278,7 @@ TEST_CASE("the Renderer board charges the table's costs", "[isa]") {
   RendererBoard board(params);
   board.begin_region(0, 0);
 
-  PacketValues values;
+  OwnedValues values;
   const char* const names[] = {"light_x", "light_y", "light_z", "half_x",  "half_y",
                                "half_z",  "ambient", "diffuse", "specular"};
   std::int64_t k = 13;
@@ -310,7 +310,7 @@ TEST_CASE("the Renderer board charges the table's costs", "[isa]") {
   CHECK(board.instructions_executed() == instructions);
 
   // mac costs follow the parameters a packet binds: other values, other cost.
-  PacketValues zero;
+  const OwnedValues zero;
   CHECK(procedure_cost(p.procedure(Procedure::light), params.timing, zero).count <
         procedure_cost(p.procedure(Procedure::light), params.timing, values).count);
 }
@@ -418,8 +418,8 @@ class StreamMaker {
  public:
   StreamMaker(const PixelBackendParams& p, unsigned seed) : p_(p), rng_(seed) {}
 
-  PacketValues values() {
-    PacketValues v;
+  OwnedValues values() {
+    OwnedValues v;
     for (auto& e : v.expressions) {
       const bool quadratic = pick(0, 3) == 0;
       e.D = pick(-(1 << 14), 1 << 14);
@@ -581,7 +581,7 @@ TEST_CASE("every registered backend runs the instruction table as the bit-sliced
       check_same(*backend, ref);
       std::vector<int> ops(static_cast<std::size_t>(Opcode::count), 0);
       for (int packet = 0; packet < 8; ++packet) {
-        const PacketValues values = make.values();
+        const OwnedValues values = make.values();
         for (int n = 0; n < 60; ++n) {
           const Instruction ins = make.next(ref.array.enable_depth());
           INFO("packet " << packet << " instruction " << n << ": " << ins.operands[0].field.lo

@@ -2,8 +2,12 @@
 // each unit at its earliest legal cycle.
 #include <fmt/format.h>
 
+#include <atomic>
 #include <catch2/catch.hpp>
+#include <stdexcept>
+#include <vector>
 
+#include "common/parallel_for.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
@@ -41,7 +45,7 @@ TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[
   const Program program = load_program("flat", config);  // no data-dependent costs
   const FrameResult r = simulate_frame(config, scene, program, 2);
   const TimingParams timing = timing_params(config);
-  const PacketValues none{};
+  const OwnedValues none{};
   const std::uint64_t overhead = config.renderer.packet_overhead_cycles;
   const std::uint64_t clear =
       procedure_cost(program.procedure(Procedure::clear), timing, none).count;
@@ -99,7 +103,7 @@ TEST_CASE("a one-GP, one-Renderer frame ends at the earliest legal time", "[mach
   const double map_words = 2;
   const double bin_words = 1 + 2 * packet_words;
   const TimingParams timing = timing_params(config);
-  const PacketValues none{};
+  const OwnedValues none{};
   const double clear_cycles =
       config.renderer.packet_overhead_cycles +
       procedure_cost(program.procedure(Procedure::clear), timing, none).count;
@@ -174,4 +178,54 @@ end
   CHECK(covered > 1000);
   // Each pass's bins cross the ring again, so the multipass frame carries more words.
   CHECK(three.stats.integer("ring.words") > one.stats.integer("ring.words"));
+}
+
+TEST_CASE("parallel_for rethrows a worker thread's exception on the caller", "[machine]") {
+  // Every index but the last succeeds; the last is taken by whichever thread is free, which
+  // with 4 threads and 64 indices is rarely the caller's.
+  for (int threads : {1, 4}) {
+    std::atomic<int> ran{0};
+    CHECK_THROWS_AS(parallel_for(64, threads,
+                                 [&](int i) {
+                                   if (i == 63) throw std::out_of_range("index 63");
+                                   ++ran;
+                                 }),
+                    std::out_of_range);
+    CHECK(ran.load() <= 63);
+  }
+  // Per-worker state: no two calls with the same worker overlap.
+  std::vector<int> busy(static_cast<std::size_t>(parallel_workers(100, 3)), 0);
+  std::atomic<int> overlaps{0};
+  parallel_for(100, 3, [&](int, int worker) {
+    if (busy[static_cast<std::size_t>(worker)]++ != 0) ++overlaps;
+    --busy[static_cast<std::size_t>(worker)];
+  });
+  CHECK(overlaps.load() == 0);
+}
+
+TEST_CASE("a board's exception during execute_pixels reaches the caller (issue 18)", "[machine]") {
+  // The triangle procedure stores to backing-store block 3; the machine has one block. Only
+  // regions with triangles run it, and those execute on the host's worker threads.
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 512;
+  config.screen.height = 256;
+  config.gp.count = 2;
+  config.renderer.count = 4;
+  AssemblerOptions options = assembler_options(config);
+  options.backing_store_bits = 4096;
+  const Program program = assemble(
+      "field z 24\n"
+      "field red 8\n"
+      "field green 8\n"
+      "field blue 8\n"
+      "output red green blue\n"
+      "proc clear\n  eall\n  mov z, 0xFFFFFF\nend\n"
+      "proc triangle\n  eall\n  qtest.ge edge0\n  bsst z, 3\nend\n",
+      "out_of_store.pp5", options);
+  config.renderer.backing_store_bits = 32;
+  const Scene scene = make_builtin_scene("sphere");
+  for (int threads : {1, 4}) {
+    INFO("threads " << threads);
+    CHECK_THROWS_AS(simulate_frame(config, scene, program, threads), std::out_of_range);
+  }
 }

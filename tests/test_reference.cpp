@@ -55,7 +55,7 @@ void shade_phong(RefPixel& p, const FrameValues& values) {
   auto P = [&](const PacketValues& v, Parameter q) { return v.parameters[static_cast<int>(q)]; };
   std::int64_t level = P(values.frame, Parameter::ambient);
   std::int64_t spec = 0;
-  for (const PacketValues& light : values.lights) {
+  for (const OwnedValues& light : values.lights) {
     auto dot = [&](Parameter a, Parameter b, Parameter c) {
       std::int64_t d =
           wrap_signed(p.n[0] * P(light, a) + p.n[1] * P(light, b) + p.n[2] * P(light, c), 16);

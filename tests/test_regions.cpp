@@ -6,6 +6,7 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/scene/scene.hpp"
 
@@ -20,7 +21,6 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
   scene.lights[1].direction = glm::vec3(0.0f, 0.0f, 1.0f);
   const GeometryEngine geometry(geometry_params(config), scene);
   const FrameValues values = geometry.frame_values();
-  const PacketValues& frame = values.frame;
   for (const char* name : {"flat", "gouraud", "phong"}) {
     INFO(name);
     const Program program =
@@ -31,11 +31,15 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
     std::vector<ScreenTriangle> tris;
     SetupCounts counts;
     for (int i = 0; i < 2; ++i) geometry.transform(i, tris, counts);
-    std::vector<PacketValues> packets;
+    std::vector<Packet> packets;
     for (const auto& t : tris) {
       SetupResult r;
-      if (geometry.setup(t, needed, r, counts)) packets.push_back(r.values);
+      if (!geometry.setup(t, needed, r, counts)) continue;
+      packets.emplace_back();
+      packets.back().values = r.values;
     }
+    const RegionStream stream(program, values);
+    const std::vector<Packet> none;
     REQUIRE_FALSE(packets.empty());
     // Regions: empty ones before and after one with triangles, and at other origins.
     const std::vector<std::pair<int, bool>> regions = {{0, false},   {128, false}, {0, true},
@@ -49,19 +53,12 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
     std::vector<std::uint8_t> a, b;
     for (const auto& [x0, busy] : regions) {
       executing.begin_region(x0, 0);
-      executing.run(program.procedure(Procedure::clear), frame);
-      if (busy) {
-        for (const auto& p : packets) executing.run(program.procedure(Procedure::triangle), p);
-      }
-      executing.run_lights(program, values);
-      executing.run(program.procedure(Procedure::shade), frame);
+      stream.for_each(busy ? packets : none,
+                      [&](const RegionStep& step) { executing.run_step(step); });
       executing.read_outputs(program, b);
       if (busy) {
         reusing.begin_region(x0, 0);
-        reusing.run(program.procedure(Procedure::clear), frame);
-        for (const auto& p : packets) reusing.run(program.procedure(Procedure::triangle), p);
-        reusing.run_lights(program, values);
-        reusing.run(program.procedure(Procedure::shade), frame);
+        stream.for_each(packets, [&](const RegionStep& step) { reusing.run_step(step); });
         reusing.read_outputs(program, a);
       } else {
         std::vector<std::uint8_t> scratch;

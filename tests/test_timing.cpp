@@ -138,6 +138,48 @@ TEST_CASE("ring: one message arrives at its earliest legal cycle", "[timing][rin
   CHECK(ring.busy()[1].count == 0);
 }
 
+namespace {
+// Records what reaches its stop; takes finished regions and bin maps only.
+struct RecordingStop : RingEndpoint {
+  std::vector<RegionArrival> regions;
+  std::vector<BinMapArrival> maps;
+  void receive_region(const RegionArrival& r) override { regions.push_back(r); }
+  void receive_bin_map(const BinMapArrival& m) override { maps.push_back(m); }
+};
+}  // namespace
+
+TEST_CASE("ring: messages reach the endpoint they are addressed to, at booking, with their arrival",
+          "[timing][ring]") {
+  fresh_kernel();
+  RingParams p;
+  p.channels = 1;
+  p.hop_latency_cycles = 2;
+  Ring ring("ring", p, 6);
+  RecordingStop near, far, frame_buffer;
+  ring.attach(2, near);
+  ring.attach(4, far);
+  ring.attach(5, frame_buffer);
+  const sc_core::sc_time cycle(1.0 / p.clock_hz, sc_core::SC_SEC);
+  const RingBooking region = ring.send_region(3, 5, 10, 7);
+  REQUIRE(frame_buffer.regions.size() == 1);
+  CHECK(frame_buffer.regions[0].region == 7);
+  CHECK(frame_buffer.regions[0].arrival == region.arrival);
+  CHECK(region.arrival == cycle * (10.0 + 2 * 2));
+  // A bin map passes every stop it names, booked once, to the farthest: each sees it when it
+  // passes.
+  const RingBooking map = ring.send_bin_map(0, {2, 4}, 3, 1);
+  CHECK(ring.messages() == 2);
+  REQUIRE(near.maps.size() == 1);
+  REQUIRE(far.maps.size() == 1);
+  CHECK(near.maps[0].gp == 1);
+  CHECK(near.maps[0].arrival == map.end + cycle * (2.0 * 2));
+  CHECK(far.maps[0].arrival == map.end + cycle * (4.0 * 2));
+  CHECK(far.maps[0].arrival == map.arrival);
+  // Wiring errors: nothing attached at stop 1; a bin message to a stop that takes none.
+  CHECK_THROWS_AS(ring.send_region(0, 1, 10, 0), std::logic_error);
+  CHECK_THROWS_AS(ring.send_bin(0, 5, std::make_shared<BinMessage>()), std::logic_error);
+}
+
 TEST_CASE("ring: saturated, it reaches and never exceeds its bandwidth", "[timing][ring]") {
   fresh_kernel();
   RingParams p;

@@ -587,7 +587,7 @@ std::string listing(const Program& program, const TimingParams& timing) {
                          f.is_signed ? " signed" : "       ", f.lo + f.width - 1, f.lo);
     }
   }
-  const PacketValues values{};
+  const OwnedValues values{};
   for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
     const ProcedureCode& code = program.procedures[p];
     if (!code.defined) continue;

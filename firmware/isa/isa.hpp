@@ -69,17 +69,40 @@ struct TimingParams {
   int backing_store_cycles_per_block = 64;
 };
 
-// The values a packet binds to a procedure's expression and parameter operands.
+using ExpressionValues = std::array<QuadraticCoefficients, static_cast<int>(Expression::count)>;
+using ParameterValues = std::array<std::int64_t, static_cast<int>(Parameter::count)>;
+
+// What a packet carries: the coefficients of its expressions. The frame's parameters are not
+// in it: they are bound when the packet runs (PacketValues).
+struct PacketExpressions {
+  ExpressionValues expressions{};
+};
+
+// Expressions and parameters held together: the values of a region-wide procedure, or of a
+// test that builds its own.
+struct OwnedValues {
+  ExpressionValues expressions{};
+  ParameterValues parameters{};
+};
+
+// The values a procedure's expression and parameter operands bind to, as a view: a packet's
+// expressions and the frame's (or a light's) parameters, wherever each lives.
+// Contract: a view, valid while what it refers to lives; never store one beyond the call it
+// was made for. Converts implicitly from OwnedValues.
 struct PacketValues {
-  std::array<QuadraticCoefficients, static_cast<int>(Expression::count)> expressions{};
-  std::array<std::int64_t, static_cast<int>(Parameter::count)> parameters{};
+  const ExpressionValues& expressions;
+  const ParameterValues& parameters;
+  PacketValues(const ExpressionValues& e, const ParameterValues& p)
+      : expressions(e), parameters(p) {}
+  PacketValues(const OwnedValues& v)  // NOLINT(google-explicit-constructor): a view of it
+      : expressions(v.expressions), parameters(v.parameters) {}
 };
 
 // The values of a frame's region-wide procedures: `frame` for clear, pass and shade (with the
 // first light's parameters), and lights[k] for the `light` procedure of light k.
 struct FrameValues {
-  PacketValues frame;
-  std::vector<PacketValues> lights;
+  OwnedValues frame;
+  std::vector<OwnedValues> lights;
 };
 
 // What an executor acts on: the board's pixel backend, with the packet's values bound to

@@ -28,9 +28,9 @@ FrameBuffer::FrameBuffer(sc_core::sc_module_name name, int width, int height, in
   image_.rgb.assign(bytes, 0);
 }
 
-void FrameBuffer::region_arrived(int region, sc_core::sc_time when) {
-  arrival_[region] = when;
-  last_ = std::max(last_, arrival_[region]);
+void FrameBuffer::receive_region(const RegionArrival& region) {
+  arrival_[region.region] = region.arrival;
+  last_ = std::max(last_, region.arrival);
   ++received_;
 }
 

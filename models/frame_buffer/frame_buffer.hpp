@@ -1,23 +1,25 @@
 #pragma once
 // The conventional frame buffer: a ring stop that receives finished regions and assembles
-// the frame.
+// the frame. Timing arrives through the ring (receive_region); the pixel values, computed
+// after the simulation, through store_region.
 #include <systemc>
 #include <utility>
 #include <vector>
 
 #include "models/frame_buffer/image.hpp"
+#include "models/ring/ring.hpp"
 
 namespace pp5 {
 
 class Statistics;
 
-class FrameBuffer : public sc_core::sc_module {
+class FrameBuffer : public sc_core::sc_module, public RingEndpoint {
  public:
   FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions);
 
-  // A region's pixels arrive over the ring at `when` (timing; `when` may lie in the future
-  // of the caller, whose ring interface sends while its array works on).
-  void region_arrived(int region, sc_core::sc_time when);
+  // A region's pixels arrive over the ring (timing; the arrival may lie in the future of the
+  // sender, whose ring interface sends while its array works on).
+  void receive_region(const RegionArrival& region) override;
   // A region's pixel values (function): rgb is region_width x region_height, row-major;
   // the part inside the screen is copied to the frame.
   void store_region(int x0, int y0, int region_width, int region_height,

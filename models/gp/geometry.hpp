@@ -71,7 +71,7 @@ struct SetupCounts {
 using ExpressionSet = std::bitset<static_cast<int>(Expression::count)>;
 
 struct SetupResult {
-  PacketValues values;
+  PacketExpressions values;
   int x_min = 0, x_max = -1, y_min = 0, y_max = -1;  // pixel-centre bounding box, inclusive
 };
 

@@ -114,7 +114,6 @@ void GraphicsProcessor::run() {
       packet->primitive = i;
       packet->words = k.workload.packet_words;
       packet->values = result.values;
-      packet->values.parameters = machine_.frame_parameters();
       regions.clear();
       k.worker->bin(result, regions);
       for (int r : regions) {
@@ -139,7 +138,7 @@ void GraphicsProcessor::run() {
   for (int r = 0; r < config.regions(); ++r) {
     if (!bins[r].empty()) nonempty.push_back(r);
   }
-  machine_.add_bin_senders(nonempty);
+  machine_.scheduler().add_bin_senders(nonempty);
   send_bin_map();
 
   // Bins go out as their Renderers open (pass, region) stages: each message goes to the
@@ -175,7 +174,7 @@ void GraphicsProcessor::run() {
     std::sort(open_stages.begin(), open_stages.end());
     int pick = -1;
     for (int s : open_stages) {
-      if (machine_.renderer(machine_.owner_of_region(s % n)).has_room(words_for(s))) {
+      if (machine_.renderer(machine_.scheduler().owner_of_region(s % n)).has_room(words_for(s))) {
         pick = s;
         break;
       }
@@ -183,7 +182,7 @@ void GraphicsProcessor::run() {
     if (pick < 0) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();
       begin(GpActivity::renderer);
-      wait(machine_.input_changed());
+      wait(machine_.scheduler().input_changed());
       (open_stages.empty() ? stats_.waiting_stage : stats_.waiting_queue) +=
           sc_core::sc_time_stamp() - t0;
       continue;
@@ -199,7 +198,7 @@ void GraphicsProcessor::run() {
     m->packets.assign(bin.begin() + static_cast<std::ptrdiff_t>(first),
                       bin.begin() + static_cast<std::ptrdiff_t>(next[pick]));
     m->last = next[pick] == bin.size();
-    machine_.renderer(machine_.owner_of_region(pick % n)).reserve_room(m->words);
+    machine_.renderer(machine_.scheduler().owner_of_region(pick % n)).reserve_room(m->words);
     if (m->last) {
       done[pick] = true;
       --remaining;
@@ -212,43 +211,32 @@ void GraphicsProcessor::run() {
 
 void GraphicsProcessor::send_bin_map() {
   spend(machine_.i860().clocks(I860Work::send_bin(), 0));
-  Ring& ring = machine_.ring();
-  const int from = machine_.gp_stop(index_);
-  int farthest = machine_.renderer_stop(0);
-  for (int k = 1; k < machine_.renderer_count(); ++k) {
-    if (ring.hops(from, machine_.renderer_stop(k)) > ring.hops(from, farthest))
-      farthest = machine_.renderer_stop(k);
-  }
   const sc_core::sc_time requested = sc_core::sc_time_stamp();
-  const RingBooking b = ring.reserve(from, farthest, machine_.bin_map_words());
+  const RingBooking b = machine_.ring().send_bin_map(
+      machine_.gp_stop(index_), machine_.renderer_stops(), machine_.bin_map_words(), index_);
   ++stats_.messages;
   if (machine_.timeline_on()) machine_.add_slice(Unit::gp, index_, "bin map", requested, b.end);
-  for (int k = 0; k < machine_.renderer_count(); ++k) {
-    machine_.renderer(k).deliver_bin_map(requested,
-                                         b.end + ring.hop_delay(from, machine_.renderer_stop(k)));
-  }
   begin(GpActivity::ring);
   stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
   wait(b.end - sc_core::sc_time_stamp());
 }
 
 void GraphicsProcessor::send(std::shared_ptr<BinMessage> m) {
-  const int renderer_index = machine_.owner_of_region(m->region);
-  Renderer& renderer = machine_.renderer(renderer_index);
+  const int renderer_index = machine_.scheduler().owner_of_region(m->region);
   // Starting the message costs i860 clocks; its room in the queue is already reserved.
   spend(machine_.i860().clocks(I860Work::send_bin(), 0));
-  m->requested = sc_core::sc_time_stamp();
-  const RingBooking b = machine_.ring().reserve(machine_.gp_stop(index_),
-                                                machine_.renderer_stop(renderer_index), m->words);
-  m->arrival = b.arrival;
+  const sc_core::sc_time requested = sc_core::sc_time_stamp();
+  m->requested = requested;
+  const int region = m->region;
+  const RingBooking b = machine_.ring().send_bin(
+      machine_.gp_stop(index_), machine_.renderer_stop(renderer_index), std::move(m));
   ++stats_.messages;
   if (machine_.timeline_on()) {
-    machine_.add_slice(Unit::gp, index_,
-                       "send region " + std::to_string(m->region) + " to renderer" +
-                           std::to_string(renderer_index),
-                       m->requested, b.end);
+    machine_.add_slice(
+        Unit::gp, index_,
+        "send region " + std::to_string(region) + " to renderer" + std::to_string(renderer_index),
+        requested, b.end);
   }
-  renderer.deliver(std::move(m));
   // The GP's ring interface sends one message at a time.
   begin(GpActivity::ring);
   stats_.waiting_ring += b.end - sc_core::sc_time_stamp();

@@ -13,6 +13,7 @@
 
 #include "common/units.hpp"
 #include "models/machine.hpp"
+#include "models/ring/ring.hpp"
 
 namespace pp5 {
 
@@ -60,7 +61,7 @@ class GraphicsProcessor : public sc_core::sc_module {
   void run();
   void spend(GpClocks clocks);
   void send(std::shared_ptr<BinMessage> message);
-  // Tells every Renderer which regions this GP has packets for (Machine::add_bin_senders),
+  // Tells every Renderer which regions this GP has packets for (RegionScheduler::add_bin_senders),
   // in one message around the ring.
   void send_bin_map();
   void begin(GpActivity a);

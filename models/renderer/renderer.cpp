@@ -23,7 +23,7 @@ void Renderer::reserve_room(std::uint64_t words) {
   stats_.queue_peak_words = std::max(stats_.queue_peak_words, queued_words_);
 }
 
-void Renderer::deliver(std::shared_ptr<const BinMessage> message) {
+void Renderer::receive_bin(std::shared_ptr<const BinMessage> message) {
   const bool last = message->last;
   queue_.push_back(std::move(message));
   if (last) {
@@ -33,10 +33,10 @@ void Renderer::deliver(std::shared_ptr<const BinMessage> message) {
   arrived_.notify(sc_core::SC_ZERO_TIME);
 }
 
-void Renderer::deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arrival) {
+void Renderer::receive_bin_map(const BinMapArrival& map) {
   ++maps_delivered_;
-  maps_requested_ = std::max(maps_requested_, requested);
-  maps_arrival_ = std::max(maps_arrival_, arrival);
+  maps_requested_ = std::max(maps_requested_, map.requested);
+  maps_arrival_ = std::max(maps_arrival_, map.arrival);
   if (maps_complete()) {
     maps_complete_.notify(sc_core::SC_ZERO_TIME);
     advance();
@@ -45,7 +45,7 @@ void Renderer::deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arri
 
 void Renderer::advance() {
   if (open_region_ < 0 || !maps_complete()) return;
-  const int senders = machine_.bin_senders(open_region_);
+  const int senders = machine_.scheduler().bin_senders(open_region_);
   if (lasts_delivered_ == senders && (senders > 0 || open_started_)) open_next_stage();
 }
 
@@ -68,11 +68,11 @@ void Renderer::open_next_stage() {
   } else {
     // The last pass of the region is all in the queue: take the next region now, so that
     // its bins flow in while this one finishes.
-    open_region_ = machine_.claim_region(index_);
+    open_region_ = machine_.scheduler().claim_region(index_);
     open_pass_ = open_region_ >= 0 ? 0 : -1;
   }
   if (open_region_ >= 0) stages_.push_back({open_region_, open_pass_});
-  machine_.input_changed().notify(sc_core::SC_ZERO_TIME);
+  machine_.scheduler().input_changed().notify(sc_core::SC_ZERO_TIME);
 }
 
 void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values) {
@@ -169,17 +169,17 @@ void Renderer::ship(int region) {
     stats_.busy += copy;
     catch_up();
     machine_.add_slice(Unit::renderer, index_, "copy out", t0, cursor_);
-    const RingBooking b = ring.reserve(from, to, words, ship_free_);
+    const RingBooking b = ring.send_region(from, to, words, region, ship_free_);
     ship_free_ = b.end;
-    machine_.frame_buffer().region_arrived(region, b.arrival);
     stats_.finished = std::max(stats_.finished, b.arrival);
   } else {
     catch_up();
     const sc_core::sc_time t0 = sc_core::sc_time_stamp();
-    ring.transfer(from, to, words);
+    // The region is handed to the frame buffer at booking; the array waits for its arrival.
+    const RingBooking b = ring.send_region(from, to, words, region);
+    wait(b.arrival - sc_core::sc_time_stamp());
     stats_.waiting_ship += sc_core::sc_time_stamp() - t0;
     cursor_ = sc_core::sc_time_stamp();
-    machine_.frame_buffer().region_arrived(region, cursor_);
     stats_.finished = std::max(stats_.finished, cursor_);
   }
 }
@@ -188,8 +188,7 @@ void Renderer::run() {
   const MachineConfig& config = machine_.config();
   const Program& program = machine_.program();
   const int gps = machine_.gp_count();
-  const FrameValues& values = machine_.frame_values();
-  const PacketValues& frame_values = values.frame;
+  const RegionStream stream(program, machine_.frame_values());
   cursor_ = sc_core::SC_ZERO_TIME;
   open_next_stage();
   std::vector<std::vector<std::shared_ptr<const Packet>>> by_gp(gps);
@@ -198,8 +197,11 @@ void Renderer::run() {
   std::vector<std::vector<std::vector<std::uint64_t>>> starts(
       program.passes, std::vector<std::vector<std::uint64_t>>(gps));
   auto cycle_now = [&] { return static_cast<std::uint64_t>(std::llround(cursor_ / cycle_)); };
-  std::uint64_t clear_start = 0;
-  std::vector<std::uint64_t> pass_start;
+  std::vector<std::uint64_t> step_start;
+  auto charge_step = [&](const RegionStep& step) {
+    step_start.push_back(cycle_now());
+    charge(step.code, step.values);
+  };
   sc_core::sc_time region_start;
   while (!stages_.empty()) {
     const Stage stage = stages_.front();
@@ -212,17 +214,13 @@ void Renderer::run() {
       for (auto& v : by_gp) v.clear();
       for (auto& pass : starts)
         for (auto& v : pass) v.clear();
-      pass_start.clear();
+      step_start.clear();
       region_start = cursor_;
-      clear_start = cycle_now();
-      charge(program.procedure(Procedure::clear), frame_values);
-    } else {
-      pass_start.push_back(cycle_now());
-      charge(program.procedure(Procedure::pass), frame_values);
     }
+    stream.before_pass(stage.pass, charge_step);
     catch_up();
     if (!maps_complete() || maps_arrival_ > sc_core::sc_time_stamp()) wait_for_bin_maps();
-    const int senders = machine_.bin_senders(stage.region);
+    const int senders = machine_.scheduler().bin_senders(stage.region);
     int lasts = 0;
     while (lasts < senders) {
       catch_up();
@@ -257,7 +255,9 @@ void Renderer::run() {
       for (const auto& packet : m->packets) {
         load_coefficients(*packet, m->arrival);
         starts[stage.pass][m->gp].push_back(cycle_now());
-        charge(program.procedure(Procedure::triangle), packet->values);
+        // Its place among the region's packets is known only once all have arrived.
+        const RegionStep step = stream.packet(*packet, stage.pass, -1);
+        charge(step.code, step.values);
         if (stage.pass == 0) by_gp[m->gp].push_back(packet);
       }
       // Time advances per message, not per cycle: one kernel event for a whole stream.
@@ -270,17 +270,11 @@ void Renderer::run() {
             t0, cursor_);
       }
       queued_words_ -= m->words;
-      machine_.input_changed().notify(sc_core::SC_ZERO_TIME);
+      machine_.scheduler().input_changed().notify(sc_core::SC_ZERO_TIME);
       if (m->last) ++lasts;
     }
     if (stage.pass + 1 < program.passes) continue;
-    std::vector<std::uint64_t> light_start;
-    for (const PacketValues& light : values.lights) {
-      light_start.push_back(cycle_now());
-      charge(program.procedure(Procedure::light), light);
-    }
-    const std::uint64_t shade_start = cycle_now();
-    charge(program.procedure(Procedure::shade), frame_values);
+    stream.after_passes(charge_step);
     catch_up();
     machine_.add_slice(Unit::renderer, index_, "region " + std::to_string(stage.region),
                        region_start, cursor_);
@@ -289,13 +283,9 @@ void Renderer::run() {
     w.x0 = (stage.region % config.regions_x()) * config.renderer.region_width;
     w.y0 = (stage.region / config.regions_x()) * config.renderer.region_height;
     for (auto& v : by_gp) w.triangles.insert(w.triangles.end(), v.begin(), v.end());
-    w.clear_start = clear_start;
-    w.pass_start = pass_start;
-    w.light_start = std::move(light_start);
-    w.shade_start = shade_start;
+    w.step_start = step_start;
     for (const auto& pass : starts)
-      for (const auto& v : pass)
-        w.triangle_start.insert(w.triangle_start.end(), v.begin(), v.end());
+      for (const auto& v : pass) w.packet_start.insert(w.packet_start.end(), v.begin(), v.end());
     ship(stage.region);
     ++stats_.regions;
     work_.push_back(std::move(w));
@@ -307,7 +297,7 @@ void Renderer::run() {
 
 void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,
                        const FrameValues& values) const {
-  const PacketValues& frame_values = values.frame;
+  const RegionStream stream(program, values);
   const auto& geometry = board.array().geometry();
   std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work_) {
@@ -319,23 +309,13 @@ void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer
       continue;
     }
     board.begin_region(w.x0, w.y0);
-    board.begin_packet({Procedure::clear, -1, w.region, w.clear_start});
-    board.run(program.procedure(Procedure::clear), frame_values);
     const std::size_t n = w.triangles.size();
-    for (int pass = 0; pass < program.passes; ++pass) {
-      if (pass > 0) {
-        board.begin_packet({Procedure::pass, -1, w.region, w.pass_start[pass - 1]});
-        board.run(program.procedure(Procedure::pass), frame_values);
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        board.begin_packet({Procedure::triangle, w.triangles[i]->primitive, w.region,
-                            w.triangle_start[pass * n + i]});
-        board.run(program.procedure(Procedure::triangle), w.triangles[i]->values);
-      }
-    }
-    board.run_lights(program, values, w.region, w.light_start);
-    board.begin_packet({Procedure::shade, -1, w.region, w.shade_start});
-    board.run(program.procedure(Procedure::shade), frame_values);
+    std::size_t next_step = 0;
+    stream.for_each(w.triangles, [&](const RegionStep& step) {
+      const std::uint64_t start =
+          step.packet ? w.packet_start[step.pass * n + step.index] : w.step_start[next_step++];
+      board.run_step(step, w.region, start);
+    });
     board.end_region(w.region);
     board.read_outputs(program, rgb);
     frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);

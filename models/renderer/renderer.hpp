@@ -28,29 +28,28 @@
 
 #include "common/units.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "models/ring/ring.hpp"
 
 namespace pp5 {
 
 class Statistics;
 
-// The instruction stream of one region: clear, then for each of the program's passes the
-// triangles in this order (with `pass` between passes), then `light` once per scene light,
-// then shade. Triangles are kept in
-// GP order, which is display-list order, whatever order their messages arrived in: no
-// instruction's cost depends on pixel data, so the order changes the image only on depth
-// ties, and this way it never changes with timing or load balancing.
+// What one region ran, recorded by the timing pass for the functional one: the region's
+// packets, kept in GP order, which is display-list order, whatever order their messages
+// arrived in (no instruction's cost depends on pixel data, so the order changes the image only
+// on depth ties, and this way it never changes with timing or load balancing). Its stream is
+// RegionStream's over these packets.
 struct RegionWork {
   int region = 0;
   int x0 = 0;
   int y0 = 0;
-  std::vector<std::shared_ptr<const Packet>> triangles;
-  // Simulated array cycle at which the timing pass started each packet (for traces).
-  std::uint64_t clear_start = 0;
-  std::vector<std::uint64_t> triangle_start;  // pass-major: pass * triangles + i
-  std::vector<std::uint64_t> pass_start;      // the 'pass' procedure before pass k + 1
-  std::vector<std::uint64_t> light_start;     // the 'light' procedure of light k
-  std::uint64_t shade_start = 0;
+  std::vector<std::shared_ptr<const Packet>> triangles;  // the region's packets
+  // Simulated array cycle at which the timing pass started each step (for traces): the steps
+  // without a packet in stream order, and the packets pass-major (pass * packets + i).
+  std::vector<std::uint64_t> step_start;
+  std::vector<std::uint64_t> packet_start;
 };
 
 struct RendererStats {
@@ -72,7 +71,7 @@ struct RendererStats {
   sc_core::sc_time finished;  // when its last region reached the frame buffer
 };
 
-class Renderer : public sc_core::sc_module {
+class Renderer : public sc_core::sc_module, public RingEndpoint {
  public:
   SC_HAS_PROCESS(Renderer);
   Renderer(sc_core::sc_module_name name, int index, Machine& machine);
@@ -85,10 +84,11 @@ class Renderer : public sc_core::sc_module {
   bool has_room(std::uint64_t words) const { return queued_words_ + words <= capacity_; }
   // A GP takes room for its next message (after has_room), before it starts sending.
   void reserve_room(std::uint64_t words);
-  // A GP's message has been booked on the ring; it is in the queue from its arrival on.
-  void deliver(std::shared_ptr<const BinMessage> message);
-  // A GP's bin map has been booked on the ring (Machine::bin_senders has its regions).
-  void deliver_bin_map(sc_core::sc_time requested, sc_core::sc_time arrival);
+  // Through the ring: a GP's message has been booked; it is in the queue from its arrival on.
+  void receive_bin(std::shared_ptr<const BinMessage> message) override;
+  // Through the ring: a GP's bin map has been booked (RegionScheduler::bin_senders has its
+  // regions).
+  void receive_bin_map(const BinMapArrival& map) override;
 
   const RendererStats& stats() const { return stats_; }
   // Registers renderer.INDEX.* (models/renderer/renderer_statistics.cpp); read once the frame
@@ -117,7 +117,7 @@ class Renderer : public sc_core::sc_module {
   void wait_for_bin_maps();
   // Adds one procedure's time at the array's cursor.
   void charge(const ProcedureCode& procedure, const PacketValues& values);
-  // Loads a triangle packet's coefficients into the evaluator before it runs.
+  // Loads a packet's coefficients into the evaluator before it runs.
   void load_coefficients(const Packet& packet, sc_core::sc_time arrival);
   // Advances simulated time to the cursor (one kernel event).
   void catch_up();

@@ -22,26 +22,15 @@ void RendererBoard::materialise() const {
   lazy_ = false;
 }
 
-ArrayCycles RendererBoard::run_lights(const Program& program, const FrameValues& values, int region,
-                                      const std::vector<std::uint64_t>& starts) {
-  const ProcedureCode& light = program.procedure(Procedure::light);
-  ArrayCycles cycles{};
-  if (!light.defined) return cycles;
-  for (std::size_t k = 0; k < values.lights.size(); ++k) {
-    begin_packet(
-        {Procedure::light, -1, region, k < starts.size() ? starts[k] : 0, static_cast<int>(k)});
-    cycles += run(light, values.lights[k]);
-  }
-  return cycles;
+ArrayCycles RendererBoard::run_step(const RegionStep& step, int region, std::uint64_t start_cycle) {
+  begin_packet(
+      {step.procedure, step.packet ? step.packet->primitive : -1, region, start_cycle, step.light});
+  return run(step.code, step.values);
 }
 
-void RendererBoard::run_rest_of_empty(const Program& program, const FrameValues& frame_values,
+void RendererBoard::run_rest_of_empty(const RegionStream& stream, const Program& program,
                                       std::vector<std::uint8_t>& rgb) {
-  for (int pass = 1; pass < program.passes; ++pass) {
-    run(program.procedure(Procedure::pass), frame_values.frame);
-  }
-  run_lights(program, frame_values);
-  run(program.procedure(Procedure::shade), frame_values.frame);
+  stream.after_clear(std::vector<const Packet*>{}, [&](const RegionStep& step) { run_step(step); });
   read_outputs(program, rgb);
 }
 
@@ -49,29 +38,30 @@ const std::vector<std::uint8_t>& RendererBoard::run_empty_region(int x0, int y0,
                                                                  const Program& program,
                                                                  const FrameValues& frame_values,
                                                                  std::vector<std::uint8_t>& rgb) {
+  const RegionStream stream(program, frame_values);
+  auto clear = [&] { stream.before_pass(0, [&](const RegionStep& step) { run_step(step); }); };
   if (observer_) {  // a traced board shows every instruction: nothing is reused
     begin_region(x0, y0);
-    run(program.procedure(Procedure::clear), frame_values.frame);
-    run_rest_of_empty(program, frame_values, rgb);
+    clear();
+    run_rest_of_empty(stream, program, rgb);
     return rgb;
   }
+  // The region's origin matters only if a step binds a non-zero expression.
   bool origin_free = true;
-  auto zero_expressions = [&](const PacketValues& v) {
-    for (const QuadraticCoefficients& c : v.expressions) {
+  stream.for_each_empty([&](const RegionStep& step) {
+    for (const QuadraticCoefficients& c : step.values.expressions) {
       origin_free = origin_free && c.A == 0 && c.B == 0 && c.C == 0 && c.D == 0 && c.E == 0;
     }
-  };
-  zero_expressions(frame_values.frame);
-  for (const PacketValues& v : frame_values.lights) zero_expressions(v);
+  });
   if (lazy_ && origin_free && clear_restores_.value_or(false)) {
     ++empty_reused_;
     return *empty_rgb_;
   }
   begin_region(x0, y0);
   const bool was_kept_state = empty_after_shade_ && array_->same_state(*empty_after_shade_);
-  run(program.procedure(Procedure::clear), frame_values.frame);
+  clear();
   if (!origin_free) {
-    run_rest_of_empty(program, frame_values, rgb);
+    run_rest_of_empty(stream, program, rgb);
     return rgb;
   }
   if (empty_after_clear_ && array_->same_state(*empty_after_clear_)) {
@@ -84,7 +74,7 @@ const std::vector<std::uint8_t>& RendererBoard::run_empty_region(int x0, int y0,
   // earlier region put there): execute, and keep this region's states instead, since the
   // next empty region on this board will most likely start from them.
   empty_after_clear_ = array_->clone();
-  run_rest_of_empty(program, frame_values, rgb);
+  run_rest_of_empty(stream, program, rgb);
   empty_after_shade_ = array_->clone();
   empty_rgb_ = std::make_shared<const std::vector<std::uint8_t>>(rgb);
   clear_restores_.reset();

@@ -17,6 +17,7 @@
 #include "firmware/isa/interface.hpp"
 #include "firmware/isa/isa.hpp"
 #include "firmware/isa/types.hpp"
+#include "models/renderer/region_stream.hpp"
 
 namespace pp5 {
 
@@ -74,13 +75,11 @@ class RendererBoard {
   // Reads the program's output fields of every pixel as 8-bit RGB, row-major.
   void read_outputs(const Program& program, std::vector<std::uint8_t>& rgb) const;
 
-  // The program's `light` procedure once per light, light k with values.lights[k] (nothing
-  // if the program has none); an observer sees light k's packet start at starts[k] (0 if
-  // `starts` is empty).
-  ArrayCycles run_lights(const Program& program, const FrameValues& values, int region = 0,
-                         const std::vector<std::uint64_t>& starts = {});
-  // A region no primitive touches: clear, the passes with no triangles, the lights, shade,
-  // and its outputs, as run_region would give them; see "Empty regions" below. Returns the
+  // One step of a region's stream (models/renderer/region_stream.hpp); an observer sees it
+  // as a packet of `region` starting at simulated array cycle `start_cycle`.
+  ArrayCycles run_step(const RegionStep& step, int region = 0, std::uint64_t start_cycle = 0);
+  // A region no primitive touches: its stream (RegionStream::for_each_empty) and its outputs,
+  // as executing it step by step would give them; see "Empty regions" below. Returns the
   // outputs: `rgb` when the region was executed, the kept colours (not copied) when it was
   // reused; valid until the next call.
   const std::vector<std::uint8_t>& run_empty_region(int x0, int y0, const Program& program,
@@ -117,7 +116,7 @@ class RendererBoard {
   // after-shade state onto the kept after-clear state. Exact: nothing is assumed that is not
   // checked on the array's full state; the simulated timing still charges every region.
   void materialise() const;
-  void run_rest_of_empty(const Program& program, const FrameValues& frame_values,
+  void run_rest_of_empty(const RegionStream& stream, const Program& program,
                          std::vector<std::uint8_t>& rgb);
 
   RendererBoardParams params_;

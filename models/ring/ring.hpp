@@ -9,12 +9,20 @@
 // its last word leaves. No channel ever carries more than one word per cycle, so the ring
 // never exceeds channels x word_bits x clock. reserve() books a message and returns when it
 // arrives without blocking; transfer() blocks the calling SystemC thread until arrival.
+//
+// Units talk through the ring: a unit that receives messages attaches a RingEndpoint at its
+// stop, and send_bin, send_bin_map and send_region book a message (as reserve does) and hand
+// it, at booking time, to the endpoint of the stop it is addressed to, with its arrival time;
+// the receiver must not act on it before then. A message to a stop with no endpoint, or of a
+// kind its endpoint does not take, is a wiring error (std::logic_error).
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <systemc>
 #include <vector>
 
 #include "common/units.hpp"
+#include "models/renderer/packet.hpp"
 
 namespace pp5 {
 
@@ -43,6 +51,42 @@ struct RingBooking {
   sc_core::sc_time arrival;  // the message has fully arrived
 };
 
+// Part of a GP's bin for one (region, pass), as one ring message into a Renderer's queue.
+struct BinMessage {
+  int region = 0;
+  int pass = 0;
+  int gp = 0;
+  bool last = false;  // the GP's final message for this (region, pass)
+  std::vector<std::shared_ptr<const Packet>> packets;
+  std::uint64_t words = 0;
+  sc_core::sc_time requested;  // the GP asked the ring for it
+  sc_core::sc_time arrival;    // fully in the Renderer's queue
+};
+
+// A GP's bin map as one Renderer receives it (the regions are in the RegionScheduler).
+struct BinMapArrival {
+  int gp = 0;
+  sc_core::sc_time requested;  // the GP asked the ring for it
+  sc_core::sc_time arrival;    // fully at this stop
+};
+
+// A finished region's colours, from a Renderer to the frame buffer.
+struct RegionArrival {
+  int region = 0;
+  sc_core::sc_time arrival;
+};
+
+// What a unit at a ring stop receives. Each kind of message has its own entry; a unit
+// overrides those it takes, and the others refuse the message (std::logic_error).
+class RingEndpoint {
+ public:
+  virtual ~RingEndpoint() = default;
+  // Part of a bin; message->arrival is when it is fully in the receiver's queue.
+  virtual void receive_bin(std::shared_ptr<const BinMessage> message);
+  virtual void receive_bin_map(const BinMapArrival& map);
+  virtual void receive_region(const RegionArrival& region);
+};
+
 class Ring : public sc_core::sc_module {
  public:
   Ring(sc_core::sc_module_name name, const RingParams& params, int stops);
@@ -51,6 +95,20 @@ class Ring : public sc_core::sc_module {
   RingBooking reserve(int from, int to, std::uint64_t words,
                       sc_core::sc_time not_before = sc_core::SC_ZERO_TIME);
   void transfer(int from, int to, std::uint64_t words);
+
+  // `endpoint` receives the messages addressed to `stop` (not owned; it must outlive the
+  // ring's use).
+  void attach(int stop, RingEndpoint& endpoint);
+  // Books `message` (message->words) from `from` to `to`, sets its arrival and hands it to
+  // `to`'s endpoint.
+  RingBooking send_bin(int from, int to, std::shared_ptr<BinMessage> message);
+  // Books one bin map of `words` from `from` past every stop of `to` (booked to the farthest:
+  // the nearer ones see it on the way) and hands each its arrival, in the order of `to`.
+  RingBooking send_bin_map(int from, const std::vector<int>& to, std::uint64_t words, int gp);
+  // Books a finished region from `from` to `to`, starting no earlier than `not_before`, and
+  // hands it to `to`'s endpoint.
+  RingBooking send_region(int from, int to, std::uint64_t words, int region,
+                          sc_core::sc_time not_before = sc_core::SC_ZERO_TIME);
   // Time from a message's last word leaving `from` to its arrival at `to`: a message booked
   // to the farthest of several stops passes the nearer ones on the way (a broadcast).
   sc_core::sc_time hop_delay(int from, int to) const;
@@ -83,8 +141,11 @@ class Ring : public sc_core::sc_module {
   RingCycles contention_{};
   std::uint64_t messages_ = 0;
   std::uint64_t words_ = 0;
+  RingEndpoint& endpoint(int stop) const;
+
   bool record_ = false;
   std::vector<RingMessage> log_;
+  std::vector<RingEndpoint*> endpoints_;  // by stop, null where nothing receives
 };
 
 }  // namespace pp5

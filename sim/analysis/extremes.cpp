@@ -295,7 +295,7 @@ std::int64_t depth_precision_error(const MachineConfig& config, int depth_bits, 
   const double b = std::floor(0.4 * range / h) + 1.0 / 3.0;
   const double z0 = std::floor(0.1 * range) + 1.0 / 3.0;
   const double scale = std::ldexp(1.0, fraction_bits);
-  PacketValues values;
+  OwnedValues values;
   values.expressions[static_cast<int>(Expression::depth)] = QuadraticCoefficients::linear(
       std::llround(a * scale), std::llround(b * scale), std::llround(z0 * scale));
   RendererBoard board(params);

@@ -3,12 +3,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
+#include <optional>
 #include <stdexcept>
-#include <thread>
 
+#include "common/parallel_for.hpp"
 #include "models/gp/geometry.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 
 namespace pp5 {
@@ -22,10 +23,10 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
   }
   const GeometryEngine geometry(geometry_params(config), scene);
   const FrameValues values = geometry.frame_values();
-  const PacketValues& frame = values.frame;
+  const RegionStream stream(program, values);
   const auto& needed = program.procedure(Procedure::triangle).expressions;
 
-  std::vector<std::vector<PacketValues>> bins(config.regions());
+  std::vector<std::vector<std::shared_ptr<const Packet>>> bins(config.regions());
   FieldFrame out;
   SetupCounts counts;
   std::vector<ScreenTriangle> screen;
@@ -36,11 +37,13 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
     for (const ScreenTriangle& t : screen) {
       SetupResult r;
       if (!geometry.setup(t, needed, r, counts)) continue;
-      r.values.parameters = frame.parameters;
+      auto packet = std::make_shared<Packet>();
+      packet->primitive = i;
+      packet->values = r.values;
       regions.clear();
       geometry.bin(r, regions);
       for (int region : regions) {
-        bins[region].push_back(r.values);
+        bins[region].push_back(packet);
         ++out.packets;
       }
     }
@@ -62,38 +65,32 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
         "{}: field '{}' lives in the backing store and cannot be read back", program.name, field));
   }
   const Field f{decl->lo, decl->width, decl->is_signed};
-  std::atomic<int> next{0};
-  auto worker = [&] {
-    RendererBoard board(params);
+  // A board per host thread, made when the thread first needs it.
+  struct Worker {
+    std::optional<RendererBoard> board;
     std::vector<std::uint8_t> rgb;
-    for (int region = next++; region < config.regions(); region = next++) {
-      const int x0 = (region % across) * rw;
-      const int y0 = (region / across) * rh;
-      board.begin_region(x0, y0);
-      board.run(program.procedure(Procedure::clear), frame);
-      for (int pass = 0; pass < program.passes; ++pass) {
-        if (pass > 0) board.run(program.procedure(Procedure::pass), frame);
-        for (const PacketValues& v : bins[region])
-          board.run(program.procedure(Procedure::triangle), v);
-      }
-      board.run_lights(program, values, region);
-      board.run(program.procedure(Procedure::shade), frame);
-      board.read_outputs(program, rgb);
-      for (int y = 0; y < rh && y0 + y < h; ++y) {
-        for (int x = 0; x < rw && x0 + x < w; ++x) {
-          const int p = y * rw + x;
-          const std::size_t q = static_cast<std::size_t>(y0 + y) * w + (x0 + x);
-          for (int c = 0; c < 3; ++c) out.image.rgb[q * 3 + c] = rgb[p * 3 + c];
-          out.values[q] = board.array().read(p, f);
-        }
+  };
+  std::vector<Worker> workers(
+      static_cast<std::size_t>(parallel_workers(config.regions(), threads)));
+  parallel_for(config.regions(), threads, [&](int region, int worker) {
+    Worker& slot = workers[static_cast<std::size_t>(worker)];
+    if (!slot.board) slot.board.emplace(params);
+    RendererBoard& board = *slot.board;
+    std::vector<std::uint8_t>& rgb = slot.rgb;
+    const int x0 = (region % across) * rw;
+    const int y0 = (region / across) * rh;
+    board.begin_region(x0, y0);
+    stream.for_each(bins[region], [&](const RegionStep& step) { board.run_step(step, region); });
+    board.read_outputs(program, rgb);
+    for (int y = 0; y < rh && y0 + y < h; ++y) {
+      for (int x = 0; x < rw && x0 + x < w; ++x) {
+        const int p = y * rw + x;
+        const std::size_t q = static_cast<std::size_t>(y0 + y) * w + (x0 + x);
+        for (int c = 0; c < 3; ++c) out.image.rgb[q * 3 + c] = rgb[p * 3 + c];
+        out.values[q] = board.array().read(p, f);
       }
     }
-  };
-  const int n = std::max(1, std::min(threads, config.regions()));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < n; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
+  });
   return out;
 }
 

@@ -1,9 +1,10 @@
 #pragma once
 // The functional half of a frame with one firmware field read back: the GP's set-up
 // (GeometryEngine) feeds every region's triangles, in display-list order, to a RendererBoard
-// that executes the program on its pixel array, exactly as Machine::execute_pixels does;
-// afterwards the value of a named field (an intersection flag, say) is read from every
-// pixel. The analysis of intersection highlighting compares that field with the truth.
+// that executes the program's region stream on its pixel array, exactly as execute_pixels
+// (models/renderer/execute_pixels.hpp) does; afterwards the value of a named field (an intersection
+// flag, say) is read from every pixel. The analysis of intersection highlighting compares that
+// field with the truth.
 //
 // Contract: no value is computed here but by the firmware; the readout is the same scalar
 // access the frame buffer's output path uses. Deterministic for any thread count.

@@ -1,0 +1,22 @@
+#pragma once
+// The functional half of a frame, after its simulation: every Renderer's board executes the
+// regions the timing pass recorded (Renderer::execute) and the frame buffer gets the colours.
+//
+// Contract:
+//  - Deterministic: each board executes its own regions in order, whatever the thread count,
+//    so the image never depends on `threads`.
+//  - `observe`, if given, returns an observer (or null) for Renderer k's board; see
+//    BoardObserver. Each board's observer is called from one host thread only.
+//  - An exception thrown while a board executes (e.g. std::out_of_range from a backing-store
+//    block) is rethrown here, on the caller's thread, once the other boards have stopped.
+#include <functional>
+
+namespace pp5 {
+
+class Machine;
+class BoardObserver;
+
+void execute_pixels(Machine& machine, int threads,
+                    const std::function<BoardObserver*(int renderer)>& observe = {});
+
+}  // namespace pp5
