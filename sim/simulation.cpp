@@ -139,8 +139,8 @@ nlohmann::json frame_attribution(Machine& machine, double frame_seconds, const n
           {"renderer_utilisation_max", max_of(s["renderer"], "utilisation")},
           {"ring_utilisation", s["ring"]["utilisation"].get<double>()},
           {"ring_channel_utilisation_max", max_of(s["ring"]["channels"], "utilisation")},
-          {"gp_code", config.gp.code},
-          {"balancing", config.renderer.balancing}};
+          {"gp_code", name_of(config.gp.code)},
+          {"balancing", name_of(config.renderer.balancing)}};
 }
 
 }  // namespace

@@ -30,7 +30,6 @@ struct RenderOptions {
   int threads = default_threads();
   std::vector<int> tessellation;
   std::string timeline;
-  std::vector<std::string> params;
   std::string order = "given";
 };
 
@@ -70,7 +69,6 @@ int run_render(RenderOptions o) {
   const DisplayOrder order = parse_display_order(o.order, "--order");
   Scene scene = load_scene(o.scene_name, scene_options);
   apply_display_order(scene.mesh, order);
-  scene.parameters = parse_frame_parameters(o.params);
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(firmware_for(o.firmware, scene), assembler_options(config));
   warn_about_ignored_scene_parts(scene, program);
@@ -139,9 +137,6 @@ Command add_render_command(CLI::App& app) {
   render->add_option("--timeline", o->timeline,
                      "Also write a timeline of every GP, ring channel and Renderer to FILE, in the "
                      "Chrome trace-event JSON format that ui.perfetto.dev opens");
-  render->add_option("--param", o->params,
-                     "Set a frame parameter, NAME=VALUE (repeatable), e.g. --param "
-                     "highlight_opacity=128 (see pp5sim isa)");
   render
       ->add_option("--order", o->order,
                    "Display-list order of the scene's triangles: given, reversed, shuffled or "

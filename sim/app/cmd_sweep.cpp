@@ -19,6 +19,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
@@ -201,11 +202,9 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
 nlohmann::json read_json(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path.string()));
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", path.string(), e.what()));
-  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_strict_json(text.str(), path.string());
 }
 
 // The metrics of one run, as CSV columns.

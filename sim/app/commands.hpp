@@ -40,7 +40,9 @@ std::string firmware_for(const std::string& option, const Scene& scene);
 // The defaults, or a JSON file, then the --set KEY=VALUE overrides.
 MachineConfig load_config(const std::string& path, const std::vector<std::string>& sets);
 
-// The usual --config and --set options, bound to `path` and `sets`.
+// The usual --config, --set and --param options, bound to `path` and `sets`: each --set
+// KEY=VALUE is appended to `sets`, and each --param NAME=VALUE as frame.NAME=VALUE (the
+// shorthand for a frame parameter), --set ones first.
 void add_config_options(CLI::App& command, std::string& path, std::vector<std::string>& sets);
 
 // Markdown table cells must not contain a bare '|'.
@@ -48,8 +50,5 @@ std::string markdown_cell(const std::string& text);
 
 // A sensible default for --threads: the host's hardware threads.
 int default_threads();
-
-// --param NAME=VALUE items as frame-parameter overrides (names checked, values integers).
-std::map<std::string, std::int64_t> parse_frame_parameters(const std::vector<std::string>& items);
 
 }  // namespace pp5

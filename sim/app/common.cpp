@@ -40,9 +40,20 @@ MachineConfig load_config(const std::string& path, const std::vector<std::string
 void add_config_options(CLI::App& command, std::string& path, std::vector<std::string>& sets) {
   command.add_option("-c,--config", path,
                      "Machine configuration (JSON); unspecified keys take their defaults");
-  command.add_option("--set", sets,
-                     "Override one parameter, KEY=VALUE (repeatable), e.g. "
-                     "--set renderer.count=8");
+  // Both append, in the order CLI11 runs option callbacks (the order they are added here).
+  auto append = [&sets](const std::string& prefix) {
+    return [&sets, prefix](const std::vector<std::string>& items) {
+      for (const std::string& item : items) sets.push_back(prefix + item);
+    };
+  };
+  command.add_option_function<std::vector<std::string>>(
+      "--set", append(""),
+      "Override one parameter, KEY=VALUE (repeatable), e.g. --set renderer.count=8 or --set "
+      "frame.threshold=8192 (pp5sim config --describe lists the keys)");
+  command.add_option_function<std::vector<std::string>>(
+      "--param", append("frame."),
+      "Set a frame parameter, NAME=VALUE (repeatable): short for --set frame.NAME=VALUE, e.g. "
+      "--param highlight_opacity=128 (pp5sim isa lists them)");
 }
 
 std::string markdown_cell(const std::string& text) {
