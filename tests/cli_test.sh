@@ -116,4 +116,21 @@ grep -q '"threshold": 8192' "$tmp/swp2/gp.count-1/config.json" || fail "the swee
 # Duplicate JSON keys are refused, naming the file and the key.
 printf '{"renderer": {"count": 8, "count": 4}}' > "$tmp/dup.json"
 expect_error "dup.json: duplicate key 'count' in 'renderer'" render --config "$tmp/dup.json" --out "$tmp/f"
+
+# scripts/check-includes on a tree of its own: an upward include fails with FILE:LINE, the
+# same tree without it passes, and a cycle inside a layer is reported.
+check="$(dirname "$0")/../scripts/check-includes"
+mkdir -p "$tmp/layers/common" "$tmp/layers/firmware/isa" "$tmp/layers/models/a" "$tmp/layers/models/b" "$tmp/layers/tests"
+printf '#pragma once\n' > "$tmp/layers/common/u.hpp"
+printf '#include "common/u.hpp"\n#include <vector>\n#include "models/a/a.hpp"\n' > "$tmp/layers/firmware/isa/i.hpp"
+printf '#include "models/b/b.hpp"\n' > "$tmp/layers/models/a/a.hpp"
+printf '#include "models/a/a.hpp"\n#include "firmware/isa/i.hpp"\n' > "$tmp/layers/models/b/b.hpp"
+printf '#include "models/a/a.hpp"\n' > "$tmp/layers/tests/t.cpp"
+"$check" --root "$tmp/layers" >"$tmp/layers.log" 2>&1 && fail "check-includes passed an upward include"
+grep -q '^firmware/isa/i.hpp:3: #include "models/a/a.hpp"' "$tmp/layers.log" || fail "check-includes said: $(cat "$tmp/layers.log")"
+grep -q "directory cycle: models/a <-> models/b" "$tmp/layers.log" || fail "no directory cycle reported"
+"$check" --root "$tmp/layers" --allow firmware/isa/i.hpp:models/a/a.hpp >"$tmp/layers.log" 2>&1 \
+  || fail "check-includes failed a clean tree: $(cat "$tmp/layers.log")"
+"$check" --root "$tmp/layers" --allow firmware/isa/i.hpp:models/a/a.hpp --dir-cycles=error >/dev/null 2>&1 \
+  && fail "--dir-cycles=error passed a cycle"
 echo "1 passed, 0 failed"
