@@ -117,6 +117,31 @@ grep -q '"threshold": 8192' "$tmp/swp2/gp.count-1/config.json" || fail "the swee
 printf '{"renderer": {"count": 8, "count": 4}}' > "$tmp/dup.json"
 expect_error "dup.json: duplicate key 'count' in 'renderer'" render --config "$tmp/dup.json" --out "$tmp/f"
 
+# Installable: cmake --install into a prefix, the prefix moved elsewhere, a named program
+# renders from there (found beside the executable, not in the source tree).
+cmake --install "$(dirname "$bin")" --prefix "$tmp/prefix" >"$tmp/install.log" 2>&1 \
+  || fail "cmake --install failed: $(cat "$tmp/install.log")"
+[ -x "$tmp/prefix/bin/pp5sim" ] || fail "no bin/pp5sim installed"
+[ -s "$tmp/prefix/share/pp5sim/programs/phong.pp5" ] || fail "no programs installed"
+mv "$tmp/prefix" "$tmp/moved"
+(cd "$tmp" && "$tmp/moved/bin/pp5sim" render --scene two-triangles --firmware gouraud \
+  --set screen.width=128 --set screen.height=128 --out "$tmp/inst" >"$tmp/inst.log" 2>&1) \
+  || fail "the moved installation failed: $(cat "$tmp/inst.log")"
+grep -q "firmware $tmp/moved/share/pp5sim/programs/gouraud.pp5" "$tmp/inst.log" \
+  || fail "the moved installation did not use its own programs: $(grep firmware "$tmp/inst.log")"
+# A bare name is the built-in program even when a file of that name is in the current
+# directory; a path names the file.
+abs_bin="$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")"
+mkdir -p "$tmp/cwd" && printf 'this is not firmware\n' > "$tmp/cwd/phong"
+(cd "$tmp/cwd" && "$abs_bin" render --scene two-triangles --firmware phong --set screen.width=128 \
+  --set screen.height=128 --out "$tmp/cwd/out" >"$tmp/cwd.log" 2>&1) \
+  || fail "a file named phong in the current directory was run: $(tail -2 "$tmp/cwd.log")"
+grep -q "firmware .*/phong.pp5" "$tmp/cwd.log" || fail "not the built-in phong"
+(cd "$tmp/cwd" && "$abs_bin" render --scene two-triangles --firmware ./phong --out "$tmp/cwd/bad" >"$tmp/cwd2.log" 2>&1) \
+  && fail "./phong (not firmware) was accepted"
+grep -q "phong:1" "$tmp/cwd2.log" || fail "./phong was not read as a file: $(cat "$tmp/cwd2.log")"
+expect_error "no built-in program of that name (built-in: epsilon" render --firmware nope --out "$tmp/f"
+
 # scripts/check-includes on a tree of its own: an upward include fails with FILE:LINE, the
 # same tree without it passes, and a cycle inside a layer is reported.
 check="$(dirname "$0")/../scripts/check-includes"

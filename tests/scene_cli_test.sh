@@ -46,9 +46,9 @@ printf '{"meshes": [{"builtin": "two-triangles", "material": "stone"}]}' >"$tmp/
 expect_error "bad.json: key 'meshes\[0\].material' names an unknown material 'stone'" \
   render --scene "$tmp/bad.json" --out "$tmp/bad"
 printf '{"meshes": [{"builtin": "two-triangles"}], "firmware": "nope"}' >"$tmp/nofw.json"
-expect_error "--firmware nope: no such file" render --scene "$tmp/nofw.json" --out "$tmp/bad"
+expect_error "--firmware nope: no built-in program of that name" render --scene "$tmp/nofw.json" --out "$tmp/bad"
 [ -e "$tmp/bad/frame.png" ] && fail "output after bad input"
-"$bin" render --help | grep -q "transparent) \[the scene file's \"firmware\", else phong\]" \
+"$bin" render --help | grep -q "transparent_threshold), never a file .*\[the scene file's \"firmware\", else phong\]" \
   || fail "render --help does not describe the default firmware"
 # trace and sweep take scene files too, with the scene's program by default.
 "$bin" trace record --scene "$data/scenes/glass_quads.json" "${small[@]}" --pixel 64,64 \

@@ -220,8 +220,8 @@ Command add_highlight_command(CLI::App& app) {
       "and projected polygons per second, for every program x scene");
   cmd->add_option("-s,--scenes", o->scenes, "Built-in scenes")->capture_default_str();
   cmd->add_option("-f,--firmware", o->programs,
-                  "Highlighting programs (.pp5 files or names in firmware/programs); each must "
-                  "keep its flag in a field 'iflag'")
+                  "Highlighting programs (bare names are built-in programs; a path with a '/' "
+                  "or ending in .pp5 is a file); each must keep its flag in a field 'iflag'")
       ->capture_default_str();
   cmd->add_option("--speed-scene", o->speed_scene,
                   "Scene for the projected polygons/s column ('' to skip)")

@@ -68,7 +68,9 @@ Command add_asm_command(CLI::App& app) {
   auto o = std::make_shared<ConfigOptions>();
   auto* cmd =
       app.add_subcommand("asm", "Assemble a firmware program and print its field map and listing");
-  cmd->add_option("program", o->program, "A .pp5 file or a built-in program name")->required();
+  cmd->add_option("program", o->program,
+                  "A built-in program's name, or a path (with a '/' or ending in .pp5) to a file")
+      ->required();
   add_config_options(*cmd, o->path, o->sets);
   return {cmd, [o] {
             const MachineConfig config = load_config(o->path, o->sets);

@@ -119,9 +119,7 @@ Command add_render_command(CLI::App& app) {
                    "A built-in scene (see 'pp5sim scenes'), a mesh file (.obj .ply .stl .off) or a "
                    "scene file (.json, described in README.md)")
       ->capture_default_str();
-  render->add_option("-f,--firmware", o->firmware,
-                     "Firmware program: a .pp5 file, or a name in firmware/programs (flat, "
-                     "gouraud, phong, transparent) [the scene file's \"firmware\", else phong]");
+  render->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*render, o->config_path, o->sets);
   render->add_option("-o,--out", o->out_dir,
                      "Output folder for frame.png, config.json and stats.json [out/SCENE]");

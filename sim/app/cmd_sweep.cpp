@@ -495,8 +495,7 @@ Command add_sweep_command(CLI::App& app) {
       ->add_option("-s,--scene", o->scene_name,
                    "Scene: a built-in name, a mesh file or a scene file")
       ->capture_default_str();
-  sweep->add_option("-f,--firmware", o->firmware,
-                    "Firmware program [the scene file's \"firmware\", else phong]");
+  sweep->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*sweep, o->config_path, o->sets);
   sweep->add_option("-o,--out", o->out_dir, "Folder for sweep.json and one folder per run")
       ->capture_default_str();
