@@ -299,6 +299,14 @@ TEST_CASE("choice keys are enums, checked at load, written back by name", "[conf
 }
 
 TEST_CASE("frame parameters are keys of the table", "[config]") {
+  // Every Parameter the firmware can name has exactly one row, frame.NAME.
+  std::set<std::string> rows;
+  for (const ParameterInfo& p : describe_parameters()) {
+    if (p.key.rfind("frame.", 0) == 0) rows.insert(p.key.substr(6));
+  }
+  std::set<std::string> names;
+  for (const auto& p : kParameters) names.insert(p.name);
+  CHECK(rows == names);
   MachineConfig c = MachineConfig::defaults();
   // Unset, each takes its declared default; today's values at the default depth.
   CHECK(resolved_frame_parameter(c, Parameter::threshold) == 32768);
