@@ -24,6 +24,7 @@ GeometryParams geometry_params(const MachineConfig& c) {
   g.coefficient_bits = c.evaluator.coefficient_bits;
   g.result_bits = c.evaluator.result_bits;
   g.cull_back_faces = c.gp.cull_back_faces != 0;
+  g.frame = c.frame.set;
   return g;
 }
 
@@ -39,7 +40,7 @@ TimingParams timing_params(const MachineConfig& c) {
 
 I860Params i860_params(const MachineConfig& c) {
   I860Params p;
-  p.code = parse_gp_code(c.gp.code);
+  p.code = parse_gp_code(name_of(c.gp.code));
   p.fp_latency_clocks = c.gp.fp_latency_clocks;
   p.load_use_clocks = c.gp.load_use_clocks;
   p.icache_bytes = c.gp.icache_bytes;
@@ -84,7 +85,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       timing_(timing_params(config)),
       frame_values_(geometry_.frame_values()),
       i860_(i860_params(config)),
-      scheduler_(config.regions(), config.renderer.count, config.renderer.balancing == "dynamic") {
+      scheduler_(config.regions(), config.renderer.count, config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic) {
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);

@@ -184,10 +184,10 @@ void register_timing_statistics(Statistics& s, const FrameAttribution& a,
              [&s] { return s.real("ring.utilisation"); });
   s.add_real("timing.ring_channel_utilisation_max", u::ratio, "Largest ring.channels.N.utilisation",
              [&s] { return max_of(s, "ring.channels", "utilisation"); });
-  const std::string gp_code = config.gp.code;
+  const std::string gp_code = name_of(config.gp.code);
   s.add_text("timing.gp_code", u::name, "gp.code of the run: assembly or compiled",
              [gp_code] { return gp_code; });
-  const std::string balancing = config.renderer.balancing;
+  const std::string balancing = name_of(config.renderer.balancing);
   s.add_text("timing.balancing", u::name, "renderer.balancing of the run: static or dynamic",
              [balancing] { return balancing; });
 }

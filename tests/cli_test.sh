@@ -13,7 +13,7 @@ expect_error "out of range" render --set renderer.count=99 --out "$tmp/c"
 printf 'field z 24\nproc triangle\n  qload z, nowhere\nend\n' > "$tmp/bad.pp5"
 expect_error "bad.pp5:3:" render --firmware "$tmp/bad.pp5" --out "$tmp/d"
 expect_error "no frame parameter 'nope'" highlight --param nope=1 --out "$tmp/e"
-expect_error "not an integer" render --param delta=wide --out "$tmp/e"
+expect_error "value 'wide' of key 'frame.delta' is not a number" render --param delta=wide --out "$tmp/e"
 expect_error "highlight_opacity' = 999" highlight --param highlight_opacity=999 --out "$tmp/e"
 expect_error "unknown scene 'nope'" highlight --scenes two-triangles nope --out "$tmp/e"
 expect_error "not a highlighting program" highlight --firmware phong --out "$tmp/e"
@@ -91,4 +91,81 @@ head -1 "$tmp/sw.csv" | grep -q "^gp.count,renderer.balancing,frame_seconds" || 
 "$bin" sweep plot "$tmp/sw.csv" -o "$tmp/sw.svg" >/dev/null || fail "plot failed"
 grep -q "<polyline" "$tmp/sw.svg" || fail "no lines in the plot"
 expect_error "no column 'nope'" sweep plot "$tmp/sw.csv" -y nope -o "$tmp/bad.svg"
+
+# Frame parameters are keys of the configuration (issue 11; issue 18 section 4).
+small=(--scene two-triangles --firmware threshold --set screen.width=128 --set screen.height=128)
+"$bin" render --scene two-triangles --set screen.width=128 --set screen.height=128 \
+  --set gp.depth_bits=8 --out "$tmp/d8" >"$tmp/d8.log" 2>&1 \
+  || fail "--set gp.depth_bits=8 was refused: $(tail -1 "$tmp/d8.log")"
+"$bin" sweep --grid gp.depth_bits=8,24 --scene two-triangles --set screen.width=128 \
+  --set screen.height=128 --out "$tmp/swd" >/dev/null 2>&1 || fail "a sweep over gp.depth_bits failed"
+expect_error "'frame.threshold' = 32768 is out of range \[0, 255\]" render "${small[@]}" \
+  --set gp.depth_bits=8 --param threshold=32768 --out "$tmp/f"
+for bad in ambient=-1 ambient=99999999 specular=-100000 light_x=3 epsilon_scale=1; do
+  expect_error "key 'frame.${bad%%=*}' cannot be set: the GP computes it from" render "${small[@]}" \
+    --param "$bad" --out "$tmp/f"
+done
+expect_error "'frame.delta' = 2000 is out of range" render "${small[@]}" --set frame.delta=2000 --out "$tmp/f"
+[ -e "$tmp/f" ] && fail "a refused frame parameter wrote output"
+# --param NAME is --set frame.NAME, and a config file's "frame" section is the same again.
+"$bin" render "${small[@]}" --param threshold=8192 --out "$tmp/p1" >/dev/null 2>&1 || fail "--param failed"
+"$bin" render "${small[@]}" --set frame.threshold=8192 --out "$tmp/p2" >/dev/null 2>&1 || fail "--set frame failed"
+printf '{"frame": {"threshold": 8192}}' > "$tmp/frame.json"
+"$bin" render "${small[@]}" --config "$tmp/frame.json" --out "$tmp/p3" >/dev/null 2>&1 || fail "config frame failed"
+"$bin" render "${small[@]}" --out "$tmp/p0" >/dev/null 2>&1 || fail "default threshold render failed"
+cmp -s "$tmp/p1/frame.png" "$tmp/p2/frame.png" || fail "--param and --set frame. differ"
+cmp -s "$tmp/p1/frame.png" "$tmp/p3/frame.png" || fail "--param and the config file differ"
+cmp -s "$tmp/p1/frame.png" "$tmp/p0/frame.png" && fail "threshold=8192 changed nothing (the test cannot tell)"
+grep -q '"threshold": 8192' "$tmp/p1/config.json" || fail "config.json does not record frame.threshold"
+# sweep takes --param, and passes it on to the commands it prints.
+"$bin" sweep --grid gp.count=1,2 "${small[@]}" --param threshold=8192 --out "$tmp/swp" \
+  --print-commands | grep -q -- "--set frame.threshold=8192" || fail "sweep --param not passed on"
+"$bin" sweep --grid gp.count=1 "${small[@]}" --param threshold=8192 --out "$tmp/swp2" >/dev/null 2>&1 \
+  || fail "sweep --param failed"
+grep -q '"threshold": 8192' "$tmp/swp2/gp.count-1/config.json" || fail "the sweep run did not use --param"
+# Duplicate JSON keys are refused, naming the file and the key.
+printf '{"renderer": {"count": 8, "count": 4}}' > "$tmp/dup.json"
+expect_error "dup.json: duplicate key 'count' in 'renderer'" render --config "$tmp/dup.json" --out "$tmp/f"
+
+# Installable: cmake --install into a prefix, the prefix moved elsewhere, a named program
+# renders from there (found beside the executable, not in the source tree).
+cmake --install "$(dirname "$bin")" --prefix "$tmp/prefix" >"$tmp/install.log" 2>&1 \
+  || fail "cmake --install failed: $(cat "$tmp/install.log")"
+[ -x "$tmp/prefix/bin/pp5sim" ] || fail "no bin/pp5sim installed"
+[ -s "$tmp/prefix/share/pp5sim/programs/phong.pp5" ] || fail "no programs installed"
+mv "$tmp/prefix" "$tmp/moved"
+(cd "$tmp" && "$tmp/moved/bin/pp5sim" render --scene two-triangles --firmware gouraud \
+  --set screen.width=128 --set screen.height=128 --out "$tmp/inst" >"$tmp/inst.log" 2>&1) \
+  || fail "the moved installation failed: $(cat "$tmp/inst.log")"
+grep -q "firmware $tmp/moved/share/pp5sim/programs/gouraud.pp5" "$tmp/inst.log" \
+  || fail "the moved installation did not use its own programs: $(grep firmware "$tmp/inst.log")"
+# A bare name is the built-in program even when a file of that name is in the current
+# directory; a path names the file.
+abs_bin="$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")"
+mkdir -p "$tmp/cwd" && printf 'this is not firmware\n' > "$tmp/cwd/phong"
+(cd "$tmp/cwd" && "$abs_bin" render --scene two-triangles --firmware phong --set screen.width=128 \
+  --set screen.height=128 --out "$tmp/cwd/out" >"$tmp/cwd.log" 2>&1) \
+  || fail "a file named phong in the current directory was run: $(tail -2 "$tmp/cwd.log")"
+grep -q "firmware .*/phong.pp5" "$tmp/cwd.log" || fail "not the built-in phong"
+(cd "$tmp/cwd" && "$abs_bin" render --scene two-triangles --firmware ./phong --out "$tmp/cwd/bad" >"$tmp/cwd2.log" 2>&1) \
+  && fail "./phong (not firmware) was accepted"
+grep -q "phong:1" "$tmp/cwd2.log" || fail "./phong was not read as a file: $(cat "$tmp/cwd2.log")"
+expect_error "no built-in program of that name (built-in: epsilon" render --firmware nope --out "$tmp/f"
+
+# scripts/check-includes on a tree of its own: an upward include fails with FILE:LINE, the
+# same tree without it passes, and a cycle inside a layer is reported.
+check="$(dirname "$0")/../scripts/check-includes"
+mkdir -p "$tmp/layers/common" "$tmp/layers/firmware/isa" "$tmp/layers/models/a" "$tmp/layers/models/b" "$tmp/layers/tests"
+printf '#pragma once\n' > "$tmp/layers/common/u.hpp"
+printf '#include "common/u.hpp"\n#include <vector>\n#include "models/a/a.hpp"\n' > "$tmp/layers/firmware/isa/i.hpp"
+printf '#include "models/b/b.hpp"\n' > "$tmp/layers/models/a/a.hpp"
+printf '#include "models/a/a.hpp"\n#include "firmware/isa/i.hpp"\n' > "$tmp/layers/models/b/b.hpp"
+printf '#include "models/a/a.hpp"\n' > "$tmp/layers/tests/t.cpp"
+"$check" --root "$tmp/layers" >"$tmp/layers.log" 2>&1 && fail "check-includes passed an upward include"
+grep -q '^firmware/isa/i.hpp:3: #include "models/a/a.hpp"' "$tmp/layers.log" || fail "check-includes said: $(cat "$tmp/layers.log")"
+grep -q "directory cycle: models/a <-> models/b" "$tmp/layers.log" || fail "no directory cycle reported"
+"$check" --root "$tmp/layers" --allow firmware/isa/i.hpp:models/a/a.hpp >"$tmp/layers.log" 2>&1 \
+  || fail "check-includes failed a clean tree: $(cat "$tmp/layers.log")"
+"$check" --root "$tmp/layers" --allow firmware/isa/i.hpp:models/a/a.hpp --dir-cycles=error >/dev/null 2>&1 \
+  && fail "--dir-cycles=error passed a cycle"
 echo "1 passed, 0 failed"

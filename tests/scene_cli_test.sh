@@ -46,9 +46,9 @@ printf '{"meshes": [{"builtin": "two-triangles", "material": "stone"}]}' >"$tmp/
 expect_error "bad.json: key 'meshes\[0\].material' names an unknown material 'stone'" \
   render --scene "$tmp/bad.json" --out "$tmp/bad"
 printf '{"meshes": [{"builtin": "two-triangles"}], "firmware": "nope"}' >"$tmp/nofw.json"
-expect_error "--firmware nope: no such file" render --scene "$tmp/nofw.json" --out "$tmp/bad"
+expect_error "--firmware nope: no built-in program of that name" render --scene "$tmp/nofw.json" --out "$tmp/bad"
 [ -e "$tmp/bad/frame.png" ] && fail "output after bad input"
-"$bin" render --help | grep -q "transparent) \[the scene file's \"firmware\", else phong\]" \
+"$bin" render --help | grep -q "transparent_threshold), never a file .*\[the scene file's \"firmware\", else phong\]" \
   || fail "render --help does not describe the default firmware"
 # trace and sweep take scene files too, with the scene's program by default.
 "$bin" trace record --scene "$data/scenes/glass_quads.json" "${small[@]}" --pixel 64,64 \
@@ -59,4 +59,27 @@ grep -q "scene 'glass-quads'.*firmware .*transparent" "$tmp/trace.log" \
   --out "$tmp/sweep" >"$tmp/sweep.log" 2>&1 || fail "sweep failed: $(cat "$tmp/sweep.log")"
 grep -q '"firmware": ".*transparent' "$tmp/sweep/renderer.count-2/stats.json" \
   || fail "sweep did not use the scene's firmware"
+# Duplicate keys anywhere in a scene file (its materials included) are refused by name.
+printf '{"meshes": [{"builtin": "two-triangles", "material": "m"}], "materials": {"m": {"color": [1, 0, 0]}, "m": {"color": [0, 1, 0]}}}' >"$tmp/dupmat.json"
+expect_error "dupmat.json: duplicate key 'm' in 'materials'" render --scene "$tmp/dupmat.json" --out "$tmp/bad"
+printf '{"meshes": [{"builtin": "two-triangles", "scale": 1, "scale": 2}]}' >"$tmp/dupmesh.json"
+expect_error "dupmesh.json: duplicate key 'scale' in 'meshes\[\]'" render --scene "$tmp/dupmesh.json" --out "$tmp/bad"
+# Frame parameters in a scene file: the same as --param; computed ones and unknown names are
+# refused naming the file and the key; the command line wins over the scene file.
+printf '{"meshes": [{"builtin": "two-triangles"}], "firmware": "threshold", "parameters": {"threshold": 8192}}' >"$tmp/thr.json"
+printf '{"meshes": [{"builtin": "two-triangles"}], "firmware": "threshold"}' >"$tmp/thr0.json"
+"$bin" render --scene "$tmp/thr.json" "${small[@]}" --out "$tmp/t1" >/dev/null 2>&1 || fail "scene parameters failed"
+"$bin" render --scene "$tmp/thr0.json" "${small[@]}" --param threshold=8192 --out "$tmp/t2" >/dev/null 2>&1 || fail "--param failed"
+"$bin" render --scene "$tmp/thr.json" "${small[@]}" --param threshold=32768 --out "$tmp/t3" >/dev/null 2>&1 || fail "--param over the scene failed"
+"$bin" render --scene "$tmp/thr0.json" "${small[@]}" --out "$tmp/t4" >/dev/null 2>&1 || fail "default render failed"
+cmp -s "$tmp/t1/frame.png" "$tmp/t2/frame.png" || fail "the scene file's parameter differs from --param"
+cmp -s "$tmp/t3/frame.png" "$tmp/t4/frame.png" || fail "--param did not win over the scene file"
+cmp -s "$tmp/t1/frame.png" "$tmp/t4/frame.png" && fail "threshold=8192 changed nothing (the test cannot tell)"
+printf '{"meshes": [{"builtin": "two-triangles"}], "parameters": {"ambient": 3}}' >"$tmp/amb.json"
+expect_error "amb.json: key 'parameters.ambient' cannot be set: the GP computes it" render --scene "$tmp/amb.json" --out "$tmp/bad"
+printf '{"meshes": [{"builtin": "two-triangles"}], "parameters": {"thresh": 3}}' >"$tmp/unk.json"
+expect_error "unk.json: key 'parameters.thresh' is not a frame parameter" render --scene "$tmp/unk.json" --out "$tmp/bad"
+printf '{"meshes": [{"builtin": "two-triangles"}], "parameters": {"delta": 5000}}' >"$tmp/rng.json"
+expect_error "'frame.delta' = 5000 is out of range" render --scene "$tmp/rng.json" --out "$tmp/bad"
+[ -e "$tmp/bad/frame.png" ] && fail "output after bad input"
 echo "scene_cli: ok"

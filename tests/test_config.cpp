@@ -9,6 +9,7 @@
 #include <set>
 #include <string>
 
+#include "common/strict_json.hpp"
 #include "models/config/machine_config.hpp"
 
 using namespace pp5;
@@ -256,6 +257,13 @@ TEST_CASE("to_json round-trips and every key is described", "[config]") {
     CHECK_FALSE(p.description.empty());
     CHECK_FALSE(p.default_value.empty());
     CHECK((p.confidence == "P" || p.confidence == "S" || p.confidence == "A"));
+    if (p.key.rfind("frame.", 0) == 0) {
+      // Frame parameters: to_json shows only those set; computed ones say from what.
+      described.erase(p.key);
+      if (p.computed) CHECK(p.range.rfind("from ", 0) == 0);
+      if (!p.computed) CHECK(json::parse(p.default_value).is_number_integer());
+      continue;
+    }
     // The described default is the one defaults() has.
     const auto dot = p.key.find('.');
     const json& value = defaults[p.key.substr(0, dot)][p.key.substr(dot + 1)];
@@ -268,4 +276,119 @@ TEST_CASE("to_json round-trips and every key is described", "[config]") {
     CHECK(json::parse(p.default_value).get<double>() == value.get<double>());
   }
   CHECK(described == keys);
+}
+
+TEST_CASE("choice keys are enums, checked at load, written back by name", "[config]") {
+  MachineConfig c = MachineConfig::defaults();
+  CHECK(c.gp.code == MachineConfig::Gp::Code::assembly);
+  CHECK(c.renderer.balancing == MachineConfig::Renderer::Balancing::static_);
+  c.set(std::vector<std::string>{"gp.code=compiled", "renderer.balancing=dynamic"});
+  CHECK(c.gp.code == MachineConfig::Gp::Code::compiled);
+  CHECK(c.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic);
+  CHECK(name_of(c.gp.code) == "compiled");
+  CHECK(name_of(c.renderer.balancing) == "dynamic");
+  const json doc = c.to_json();
+  CHECK(doc["gp"]["code"] == "compiled");
+  CHECK(doc["renderer"]["balancing"] == "dynamic");
+  CHECK(MachineConfig::from_json(doc, "t").renderer.balancing ==
+        MachineConfig::Renderer::Balancing::dynamic);
+  const std::string m = config_error(json::parse(R"({"renderer": {"balancing": "round-robin"}})"));
+  CHECK(m.find("'renderer.balancing' must be one of \"static\", \"dynamic\"") != std::string::npos);
+  CHECK(set_error(c, "gp.code=fast").find("'gp.code' must be one of \"assembly\", \"compiled\"") !=
+        std::string::npos);
+}
+
+TEST_CASE("frame parameters are keys of the table", "[config]") {
+  // Every Parameter the firmware can name has exactly one row, frame.NAME.
+  std::set<std::string> rows;
+  for (const ParameterInfo& p : describe_parameters()) {
+    if (p.key.rfind("frame.", 0) == 0) rows.insert(p.key.substr(6));
+  }
+  std::set<std::string> names;
+  for (const auto& p : kParameters) names.insert(p.name);
+  CHECK(rows == names);
+  MachineConfig c = MachineConfig::defaults();
+  // Unset, each takes its declared default; today's values at the default depth.
+  CHECK(resolved_frame_parameter(c, Parameter::threshold) == 32768);
+  CHECK(resolved_frame_parameter(c, Parameter::delta) == 24);
+  CHECK(resolved_frame_parameter(c, Parameter::highlight_green) == 230);
+  CHECK(resolved_frame_parameter(c, Parameter::surface_opacity) == 128);
+  CHECK_FALSE(c.to_json().contains("frame"));
+
+  c.set("frame.threshold=8192");
+  CHECK(resolved_frame_parameter(c, Parameter::threshold) == 8192);
+  CHECK(c.to_json()["frame"]["threshold"] == 8192);
+  CHECK(MachineConfig::from_json(c.to_json(), "t")
+            .frame.set[static_cast<int>(Parameter::threshold)] == 8192);
+  const MachineConfig loaded =
+      MachineConfig::from_json(json::parse(R"({"frame": {"delta": 32}})"), "t");
+  CHECK(resolved_frame_parameter(loaded, Parameter::delta) == 32);
+
+  SECTION("ranges name the key") {
+    const std::string m = set_error(c, "frame.highlight_opacity=300");
+    CHECK(m.find("'frame.highlight_opacity' = 300 is out of range [0, 256]") != std::string::npos);
+    check_rejected(json::parse(R"({"frame": {"delta": -1}})"), "'frame.delta'");
+    check_rejected(json::parse(R"({"frame": {"silhouette": 128}})"), "'frame.silhouette'");
+    check_rejected(json::parse(R"({"frame": {"threshold": 1.5}})"), "'frame.threshold'");
+    check_rejected(json::parse(R"({"frame": {"no_such": 1}})"), "'frame.no_such'");
+  }
+  SECTION("computed ones are refused, saying why") {
+    // Issue 18: ambient=-1, ambient=99999999 and specular=-100000 were accepted.
+    for (const char* a : {"frame.ambient=-1", "frame.ambient=99999999", "frame.specular=-100000",
+                          "frame.light_x=1", "frame.background_red=3"}) {
+      const std::string m = set_error(c, a);
+      INFO(m);
+      CHECK(m.find("cannot be set: the GP computes it from the scene's") != std::string::npos);
+    }
+    const std::string m = set_error(c, "frame.epsilon_scale=1");
+    CHECK(m.find("'frame.epsilon_scale' cannot be set") != std::string::npos);
+    CHECK(m.find("frame.delta (derived)") != std::string::npos);
+    check_rejected(json::parse(R"({"frame": {"ambient": 10}})"), "'frame.ambient'");
+  }
+  SECTION("threshold follows gp.depth_bits") {
+    // Issue 18: --set gp.depth_bits=8 was refused because the default threshold (32768) no
+    // longer fitted. The default is 1/512 of the depth range at any depth.
+    MachineConfig d = MachineConfig::defaults();
+    REQUIRE_NOTHROW(d.set("gp.depth_bits=8"));
+    CHECK(resolved_frame_parameter(d, Parameter::threshold) == 1);
+    d.set("gp.depth_bits=16");
+    CHECK(resolved_frame_parameter(d, Parameter::threshold) == 128);
+    // An explicit value is checked against the depth it is used with, whichever comes first.
+    CHECK(set_error(d, "frame.threshold=70000")
+              .find("'frame.threshold' = 70000 is out of range "
+                    "[0, 65535] depth units (at gp.depth_bits = "
+                    "16)") != std::string::npos);
+    MachineConfig e = MachineConfig::defaults();
+    e.set("frame.threshold=32768");
+    CHECK(set_error(e, "gp.depth_bits=8").find("'frame.threshold'") != std::string::npos);
+    check_rejected(json::parse(R"({"frame": {"threshold": 300}, "gp": {"depth_bits": 8}})"),
+                   "'frame.threshold'");
+  }
+}
+
+TEST_CASE("duplicate JSON keys are refused with the file and the key", "[config]") {
+  const TempFile dup("dup.json", R"({"renderer": {"count": 8, "memory_bits": 256, "count": 4}})");
+  try {
+    MachineConfig::from_file(dup.path);
+    FAIL("a duplicate key loaded");
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    CHECK(m.rfind(dup.path + ": duplicate key 'count' in 'renderer'", 0) == 0);
+  }
+  const TempFile top("top.json", R"({"gp": {"count": 2}, "gp": {"count": 4}})");
+  try {
+    MachineConfig::from_file(top.path);
+    FAIL("a duplicate section loaded");
+  } catch (const ConfigError& e) {
+    CHECK(std::string(e.what()).find("duplicate key 'gp' in the top-level object") !=
+          std::string::npos);
+  }
+  // Equal keys in different objects are not duplicates.
+  const TempFile ok("ok.json", R"({"gp": {"count": 2}, "renderer": {"count": 4}})");
+  CHECK(MachineConfig::from_file(ok.path).renderer.count == 4);
+  // The helper itself: nested objects inside arrays, and the path it reports.
+  CHECK_THROWS_WITH(parse_strict_json(R"({"a": [{"b": 1, "b": 2}]})", "x.json"),
+                    Catch::StartsWith("x.json: duplicate key 'b' in 'a[]'"));
+  CHECK(parse_strict_json(R"({"a": [{"b": 1}, {"b": 2}]})", "x.json") ==
+        json::parse(R"({"a": [{"b": 1}, {"b": 2}]})"));
 }

@@ -396,7 +396,7 @@ TEST_CASE("a region no primitive touches waits for no bin message", "[timing]") 
   const Program program = load_program("flat", config);
   for (const char* balancing : {"static", "dynamic"}) {
     INFO(balancing);
-    config.renderer.balancing = balancing;
+    config.set(std::string("renderer.balancing=") + balancing);
     const FrameResult r = simulate_frame(config, scene, program, 1);
     REQUIRE(r.stats.integer("setup.packets") == 1);
     // Only the GP holding the triangle takes part: its bin map and its one bin. The other

@@ -92,6 +92,9 @@ static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
               static_cast<std::size_t>(Expression::count));
 
 // Constants of the frame, sent with every packet's procedure and usable as an operand.
+// Their names are declared here, for the assembler; unit, default, range, meaning and which
+// are computed by the GP are declared once in the configuration table's `frame.` section
+// (models/config/machine_config.cpp), which `pp5sim isa` and `pp5sim config --describe` show.
 enum class Parameter {
   light_x,
   light_y,
@@ -121,50 +124,37 @@ enum class Parameter {
 };
 struct FrameParameterInfo {
   const char* name;
-  const char* meaning;
 };
 inline constexpr FrameParameterInfo kParameters[] = {
-    {"light_x",
-     "eye-space unit vector toward the light, x times 127: the scene's first light, or in the "
-     "`light` procedure the light it runs for"},
-    {"light_y", "light direction y times 127"},
-    {"light_z", "light direction z times 127"},
-    {"half_x", "eye-space half vector (light + view, normalised), x times 127"},
-    {"half_y", "half vector y times 127"},
-    {"half_z", "half vector z times 127"},
-    {"ambient", "ambient reflection, 0..255 (255 = 1.0)"},
-    {"diffuse", "diffuse reflection, 0..255 (of the light bound: see the `light` procedure)"},
-    {"specular", "specular reflection, 0..255 (of the light bound)"},
-    {"background_red", "background red, 0..255"},
-    {"background_green", "background green, 0..255"},
-    {"background_blue", "background blue, 0..255"},
-    {"highlight_red", "intersection highlight red, 0..255 (default 255)"},
-    {"highlight_green", "highlight green, 0..255 (default 230)"},
-    {"highlight_blue", "highlight blue, 0..255 (default 0)"},
-    {"highlight_opacity", "highlight opacity, 0..256 (256 = opaque, the default)"},
-    {"highlight_keep", "derived: 256 - highlight_opacity, the weight of the surface colour"},
-    {"threshold",
-     "threshold program: flag where |depth - stored depth| < threshold, depth units (default "
-     "32768)"},
-    {"delta", "half-width of fixed-width curves (epsilon programs), 1/16 pixel (default 24)"},
-    {"epsilon_scale",
-     "derived: (delta/16)^2 * 4^6, so that dz^2 < epsilon_scale * |slope difference|^2 with slopes "
-     "in units of 64 depth units per pixel"},
-    {"silhouette",
-     "silhouette remedy: ignore the flag where the frontmost |normal z| * 127 < silhouette "
-     "(default 0: off)"},
-    {"surface_opacity",
-     "opacity of every surface in the transparency programs, 0..256 (default 128)"},
-    {"surface_keep", "derived: 256 - surface_opacity"},
-    {"normal_epsilon_scale",
-     "derived: (delta/16)^2 * S^2 / 256, S = depth units per pixel per unit of eye-space slope at "
-     "the camera's target distance (epsilon_normal: slopes recovered from normals)"},
+    {"light_x"},
+    {"light_y"},
+    {"light_z"},
+    {"half_x"},
+    {"half_y"},
+    {"half_z"},
+    {"ambient"},
+    {"diffuse"},
+    {"specular"},
+    {"background_red"},
+    {"background_green"},
+    {"background_blue"},
+    {"highlight_red"},
+    {"highlight_green"},
+    {"highlight_blue"},
+    {"highlight_opacity"},
+    {"highlight_keep"},
+    {"threshold"},
+    {"delta"},
+    {"epsilon_scale"},
+    {"silhouette"},
+    {"surface_opacity"},
+    {"surface_keep"},
+    {"normal_epsilon_scale"},
 };
-
-// Frame parameters computed from others: an override of their sources recomputes them.
-inline constexpr Parameter kDerivedParameters[] = {
-    Parameter::highlight_keep, Parameter::epsilon_scale, Parameter::surface_keep,
-    Parameter::normal_epsilon_scale};
+static_assert(std::size(kParameters) == static_cast<std::size_t>(Parameter::count));
+inline constexpr const char* parameter_name(Parameter k) {
+  return kParameters[static_cast<int>(k)].name;
+}
 
 inline int expression_index(std::string_view name) {
   for (int i = 0; i < static_cast<int>(Expression::count); ++i) {

@@ -3,20 +3,39 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <sstream>
 #include <variant>
 
+#include "common/strict_json.hpp"
+
 namespace pp5 {
 
 namespace {
 
-using Ref = std::variant<int*, double*, std::string*>;
+// A choice-valued key: an enum in MachineConfig, read and written as its index into the
+// entry's `choices`.
+struct ChoiceRef {
+  void* target;
+  int (*get)(const void*);
+  void (*put)(void*, int);
+};
+template <class Enum>
+ChoiceRef choice(Enum* e) {
+  return {e, [](const void* t) { return static_cast<int>(*static_cast<const Enum*>(t)); },
+          [](void* t, int v) { *static_cast<Enum*>(t) = static_cast<Enum>(v); }};
+}
 
-struct Parameter {
-  const char* key;
+// A frame parameter: set, or left to its default.
+using FrameRef = std::optional<std::int64_t>*;
+
+using Ref = std::variant<int*, double*, ChoiceRef, FrameRef>;
+
+struct Entry {
+  std::string key;
   const char* unit;
   const char* confidence;
   double default_value;
@@ -24,8 +43,15 @@ struct Parameter {
   double max;
   const char* description;
   Ref (*ref)(MachineConfig&);
-  // Text parameters: the allowed values separated by '|', the first being the default.
+  // Choice keys: the allowed values separated by '|', in the enum's order, the first being
+  // the default.
   const char* choices = nullptr;
+  // Frame parameters: the Parameter index; where a computed one comes from (nullptr: it is
+  // settable); whether default and range are given for gp.depth_bits = 24 and scale with
+  // 2^(gp.depth_bits - 24).
+  int frame = -1;
+  const char* computed_from = nullptr;
+  bool depth_scaled = false;
 };
 
 std::vector<std::string> split_choices(const char* choices) {
@@ -43,11 +69,38 @@ std::vector<std::string> split_choices(const char* choices) {
   return out;
 }
 
+constexpr int kReferenceDepthBits = 24;
+
+// A settable frame parameter: integer, default and range as declared.
+Entry settable(Parameter k, const char* unit, double default_value, double min, double max,
+               const char* description, bool depth_scaled = false) {
+  Entry e{std::string("frame.") + parameter_name(k),
+          unit,
+          "A",
+          default_value,
+          min,
+          max,
+          description,
+          nullptr};
+  e.frame = static_cast<int>(k);
+  e.depth_scaled = depth_scaled;
+  return e;
+}
+
+// A frame parameter the GP computes: `from` says from what (shown in the table and in the
+// error when someone tries to set it).
+Entry computed(Parameter k, const char* unit, const char* description, const char* from) {
+  Entry e{std::string("frame.") + parameter_name(k), unit, "A", 0, 0, 0, description, nullptr};
+  e.frame = static_cast<int>(k);
+  e.computed_from = from;
+  return e;
+}
+
 // The single declaration of every machine parameter. Confidence: P = the 1989 SIGGRAPH
 // paper, S = a secondary source, A = an assumption of this simulator (see
 // ../shared/design/pixel-planes-5.md for the sources).
-const std::vector<Parameter>& parameter_table() {
-  static const std::vector<Parameter> table = {
+const std::vector<Entry>& parameter_table() {
+  static const std::vector<Entry> table = {
       {"screen.width", "pixels", "P", 1280, 64, 8192,
        "Width of the frame; the paper's frame buffer is 1280 x 1024.",
        [](MachineConfig& c) -> Ref { return &c.screen.width; }},
@@ -70,7 +123,7 @@ const std::vector<Parameter>& parameter_table() {
        "Quality of the GP's per-triangle code: 'assembly' (hand-coded, dual-instruction mode, "
        "scheduled pipelines, fits the instruction cache; over 1 M Phong triangles/s with 32 "
        "GPs) or 'compiled' (C: one instruction per clock, unscheduled, about 100 K/s).",
-       [](MachineConfig& c) -> Ref { return &c.gp.code; }, "assembly|compiled"},
+       [](MachineConfig& c) -> Ref { return choice(&c.gp.code); }, "assembly|compiled"},
       {"gp.fp_latency_clocks", "i860 clocks", "S", 3, 1, 10,
        "Stages of the i860's floating-point adder and single-precision multiplier pipelines: "
        "what an unscheduled operation waits for its result, and what a scheduled chain pays "
@@ -159,7 +212,7 @@ const std::vector<Parameter>& parameter_table() {
        "Assignment of screen regions to Renderers: 'static' (region r to Renderer r mod "
        "count) or 'dynamic' (a Renderer takes the next unrendered region when it finishes "
        "one). The image is identical; only the time differs.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.balancing; }, "static|dynamic"},
+       [](MachineConfig& c) -> Ref { return choice(&c.renderer.balancing); }, "static|dynamic"},
       {"renderer.packet_overhead_cycles", "array cycles", "A", 8, 0, 100000,
        "Controller cycles to decode one instruction packet and start its procedure.",
        [](MachineConfig& c) -> Ref { return &c.renderer.packet_overhead_cycles; }},
@@ -189,15 +242,99 @@ const std::vector<Parameter>& parameter_table() {
       {"frame_buffer.bits_per_pixel", "bits", "A", 32, 8, 64,
        "Bits per pixel sent from a Renderer to the frame buffer (24-bit colour in a word).",
        [](MachineConfig& c) -> Ref { return &c.frame_buffer.bits_per_pixel; }},
+
+      // The firmware's frame parameters (firmware/isa/interface.hpp names them), sent once per
+      // frame; `pp5sim isa` lists them from here. Settable: firmware options of the
+      // highlighting and transparency programs. Computed: the GP's, from the scene and the
+      // settable ones.
+      computed(Parameter::light_x, "x 127",
+               "Eye-space unit vector toward the light, x times 127: the scene's first light, "
+               "or in the `light` procedure the light it runs for.",
+               "the scene's lights (direction)"),
+      computed(Parameter::light_y, "x 127", "Light direction y times 127.",
+               "the scene's lights (direction)"),
+      computed(Parameter::light_z, "x 127", "Light direction z times 127.",
+               "the scene's lights (direction)"),
+      computed(Parameter::half_x, "x 127",
+               "Eye-space half vector (light + view, normalised), x times 127.",
+               "the scene's lights and the view direction"),
+      computed(Parameter::half_y, "x 127", "Half vector y times 127.",
+               "the scene's lights and the view direction"),
+      computed(Parameter::half_z, "x 127", "Half vector z times 127.",
+               "the scene's lights and the view direction"),
+      computed(Parameter::ambient, "1/255", "Ambient reflection, 0..255 (255 = 1.0).",
+               "the scene's ambient (scene file \"ambient\", 0 to 1)"),
+      computed(Parameter::diffuse, "1/255",
+               "Diffuse reflection, 0..255, of the light bound (see the `light` procedure).",
+               "the scene's lights (\"diffuse\", 0 to 1)"),
+      computed(Parameter::specular, "1/255", "Specular reflection, 0..255, of the light bound.",
+               "the scene's lights (\"specular\", 0 to 1)"),
+      computed(Parameter::background_red, "1/255", "Background red, 0..255.",
+               "the scene's background (scene file \"background\", 0 to 1)"),
+      computed(Parameter::background_green, "1/255", "Background green, 0..255.",
+               "the scene's background (scene file \"background\", 0 to 1)"),
+      computed(Parameter::background_blue, "1/255", "Background blue, 0..255.",
+               "the scene's background (scene file \"background\", 0 to 1)"),
+      settable(Parameter::highlight_red, "1/255", 255, 0, 255, "Intersection highlight red."),
+      settable(Parameter::highlight_green, "1/255", 230, 0, 255, "Highlight green."),
+      settable(Parameter::highlight_blue, "1/255", 0, 0, 255, "Highlight blue."),
+      settable(Parameter::highlight_opacity, "1/256", 256, 0, 256,
+               "Highlight opacity (256 = opaque)."),
+      computed(Parameter::highlight_keep, "1/256",
+               "256 - highlight_opacity: the weight of the surface colour.",
+               "frame.highlight_opacity (derived)"),
+      settable(Parameter::threshold, "depth units", 32768, 0, 16777215,
+               "The threshold programs flag where |depth - stored depth| < threshold. Default and "
+               "range are for gp.depth_bits = 24 and scale with 2^(gp.depth_bits - 24): the "
+               "default is 1/512 of the depth range at any depth_bits.",
+               true),
+      settable(Parameter::delta, "1/16 pixel", 24, 0, 1024,
+               "Half-width of fixed-width curves (epsilon programs; also the highlight "
+               "report's truth)."),
+      computed(Parameter::epsilon_scale, "slope units",
+               "(delta/16)^2 * 4^6, so that dz^2 < epsilon_scale * |slope difference|^2 with "
+               "slopes in units of 64 depth units per pixel.",
+               "frame.delta (derived)"),
+      settable(Parameter::silhouette, "x 127", 0, 0, 127,
+               "Silhouette remedy: ignore the flag where the frontmost |normal z| * 127 < "
+               "silhouette (0: off)."),
+      settable(Parameter::surface_opacity, "1/256", 128, 0, 256,
+               "Opacity of every surface in the transparency programs."),
+      computed(Parameter::surface_keep, "1/256", "256 - surface_opacity.",
+               "frame.surface_opacity (derived)"),
+      computed(Parameter::normal_epsilon_scale, "slope units",
+               "(delta/16)^2 * S^2 / 256, S = depth units per pixel per unit of eye-space slope "
+               "at the camera's target distance (epsilon_normal: slopes recovered from "
+               "normals).",
+               "frame.delta, gp.depth_bits and the scene's camera (derived)"),
   };
   return table;
 }
 
-const Parameter* find_parameter(const std::string& key) {
+Ref ref_of(const Entry& e, MachineConfig& c) {
+  if (e.frame >= 0) return &c.frame.set[static_cast<std::size_t>(e.frame)];
+  return e.ref(c);
+}
+
+const Entry* find_parameter(const std::string& key) {
   for (const auto& p : parameter_table()) {
     if (key == p.key) return &p;
   }
   return nullptr;
+}
+
+const Entry& frame_entry(Parameter k) {
+  static const std::vector<const Entry*> by_index = [] {
+    std::vector<const Entry*> v(static_cast<std::size_t>(Parameter::count), nullptr);
+    for (const auto& e : parameter_table()) {
+      if (e.frame >= 0) v[static_cast<std::size_t>(e.frame)] = &e;
+    }
+    for (const Entry* e : v) {
+      if (!e) throw std::logic_error("a frame parameter is missing from the configuration table");
+    }
+    return v;
+  }();
+  return *by_index[static_cast<std::size_t>(k)];
 }
 
 std::string format_value(double v, bool is_int) {
@@ -205,15 +342,22 @@ std::string format_value(double v, bool is_int) {
   return fmt::format("{:g}", v);
 }
 
-void assign(MachineConfig& config, const Parameter& p, const nlohmann::json& value,
+// A depth-scaled bound: declared for 24 bits, scaled to `depth_bits` (the range's top is one
+// below a power of two at every depth).
+std::int64_t scale_to_depth(double value, int depth_bits, bool is_max) {
+  const double scaled = std::ldexp(is_max ? value + 1 : value, depth_bits - kReferenceDepthBits);
+  return std::llround(scaled) - (is_max ? 1 : 0);
+}
+
+void assign(MachineConfig& config, const Entry& p, const nlohmann::json& value,
             const std::string& origin) {
-  const Ref ref = p.ref(config);
-  if (auto* text = std::get_if<std::string*>(&ref)) {
+  const Ref ref = ref_of(p, config);
+  if (auto* c = std::get_if<ChoiceRef>(&ref)) {
     const auto allowed = split_choices(p.choices);
     if (value.is_string()) {
-      for (const auto& a : allowed) {
-        if (a == value.get<std::string>()) {
-          **text = a;
+      for (std::size_t i = 0; i < allowed.size(); ++i) {
+        if (allowed[i] == value.get<std::string>()) {
+          c->put(c->target, static_cast<int>(i));
           return;
         }
       }
@@ -221,10 +365,24 @@ void assign(MachineConfig& config, const Parameter& p, const nlohmann::json& val
     throw ConfigError(fmt::format("{}: key '{}' must be one of \"{}\" (got {})", origin, p.key,
                                   fmt::join(allowed, "\", \""), value.dump()));
   }
-  const bool is_int = std::holds_alternative<int*>(ref);
+  if (p.computed_from) {
+    throw ConfigError(fmt::format("{}: key '{}' cannot be set: the GP computes it from {}", origin,
+                                  p.key, p.computed_from));
+  }
+  const bool is_int = !std::holds_alternative<double*>(ref);
   if (!value.is_number() || (is_int && !value.is_number_integer())) {
     throw ConfigError(fmt::format("{}: key '{}' must be {} (got {})", origin, p.key,
                                   is_int ? "an integer" : "a number", value.dump()));
+  }
+  if (auto* f = std::get_if<FrameRef>(&ref)) {
+    // The range of a depth-scaled key depends on gp.depth_bits, which may be set after it:
+    // validate() checks every frame value once all keys are in.
+    if (value.is_number_unsigned() && value.get<std::uint64_t>() > INT64_MAX) {
+      throw ConfigError(
+          fmt::format("{}: key '{}' = {} is out of range", origin, p.key, value.dump()));
+    }
+    **f = value.get<std::int64_t>();
+    return;
   }
   const double v = value.get<double>();
   if (!(v >= p.min && v <= p.max)) {
@@ -247,13 +405,13 @@ void apply(MachineConfig& config, const nlohmann::json& node, const std::string&
   }
   for (const auto& [name, value] : node.items()) {
     const std::string key = prefix.empty() ? name : prefix + "." + name;
-    if (const Parameter* p = find_parameter(key)) {
+    if (const Entry* p = find_parameter(key)) {
       assign(config, *p, value, origin);
       continue;
     }
     bool is_section = false;
     for (const auto& p : parameter_table()) {
-      if (std::string(p.key).rfind(key + ".", 0) == 0) is_section = true;
+      if (p.key.rfind(key + ".", 0) == 0) is_section = true;
     }
     if (!is_section) {
       std::string known;
@@ -295,6 +453,11 @@ void validate(const MachineConfig& c, const std::string& origin) {
   if (c.renderer.backing_store_bits % c.renderer.block_bits != 0) {
     fail("key 'renderer.backing_store_bits' must be a multiple of 'renderer.block_bits'");
   }
+  for (int k = 0; k < static_cast<int>(Parameter::count); ++k) {
+    if (const auto& v = c.frame.set[static_cast<std::size_t>(k)]) {
+      check_frame_parameter(static_cast<Parameter>(k), *v, c.gp.depth_bits, origin);
+    }
+  }
 }
 
 }  // namespace
@@ -302,13 +465,15 @@ void validate(const MachineConfig& c, const std::string& origin) {
 MachineConfig MachineConfig::defaults() {
   MachineConfig c;
   for (const auto& p : parameter_table()) {
-    const Ref ref = p.ref(c);
+    const Ref ref = ref_of(p, c);
     if (auto* i = std::get_if<int*>(&ref)) {
       **i = static_cast<int>(p.default_value);
-    } else if (auto* text = std::get_if<std::string*>(&ref)) {
-      **text = split_choices(p.choices).front();
+    } else if (auto* choice = std::get_if<ChoiceRef>(&ref)) {
+      choice->put(choice->target, 0);
+    } else if (auto* d = std::get_if<double*>(&ref)) {
+      **d = p.default_value;
     } else {
-      *std::get<double*>(ref) = p.default_value;
+      std::get<FrameRef>(ref)->reset();  // unset: the default, resolved with the frame
     }
   }
   return c;
@@ -324,11 +489,13 @@ MachineConfig MachineConfig::from_json(const nlohmann::json& doc, const std::str
 MachineConfig MachineConfig::from_file(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw ConfigError(fmt::format("{}: cannot open the machine configuration", path));
+  std::stringstream text;
+  text << in.rdbuf();
   nlohmann::json doc;
   try {
-    doc = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw ConfigError(fmt::format("{}: not valid JSON: {}", path, e.what()));
+    doc = parse_strict_json(text.str(), path);
+  } catch (const std::runtime_error& e) {
+    throw ConfigError(e.what());
   }
   return from_json(doc, path);
 }
@@ -344,7 +511,13 @@ void MachineConfig::set(const std::vector<std::string>& assignments) {
     }
     const std::string key = assignment.substr(0, eq);
     const std::string text = assignment.substr(eq + 1);
-    const Parameter* p = find_parameter(key);
+    const Entry* p = find_parameter(key);
+    if (!p && key.rfind("frame.", 0) == 0) {
+      throw ConfigError(
+          fmt::format("{}: unknown key '{}': no frame parameter '{}' (pp5sim isa "
+                      "lists them)",
+                      origin, key, key.substr(6)));
+    }
     if (!p) {
       throw ConfigError(
           fmt::format("{}: unknown key '{}' (pp5sim config --describe lists them)", origin, key));
@@ -366,14 +539,20 @@ nlohmann::json MachineConfig::to_json() const {
   nlohmann::json doc = nlohmann::json::object();
   MachineConfig copy = *this;
   for (const auto& p : parameter_table()) {
-    const std::string key = p.key;
+    const std::string& key = p.key;
     const auto dot = key.find('.');
-    const Ref ref = p.ref(copy);
+    const Ref ref = ref_of(p, copy);
+    // Frame parameters: only those the configuration sets. An unset one is not fixed by the
+    // configuration: its default follows gp.depth_bits, and a scene file may set it.
+    if (auto* f = std::get_if<FrameRef>(&ref)) {
+      if (**f) doc[key.substr(0, dot)][key.substr(dot + 1)] = ***f;
+      continue;
+    }
     auto& slot = doc[key.substr(0, dot)][key.substr(dot + 1)];
     if (auto* i = std::get_if<int*>(&ref)) {
       slot = **i;
-    } else if (auto* text = std::get_if<std::string*>(&ref)) {
-      slot = **text;
+    } else if (auto* choice = std::get_if<ChoiceRef>(&ref)) {
+      slot = split_choices(p.choices)[static_cast<std::size_t>(choice->get(choice->target))];
     } else {
       slot = *std::get<double*>(ref);
     }
@@ -385,18 +564,68 @@ std::vector<ParameterInfo> describe_parameters() {
   std::vector<ParameterInfo> rows;
   MachineConfig scratch;
   for (const auto& p : parameter_table()) {
-    const bool is_int = std::holds_alternative<int*>(p.ref(scratch));
+    if (p.computed_from) {
+      rows.push_back({p.key, p.unit, p.confidence, p.description, "computed",
+                      fmt::format("from {}", p.computed_from), true});
+      continue;
+    }
     if (p.choices) {
       const auto allowed = split_choices(p.choices);
       rows.push_back({p.key, p.unit, p.confidence, p.description, allowed.front(),
                       fmt::format("{}", fmt::join(allowed, ", "))});
       continue;
     }
-    rows.push_back({p.key, p.unit, p.confidence, p.description,
-                    format_value(p.default_value, is_int),
-                    format_value(p.min, is_int) + " .. " + format_value(p.max, is_int)});
+    const bool is_int = !std::holds_alternative<double*>(ref_of(p, scratch));
+    std::string range = format_value(p.min, is_int) + " .. " + format_value(p.max, is_int);
+    if (p.depth_scaled) range += " (x 2^(gp.depth_bits - 24))";
+    rows.push_back(
+        {p.key, p.unit, p.confidence, p.description, format_value(p.default_value, is_int), range});
   }
   return rows;
+}
+
+std::string name_of(MachineConfig::Gp::Code code) {
+  return split_choices(find_parameter("gp.code")->choices)[static_cast<std::size_t>(code)];
+}
+
+std::string name_of(MachineConfig::Renderer::Balancing balancing) {
+  return split_choices(
+      find_parameter("renderer.balancing")->choices)[static_cast<std::size_t>(balancing)];
+}
+
+bool frame_parameter_computed(Parameter k) { return frame_entry(k).computed_from != nullptr; }
+
+std::int64_t frame_parameter_default(Parameter k, int depth_bits) {
+  const Entry& e = frame_entry(k);
+  if (e.computed_from) {
+    throw ConfigError(
+        fmt::format("key '{}' has no default: the GP computes it from {}", e.key, e.computed_from));
+  }
+  if (e.depth_scaled) return scale_to_depth(e.default_value, depth_bits, false);
+  return static_cast<std::int64_t>(e.default_value);
+}
+
+void check_frame_parameter(Parameter k, std::int64_t value, int depth_bits,
+                           const std::string& origin) {
+  const Entry& e = frame_entry(k);
+  if (e.computed_from) {
+    throw ConfigError(fmt::format("{}: key '{}' cannot be set: the GP computes it from {}", origin,
+                                  e.key, e.computed_from));
+  }
+  const std::int64_t lo =
+      e.depth_scaled ? scale_to_depth(e.min, depth_bits, false) : static_cast<std::int64_t>(e.min);
+  const std::int64_t hi =
+      e.depth_scaled ? scale_to_depth(e.max, depth_bits, true) : static_cast<std::int64_t>(e.max);
+  if (value < lo || value > hi) {
+    throw ConfigError(fmt::format(
+        "{}: key '{}' = {} is out of range [{}, {}] {}{}", origin, e.key, value, lo, hi, e.unit,
+        e.depth_scaled ? fmt::format(" (at gp.depth_bits = {})", depth_bits) : std::string()));
+  }
+}
+
+std::int64_t resolved_frame_parameter(const MachineConfig& c, Parameter k) {
+  const auto& v = c.frame.set[static_cast<std::size_t>(k)];
+  return v ? *v : frame_parameter_default(k, c.gp.depth_bits);
 }
 
 }  // namespace pp5

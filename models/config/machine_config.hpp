@@ -4,11 +4,25 @@
 //
 // Contract: each parameter is declared exactly once, in machine_config.cpp's table, which
 // gives its default, range, unit and explanation. Loading a JSON file checks every key
-// against that table (unknown keys, wrong types and out-of-range values are errors naming
-// the file and the key's path); writing it back gives the fully resolved configuration.
+// against that table (unknown keys, wrong types, out-of-range values, a choice not among its
+// values and duplicate keys are errors naming the file and the key's path); writing it back
+// gives the fully resolved configuration, choices by name.
+//
+// The table's `frame.` section declares the firmware's frame parameters (firmware/isa/
+// interface.hpp names them, `Parameter`): the settable ones (frame.threshold, ...) with
+// default and range, and the computed ones (from the scene's lights, ambient and background,
+// or derived from other parameters) with where they come from; setting a computed one is an
+// error that says why. A settable frame parameter left unset takes its default when the
+// frame is built (resolved_frame_parameter), so defaults that follow other keys (threshold
+// follows gp.depth_bits) stay consistent under --set.
+#include <array>
+#include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "firmware/isa/interface.hpp"
 
 namespace pp5 {
 
@@ -22,7 +36,8 @@ struct MachineConfig {
     double clock_hz = 0;
     int subpixel_bits = 0;
     int depth_bits = 0;
-    std::string code;  // assembly | compiled
+    enum class Code { assembly, compiled };
+    Code code = Code::assembly;
     int fp_latency_clocks = 0;
     int load_use_clocks = 0;
     int icache_bytes = 0;
@@ -53,7 +68,8 @@ struct MachineConfig {
     int backing_store_overlap = 0;
     int overlap_shipping = 0;
     int queue_words = 0;
-    std::string balancing;  // static | dynamic
+    enum class Balancing { static_, dynamic };  // "static" is a keyword
+    Balancing balancing = Balancing::static_;
   } renderer;
   struct Evaluator {
     int coefficient_bits = 0;
@@ -66,6 +82,11 @@ struct MachineConfig {
   struct FrameBuffer {
     int bits_per_pixel = 0;
   } frame_buffer;
+  // Frame parameters set by the configuration (file, --set frame.NAME, --param NAME); unset
+  // ones take their declared default. Indexed by Parameter; computed ones are never set.
+  struct Frame {
+    std::array<std::optional<std::int64_t>, static_cast<int>(Parameter::count)> set;
+  } frame;
 
   // The defaults: the machine of the 1989 paper, with the assumptions documented.
   static MachineConfig defaults();
@@ -89,16 +110,34 @@ struct MachineConfig {
   int regions() const { return regions_x() * regions_y(); }
 };
 
+// The names of the choice values, as the configuration and stats.json spell them.
+std::string name_of(MachineConfig::Gp::Code code);
+std::string name_of(MachineConfig::Renderer::Balancing balancing);
+
 // One row of the parameter table, for documentation (`pp5sim config --describe`).
 struct ParameterInfo {
   std::string key;
   std::string unit;
   std::string confidence;  // P published, S secondary source, A assumption
   std::string description;
-  std::string default_value;
-  std::string range;
+  std::string default_value;  // for a computed frame parameter: "computed"
+  std::string range;          // for a computed frame parameter: where it comes from
+  bool computed = false;
 };
 std::vector<ParameterInfo> describe_parameters();
+
+// Frame parameters (the `frame.` section). Contract:
+//  - frame_parameter_default(k, depth_bits): the declared default of settable parameter k
+//    (threshold scales with 2^depth_bits: 32768 at the default 24 bits); throws ConfigError
+//    for a computed one.
+//  - check_frame_parameter(k, value, depth_bits, origin): throws ConfigError naming origin and
+//    the key (frame.NAME) if k is computed (saying from what) or value is outside its range.
+//  - resolved_frame_parameter(c, k): c.frame.set[k], else the default for c.gp.depth_bits.
+bool frame_parameter_computed(Parameter k);
+std::int64_t frame_parameter_default(Parameter k, int depth_bits);
+void check_frame_parameter(Parameter k, std::int64_t value, int depth_bits,
+                           const std::string& origin);
+std::int64_t resolved_frame_parameter(const MachineConfig& c, Parameter k);
 
 // Thrown for every configuration error; the message names the origin and the key.
 struct ConfigError : std::runtime_error {

@@ -54,8 +54,9 @@ struct Scene {
   // The firmware the scene asks for (a program name or .pp5 path), or empty for the
   // command's default; `pp5sim render --firmware` overrides it.
   std::string firmware;
-  // Frame-parameter overrides by name (firmware/isa/interface.hpp), e.g. highlight options
-  // from `pp5sim render --param NAME=VALUE`; unknown names are rejected by the GP.
+  // Frame-parameter overrides by name (firmware/isa/interface.hpp), from a scene file's
+  // "parameters"; the configuration's frame.NAME (--param) wins over them. Unknown or computed
+  // names and out-of-range values are rejected by the GP, naming the key.
   std::map<std::string, std::int64_t> parameters;
 };
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "models/config/machine_config.hpp"
 #include "models/gp/expressions.hpp"
 #include "models/gp/primitive_kind.hpp"
 
@@ -256,40 +257,28 @@ std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::fra
   at(Parameter::background_red) = unit(scene_.background.r);
   at(Parameter::background_green) = unit(scene_.background.g);
   at(Parameter::background_blue) = unit(scene_.background.b);
-  at(Parameter::highlight_red) = 255;
-  at(Parameter::highlight_green) = 230;
-  at(Parameter::highlight_blue) = 0;
-  at(Parameter::highlight_opacity) = 256;
-  at(Parameter::threshold) = 32768;
-  at(Parameter::delta) = 24;
-  at(Parameter::silhouette) = 0;
-  at(Parameter::surface_opacity) = 128;
+  // Settable ones: the declared default, then the scene's overrides, then the configuration's
+  // (each checked against the declared range, which names the key).
+  for (int k = 0; k < static_cast<int>(Parameter::count); ++k) {
+    const auto id = static_cast<Parameter>(k);
+    if (!frame_parameter_computed(id)) p[k] = frame_parameter_default(id, params_.depth_bits);
+  }
   for (const auto& [name, value] : scene_.parameters) {
     const int k = parameter_index(name);
-    if (k < 0) throw std::invalid_argument(fmt::format("unknown frame parameter '{}'", name));
-    for (Parameter d : kDerivedParameters) {
-      if (k == static_cast<int>(d)) {
-        throw std::invalid_argument(
-            fmt::format("frame parameter '{}' is derived from others and cannot be set", name));
-      }
+    if (k < 0) {
+      throw std::invalid_argument(
+          fmt::format("scene '{}': unknown frame parameter '{}'", scene_.name, name));
     }
+    check_frame_parameter(static_cast<Parameter>(k), value, params_.depth_bits,
+                          fmt::format("scene '{}'", scene_.name));
     p[k] = value;
   }
-  auto check = [&](Parameter k, std::int64_t lo, std::int64_t hi) {
-    if (at(k) < lo || at(k) > hi) {
-      throw std::invalid_argument(fmt::format("frame parameter '{}' = {} is outside [{}, {}]",
-                                              kParameters[static_cast<int>(k)].name, at(k), lo,
-                                              hi));
+  for (int k = 0; k < static_cast<int>(Parameter::count); ++k) {
+    if (const auto& v = params_.frame[static_cast<std::size_t>(k)]) {
+      check_frame_parameter(static_cast<Parameter>(k), *v, params_.depth_bits, "configuration");
+      p[k] = *v;
     }
-  };
-  check(Parameter::highlight_red, 0, 255);
-  check(Parameter::highlight_green, 0, 255);
-  check(Parameter::highlight_blue, 0, 255);
-  check(Parameter::highlight_opacity, 0, 256);
-  check(Parameter::threshold, 0, (std::int64_t{1} << params_.depth_bits) - 1);
-  check(Parameter::delta, 0, 1024);
-  check(Parameter::silhouette, 0, 127);
-  check(Parameter::surface_opacity, 0, 256);
+  }
   at(Parameter::surface_keep) = 256 - at(Parameter::surface_opacity);
   at(Parameter::highlight_keep) = 256 - at(Parameter::highlight_opacity);
   // dz^2 < (delta/16)^2 * (slope * 2^kSlopeShift)^2  <=>  dz^2 < epsilon_scale * slope^2.

@@ -18,6 +18,7 @@
 #include <bitset>
 #include <glm/glm.hpp>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "firmware/isa/isa.hpp"
@@ -38,6 +39,9 @@ struct GeometryParams {
   int coefficient_bits = 40;
   int result_bits = 40;          // the evaluator's: its sums wrap modulo 2^result_bits
   bool cull_back_faces = false;  // drop triangles facing away from the eye
+  // Frame parameters the machine configuration sets (MachineConfig::frame); they win over the
+  // scene's Scene::parameters, which win over the declared defaults.
+  std::array<std::optional<std::int64_t>, static_cast<int>(Parameter::count)> frame{};
 };
 
 // A triangle after projection: screen position (pixels, y down), depth in [0, 1], and the

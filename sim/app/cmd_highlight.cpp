@@ -20,36 +20,6 @@ namespace fs = std::filesystem;
 
 namespace pp5 {
 
-std::map<std::string, std::int64_t> parse_frame_parameters(const std::vector<std::string>& items) {
-  std::map<std::string, std::int64_t> out;
-  for (const std::string& item : items) {
-    const auto eq = item.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw std::runtime_error(fmt::format("--param '{}': expected NAME=VALUE", item));
-    }
-    const std::string name = item.substr(0, eq);
-    if (parameter_index(name) < 0) {
-      std::vector<std::string> names;
-      for (const auto& p : kParameters) names.push_back(p.name);
-      throw std::runtime_error(fmt::format("--param '{}': no frame parameter '{}' (known: {})",
-                                           item, name, fmt::join(names, " ")));
-    }
-    const std::string value = item.substr(eq + 1);
-    std::size_t used = 0;
-    std::int64_t v = 0;
-    try {
-      v = std::stoll(value, &used, 0);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != value.size()) {
-      throw std::runtime_error(fmt::format("--param '{}': '{}' is not an integer", item, value));
-    }
-    out[name] = v;
-  }
-  return out;
-}
-
 namespace {
 
 struct HighlightOptions {
@@ -65,7 +35,6 @@ struct HighlightOptions {
                                        "transparent_exactmatch",
                                        "transparent_threshold"};
   std::string speed_scene = "torus";
-  std::vector<std::string> params;
   std::string config_path;
   std::vector<std::string> sets;
   std::string out_dir = "out/highlight";
@@ -86,7 +55,6 @@ constexpr std::size_t kMaxCurvesReported = 8;
 
 int run_highlight(const HighlightOptions& o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
-  const auto params = parse_frame_parameters(o.params);
   const DisplayOrder order = parse_display_order(o.order, "--order");
   const bool compare = o.compare_order != "none";
   const DisplayOrder other =
@@ -95,7 +63,6 @@ int run_highlight(const HighlightOptions& o) {
   std::vector<Scene> scenes;
   for (const std::string& name : o.scenes) {
     scenes.push_back(make_builtin_scene(name));
-    scenes.back().parameters = params;
     apply_display_order(scenes.back().mesh, order);
     GeometryEngine(geometry_params(config), scenes.back()).frame_parameters();
   }
@@ -122,12 +89,11 @@ int run_highlight(const HighlightOptions& o) {
   compiled.set(std::vector<std::string>{"gp.code=compiled"});
   if (!o.speed_scene.empty()) {
     Scene scene = make_builtin_scene(o.speed_scene);
-    scene.parameters = params;
     apply_display_order(scene.mesh, order);
     for (Entry& e : programs) {
       e.speed = simulate_frame(config, scene, e.program, o.threads).triangles_per_second;
       e.speed_compiled =
-          config.gp.code == "compiled"
+          config.gp.code == MachineConfig::Gp::Code::compiled
               ? e.speed
               : simulate_frame(compiled, scene, e.program, o.threads).triangles_per_second;
     }
@@ -139,7 +105,7 @@ int run_highlight(const HighlightOptions& o) {
       "polygons/s (compiled GP code) "
       "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       compare ? fmt::format("changed by {} order", other.text()) : std::string("order change"),
-      config.renderer.memory_bits, o.speed_scene, config.gp.code, o.speed_scene);
+      config.renderer.memory_bits, o.speed_scene, name_of(config.gp.code), o.speed_scene);
   std::string curve_table;
   std::string csv =
       "program,scene,truth_pixels,flagged_pixels,recall,precision,width_mean,width_sd,coverage,"
@@ -162,7 +128,6 @@ int run_highlight(const HighlightOptions& o) {
     // The same scene in the other display-list order (from the built-in order, so that
     // "--order reversed --compare-order given" compares the same two orders both ways).
     Scene reordered = make_builtin_scene(scene_name);
-    reordered.parameters = params;
     apply_display_order(reordered.mesh, other);
     // A scene of a few separate curves (receding-pairs) also gets the width along each, by
     // its midpoint's eye depth (distance along the view axis).
@@ -239,7 +204,7 @@ int run_highlight(const HighlightOptions& o) {
       "\nwidths in pixels across the true curve (delta = {} px half-width); overlays: green = "
       "flagged and true, red = flagged only, blue = missed\nwrote {}/highlight.md, "
       "{}/highlight.csv and {}/SCENE/PROGRAM[-overlay].png\n",
-      static_cast<double>(params.count("delta") ? params.at("delta") : 24) / 16.0, o.out_dir,
+      static_cast<double>(resolved_frame_parameter(config, Parameter::delta)) / 16.0, o.out_dir,
       o.out_dir, o.out_dir);
   return 0;
 }
@@ -255,8 +220,8 @@ Command add_highlight_command(CLI::App& app) {
       "and projected polygons per second, for every program x scene");
   cmd->add_option("-s,--scenes", o->scenes, "Built-in scenes")->capture_default_str();
   cmd->add_option("-f,--firmware", o->programs,
-                  "Highlighting programs (.pp5 files or names in firmware/programs); each must "
-                  "keep its flag in a field 'iflag'")
+                  "Highlighting programs (bare names are built-in programs; a path with a '/' "
+                  "or ending in .pp5 is a file); each must keep its flag in a field 'iflag'")
       ->capture_default_str();
   cmd->add_option("--speed-scene", o->speed_scene,
                   "Scene for the projected polygons/s column ('' to skip)")
@@ -269,9 +234,6 @@ Command add_highlight_command(CLI::App& app) {
                   "Render every program again in this order and report the share of flagged "
                   "pixels that change (order sensitivity), or 'none' to skip")
       ->capture_default_str();
-  cmd->add_option("--param", o->params,
-                  "Set a frame parameter, NAME=VALUE (repeatable), e.g. --param delta=32 "
-                  "--param threshold=8192 (see pp5sim isa)");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder for the table and images")
       ->capture_default_str();

@@ -28,8 +28,20 @@ std::string isa_reference() {
       "(integer or frame parameter), E expression, B backing-store block.\n"
       "Conditions: lt le eq ne ge gt.\n\nExpressions (procedure triangle only):\n\n";
   for (const auto& e : kExpressions) out += fmt::format("- `{}`: {}\n", e.name, e.meaning);
-  out += "\nFrame parameters (any procedure):\n\n";
-  for (const auto& p : kParameters) out += fmt::format("- `{}`: {}\n", p.name, p.meaning);
+  out +=
+      "\nFrame parameters (any procedure; from the configuration table's `frame.` section: set "
+      "the settable ones with --param NAME=VALUE, --set frame.NAME=VALUE, a config file or a "
+      "scene file's \"parameters\"):\n\n";
+  for (const ParameterInfo& p : describe_parameters()) {
+    if (p.key.rfind("frame.", 0) != 0) continue;
+    const std::string name = p.key.substr(6);
+    if (p.computed) {
+      out += fmt::format("- `{}`: {} Computed {}.\n", name, p.description, p.range);
+    } else {
+      out += fmt::format("- `{}`: {} Default {}, range {}, {}.\n", name, p.description,
+                         p.default_value, p.range, p.unit);
+    }
+  }
   out += "\nProcedures:\n\n";
   for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
     out += fmt::format("- `{}`: {}\n", kProcedureNames[k], kProcedureMeaning[k]);
@@ -98,7 +110,9 @@ Command add_asm_command(CLI::App& app) {
   auto o = std::make_shared<ConfigOptions>();
   auto* cmd =
       app.add_subcommand("asm", "Assemble a firmware program and print its field map and listing");
-  cmd->add_option("program", o->program, "A .pp5 file or a built-in program name")->required();
+  cmd->add_option("program", o->program,
+                  "A built-in program's name, or a path (with a '/' or ending in .pp5) to a file")
+      ->required();
   add_config_options(*cmd, o->path, o->sets);
   return {cmd, [o] {
             const MachineConfig config = load_config(o->path, o->sets);

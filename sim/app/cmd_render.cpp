@@ -30,7 +30,6 @@ struct RenderOptions {
   int threads = default_threads();
   std::vector<int> tessellation;
   std::string timeline;
-  std::vector<std::string> params;
   std::string order = "given";
 };
 
@@ -70,7 +69,6 @@ int run_render(RenderOptions o) {
   const DisplayOrder order = parse_display_order(o.order, "--order");
   Scene scene = load_scene(o.scene_name, scene_options);
   apply_display_order(scene.mesh, order);
-  scene.parameters = parse_frame_parameters(o.params);
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(firmware_for(o.firmware, scene), assembler_options(config));
   warn_about_ignored_scene_parts(scene, program);
@@ -125,9 +123,7 @@ Command add_render_command(CLI::App& app) {
                    "A built-in scene (see 'pp5sim scenes'), a mesh file (.obj .ply .stl .off) or a "
                    "scene file (.json, described in README.md)")
       ->capture_default_str();
-  render->add_option("-f,--firmware", o->firmware,
-                     "Firmware program: a .pp5 file, or a name in firmware/programs (flat, "
-                     "gouraud, phong, transparent) [the scene file's \"firmware\", else phong]");
+  render->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*render, o->config_path, o->sets);
   render->add_option("-o,--out", o->out_dir,
                      "Output folder for frame.png, config.json and stats.json [out/SCENE]; a "
@@ -144,9 +140,6 @@ Command add_render_command(CLI::App& app) {
   render->add_option("--timeline", o->timeline,
                      "Also write a timeline of every GP, ring channel and Renderer to FILE, in the "
                      "Chrome trace-event JSON format that ui.perfetto.dev opens");
-  render->add_option("--param", o->params,
-                     "Set a frame parameter, NAME=VALUE (repeatable), e.g. --param "
-                     "highlight_opacity=128 (see pp5sim isa)");
   render
       ->add_option("--order", o->order,
                    "Display-list order of the scene's triangles: given, reversed, shuffled or "

@@ -19,6 +19,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
@@ -200,11 +201,9 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
 nlohmann::json read_json(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path.string()));
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", path.string(), e.what()));
-  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_strict_json(text.str(), path.string());
 }
 
 // A written run's statistics, to read by name.
@@ -505,8 +504,7 @@ Command add_sweep_command(CLI::App& app) {
       ->add_option("-s,--scene", o->scene_name,
                    "Scene: a built-in name, a mesh file or a scene file")
       ->capture_default_str();
-  sweep->add_option("-f,--firmware", o->firmware,
-                    "Firmware program [the scene file's \"firmware\", else phong]");
+  sweep->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*sweep, o->config_path, o->sets);
   sweep->add_option("-o,--out", o->out_dir, "Folder for sweep.json and one folder per run")
       ->capture_default_str();

@@ -37,9 +37,7 @@ struct RunOptions {
     c.add_option("-s,--scene", scene_name,
                  "Scene: a built-in name (pp5sim scenes), a mesh file or a scene file")
         ->capture_default_str();
-    c.add_option("-f,--firmware", firmware,
-                 "Firmware program: a .pp5 file, or a name in firmware/programs [the scene "
-                 "file's \"firmware\", else phong]");
+    c.add_option("-f,--firmware", firmware, firmware_help());
     add_config_options(c, config_path, sets);
     c.add_option("-j,--threads", threads, "Host threads (the trace is identical for any number)")
         ->check(CLI::Range(1, 256));

@@ -15,6 +15,8 @@
 #include <sstream>
 
 #include "common/read_file.hpp"
+#include "common/strict_json.hpp"
+#include "models/config/machine_config.hpp"
 
 namespace fs = std::filesystem;
 
@@ -226,9 +228,11 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
                        const std::string& base_dir, const LoadLimits& limits) {
   json doc;
   try {
-    doc = json::parse(text);
-  } catch (const json::exception& e) {  // syntax errors, and numbers beyond double's range
-    throw SceneError(fmt::format("{}: not valid JSON: {}", origin, e.what()));
+    // Syntax errors, numbers beyond double's range and duplicate keys (in the scene, its
+    // materials, anywhere).
+    doc = parse_strict_json(text, origin);
+  } catch (const std::runtime_error& e) {
+    throw SceneError(e.what());
   }
   const Node root{doc, "", origin};
   if (!doc.is_object()) {
@@ -236,7 +240,7 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
         fmt::format("{}: a scene file must be a JSON object (got {})", origin, doc.type_name()));
   }
   root.check_keys({"name", "description", "meshes", "materials", "camera", "ambient", "light",
-                   "lights", "background", "firmware"});
+                   "lights", "background", "firmware", "parameters"});
   if (!root.has("meshes")) throw SceneError(origin + ": missing key 'meshes' (an array of meshes)");
   const Node meshes = root.at("meshes");
   if (meshes.array().empty()) meshes.fail("must hold at least one mesh");
@@ -370,6 +374,29 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
       program = fs::path(base_dir) / program;
     }
     scene.firmware = program.string();
+  }
+  if (root.has("parameters")) {
+    // Frame parameters by name, as --param takes them; the range of each is checked when the
+    // frame is built (some depend on gp.depth_bits), the rest here.
+    const Node ps = root.at("parameters");
+    if (!ps.value.is_object()) {
+      ps.fail(
+          fmt::format("must be an object of frame parameters, e.g. {{\"threshold\": 8192}} "
+                      "(got {})",
+                      ps.value.type_name()));
+    }
+    for (const auto& item : ps.value.items()) {
+      const Node v = ps.at(item.key());
+      const int k = parameter_index(item.key());
+      if (k < 0) v.fail("is not a frame parameter (pp5sim isa lists them)");
+      if (frame_parameter_computed(static_cast<Parameter>(k))) {
+        v.fail("cannot be set: the GP computes it (pp5sim isa says from what)");
+      }
+      if (!v.value.is_number_integer()) {
+        v.fail(fmt::format("must be an integer (got {})", v.value.dump()));
+      }
+      scene.parameters[item.key()] = v.value.get<std::int64_t>();
+    }
   }
   return scene;
 }
