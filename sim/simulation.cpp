@@ -385,7 +385,7 @@ std::string summary(const FrameResult& r, const Program& program, const TimingPa
       100 * s.real("timing.ring_channel_utilisation_max"),
       100 * s.real("timing.renderer_utilisation_mean"),
       100 * s.real("timing.renderer_utilisation_max"), s.text("timing.balancing"));
-  out += fmt::format("host: {:.2f} s ({:.2f} s timing, {:.2f} s pixels), {:.3g} array cycles/s\n",
+  out += fmt::format("host: {:.3f} s ({:.3f} s timing, {:.3f} s pixels), {:.3g} array cycles/s\n",
                      s.real("host.seconds"), s.real("host.timing_seconds"),
                      s.real("host.pixel_seconds"),
                      s.real("host.simulated_array_cycles_per_host_second"));

@@ -1,5 +1,6 @@
 #include "models/pixel_array/bit_sliced_backend.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -64,8 +65,18 @@ void BitSlicedBackend::multiply_accumulate(const Field& dst, const Field& a, std
 }
 
 void BitSlicedBackend::read_field(const Field& field, std::uint64_t* out) const {
-  const int n = array_.pixels();
-  for (int p = 0; p < n; ++p) out[p] = array_.read(p, field);
+  // Plane by plane, word by word: the same bits PixelArray::read gives pixel by pixel
+  // (pixel p is bit p % 64 of word p / 64), without its per-pixel index arithmetic.
+  const int words = array_.words();
+  std::fill(out, out + array_.pixels(), std::uint64_t{0});
+  for (int i = 0; i < field.width; ++i) {
+    const Word* plane = array_.plane(field.lo + i);
+    for (int w = 0; w < words; ++w) {
+      const Word bits = plane[w];
+      std::uint64_t* o = out + static_cast<std::size_t>(w) * 64;
+      for (int j = 0; j < 64; ++j) o[j] |= ((bits >> j) & 1) << i;
+    }
+  }
 }
 
 void BitSlicedBackend::read_memory_planes(std::vector<std::uint64_t>& planes) const {

@@ -53,14 +53,12 @@ std::string encode_png(const RgbImage& image, const std::string& what) {
   png.height = static_cast<png_uint_32>(image.height);
   png.format = PNG_FORMAT_RGB;
   PngImageGuard guard(png);
-  // First the size libpng needs, then the encoding into a buffer of that size.
-  png_alloc_size_t size = 0;
-  if (png_image_write_to_memory(&png, nullptr, &size, /*convert_to_8bit=*/0, image.rgb.data(),
-                                /*row_stride=*/0, /*colormap=*/nullptr) == 0) {
-    fail(kWhat, what, png.message[0] != '\0' ? png.message : "libpng reported an error");
-  }
+  // One compression, into a buffer of the largest size libpng can need (asking for the size
+  // first would compress the image twice).
+  png_alloc_size_t size = PNG_IMAGE_PNG_SIZE_MAX(png);
   std::string bytes(size, '\0');
-  if (png_image_write_to_memory(&png, bytes.data(), &size, 0, image.rgb.data(), 0, nullptr) == 0) {
+  if (png_image_write_to_memory(&png, bytes.data(), &size, /*convert_to_8bit=*/0, image.rgb.data(),
+                                /*row_stride=*/0, /*colormap=*/nullptr) == 0) {
     fail(kWhat, what, png.message[0] != '\0' ? png.message : "libpng reported an error");
   }
   bytes.resize(size);
