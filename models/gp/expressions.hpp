@@ -96,7 +96,7 @@ bool needs_adjacency(const ExpressionSet& set);
 int coefficient_words(int coefficient_bits, int word_bits);
 // Ring words of a packet carrying `set`: a header word naming the procedure (and kind), then
 // for each expression in `set`, in Expression order, coefficients(form) coefficients of
-// coefficient_words words each (docs/arch-primitives.md, "Packet format").
+// coefficient_words words each (docs/architecture.md, "Packet format").
 std::uint64_t packet_words(const ExpressionSet& set, int coefficient_words);
 
 }  // namespace pp5
