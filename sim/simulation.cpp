@@ -192,6 +192,33 @@ void register_timing_statistics(Statistics& s, const FrameAttribution& a,
              [balancing] { return balancing; });
 }
 
+// SystemC's time is a 64-bit count of picoseconds (about 213 days) whose sums wrap without a
+// word. No unit can be busy for longer than the frame, so a Renderer or GP whose busy time
+// exceeds the frame's end means that simulated time wrapped: the run is refused rather than
+// reported with nonsense (a frame shorter than its work, utilisations in the millions).
+void check_time_did_not_wrap(Machine& machine) {
+  const MachineConfig& config = machine.config();
+  const double end = machine.frame_buffer().frame_complete().to_seconds();
+  const double limit = sc_core::sc_max_time().to_seconds();
+  auto refuse = [&](const std::string& unit, double busy) {
+    throw std::runtime_error(fmt::format(
+        "simulated time ran past what SystemC can count ({:.3g} s, 2^64 ps): {} was busy for "
+        "{:.3g} s of a frame that seems to end at {:.3g} s; make the frame shorter (fewer "
+        "triangles, a faster renderer.clock_hz or backing store, larger renderer.block_bits)",
+        limit, unit, busy, end));
+  };
+  for (int k = 0; k < machine.renderer_count(); ++k) {
+    const RendererStats& st = machine.renderer(k).stats();
+    const double busy =
+        static_cast<double>(st.busy.count + st.stall.count) / config.renderer.clock_hz;
+    if (busy > end * (1 + 1e-9) + 1e-12 || busy > limit) refuse(fmt::format("renderer{}", k), busy);
+  }
+  for (int k = 0; k < machine.gp_count(); ++k) {
+    const double busy = machine.gp(k).stats().busy.seconds(config.gp.clock_hz);
+    if (busy > end * (1 + 1e-9) + 1e-12 || busy > limit) refuse(fmt::format("gp{}", k), busy);
+  }
+}
+
 }  // namespace
 
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
@@ -202,6 +229,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
   machine->record_timeline(timeline != nullptr);
   run_kernel();
+  check_time_did_not_wrap(*machine);
   if (timeline) *timeline = timeline_document(*machine);
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();

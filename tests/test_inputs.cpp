@@ -14,6 +14,10 @@
 #include "common/read_file.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "sim/scene/mesh_loader.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/scene/scene_loader.hpp"
+#include "sim/simulation.hpp"
+#include "support.hpp"
 
 namespace fs = std::filesystem;
 using namespace pp5;
@@ -176,4 +180,31 @@ TEST_CASE("mesh files: what exporters write is read, what cannot be filled is re
     CHECK(mesh.triangles.size() == 1);
     CHECK(report.ignored_statements == 1);
   }
+}
+
+TEST_CASE("simulated time past SystemC's 2^64 ps is refused, not wrapped", "[inputs]") {
+  // In-range parameters whose frame lasts longer than SystemC can count: a 1 MHz array, a
+  // backing store of 100,000 cycles a block of one bit, one Renderer, spilling firmware.
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"renderer.clock_hz=1e6", "renderer.backing_store_cycles_per_block=100000",
+              "renderer.block_bits=1", "renderer.count=1"});
+  SceneOptions options;
+  options.tessellation_u = 640;
+  options.tessellation_v = 128;
+  const Scene scene = make_builtin_scene("torus", options);
+  const Program program = test::load_program("epsilon_folded", config);
+  CHECK_THROWS_WITH(simulate_frame(config, scene, program, 2),
+                    Catch::Contains("simulated time ran past what SystemC can count") &&
+                        Catch::Contains("renderer0 was busy"));
+}
+
+TEST_CASE("a tessellation is refused where it does not apply", "[inputs]") {
+  SceneOptions options;
+  options.tessellation_u = 8;
+  options.tessellation_v = 8;
+  CHECK_THROWS_WITH(make_builtin_scene("two-triangles", options),
+                    Catch::Contains("scene 'two-triangles' has fixed geometry"));
+  CHECK_THROWS_WITH(load_scene(PP5_SOURCE_DIR "/examples/meshes/knot.obj", options),
+                    Catch::Contains("is a file, whose geometry is its own"));
+  CHECK_NOTHROW(make_builtin_scene("sphere", options));
 }

@@ -1,5 +1,7 @@
 #include "models/config/machine_config.hpp"
 
+#include "common/read_file.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -487,13 +489,11 @@ MachineConfig MachineConfig::from_json(const nlohmann::json& doc, const std::str
 }
 
 MachineConfig MachineConfig::from_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ConfigError(fmt::format("{}: cannot open the machine configuration", path));
-  std::stringstream text;
-  text << in.rdbuf();
   nlohmann::json doc;
   try {
-    doc = parse_strict_json(text.str(), path);
+    // A configuration is a few kilobytes; 1 MiB is far beyond any.
+    doc = parse_strict_json(read_regular_file(path, 1u << 20, "a machine configuration (JSON)"),
+                            path);
   } catch (const std::runtime_error& e) {
     throw ConfigError(e.what());
   }

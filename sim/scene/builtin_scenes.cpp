@@ -296,9 +296,16 @@ std::vector<std::string> builtin_scene_names() {
 
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "torus") return make_torus(options);
-  if (name == "two-triangles") return make_two_triangles();
   if (name == "sphere") return make_sphere(options);
   if (name == "figure-eight") return make_figure_eight(options);
+  const bool fixed = name == "two-triangles" || name == "crossing-quads" || name == "receding-pairs";
+  if (fixed && (options.tessellation_u != 0 || options.tessellation_v != 0)) {
+    throw std::invalid_argument(fmt::format(
+        "--tessellation: scene '{}' has fixed geometry; only torus, sphere and figure-eight "
+        "take a tessellation",
+        name));
+  }
+  if (name == "two-triangles") return make_two_triangles();
   if (name == "crossing-quads") return make_crossing_quads();
   if (name == "receding-pairs") return make_receding_pairs();
   std::string valid;

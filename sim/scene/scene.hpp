@@ -13,7 +13,7 @@ namespace pp5 {
 
 // Tessellation overrides; 0 keeps the scene's default. For the torus, u runs along the knot and v
 // around the revolution; for the sphere, u runs around the equator and v from pole to pole. The
-// two-triangles scene ignores both.
+// scenes of fixed geometry (two-triangles, crossing-quads, receding-pairs) and files refuse them.
 struct SceneOptions {
   int tessellation_u = 0;
   int tessellation_v = 0;

@@ -417,6 +417,13 @@ Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {
   const fs::path p(name_or_path);
   std::string ext = p.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const bool tessellated = options.tessellation_u != 0 || options.tessellation_v != 0;
+  if (tessellated && (ext == ".json" || is_mesh_file(name_or_path))) {
+    throw std::invalid_argument(fmt::format(
+        "--tessellation: {} is a file, whose geometry is its own; only the built-in torus, "
+        "sphere and figure-eight take a tessellation",
+        name_or_path));
+  }
   if (ext == ".json") return load_scene_file(name_or_path);
   if (is_mesh_file(name_or_path)) {
     MeshLoadReport report;
