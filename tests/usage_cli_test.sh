@@ -15,4 +15,15 @@ done
 "$bin" --version | grep -q "^pp5sim [0-9]" || fail "--version printed: $("$bin" --version)"
 [ "$(status_of --help)" = 0 ] || fail "--help should exit 0"
 [ -e "$tmp/x" ] && fail "a usage error wrote output"
+# A grid is walked, never held: a 26-million-point grid is refused at once, a 100,000-point
+# one prints its commands without exhausting memory.
+ten=1,2,3,4,5,6,7,8,9,10
+expect_error "the grid has more than 1000000 points" sweep --grid gp.count=$ten \
+  --grid renderer.count=$ten --grid ring.channels=$ten --grid ring.hop_latency_cycles=$ten \
+  --grid evaluator.latency_cycles=$ten --grid renderer.packet_overhead_cycles=$ten,11,12,13,14,15,16,17,18,19,20,21,22,23,24,25,26 \
+  --print-commands --out "$tmp/sweep"
+lines=$( (ulimit -v $((2 * 1024 * 1024)); "$bin" sweep --grid gp.count=$ten --grid renderer.count=$ten \
+  --grid ring.channels=$ten --grid ring.hop_latency_cycles=$ten --grid evaluator.latency_cycles=$ten \
+  --print-commands --out "$tmp/sweep") | wc -l)
+[ "$lines" = 100000 ] || fail "a 100,000-point sweep printed $lines commands"
 echo "usage_cli: all checks passed"

@@ -18,6 +18,7 @@
 #include <memory>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
@@ -94,23 +95,6 @@ std::vector<Axis> parse_grid(const std::vector<std::string>& grid) {
   return axes;
 }
 
-// Every combination, the first axis varying slowest.
-std::vector<std::vector<std::string>> combinations(const std::vector<Axis>& axes) {
-  std::vector<std::vector<std::string>> out{{}};
-  for (const Axis& a : axes) {
-    std::vector<std::vector<std::string>> next;
-    for (const auto& partial : out) {
-      for (const std::string& v : a.values) {
-        auto c = partial;
-        c.push_back(v);
-        next.push_back(std::move(c));
-      }
-    }
-    out = std::move(next);
-  }
-  return out;
-}
-
 std::string run_name(const std::vector<Axis>& axes, const std::vector<std::string>& values) {
   std::string name;
   for (std::size_t k = 0; k < axes.size(); ++k) {
@@ -130,16 +114,43 @@ std::string shell_quote(const std::string& s) {
   return out + "'";
 }
 
+// The most points one sweep may have: a million runs is days of host time already, and the
+// grid is walked, never held, so no size below this can exhaust memory.
+constexpr std::uint64_t kMaxSweepPoints = 1000000;
+
+// The values of grid point `index`, the first axis varying slowest.
+std::vector<std::string> point(const std::vector<Axis>& axes, std::uint64_t index) {
+  std::vector<std::string> values(axes.size());
+  for (std::size_t k = axes.size(); k-- > 0;) {
+    values[k] = axes[k].values[index % axes[k].values.size()];
+    index /= axes[k].values.size();
+  }
+  return values;
+}
+
 int run_sweep(const SweepOptions& o, const std::string& program_path) {
   const std::vector<Axis> axes = parse_grid(o.grid);
-  const auto runs = combinations(axes);
-  // Check every run's whole configuration before writing anything.
-  std::vector<MachineConfig> configs;
-  for (const auto& values : runs) {
-    std::vector<std::string> sets = o.sets;
-    for (std::size_t k = 0; k < axes.size(); ++k) sets.push_back(axes[k].key + "=" + values[k]);
-    configs.push_back(load_config(o.config_path, sets));
+  std::uint64_t points = 1;
+  for (const Axis& a : axes) {
+    if (points > kMaxSweepPoints / a.values.size()) {
+      throw std::runtime_error(fmt::format(
+          "--grid: the grid has more than {} points; split the sweep into several (each with its "
+          "own --out) or sweep fewer values",
+          kMaxSweepPoints));
+    }
+    points *= a.values.size();
   }
+  // Each point's configuration is the base (file and --set) with its axes set, built when it
+  // is needed rather than all held at once.
+  const MachineConfig base = load_config(o.config_path, o.sets);
+  auto config_of = [&](std::uint64_t i) {
+    const std::vector<std::string> values = point(axes, i);
+    std::vector<std::string> sets;
+    for (std::size_t k = 0; k < axes.size(); ++k) sets.push_back(axes[k].key + "=" + values[k]);
+    MachineConfig c = base;
+    c.set(sets);
+    return c;
+  };
   SceneOptions scene_options;
   if (o.tessellation.size() == 2) {
     scene_options.tessellation_u = o.tessellation[0];
@@ -147,7 +158,15 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
   }
   const Scene scene = load_scene(o.scene_name, scene_options);
   const std::string firmware = firmware_for(o.firmware, scene);
-  for (const MachineConfig& c : configs) assemble_file(firmware, assembler_options(c));
+  // Check every point's whole configuration, and the program against each distinct pixel
+  // memory, before writing anything.
+  std::map<std::tuple<int, int, int, int>, bool> assembled;
+  for (std::uint64_t i = 0; i < points; ++i) {
+    const AssemblerOptions a = assembler_options(config_of(i));
+    const auto key =
+        std::make_tuple(a.memory_bits, a.backing_store_bits, a.block_bits, a.enable_stack_depth);
+    if (assembled.emplace(key, true).second) assemble_file(firmware, a);
+  }
 
   fs::create_directories(o.out_dir);
   nlohmann::json grid = nlohmann::json::object();
@@ -164,8 +183,9 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
                                        {"firmware", firmware}}
                                 .dump(2) +
                             "\n");
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    const fs::path dir = fs::path(o.out_dir) / run_name(axes, runs[i]);
+  for (std::uint64_t i = 0; i < points; ++i) {
+    const std::vector<std::string> values = point(axes, i);
+    const fs::path dir = fs::path(o.out_dir) / run_name(axes, values);
     if (o.print_commands) {
       std::string line =
           fmt::format("{} render --scene {} --firmware {}", shell_quote(program_path),
@@ -176,24 +196,28 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
       }
       for (const std::string& s : o.sets) line += " --set " + shell_quote(s);
       for (std::size_t k = 0; k < axes.size(); ++k) {
-        line += " --set " + shell_quote(axes[k].key + "=" + runs[i][k]);
+        line += " --set " + shell_quote(axes[k].key + "=" + values[k]);
       }
       line += " --threads 1 --out " + shell_quote(dir.string());
       std::cout << line << "\n";
       continue;
     }
-    const Program program = assemble_file(firmware, assembler_options(configs[i]));
-    const FrameResult r = simulate_frame(configs[i], scene, program, o.threads);
+    const MachineConfig config = config_of(i);
+    const Program program = assemble_file(firmware, assembler_options(config));
+    const FrameResult r = simulate_frame(config, scene, program, o.threads);
     fs::create_directories(dir);
-    write_file_atomically((dir / "config.json").string(), configs[i].to_json().dump(2) + "\n");
-    write_file_atomically((dir / "stats.json").string(), r.stats_json.dump(2) + "\n");
+    // A run's two files together, or neither (sim/output).
+    OutputSet outputs;
+    outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
+    outputs.add((dir / "stats.json").string(), r.stats_json.dump(2) + "\n");
+    outputs.commit();
     std::cerr << fmt::format("[{}/{}] {}: {:.3f} ms, {:.0f} triangles/s, bottleneck {}\n", i + 1,
-                             runs.size(), dir.filename().string(), r.frame_seconds * 1e3,
+                             points, dir.filename().string(), r.frame_seconds * 1e3,
                              r.triangles_per_second, r.stats.text("timing.bottleneck"));
   }
   if (!o.print_commands) {
     std::cout << fmt::format("{} runs in {}; next: pp5sim sweep aggregate {} -o sweep.csv\n",
-                             runs.size(), o.out_dir, o.out_dir);
+                             points, o.out_dir, o.out_dir);
   }
   return 0;
 }
@@ -253,8 +277,17 @@ int run_aggregate(const SweepOptions& o) {
   std::vector<Axis> axes;
   for (const auto& k : keys)
     axes.push_back({k, sweep.at("grid").at(k).get<std::vector<std::string>>()});
+  std::uint64_t points = 1;
+  for (const Axis& a : axes) {
+    if (a.values.empty() || points > kMaxSweepPoints / a.values.size()) {
+      throw std::runtime_error(
+          fmt::format("{}: the grid has no values on axis '{}' or more than {} points",
+                      (dir / "sweep.json").string(), a.key, kMaxSweepPoints));
+    }
+    points *= a.values.size();
+  }
   std::vector<fs::path> runs;
-  for (const auto& values : combinations(axes)) runs.push_back(dir / run_name(axes, values));
+  for (std::uint64_t i = 0; i < points; ++i) runs.push_back(dir / run_name(axes, point(axes, i)));
   std::sort(runs.begin(), runs.end());
   std::string csv;
   std::vector<std::pair<std::vector<double>, std::string>> sorted_rows;
