@@ -1,6 +1,7 @@
 #include "sim/simulation.hpp"
 
 #include <fmt/format.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -192,6 +193,72 @@ void register_timing_statistics(Statistics& s, const FrameAttribution& a,
              [balancing] { return balancing; });
 }
 
+// Bytes the host can still give this process: the kernel's MemAvailable, and the address-space
+// limit (ulimit -v) less what the process already maps, whichever is smaller.
+double host_bytes_available() {
+  double available = 0;
+  {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key;
+    double kib = 0;
+    std::string unit;
+    while (meminfo >> key >> kib >> unit) {
+      if (key == "MemAvailable:") available = kib * 1024;
+    }
+  }
+  if (available <= 0) available = 1e18;  // unknown: no limit from here
+  struct rlimit limit {};
+  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
+    double mapped = 0;
+    std::ifstream status("/proc/self/status");
+    std::string key;
+    double kib = 0;
+    std::string unit;
+    while (status >> key) {
+      if (key == "VmSize:" && status >> kib >> unit) mapped = kib * 1024;
+    }
+    available = std::min(available, static_cast<double>(limit.rlim_cur) - mapped);
+  }
+  return available;
+}
+
+// The memory a frame will need, estimated before anything is allocated, so that a run too
+// large for the host is refused with what to reduce instead of dying in an allocation:
+// each board in flight holds its pixel memory (and backing store, if the program uses it)
+// three times (the array and the two kept states of an empty region); each triangle's packet
+// holds every expression's coefficients; the frame is held as RGB.
+void check_memory(const MachineConfig& config, const Scene& scene, const Program& program,
+                  int threads) {
+  bool backing = false;
+  for (const ProcedureCode& code : program.procedures) {
+    for (const Instruction& ins : code.code) {
+      backing = backing || ins.op == Opcode::bsld || ins.op == Opcode::bsst;
+    }
+  }
+  const double pixels =
+      static_cast<double>(config.renderer.region_width) * config.renderer.region_height;
+  const double array_bits = std::max(1, program.bits_used()) + config.renderer.enable_stack_depth +
+                            8 + (backing ? config.renderer.backing_store_bits : 0);
+  const double board = 3 * array_bits * pixels / 8;
+  const int boards = std::min(std::max(1, threads), config.renderer.count) + 1;
+  const double packets =
+      static_cast<double>(scene.mesh.triangles.size()) * (sizeof(Packet) + 64) * program.passes;
+  const double frame = 2.0 * config.screen.width * config.screen.height * 3;
+  const double need = board * boards + packets + frame;
+  const double available = host_bytes_available();
+  if (need > 0.9 * available) {
+    const double gib = 1024.0 * 1024 * 1024;
+    throw std::runtime_error(fmt::format(
+        "this frame needs about {:.1f} GiB ({} boards in flight x {:.2f} GiB of pixel memory{}, "
+        "{:.2f} GiB of packets for {} triangles, {:.2f} GiB of frame) and the host can give "
+        "{:.1f} GiB: use fewer --threads, a smaller renderer.region_width/height{} or a "
+        "smaller scene",
+        need / gib, boards, board / gib, backing ? " and backing store" : "", packets / gib,
+        scene.mesh.triangles.size(), frame / gib, available / gib,
+        backing ? ", a smaller renderer.backing_store_bits" : ""));
+  }
+}
+
 // SystemC's time is a 64-bit count of picoseconds (about 213 days) whose sums wrap without a
 // word. No unit can be busy for longer than the frame, so a Renderer or GP whose busy time
 // exceeds the frame's end means that simulated time wrapped: the run is refused rather than
@@ -225,6 +292,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
                            int threads, const std::function<BoardObserver*(int renderer)>& observe,
                            nlohmann::json* timeline) {
   const auto t0 = std::chrono::steady_clock::now();
+  check_memory(config, scene, program, threads);
   fresh_kernel();
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
   machine->record_timeline(timeline != nullptr);

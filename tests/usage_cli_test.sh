@@ -26,4 +26,11 @@ lines=$( (ulimit -v $((2 * 1024 * 1024)); "$bin" sweep --grid gp.count=$ten --gr
   --grid ring.channels=$ten --grid ring.hop_latency_cycles=$ten --grid evaluator.latency_cycles=$ten \
   --print-commands --out "$tmp/sweep") | wc -l)
 [ "$lines" = 100000 ] || fail "a 100,000-point sweep printed $lines commands"
+# A frame too large for the host is refused before anything is allocated, saying what to reduce.
+out=$( (ulimit -v $((2 * 1024 * 1024)); "$bin" render --set renderer.region_width=1024 \
+  --set renderer.region_height=1024 --set renderer.backing_store_bits=65536 --firmware epsilon \
+  --set screen.width=1024 --out "$tmp/big") 2>&1) && fail "a 72 GiB frame ran under a 2 GiB limit"
+echo "$out" | grep -q "this frame needs about .* GiB .* smaller renderer.backing_store_bits" \
+  || fail "memory refusal said: $out"
+[ -e "$tmp/big/frame.png" ] && fail "a refused frame wrote output"
 echo "usage_cli: all checks passed"

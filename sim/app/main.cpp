@@ -122,6 +122,13 @@ int main(int argc, char** argv) {
                  "smaller\n";
     return 1;
   } catch (const std::exception& e) {
+    // SystemC reports an exception thrown inside a simulation process as its own error
+    // (E549, "uncaught exception"), naming the original: bad_alloc is still out of memory.
+    if (std::string(e.what()).find("bad_alloc") != std::string::npos) {
+      std::cerr << "pp5sim: error: out of memory during the simulation: make the scene, the "
+                   "screen or renderer.backing_store_bits smaller\n";
+      return 1;
+    }
     std::cerr << "pp5sim: error: " << e.what() << "\n";
     return 1;
   }
