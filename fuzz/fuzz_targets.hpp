@@ -17,6 +17,8 @@
 #include "models/config/machine_config.hpp"
 #include "sim/scene/mesh_loader.hpp"
 #include "sim/scene/scene_loader.hpp"
+#include "sim/trace/snapshot.hpp"
+#include "sim/trace/trace_file.hpp"
 
 namespace pp5::fuzz {
 
@@ -87,6 +89,30 @@ inline void assembler(const std::uint8_t* data, std::size_t size) {
     const Program p = assemble(text, "fuzz.pp5", AssemblerOptions{});
     (void)listing(p, TimingParams{});
   } catch (const AssemblyError&) {
+  }
+}
+
+// A trace file's bytes (.pp5t): preamble, JSON header, records, checksum. Inputs with a
+// valid checksum reach the header's meaning and the records; libFuzzer's comparison tracing
+// finds the checksum of small ones.
+inline void trace(const std::uint8_t* data, std::size_t size) {
+  const std::string bytes(reinterpret_cast<const char*>(data), size);
+  try {
+    (void)trace::parse_trace(bytes, "fuzz.pp5t");
+  } catch (const trace::TraceError&) {
+  }
+}
+
+// A snapshot file's bytes (.pp5m); a snapshot that parses is also turned into a field image,
+// which reads every field the header names.
+inline void snapshot(const std::uint8_t* data, std::size_t size) {
+  const std::string bytes(reinterpret_cast<const char*>(data), size);
+  try {
+    const trace::Snapshot s = trace::parse_snapshot(bytes, "fuzz.pp5m");
+    for (const auto& f : s.header.at("firmware").at("fields")) {
+      if (f.at("lo").get<int>() >= 0) (void)trace::field_image(s, f.at("name").get<std::string>());
+    }
+  } catch (const trace::TraceError&) {
   }
 }
 

@@ -220,7 +220,9 @@ TEST_CASE("the fuzz corpus and every kept crasher run cleanly through the fuzz t
       {"mesh", fuzz::mesh},
       {"scene", fuzz::scene},
       {"config", fuzz::config},
-      {"asm", fuzz::assembler}};
+      {"asm", fuzz::assembler},
+      {"trace", fuzz::trace},
+      {"snapshot", fuzz::snapshot}};
   int inputs = 0;
   for (const auto& [name, run] : targets) {
     for (const char* set : {"corpus", "regressions"}) {

@@ -319,8 +319,10 @@ class Assembler {
       const int used = (p.uses[0].width + options_.block_bits - 1) / options_.block_bits;
       // Compared without adding to the literal, which may be near 2^63.
       if (literal > blocks - used) {
+        // The last block in unsigned arithmetic: a literal near 2^63 plus the blocks it
+        // spans would overflow a signed one (UBSan found it).
         fail("backing-store blocks {}..{} are past the end of the store ({} blocks)", literal,
-             literal + used - 1, blocks);
+             static_cast<std::uint64_t>(literal) + static_cast<std::uint64_t>(used) - 1, blocks);
       }
       o.kind = Operand::Kind::literal;
       o.literal = literal;

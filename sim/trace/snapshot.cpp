@@ -139,6 +139,10 @@ Snapshot read_snapshot(const std::string& path) {
   } catch (const FileError& e) {
     throw TraceError(e.what());
   }
+  return parse_snapshot(bytes, path);
+}
+
+Snapshot parse_snapshot(const std::string& bytes, const std::string& path) {
   const auto* d = reinterpret_cast<const std::uint8_t*>(bytes.data());
   const std::size_t n = bytes.size();
   if (n < 8 || std::memcmp(d, kSnapMagic, 8) != 0) {

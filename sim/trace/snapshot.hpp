@@ -55,6 +55,8 @@ class SnapshotTaker {
 
 void write_snapshot(const std::string& path, const Snapshot& s);
 Snapshot read_snapshot(const std::string& path);
+// The same from a file's bytes; `path` names it in messages.
+Snapshot parse_snapshot(const std::string& bytes, const std::string& path);
 
 // One field of every pixel as an image: 1-bit fields as a mask (0 black, 1 white), wider
 // ones as a grey ramp from the region's smallest value (black) to its largest (white).
