@@ -12,6 +12,7 @@
 #include "sim/analysis/intersections.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/output/output_set.hpp"
 #include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
@@ -82,7 +83,8 @@ int run_highlight(const HighlightOptions& o) {
     }
     programs.push_back(std::move(e));
   }
-  fs::create_directories(o.out_dir);
+  prepare_output_folder(o.out_dir, "--out");
+  OutputSet outputs;
   // Projected polygons per second, from the timing model, on one scene: with the configured
   // GP code and with the compiled C code, which Banks' variants were built on.
   MachineConfig compiled = config;
@@ -174,9 +176,9 @@ int run_highlight(const HighlightOptions& o) {
             a.flagged ? static_cast<double>(changed) / a.flagged : static_cast<double>(changed),
             changed);
       }
-      write_png((dir / (e.name + ".png")).string(), frame.image);
-      write_png((dir / (e.name + "-overlay.png")).string(),
-                overlay_image(frame.image, truth, flagged));
+      outputs.add((dir / (e.name + ".png")).string(), encode_png(frame.image));
+      outputs.add((dir / (e.name + "-overlay.png")).string(),
+                  encode_png(overlay_image(frame.image, truth, flagged)));
       const std::string speed = o.speed_scene.empty() ? "-" : fmt::format("{:.0f}", e.speed);
       const std::string speed_compiled =
           o.speed_scene.empty() ? "-" : fmt::format("{:.0f}", e.speed_compiled);
@@ -197,8 +199,10 @@ int run_highlight(const HighlightOptions& o) {
     }
   }
   table += curve_table;
-  write_file_atomically((fs::path(o.out_dir) / "highlight.md").string(), table);
-  write_file_atomically((fs::path(o.out_dir) / "highlight.csv").string(), csv);
+  outputs.add((fs::path(o.out_dir) / "highlight.md").string(), table);
+  outputs.add((fs::path(o.out_dir) / "highlight.csv").string(), csv);
+  // The tables and every image together, or none of them (sim/output).
+  outputs.commit();
   std::cout << table;
   std::cout << fmt::format(
       "\nwidths in pixels across the true curve (delta = {} px half-width); overlays: green = "

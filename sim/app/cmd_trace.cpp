@@ -10,6 +10,7 @@
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/output/output_set.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
@@ -295,17 +296,20 @@ Command add_trace_command(CLI::App& app) {
                  ? (fs::path("out") / scene.name / fmt::format("region-{}.pp5m", region)).string()
                  : so->out;
          if (fs::path(path).has_parent_path()) {
-           fs::create_directories(fs::path(path).parent_path());
+           prepare_output_folder(fs::path(path).parent_path().string(), "--out");
          }
-         trace::write_snapshot(path, s);
+         // The snapshot and its images together, or none of them (sim/output).
+         OutputSet outputs;
+         outputs.add(path, trace::encode_snapshot(s));
+         std::vector<std::string> pngs;
+         for (const auto& f : so->png) {
+           pngs.push_back((fs::path(path).replace_extension("").string()) + "-" + f + ".png");
+           outputs.add(pngs.back(), encode_png(trace::field_image(s, f)));
+         }
+         outputs.commit();
          std::cout << fmt::format("wrote {} (region {}, {})\n", path, region,
                                   s.header["point"].get<std::string>());
-         for (const auto& f : so->png) {
-           const std::string png =
-               (fs::path(path).replace_extension("").string()) + "-" + f + ".png";
-           write_png(png, trace::field_image(s, f));
-           std::cout << fmt::format("wrote {}\n", png);
-         }
+         for (const std::string& png : pngs) std::cout << fmt::format("wrote {}\n", png);
          return 0;
        }});
 

@@ -120,6 +120,10 @@ const Snapshot& SnapshotTaker::snapshot() const {
 }
 
 void write_snapshot(const std::string& path, const Snapshot& s) {
+  write_file_atomically(path, encode_snapshot(s));
+}
+
+std::string encode_snapshot(const Snapshot& s) {
   const std::string h = s.header.dump();
   std::string out(kSnapMagic, 8);
   put32(out, kSnapVersion);
@@ -128,7 +132,7 @@ void write_snapshot(const std::string& path, const Snapshot& s) {
   put64(out, static_cast<std::uint64_t>(s.planes.size()) * 8);
   for (std::uint64_t w : s.planes) put64(out, w);
   put64(out, fnv1a(reinterpret_cast<const std::uint8_t*>(out.data()), out.size()));
-  write_file_atomically(path, out);
+  return out;
 }
 
 Snapshot read_snapshot(const std::string& path) {

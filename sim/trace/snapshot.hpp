@@ -54,6 +54,8 @@ class SnapshotTaker {
 };
 
 void write_snapshot(const std::string& path, const Snapshot& s);
+// The bytes write_snapshot writes.
+std::string encode_snapshot(const Snapshot& s);
 Snapshot read_snapshot(const std::string& path);
 // The same from a file's bytes; `path` names it in messages.
 Snapshot parse_snapshot(const std::string& bytes, const std::string& path);
