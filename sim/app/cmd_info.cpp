@@ -6,6 +6,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "common/read_file.hpp"
+#include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "firmware/isa/isa.hpp"
 #include "models/machine.hpp"
@@ -63,13 +65,14 @@ struct StatsOptions {
 // `pp5sim stats FILE`: every statistic of a written stats.json with its unit; a name the
 // simulator does not register (a file from another version) is an error.
 int print_stats_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path));
+  const std::string text = read_regular_file(path, 64u << 20, "a stats.json");
   Statistics file;
   try {
-    file = Statistics::from_json(nlohmann::json::parse(in));
+    file = Statistics::from_json(parse_strict_json(text, path));
   } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: {}", path, e.what()));
+    const std::string what = e.what();
+    // parse_strict_json names the file itself; from_json does not.
+    throw std::runtime_error(what.rfind(path, 0) == 0 ? what : fmt::format("{}: {}", path, what));
   }
   std::map<std::string, StatisticInfo> described;
   for (StatisticInfo& i : describe_statistics(resolve_firmware("phong")))

@@ -20,6 +20,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
@@ -223,11 +224,9 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
 }
 
 nlohmann::json read_json(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_strict_json(text.str(), path.string());
+  // A run's files are kilobytes; 64 MiB is far beyond any.
+  return parse_strict_json(read_regular_file(path.string(), 64u << 20, "a JSON file of a sweep"),
+                           path.string());
 }
 
 // A written run's statistics, to read by name.
@@ -349,8 +348,8 @@ struct Csv {
 };
 
 Csv read_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", path));
+  // One row per run of at most a million runs.
+  std::istringstream in(read_regular_file(path, 1u << 30, "a sweep CSV (sweep aggregate's)"));
   Csv csv;
   std::string line;
   int n = 0;

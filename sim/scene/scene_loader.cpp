@@ -439,6 +439,14 @@ Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {
                                       report.ignored_statements)
                         : ""));
   }
+  // A path that is neither a mesh nor a scene file (a folder, a device, another format) is
+  // named as such rather than looked up as a built-in scene.
+  std::error_code error;
+  if (name_or_path.find('/') != std::string::npos || fs::exists(name_or_path, error)) {
+    throw std::invalid_argument(fmt::format(
+        "{}: not a mesh file (.obj .ply .stl .off) or a scene file (.json), nor a built-in scene",
+        name_or_path));
+  }
   try {
     return make_builtin_scene(name_or_path, options);
   } catch (const std::invalid_argument& e) {
