@@ -50,8 +50,14 @@ printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > "$tmp/cwd/...obj"
 (cd "$tmp/cwd" && "$bin" render --scene ...obj "${small[@]}" >/dev/null) || fail "...obj failed"
 [ -s "$tmp/cwd/out/scene/frame.png" ] || fail "...obj did not write out/scene/frame.png"
 
-# FIFOs and devices as inputs are refused at once, not read.
-mkfifo "$tmp/fifo.obj" "$tmp/fifo.json" "$tmp/fifo.pp5"
+# A second run into a folder says it replaced the first's outputs.
+"$bin" render --scene two-triangles "${small[@]}" --out "$tmp/again" >/dev/null || fail "first run"
+"$bin" render --scene two-triangles "${small[@]}" --out "$tmp/again" | grep -q "replacing the previous run's" \
+  || fail "a second run into one folder did not say it replaced the first's outputs"
+
+# FIFOs, devices and folders as inputs are refused at once, not read.
+mkfifo "$tmp/fifo.obj" "$tmp/fifo.json" "$tmp/fifo.pp5" "$tmp/fifo-config.json"
+expect_error "$tmp: is a directory, expected a machine configuration" render --config "$tmp" --out "$tmp/f"
 # (Each under `timeout`, so that a regression fails instead of hanging the suite.)
 pp5sim="$bin"
 bin=timeout
@@ -59,5 +65,6 @@ expect_error "fifo.obj: is a FIFO" 10 "$pp5sim" render --scene "$tmp/fifo.obj" -
 expect_error "fifo.json: is a FIFO" 10 "$pp5sim" render --scene "$tmp/fifo.json" --out "$tmp/f"
 expect_error "fifo.pp5: is a FIFO" 10 "$pp5sim" render --firmware "$tmp/fifo.pp5" --out "$tmp/f"
 expect_error "/dev/zero: is a character device" 10 "$pp5sim" asm /dev/zero
+expect_error "fifo-config.json: is a FIFO" 10 "$pp5sim" render --config "$tmp/fifo-config.json" --out "$tmp/f"
 bin="$pp5sim"
 echo "output_cli: all checks passed"
