@@ -44,6 +44,31 @@ long="$tmp/$(printf 'x%.0s' $(seq 1 250)).json"
 "$bin" render --scene two-triangles "${small[@]}" --out "$tmp/long" --timeline "$long" >/dev/null \
   || fail "a 251-character timeline name was refused"
 
+# A full disk: a run that cannot write everything leaves the previous run's outputs as they
+# were and no temporary, and names the reason. A 36 KiB tmpfs in a private mount namespace
+# holds the first run's files (4 pages) and the second's frame and config (4 pages) but not
+# its 29 KB stats.json, so writing file by file would leave a new frame beside an old
+# stats.json (skipped where unprivileged namespaces are not allowed).
+if unshare --user --map-root-user --mount true 2>/dev/null; then
+  full=$(unshare --user --map-root-user --mount sh -c '
+    bin="$1"; dir="$2"; shift 2
+    mkdir -p "$dir/disk" && mount -t tmpfs -o size=36k tmpfs "$dir/disk" || exit 90
+    "$bin" render --scene two-triangles "$@" --out "$dir/disk/run" >/dev/null 2>&1 || exit 91
+    cp "$dir/disk/run/stats.json" "$dir/old-stats.json"; cp "$dir/disk/run/frame.png" "$dir/old-frame.png"
+    "$bin" render --scene torus --set screen.width=128 --set screen.height=128 \
+      --out "$dir/disk/run" 2>&1 && exit 92
+    cmp -s "$dir/disk/run/stats.json" "$dir/old-stats.json" || exit 93
+    cmp -s "$dir/disk/run/frame.png" "$dir/old-frame.png" || exit 94
+    [ -z "$(find "$dir/disk" -name ".*.??????")" ] || exit 95
+    exit 0' sh "$bin" "$tmp" "${small[@]}")
+  status=$?
+  [ $status -eq 0 ] || fail "full disk: step $status failed: $full"
+  echo "$full" | grep -q "stats.json: cannot write (No space left on device)" \
+    || fail "full disk said: $full"
+else
+  echo "output_cli: full-disk check skipped (no unprivileged mount namespace here)"
+fi
+
 # A mesh named "...obj" gets out/scene, not out/.. (run in a scratch folder).
 mkdir -p "$tmp/cwd"
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > "$tmp/cwd/...obj"
