@@ -241,8 +241,8 @@ void check_memory(const MachineConfig& config, const Scene& scene, const Program
                             8 + (backing ? config.renderer.backing_store_bits : 0);
   const double board = 3 * array_bits * pixels / 8;
   const int boards = std::min(std::max(1, threads), config.renderer.count) + 1;
-  const double packets =
-      static_cast<double>(scene.mesh.triangles.size()) * (sizeof(Packet) + 64) * program.passes;
+  // A packet is kept once for all passes (the GPs resend the same ones).
+  const double packets = static_cast<double>(scene.mesh.triangles.size()) * (sizeof(Packet) + 64);
   const double frame = 2.0 * config.screen.width * config.screen.height * 3;
   const double need = board * boards + packets + frame;
   const double available = host_bytes_available();
