@@ -174,6 +174,23 @@ TEST_CASE("limits bound what a file can make the loader allocate", "[loaders]") 
              Catch::Contains("element 'face' declares 3000000 items"));
 }
 
+TEST_CASE("a PLY header declares its format and each element once", "[loaders]") {
+  // assimp 5.2 frees memory it never allocated when an element is declared twice (found by
+  // fuzzing: fuzz/regressions/mesh/ply-second-vertex-element-leak).
+  const std::string vertex =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+  const std::string body = "end_header\n0 0 0\n1 0 0\n0 1 0\n";
+  CHECK_THAT(error_of([&] {
+               parse_mesh("ply\nformat ascii 1.0\n" + vertex + vertex + body, "ply", "two.ply");
+             }),
+             Catch::Contains("two.ply:7: a second element 'vertex' (the first is line 3)"));
+  CHECK_THAT(error_of([&] {
+               parse_mesh("ply\nformat ascii 1.0\nformat binary_big_endian 1.0\n" + vertex + body,
+                          "ply", "f.ply");
+             }),
+             Catch::Contains("f.ply:3: a second 'format' line (the first is line 2)"));
+}
+
 TEST_CASE("scene files combine meshes, transforms, materials, camera and light", "[loaders]") {
   const Scene s = load_scene(data_path("scenes/two_meshes.json"));
   CHECK(s.name == "two-meshes");
@@ -217,12 +234,8 @@ TEST_CASE("the fuzz corpus and every kept crasher run cleanly through the fuzz t
           "[loaders][fuzz]") {
   namespace fs = std::filesystem;
   const std::pair<const char*, void (*)(const std::uint8_t*, std::size_t)> targets[] = {
-      {"mesh", fuzz::mesh},
-      {"scene", fuzz::scene},
-      {"config", fuzz::config},
-      {"asm", fuzz::assembler},
-      {"trace", fuzz::trace},
-      {"snapshot", fuzz::snapshot}};
+      {"mesh", fuzz::mesh},     {"scene", fuzz::scene}, {"config", fuzz::config},
+      {"asm", fuzz::assembler}, {"trace", fuzz::trace}, {"snapshot", fuzz::snapshot}};
   int inputs = 0;
   for (const auto& [name, run] : targets) {
     for (const char* set : {"corpus", "regressions"}) {

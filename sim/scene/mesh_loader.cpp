@@ -196,10 +196,11 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
     std::string name;
     unsigned long long count = 0, min_bytes = 0;
     std::vector<Property> properties;
+    int line = 0;  // where it is declared
   };
   std::vector<Element> elements;
   bool text = true, big_endian = false;
-  int line = 0;
+  int line = 0, format_line = 0;
   std::size_t pos = 0;
   for (;;) {
     const std::size_t start = pos, end = data.find('\n', pos);
@@ -235,6 +236,13 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
                       origin, line, printable(std::string(data.substr(start, end - start)))));
     }
     if (key == "format") {
+      // assimp 5.2 frees memory it did not allocate (or leaks it) when a header declares a
+      // second format or a second element of one name: both are malformed PLY.
+      if (format_line != 0) {
+        throw MeshError(fmt::format("{}:{}: a second 'format' line (the first is line {})", origin,
+                                    line, format_line));
+      }
+      format_line = line;
       text = a == "ascii";
       big_endian = a == "binary_big_endian";
     }
@@ -245,7 +253,13 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
         throw MeshError(fmt::format("{}:{}: element '{}' has count '{}', expected an integer",
                                     origin, line, printable(a), printable(b)));
       }
-      elements.push_back({a, n, 0, {}});
+      for (const Element& e : elements) {
+        if (e.name == a) {
+          throw MeshError(fmt::format("{}:{}: a second element '{}' (the first is line {})", origin,
+                                      line, printable(a), e.line));
+        }
+      }
+      elements.push_back({a, n, 0, {}, line});
     }
     if (key == "property") {
       Element& e = elements.back();
