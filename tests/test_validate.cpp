@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <set>
 
 #include "models/machine.hpp"
@@ -172,4 +173,17 @@ TEST_CASE("sensitivity: each end of a range is projected, and the rates move the
   const std::string md = sensitivity_markdown(t);
   CHECK_THAT(md, Catch::Contains("`gp.multipass` | assumed | resend | retraverse |"));
   CHECK_THAT(sensitivity_csv(t), Catch::StartsWith("key,mark,low,high,workload"));
+}
+
+TEST_CASE("sensitivity: an end that does not combine with the configuration has no rate",
+          "[validate]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"evaluator.coefficient_bits=44", "evaluator.result_bits=44"});
+  const SensitivityTable t = sensitivity(
+      config, kLoad, {{"phong", MachineConfig::Gp::Code::assembly}}, {"evaluator.result_bits"});
+  REQUIRE(t.rows.size() == 1);
+  // 40 result bits below 44-bit coefficients is no machine; 48 is one.
+  CHECK(std::isnan(t.rows[0].rates[0][0]));
+  CHECK(t.rows[0].rates[0][2] > 0);
+  CHECK_THAT(sensitivity_markdown(t), Catch::Contains("| - .. "));
 }

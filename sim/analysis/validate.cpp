@@ -305,7 +305,13 @@ SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& loa
   auto rate = [&](MachineConfig c, const SensitivityWorkload& w,
                   const std::vector<std::string>& sets) {
     c.gp.code = w.code;
-    if (!sets.empty()) c.set(sets);
+    // An end of a range may not combine with what --config/--set changed (a result width
+    // below the coefficients they asked for): that point is not a machine, and has no rate.
+    try {
+      if (!sets.empty()) c.set(sets);
+    } catch (const ConfigError&) {
+      return std::nan("");
+    }
     // The program is assembled for the point: its layout follows memory and block sizes.
     return project_frame(c, torus, load(w.program, c)).triangles_per_second;
   };
@@ -363,7 +369,13 @@ std::string assignments_text(const std::vector<std::string>& sets, const std::st
   }
   return linked.empty() ? own : fmt::format("{} ({})", own, linked);
 }
-std::string kilo(double rate) { return fmt::format("{:.0f}", rate / 1e3); }
+// A rate in thousands; '-' where the point was not a valid machine (NaN).
+std::string kilo(double rate) {
+  return std::isnan(rate) ? std::string("-") : fmt::format("{:.0f}", rate / 1e3);
+}
+std::string change(double rate, double base) {
+  return std::isnan(rate) ? std::string("-") : fmt::format("{:+.0f}%", 100 * (rate - base) / base);
+}
 }  // namespace
 
 std::string sensitivity_markdown(const SensitivityTable& t) {
@@ -380,8 +392,8 @@ std::string sensitivity_markdown(const SensitivityTable& t) {
     out += fmt::format("| `{}` | {} | {} | {} |", r.key, calibration_name(r.calibration),
                        md(assignments_text(r.low, r.key)), md(assignments_text(r.high, r.key)));
     for (const auto& v : r.rates) {
-      out += fmt::format(" {} .. {} K ({:+.0f}% .. {:+.0f}%) |", kilo(v[0]), kilo(v[2]),
-                         100 * (v[0] - v[1]) / v[1], 100 * (v[2] - v[1]) / v[1]);
+      out += fmt::format(" {} .. {} K ({} .. {}) |", kilo(v[0]), kilo(v[2]), change(v[0], v[1]),
+                         change(v[2], v[1]));
     }
     out += "\n";
   }

@@ -15,6 +15,8 @@
 //    plausible range (ParameterInfo::low/high: the --set assignments that put the machine
 //    there), from `base`; every other key stays as in `base`. Constants come from the
 //    configuration table, so a new assumed constant joins the table without code here.
+//    An end that does not combine with `base` (a ConfigError: e.g. result bits below the
+//    coefficient bits `base` asks for) has the rate NaN, printed '-'.
 //  - Deterministic: the same inputs give the same rows.
 #include <array>
 #include <functional>
