@@ -66,7 +66,7 @@ Command add_validate_command(CLI::App& app) {
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out, "Output folder (default out/validate)");
   cmd->add_flag("!--no-sensitivity", o->sensitivity,
-                "Skip the sensitivity table (about 200 projections of the torus)");
+                "Skip the sensitivity table (about 170 projections of the torus, some seconds)");
   cmd->add_option("--tessellation", o->tessellation,
                   "Tessellation U V of the large torus the full machine renders against the "
                   "design goal (default 512 128: 131,072 triangles)")
