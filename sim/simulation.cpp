@@ -286,11 +286,10 @@ void check_time_did_not_wrap(Machine& machine) {
   }
 }
 
-}  // namespace
-
-FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
-                           int threads, const std::function<BoardObserver*(int renderer)>& observe,
-                           nlohmann::json* timeline) {
+// simulate_frame, or with `pixels` false project_frame: the timing model alone.
+FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Program& program,
+                      int threads, const std::function<BoardObserver*(int renderer)>& observe,
+                      nlohmann::json* timeline, bool pixels) {
   const auto t0 = std::chrono::steady_clock::now();
   check_memory(config, scene, program, threads);
   fresh_kernel();
@@ -301,7 +300,7 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   if (timeline) *timeline = timeline_document(*machine);
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  execute_pixels(*machine, threads, observe);
+  if (pixels) execute_pixels(*machine, threads, observe);
   const double pixel_seconds = seconds_since(t1);
   const double host_seconds = seconds_since(t0);
 
@@ -412,6 +411,18 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
   result.stats_json = s.to_json();
   machine.reset();
   return result;
+}
+
+}  // namespace
+
+FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
+                           int threads, const std::function<BoardObserver*(int renderer)>& observe,
+                           nlohmann::json* timeline) {
+  return run_frame(config, scene, program, threads, observe, timeline, true);
+}
+
+FrameResult project_frame(const MachineConfig& config, const Scene& scene, const Program& program) {
+  return run_frame(config, scene, program, 1, {}, nullptr, false);
 }
 
 std::vector<StatisticInfo> describe_statistics(const std::string& program_path) {

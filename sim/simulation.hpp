@@ -36,6 +36,12 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
                            const std::function<BoardObserver*(int renderer)>& observe = {},
                            nlohmann::json* timeline = nullptr);
 
+// The timing model alone, for projections over many configurations (pp5sim validate): the
+// frame time and the statistics of simulate_frame, without executing the firmware on the
+// pixel arrays, which no instruction's cost depends on. The image is not drawn, and what
+// only execution counts (host.pixel_seconds) is 0.
+FrameResult project_frame(const MachineConfig& config, const Scene& scene, const Program& program);
+
 // What every statistic of a run is (its name pattern, kind, unit and description), in
 // registration order: the statistics a frame of the smallest machine registers, which are
 // those of any run with the indices of gp, renderer, ring.channels and primitives_per_region

@@ -56,18 +56,24 @@ struct RingLoad : sc_core::sc_module {
 
 }  // namespace
 
-TEST_CASE("i860 model: the calibration points within 10%", "[timing][gp]") {
+// A consistency check, not a test of the model: gp.overhead_factor is fitted so that the
+// hand-coded rate comes out at 1.2 M (docs/timing.md, Calibration), so the first check can
+// fail only if the fit or the operation counts drift apart. The compiled rate is a prediction,
+// but it rests on two assumed constants (gp.compiled_code_bytes, gp.icache_miss_clocks);
+// `pp5sim validate` shows how far their plausible ranges move it.
+TEST_CASE(
+    "i860 model: consistency check - the fitted hand-coded rate and the predicted compiled one",
+    "[timing][gp][consistency]") {
   MachineConfig c = MachineConfig::defaults();
   const GpWorkload w = phong_workload(c);
   // Hand-coded assembly: "well over 1,000,000" Phong triangles/s on the 32-GP machine; the
-  // calibration target is 1.2 M.
+  // fitted target is 1.2 M.
   I860Params assembly = i860_params(c);
   REQUIRE(assembly.code == GpCode::assembly);
   const double fast = I860Model(assembly).reference_rate(w, 32, c.gp.clock_hz);
-  CHECK(fast == Approx(1.2e6).epsilon(0.10));
-  CHECK(fast > 1.0e6);
-  // Compiled C: about 100,000/s. Not fitted: it follows from the pipeline model and the
-  // same overhead factor.
+  CHECK(fast == Approx(1.2e6).epsilon(0.01));
+  // Compiled C: about 100,000/s. Not fitted: it follows from the pipeline model, the same
+  // overhead factor and the assumed cache constants.
   c.set("gp.code=compiled");
   const double slow = I860Model(i860_params(c)).reference_rate(w, 32, c.gp.clock_hz);
   CHECK(slow == Approx(1.0e5).epsilon(0.10));

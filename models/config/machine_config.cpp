@@ -1,7 +1,5 @@
 #include "models/config/machine_config.hpp"
 
-#include "common/read_file.hpp"
-
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -12,6 +10,7 @@
 #include <sstream>
 #include <variant>
 
+#include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 
 namespace pp5 {
@@ -54,7 +53,43 @@ struct Entry {
   int frame = -1;
   const char* computed_from = nullptr;
   bool depth_scaled = false;
+  // Timing constants: how the value was obtained, and for a fitted or assumed one the ends of
+  // its plausible range as --set assignments separated by spaces (ParameterInfo).
+  Calibration calibration = Calibration::none;
+  const char* basis = nullptr;
+  const char* low = nullptr;
+  const char* high = nullptr;
 };
+
+// A timing constant fitted to a published figure (`basis` names it and its source).
+Entry fitted(Entry e, const char* basis, const char* low, const char* high) {
+  e.calibration = Calibration::fitted;
+  e.basis = basis;
+  e.low = low;
+  e.high = high;
+  return e;
+}
+// A timing constant that follows from a published or data-sheet figure, or from other keys.
+Entry derived(Entry e, const char* basis) {
+  e.calibration = Calibration::derived;
+  e.basis = basis;
+  return e;
+}
+// A timing constant no source gives: why this value, and its plausible range.
+Entry assumed(Entry e, const char* basis, const char* low, const char* high) {
+  e.calibration = Calibration::assumed;
+  e.basis = basis;
+  e.low = low;
+  e.high = high;
+  return e;
+}
+
+std::vector<std::string> split_words(const char* text) {
+  std::vector<std::string> out;
+  std::istringstream in(text ? text : "");
+  for (std::string w; in >> w;) out.push_back(w);
+  return out;
+}
 
 std::vector<std::string> split_choices(const char* choices) {
   std::vector<std::string> out;
@@ -109,11 +144,13 @@ const std::vector<Entry>& parameter_table() {
       {"screen.height", "pixels", "P", 1024, 1, 8192, "Height of the frame.",
        [](MachineConfig& c) -> Ref { return &c.screen.height; }},
 
-      {"gp.count", "processors", "P", 32, 1, 64,
-       "Graphics Processors (Intel i860); the paper's machine has up to 32.",
-       [](MachineConfig& c) -> Ref { return &c.gp.count; }},
-      {"gp.clock_hz", "Hz", "S", 40e6, 1e6, 1e9, "i860 clock.",
-       [](MachineConfig& c) -> Ref { return &c.gp.clock_hz; }},
+      derived({"gp.count", "processors", "P", 32, 1, 64,
+               "Graphics Processors (Intel i860); the paper's machine has up to 32.",
+               [](MachineConfig& c) -> Ref { return &c.gp.count; }},
+              "the paper's full machine: up to 32 GPs (P, abstract)"),
+      derived({"gp.clock_hz", "Hz", "S", 40e6, 1e6, 1e9, "i860 clock.",
+               [](MachineConfig& c) -> Ref { return &c.gp.clock_hz; }},
+              "i860 XR at 40 MHz (S: Stony Brook volume-rendering report; Kesteloot)"),
       {"gp.subpixel_bits", "bits", "A", 4, 0, 8,
        "Vertex positions are snapped to 1/2^n pixel before edge set-up, so that edge "
        "coefficients are exact integers and shared edges own each pixel exactly once.",
@@ -126,56 +163,105 @@ const std::vector<Entry>& parameter_table() {
        "scheduled pipelines, fits the instruction cache; over 1 M Phong triangles/s with 32 "
        "GPs) or 'compiled' (C: one instruction per clock, unscheduled, about 100 K/s).",
        [](MachineConfig& c) -> Ref { return choice(&c.gp.code); }, "assembly|compiled"},
-      {"gp.fp_latency_clocks", "i860 clocks", "S", 3, 1, 10,
-       "Stages of the i860's floating-point adder and single-precision multiplier pipelines: "
-       "what an unscheduled operation waits for its result, and what a scheduled chain pays "
-       "once to fill and drain.",
-       [](MachineConfig& c) -> Ref { return &c.gp.fp_latency_clocks; }},
-      {"gp.load_use_clocks", "i860 clocks", "A", 2, 1, 10,
-       "Clocks from a load's issue until compiled code can use its value (one delay slot).",
-       [](MachineConfig& c) -> Ref { return &c.gp.load_use_clocks; }},
-      {"gp.icache_bytes", "bytes", "S", 4096, 256, 1048576, "i860 XR instruction cache.",
-       [](MachineConfig& c) -> Ref { return &c.gp.icache_bytes; }},
-      {"gp.icache_line_bytes", "bytes", "S", 32, 4, 256, "Instruction-cache line.",
-       [](MachineConfig& c) -> Ref { return &c.gp.icache_line_bytes; }},
-      {"gp.icache_miss_clocks", "i860 clocks", "A", 6, 0, 1000,
-       "Refilling one instruction-cache line from GP memory.",
-       [](MachineConfig& c) -> Ref { return &c.gp.icache_miss_clocks; }},
-      {"gp.assembly_code_bytes", "bytes", "A", 3584, 256, 1048576,
-       "Size of the hand-coded per-triangle loop; the sources say it fits the 4 KB cache.",
-       [](MachineConfig& c) -> Ref { return &c.gp.assembly_code_bytes; }},
-      {"gp.compiled_code_bytes", "bytes", "A", 12288, 256, 1048576,
-       "Size of the compiled per-triangle loop (about 3x the hand-coded one), which does not fit "
-       "the instruction cache.",
-       [](MachineConfig& c) -> Ref { return &c.gp.compiled_code_bytes; }},
-      {"gp.overhead_factor", "ratio", "A", 3.26, 1, 100,
-       "Clocks of the counted operations are multiplied by this for the work the count leaves "
-       "out (display-list traversal, PPHIGS state, the message-passing OS). Calibrated: the "
-       "hand-coded Phong triangle then runs at 1.2 M/s on 32 GPs; the compiled rate, about "
-       "100 K/s, follows from the pipeline model (docs/timing.md).",
-       [](MachineConfig& c) -> Ref { return &c.gp.overhead_factor; }},
+      derived(
+          {"gp.fp_latency_clocks", "i860 clocks", "S", 3, 1, 10,
+           "Stages of the i860's floating-point adder and single-precision multiplier pipelines: "
+           "what an unscheduled operation waits for its result, and what a scheduled chain pays "
+           "once to fill and drain.",
+           [](MachineConfig& c) -> Ref { return &c.gp.fp_latency_clocks; }},
+          "the i860's 3-stage adder and single-precision multiplier pipelines (Intel i860 "
+          "Programmer's Reference Manual 240329-002; Kohn & Margulis, IEEE Micro 9(4), 1989)"),
+      assumed({"gp.load_use_clocks", "i860 clocks", "A", 2, 1, 10,
+               "Clocks from a load's issue until compiled code can use its value (one delay slot).",
+               [](MachineConfig& c) -> Ref { return &c.gp.load_use_clocks; }},
+              "one load delay slot for unscheduled code; the i860's load pipeline has 3 stages, so "
+              "1 (the value forwarded) to 3 (the whole pipeline)",
+              "gp.load_use_clocks=1", "gp.load_use_clocks=3"),
+      derived({"gp.icache_bytes", "bytes", "S", 4096, 256, 1048576, "i860 XR instruction cache.",
+               [](MachineConfig& c) -> Ref { return &c.gp.icache_bytes; }},
+              "i860 XR: 4 KB instruction cache (reference manual)"),
+      derived({"gp.icache_line_bytes", "bytes", "S", 32, 4, 256, "Instruction-cache line.",
+               [](MachineConfig& c) -> Ref { return &c.gp.icache_line_bytes; }},
+              "i860 XR: 32-byte cache lines (reference manual)"),
+      assumed({"gp.icache_miss_clocks", "i860 clocks", "A", 6, 0, 1000,
+               "Refilling one instruction-cache line from GP memory.",
+               [](MachineConfig& c) -> Ref { return &c.gp.icache_miss_clocks; }},
+              "no source gives the GP board's memory timing; 4 (a 64-bit bus in burst, 4 transfers "
+              "of 1 clock) to 16 (4 transfers of a 4-clock DRAM access)",
+              "gp.icache_miss_clocks=4", "gp.icache_miss_clocks=16"),
+      assumed({"gp.assembly_code_bytes", "bytes", "A", 3584, 256, 1048576,
+               "Size of the hand-coded per-triangle loop; the sources say it fits the 4 KB cache.",
+               [](MachineConfig& c) -> Ref { return &c.gp.assembly_code_bytes; }},
+              "the hand-coded loop fits the 4 KB cache (S: Banks), its size is not given; it costs "
+              "nothing while it fits, so 2 KB to 4 KB",
+              "gp.assembly_code_bytes=2048", "gp.assembly_code_bytes=4096"),
+      assumed({"gp.compiled_code_bytes", "bytes", "A", 12288, 256, 1048576,
+               "Size of the compiled per-triangle loop (about 3x the hand-coded one), which does "
+               "not fit "
+               "the instruction cache.",
+               [](MachineConfig& c) -> Ref { return &c.gp.compiled_code_bytes; }},
+              "the compiled loop does not fit the cache (S: Banks), its size is not given: 2x to "
+              "4x the hand-coded loop, 8 KB to 16 KB",
+              "gp.compiled_code_bytes=8192", "gp.compiled_code_bytes=16384"),
+      fitted(
+          {"gp.overhead_factor", "ratio", "A", 3.26, 1, 100,
+           "Clocks of the counted operations are multiplied by this for the work the count leaves "
+           "out (display-list traversal, PPHIGS state, the message-passing OS), in either code "
+           "profile. Fitted: the hand-coded Phong triangle then runs at 1.2 M/s on 32 GPs. The "
+           "compiled rate, about 100 K/s, is then a prediction that rests on two assumed constants "
+           "(gp.compiled_code_bytes, gp.icache_miss_clocks); docs/timing.md says why the factor "
+           "multiplies rather than adds.",
+           [](MachineConfig& c) -> Ref { return &c.gp.overhead_factor; }},
+          "to the hand-coded rate: transform + Phong 'well over 1 million polygons/second' on the "
+          "32-GP machine (S: Banks, Screen-Parallel Calculation of Surface Intersections, sec. 5), "
+          "taken as 1.2 M; the range refits it to 1.5 M (2.61) and 1.05 M (3.73)",
+          "gp.overhead_factor=2.61", "gp.overhead_factor=3.73"),
       {"gp.cull_back_faces", "flag", "A", 0, 0, 1,
        "GP library option: 1 drops triangles that face away from the eye (the silhouette "
        "remedy for closed opaque surfaces); 0 draws both sides, lit two-sided.",
        [](MachineConfig& c) -> Ref { return &c.gp.cull_back_faces; }},
-      {"ring.channels", "channels", "A", 8, 1, 64,
-       "Parallel channels of the ring; 8 x 32 bits x 20 MHz = 5.12 Gb/s matches the paper's "
-       "5 Gb/s, but 4 x 40 MHz fits as well.",
-       [](MachineConfig& c) -> Ref { return &c.ring.channels; }},
-      {"ring.word_bits", "bits", "A", 32, 8, 128, "Width of one channel.",
-       [](MachineConfig& c) -> Ref { return &c.ring.word_bits; }},
-      {"ring.clock_hz", "Hz", "A", 20e6, 1e6, 1e9, "Ring clock: one word per channel per cycle.",
-       [](MachineConfig& c) -> Ref { return &c.ring.clock_hz; }},
-      {"ring.hop_latency_cycles", "ring cycles", "A", 1, 0, 1000,
-       "Latency of one hop from a ring stop to the next.",
-       [](MachineConfig& c) -> Ref { return &c.ring.hop_latency_cycles; }},
+      assumed(
+          {"gp.multipass", "policy", "A", 0, 0, 0,
+           "What a GP does for the second and later passes of a multipass program "
+           "(transparency): 'resend' the binned packets it kept, or 'retraverse' its share "
+           "of the display list, transforming and setting it up again (costed on the i860 "
+           "model like the first pass). The image is identical; only the time differs.",
+           [](MachineConfig& c) -> Ref { return choice(&c.gp.multipass); }, "resend|retraverse"},
+          "PPHIGS's policy is not published; resend costs ring time only and fits the GP's "
+          "memory, retraverse repeats the geometry every pass (docs/timing.md, Multipass)",
+          "gp.multipass=resend", "gp.multipass=retraverse"),
+      assumed(
+          {"ring.channels", "channels", "A", 8, 1, 64,
+           "Parallel channels of the ring; 8 x 32 bits x 20 MHz = 5.12 Gb/s matches the paper's "
+           "5 Gb/s, but 4 x 40 MHz fits as well.",
+           [](MachineConfig& c) -> Ref { return &c.ring.channels; }},
+          "the paper gives 5 Gb/s only (P); 4 channels at 40 MHz or 16 at 10 MHz carry the same "
+          "(the range keeps ring.clock_hz at 5.12 Gb/s)",
+          "ring.channels=4 ring.clock_hz=4e7", "ring.channels=16 ring.clock_hz=1e7"),
+      assumed({"ring.word_bits", "bits", "A", 32, 8, 128, "Width of one channel.",
+               [](MachineConfig& c) -> Ref { return &c.ring.word_bits; }},
+              "not published; 16-bit channels at 40 MHz or 64-bit ones at 10 MHz carry the same "
+              "5.12 Gb/s (a 40-bit coefficient takes 3, 2 or 1 words)",
+              "ring.word_bits=16 ring.clock_hz=4e7", "ring.word_bits=64 ring.clock_hz=1e7"),
+      derived(
+          {"ring.clock_hz", "Hz", "A", 20e6, 1e6, 1e9,
+           "Ring clock: one word per channel per cycle.",
+           [](MachineConfig& c) -> Ref { return &c.ring.clock_hz; }},
+          "from the published 5 Gb/s (P, abstract): 5.12 Gb/s / (ring.channels x ring.word_bits)"),
+      assumed({"ring.hop_latency_cycles", "ring cycles", "A", 1, 0, 1000,
+               "Latency of one hop from a ring stop to the next.",
+               [](MachineConfig& c) -> Ref { return &c.ring.hop_latency_cycles; }},
+              "the ring's latency and protocol are not published; 0 to 4 ring cycles a hop",
+              "ring.hop_latency_cycles=0", "ring.hop_latency_cycles=4"),
 
-      {"renderer.count", "boards", "P", 16, 1, 32,
-       "Renderer boards; the paper's machine has up to 16.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.count; }},
-      {"renderer.clock_hz", "Hz", "P", 40e6, 1e6, 1e9,
-       "Array clock: one micro-instruction cycle every 25 ns.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.clock_hz; }},
+      derived({"renderer.count", "boards", "P", 16, 1, 32,
+               "Renderer boards; the paper's machine has up to 16.",
+               [](MachineConfig& c) -> Ref { return &c.renderer.count; }},
+              "the paper's full machine: up to 16 Renderers (P, abstract)"),
+      derived({"renderer.clock_hz", "Hz", "P", 40e6, 1e6, 1e9,
+               "Array clock: one micro-instruction cycle every 25 ns.",
+               [](MachineConfig& c) -> Ref { return &c.renderer.clock_hz; }},
+              "chips designed to run at 40 MHz, 25 ns per micro-instruction (P, abstract)"),
       {"renderer.region_width", "pixels", "P", 128, 64, 1024,
        "Width of the SIMD array and so of a screen region (a multiple of 64).",
        [](MachineConfig& c) -> Ref { return &c.renderer.region_width; }},
@@ -190,60 +276,100 @@ const std::vector<Entry>& parameter_table() {
       {"renderer.backing_store_bits", "bits", "P", 4096, 0, 65536,
        "Off-chip backing store per pixel (video RAM).",
        [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_bits; }},
-      {"renderer.block_bits", "bits", "S", 32, 1, 64, "Backing-store transfer unit.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.block_bits; }},
-      {"renderer.backing_store_cycles_per_block", "array cycles", "A", 64, 1, 100000,
-       "Time to move one block between pixel memory and backing store; 'much slower than "
-       "local memory' is all the sources say.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_cycles_per_block; }},
-      {"renderer.backing_store_overlap", "0 or 1", "P", 1, 0, 1,
-       "1: backing-store transfers are asynchronous, as the paper says: a store (bsst) "
-       "occupies the backing-store port while the array goes on, a load (bsld) waits only for "
-       "the port and its own blocks. 0: every transfer stops the array for its full time.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_overlap; }},
-      {"renderer.overlap_shipping", "0 or 1", "A", 1, 0, 1,
-       "1: a finished region's colours are moved to the backing store and cross the ring from "
-       "there while the array starts its next region (one region in flight per board). 0: the "
-       "Renderer waits until its region has reached the frame buffer.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.overlap_shipping; }},
-      {"renderer.queue_words", "ring words", "A", 4096, 64, 1048576,
-       "Capacity of a Renderer's instruction queue. A GP's bin travels in messages of at "
-       "most this size, and a GP stalls until the queue has room for its next message.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.queue_words; }},
-      {"renderer.balancing", "mode", "A", 0, 0, 0,
-       "Assignment of screen regions to Renderers: 'static' (region r to Renderer r mod "
-       "count) or 'dynamic' (a Renderer takes the next unrendered region when it finishes "
-       "one). The image is identical; only the time differs.",
-       [](MachineConfig& c) -> Ref { return choice(&c.renderer.balancing); }, "static|dynamic"},
-      {"renderer.packet_overhead_cycles", "array cycles", "A", 8, 0, 100000,
-       "Controller cycles to decode one instruction packet and start its procedure.",
-       [](MachineConfig& c) -> Ref { return &c.renderer.packet_overhead_cycles; }},
+      derived({"renderer.block_bits", "bits", "S", 32, 1, 64, "Backing-store transfer unit.",
+               [](MachineConfig& c) -> Ref { return &c.renderer.block_bits; }},
+              "the backing store is moved in 32-bit blocks (S: Kesteloot)"),
+      assumed({"renderer.backing_store_cycles_per_block", "array cycles", "A", 64, 1, 100000,
+               "Time to move one block between pixel memory and backing store; 'much slower than "
+               "local memory' is all the sources say.",
+               [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_cycles_per_block; }},
+              "'much slower than local memory' (S: Kesteloot) is all the sources say: 16 to 256 "
+              "array cycles a block",
+              "renderer.backing_store_cycles_per_block=16",
+              "renderer.backing_store_cycles_per_block=256"),
+      derived(
+          {"renderer.backing_store_overlap", "0 or 1", "P", 1, 0, 1,
+           "1: backing-store transfers are asynchronous, as the paper says: a store (bsst) "
+           "occupies the backing-store port while the array goes on, a load (bsld) waits only for "
+           "the port and its own blocks. 0: every transfer stops the array for its full time.",
+           [](MachineConfig& c) -> Ref { return &c.renderer.backing_store_overlap; }},
+          "backing-store transfers are asynchronous, overlapping other operations (P/S: abstract; "
+          "Kesteloot)"),
+      assumed(
+          {"renderer.overlap_shipping", "0 or 1", "A", 1, 0, 1,
+           "1: a finished region's colours are moved to the backing store and cross the ring from "
+           "there while the array starts its next region (one region in flight per board). 0: the "
+           "Renderer waits until its region has reached the frame buffer.",
+           [](MachineConfig& c) -> Ref { return &c.renderer.overlap_shipping; }},
+          "follows from the asynchronous backing store, but no source says finished regions leave "
+          "from it; 0 (the Renderer waits for its region to reach the frame buffer) or 1",
+          "renderer.overlap_shipping=0", "renderer.overlap_shipping=1"),
+      assumed({"renderer.queue_words", "ring words", "A", 4096, 64, 1048576,
+               "Capacity of a Renderer's instruction queue. A GP's bin travels in messages of at "
+               "most this size, and a GP stalls until the queue has room for its next message.",
+               [](MachineConfig& c) -> Ref { return &c.renderer.queue_words; }},
+              "the controller's queue is not published: 1,024 to 16,384 words",
+              "renderer.queue_words=1024", "renderer.queue_words=16384"),
+      assumed(
+          {"renderer.balancing", "mode", "A", 0, 0, 0,
+           "Assignment of screen regions to Renderers: 'static' (region r to Renderer r mod "
+           "count) or 'dynamic' (a Renderer takes the next unrendered region when it finishes "
+           "one). The image is identical; only the time differs.",
+           [](MachineConfig& c) -> Ref { return choice(&c.renderer.balancing); }, "static|dynamic"},
+          "'Renderers can be reassigned to any region' (P); the policy is not given: static or "
+          "dynamic",
+          "renderer.balancing=static", "renderer.balancing=dynamic"),
+      assumed({"renderer.packet_overhead_cycles", "array cycles", "A", 8, 0, 100000,
+               "Controller cycles to decode one instruction packet and start its procedure.",
+               [](MachineConfig& c) -> Ref { return &c.renderer.packet_overhead_cycles; }},
+              "the controller's instruction set is not published: 2 to 32 array cycles a packet",
+              "renderer.packet_overhead_cycles=2", "renderer.packet_overhead_cycles=32"),
 
-      {"evaluator.coefficient_bits", "bits", "A", 40, 8, 62,
-       "Signed width of each coefficient the expression evaluator accepts.",
-       [](MachineConfig& c) -> Ref { return &c.evaluator.coefficient_bits; }},
-      {"evaluator.result_bits", "bits", "A", 40, 8, 64,
-       "Width of the value the evaluator delivers; values wrap modulo 2^n.",
-       [](MachineConfig& c) -> Ref { return &c.evaluator.result_bits; }},
-      {"evaluator.fraction_bits", "bits", "A", 12, 0, 24,
-       "Fraction bits of interpolated attributes (depth, colour, normal); they stream out of "
-       "the evaluator first, LSB first, before the integer bits a field loads.",
-       [](MachineConfig& c) -> Ref { return &c.evaluator.fraction_bits; }},
-      {"evaluator.latency_cycles", "array cycles", "A", 8, 0, 1000,
-       "Pipeline latency of the evaluator tree (about log2 of 128 levels plus input stages).",
-       [](MachineConfig& c) -> Ref { return &c.evaluator.latency_cycles; }},
+      assumed({"evaluator.coefficient_bits", "bits", "A", 40, 8, 62,
+               "Signed width of each coefficient the expression evaluator accepts.",
+               [](MachineConfig& c) -> Ref { return &c.evaluator.coefficient_bits; }},
+              "coefficient widths are not published: 40 (the least that draws the torus: at 38, "
+              "which holds a 24-bit depth with 12 fraction bits, 2,215 of its 8,192 triangles "
+              "have coefficients that do not fit) to 48",
+              "evaluator.coefficient_bits=40",
+              "evaluator.coefficient_bits=48 evaluator.result_bits=48"),
+      assumed(
+          {"evaluator.result_bits", "bits", "A", 40, 8, 64,
+           "Width of the value the evaluator delivers; values wrap modulo 2^n.",
+           [](MachineConfig& c) -> Ref { return &c.evaluator.result_bits; }},
+          "not published; at least evaluator.coefficient_bits: 40 to 48 (qtest streams every bit)",
+          "evaluator.result_bits=40", "evaluator.result_bits=48"),
+      assumed(
+          {"evaluator.fraction_bits", "bits", "A", 12, 0, 24,
+           "Fraction bits of interpolated attributes (depth, colour, normal); they stream out of "
+           "the evaluator first, LSB first, before the integer bits a field loads.",
+           [](MachineConfig& c) -> Ref { return &c.evaluator.fraction_bits; }},
+          "not published: 8 to 14 (24 depth bits + fraction + 2 must fit the 40-bit coefficients)",
+          "evaluator.fraction_bits=8", "evaluator.fraction_bits=14"),
+      assumed(
+          {"evaluator.latency_cycles", "array cycles", "A", 8, 0, 1000,
+           "Pipeline latency of the evaluator tree (about log2 of 128 levels plus input stages).",
+           [](MachineConfig& c) -> Ref { return &c.evaluator.latency_cycles; }},
+          "a tree of about log2(128) = 7 levels plus input stages; not published: 4 to 16",
+          "evaluator.latency_cycles=4", "evaluator.latency_cycles=16"),
 
-      {"evaluator.coefficient_words_per_cycle", "words/cycle", "A", 1, 1, 64,
-       "Ring words of a packet's coefficients moved from the instruction queue into the "
-       "evaluator's input registers per array cycle.",
-       [](MachineConfig& c) -> Ref { return &c.evaluator.coefficient_words_per_cycle; }},
-      {"evaluator.double_buffered", "0 or 1", "A", 1, 0, 1,
-       "1: the evaluator holds a second set of coefficient registers, so the next packet's "
-       "coefficients load while the current packet executes. 0: loading stops the array.",
-       [](MachineConfig& c) -> Ref { return &c.evaluator.double_buffered; }},
-      {"frame_buffer.bits_per_pixel", "bits", "A", 32, 8, 64,
-       "Bits per pixel sent from a Renderer to the frame buffer (24-bit colour in a word).",
-       [](MachineConfig& c) -> Ref { return &c.frame_buffer.bits_per_pixel; }},
+      assumed({"evaluator.coefficient_words_per_cycle", "words/cycle", "A", 1, 1, 64,
+               "Ring words of a packet's coefficients moved from the instruction queue into the "
+               "evaluator's input registers per array cycle.",
+               [](MachineConfig& c) -> Ref { return &c.evaluator.coefficient_words_per_cycle; }},
+              "not published: 1 or 2 ring words a cycle into the evaluator",
+              "evaluator.coefficient_words_per_cycle=1", "evaluator.coefficient_words_per_cycle=2"),
+      assumed({"evaluator.double_buffered", "0 or 1", "A", 1, 0, 1,
+               "1: the evaluator holds a second set of coefficient registers, so the next packet's "
+               "coefficients load while the current packet executes. 0: loading stops the array.",
+               [](MachineConfig& c) -> Ref { return &c.evaluator.double_buffered; }},
+              "not published: 0 (loading stops the array) or 1", "evaluator.double_buffered=0",
+              "evaluator.double_buffered=1"),
+      assumed({"frame_buffer.bits_per_pixel", "bits", "A", 32, 8, 64,
+               "Bits per pixel sent from a Renderer to the frame buffer (24-bit colour in a word).",
+               [](MachineConfig& c) -> Ref { return &c.frame_buffer.bits_per_pixel; }},
+              "24-bit colour (P: the frame buffer), sent packed (24) or in a word (32)",
+              "frame_buffer.bits_per_pixel=24", "frame_buffer.bits_per_pixel=32"),
 
       // The firmware's frame parameters (firmware/isa/interface.hpp names them), sent once per
       // frame; `pp5sim isa` lists them from here. Settable: firmware options of the
@@ -564,22 +690,30 @@ std::vector<ParameterInfo> describe_parameters() {
   std::vector<ParameterInfo> rows;
   MachineConfig scratch;
   for (const auto& p : parameter_table()) {
+    ParameterInfo row;
+    row.key = p.key;
+    row.unit = p.unit;
+    row.confidence = p.confidence;
+    row.description = p.description;
     if (p.computed_from) {
-      rows.push_back({p.key, p.unit, p.confidence, p.description, "computed",
-                      fmt::format("from {}", p.computed_from), true});
-      continue;
-    }
-    if (p.choices) {
+      row.default_value = "computed";
+      row.range = fmt::format("from {}", p.computed_from);
+      row.computed = true;
+    } else if (p.choices) {
       const auto allowed = split_choices(p.choices);
-      rows.push_back({p.key, p.unit, p.confidence, p.description, allowed.front(),
-                      fmt::format("{}", fmt::join(allowed, ", "))});
-      continue;
+      row.default_value = allowed.front();
+      row.range = fmt::format("{}", fmt::join(allowed, ", "));
+    } else {
+      const bool is_int = !std::holds_alternative<double*>(ref_of(p, scratch));
+      row.default_value = format_value(p.default_value, is_int);
+      row.range = format_value(p.min, is_int) + " .. " + format_value(p.max, is_int);
+      if (p.depth_scaled) row.range += " (x 2^(gp.depth_bits - 24))";
     }
-    const bool is_int = !std::holds_alternative<double*>(ref_of(p, scratch));
-    std::string range = format_value(p.min, is_int) + " .. " + format_value(p.max, is_int);
-    if (p.depth_scaled) range += " (x 2^(gp.depth_bits - 24))";
-    rows.push_back(
-        {p.key, p.unit, p.confidence, p.description, format_value(p.default_value, is_int), range});
+    row.calibration = p.calibration;
+    row.basis = p.basis ? p.basis : "";
+    row.low = split_words(p.low);
+    row.high = split_words(p.high);
+    rows.push_back(std::move(row));
   }
   return rows;
 }
@@ -591,6 +725,25 @@ std::string name_of(MachineConfig::Gp::Code code) {
 std::string name_of(MachineConfig::Renderer::Balancing balancing) {
   return split_choices(
       find_parameter("renderer.balancing")->choices)[static_cast<std::size_t>(balancing)];
+}
+
+std::string name_of(MachineConfig::Gp::Multipass multipass) {
+  return split_choices(
+      find_parameter("gp.multipass")->choices)[static_cast<std::size_t>(multipass)];
+}
+
+const char* calibration_name(Calibration c) {
+  switch (c) {
+    case Calibration::fitted:
+      return "fitted";
+    case Calibration::derived:
+      return "derived";
+    case Calibration::assumed:
+      return "assumed";
+    case Calibration::none:
+      break;
+  }
+  return "-";
 }
 
 bool frame_parameter_computed(Parameter k) { return frame_entry(k).computed_from != nullptr; }

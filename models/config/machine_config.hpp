@@ -47,6 +47,10 @@ struct MachineConfig {
     int compiled_code_bytes = 0;
     double overhead_factor = 0;
     int cull_back_faces = 0;
+    // What a GP does for the second and later passes of a multipass program: send the binned
+    // packets it kept again, or traverse and transform its share of the display list again.
+    enum class Multipass { resend, retraverse };
+    Multipass multipass = Multipass::resend;
   } gp;
   struct Ring {
     int channels = 0;
@@ -113,6 +117,17 @@ struct MachineConfig {
 // The names of the choice values, as the configuration and stats.json spell them.
 std::string name_of(MachineConfig::Gp::Code code);
 std::string name_of(MachineConfig::Renderer::Balancing balancing);
+std::string name_of(MachineConfig::Gp::Multipass multipass);
+
+// How a timing constant's value was obtained (docs/timing.md, "Calibration"):
+//  - fitted: chosen so that the simulator reproduces a published figure, which the entry
+//    names with its source; reproducing that figure is then a consistency check, not a test
+//    of the model;
+//  - derived: follows from a published or data-sheet figure (named), or from other entries;
+//  - assumed: no source gives it; the entry gives a plausible range.
+// `none`: not a timing constant (sizes of the workload, firmware options, capacities).
+enum class Calibration { none, fitted, derived, assumed };
+const char* calibration_name(Calibration c);  // "fitted", "derived", "assumed" or "-"
 
 // One row of the parameter table, for documentation (`pp5sim config --describe`).
 struct ParameterInfo {
@@ -123,6 +138,13 @@ struct ParameterInfo {
   std::string default_value;  // for a computed frame parameter: "computed"
   std::string range;          // for a computed frame parameter: where it comes from
   bool computed = false;
+  Calibration calibration = Calibration::none;
+  std::string basis;  // fitted: to which figure (source); derived: from what; assumed: why
+  // The ends of the plausible range of a fitted or assumed constant, each as the --set
+  // assignments (KEY=VALUE) that put the machine there; linked keys move together (a ring of
+  // 4 channels runs at 40 MHz to keep the published 5 Gb/s). Empty otherwise.
+  std::vector<std::string> low;
+  std::vector<std::string> high;
 };
 std::vector<ParameterInfo> describe_parameters();
 

@@ -20,7 +20,8 @@ void GraphicsProcessor::register_statistics(Statistics& stats, double frame_seco
                     "Clocks computing: geometry, and starting its ring messages",
                     [&g] { return integer(g.busy.count); });
   stats.add_integer(p + "geometry_clocks", u::gp_clocks,
-                    "Of busy_clocks, those of transform, clip, light, set-up and binning",
+                    "Of busy_clocks, those of transform, clip, light, set-up and binning (every "
+                    "traversal of its share: one, or one per pass with gp.multipass=retraverse)",
                     [&g] { return integer(g.geometry.count); });
   stats.add_real(
       p + "utilisation", u::ratio, "busy_clocks as a fraction of the frame time",

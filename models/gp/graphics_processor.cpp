@@ -143,9 +143,17 @@ void GraphicsProcessor::run() {
 
   // Bins go out as their Renderers open (pass, region) stages: each message goes to the
   // lowest open stage whose Renderer's queue has room for it, so a full queue holds up only
-  // the bins bound for it. A multipass program gets the same packets again for every pass:
-  // the GP keeps its set-up packets, so only the sending repeats.
+  // the bins bound for it. A multipass program gets the same packets again for every pass.
+  // gp.multipass=resend: the GP keeps its set-up packets, so only the sending repeats.
+  // gp.multipass=retraverse: pass k's packets exist only once the GP has traversed and
+  // transformed its share k more times, each costing what the first traversal cost; it
+  // does the next traversal whenever it has nothing it can send (functionally the packets
+  // are the same, so the first traversal's are sent).
   const int passes = machine_.program().passes;
+  const bool retraverse = config.gp.multipass == MachineConfig::Gp::Multipass::retraverse;
+  const GpClocks traversal = stats_.geometry;
+  const OpCounts traversal_ops = stats_.ops;
+  int ready_passes = retraverse ? 1 : passes;
   const int n = config.regions();
   const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
   std::vector<std::size_t> next(static_cast<std::size_t>(passes) * n, 0);
@@ -169,7 +177,8 @@ void GraphicsProcessor::run() {
     open_stages.clear();
     for (int k = 0; k < machine_.renderer_count(); ++k) {
       const int s = machine_.renderer(k).open_stage(n);
-      if (s >= 0 && !done[s]) open_stages.push_back(s);  // a region it claimed: its owner
+      // A region it claimed (its owner), of a pass whose packets exist.
+      if (s >= 0 && !done[s] && s / n < ready_passes) open_stages.push_back(s);
     }
     std::sort(open_stages.begin(), open_stages.end());
     int pick = -1;
@@ -178,6 +187,18 @@ void GraphicsProcessor::run() {
         pick = s;
         break;
       }
+    }
+    if (pick < 0 && ready_passes < passes) {
+      const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+      spend(traversal);
+      stats_.geometry += traversal;
+      stats_.ops += traversal_ops;
+      if (machine_.timeline_on()) {
+        machine_.add_slice(Unit::gp, index_, "retraverse for pass " + std::to_string(ready_passes),
+                           t0, sc_core::sc_time_stamp());
+      }
+      ++ready_passes;
+      continue;
     }
     if (pick < 0) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();

@@ -7,6 +7,9 @@
 // Contract: geometry for the whole share first (one kernel event), then bins in the order
 // (pass, region) as their Renderers open them; a bin travels in messages no larger than the
 // Renderer's queue, and the GP stalls while the queue has no room or the stage is not open.
+// With a multipass program, gp.multipass says where later passes' packets come from: the
+// bins kept from the first traversal (resend), or a new traversal of the whole share per
+// pass, charged like the first and done when the GP has nothing it can send (retraverse).
 #include <memory>
 #include <systemc>
 #include <vector>

@@ -1,5 +1,6 @@
 // The reference subcommands: pp5sim isa, asm, config, stats and scenes.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <fstream>
 #include <iostream>
@@ -95,8 +96,33 @@ struct ConfigOptions {
   std::string path;
   std::vector<std::string> sets;
   bool describe = false;
+  bool calibration = false;
   std::string program;
 };
+
+// The timing constants of `config` (the defaults, or what --config/--set made them), each
+// with its calibration mark, its basis and its plausible range.
+std::string calibration_table(const MachineConfig& config) {
+  const nlohmann::json values = config.to_json();
+  std::string out =
+      "| key | value | unit | calibration | basis | plausible range (low .. high) |\n"
+      "|---|---|---|---|---|---|\n";
+  for (const ParameterInfo& p : describe_parameters()) {
+    if (p.calibration == Calibration::none) continue;
+    const auto dot = p.key.find('.');
+    const nlohmann::json& v = values.at(p.key.substr(0, dot)).at(p.key.substr(dot + 1));
+    const std::string value = v.is_string()         ? v.get<std::string>()
+                              : v.is_number_float() ? fmt::format("{:g}", v.get<double>())
+                                                    : v.dump();
+    const std::string range =
+        p.low.empty() ? "-"
+                      : fmt::format("{} .. {}", fmt::join(p.low, " "), fmt::join(p.high, " "));
+    out +=
+        fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", p.key, value, p.unit,
+                    calibration_name(p.calibration), markdown_cell(p.basis), markdown_cell(range));
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -132,21 +158,38 @@ Command add_config_command(CLI::App& app) {
       "config", "Print the resolved machine configuration as JSON, or describe every parameter");
   add_config_options(*cmd, o->path, o->sets);
   cmd->add_flag("--describe", o->describe,
-                "A table of every parameter: default, range, unit, source, meaning");
+                "A table of every parameter: default, range, unit, source, calibration, meaning");
+  cmd->add_flag("--calibration", o->calibration,
+                "A table of the timing constants only: value, how it was obtained (fitted, "
+                "derived, assumed), from what, and the plausible range of fitted and assumed "
+                "ones (the ends `pp5sim validate` projects)");
   return {cmd, [o] {
+            if (o->describe && o->calibration) {
+              throw std::runtime_error("config: give --describe or --calibration, not both");
+            }
+            if (o->calibration) {
+              std::cout << calibration_table(load_config(o->path, o->sets));
+              return 0;
+            }
             if (!o->describe) {
               std::cout << load_config(o->path, o->sets).to_json().dump(2) << "\n";
               return 0;
             }
-            std::cout << "| key | default | range | unit | conf. | meaning |\n"
-                         "|---|---|---|---|---|---|\n";
+            std::cout << "| key | default | range | unit | conf. | calibration | meaning |\n"
+                         "|---|---|---|---|---|---|---|\n";
             for (const auto& p : describe_parameters()) {
-              std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", p.key,
+              std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} | {} |\n", p.key,
                                        p.default_value, p.range, p.unit, p.confidence,
+                                       calibration_name(p.calibration),
                                        markdown_cell(p.description));
             }
-            std::cout << "\nConfidence: P published (SIGGRAPH 1989), S secondary source, A "
-                         "assumption.\n";
+            std::cout << "\nConfidence (conf.): where the value comes from: P published (SIGGRAPH "
+                         "1989), S secondary source, A assumption. Calibration: how a timing "
+                         "constant was obtained: fitted (to a published figure), derived (from a "
+                         "published figure or other keys), assumed (no source; with a plausible "
+                         "range), - (not a timing constant). The timing constants, with the "
+                         "basis of each (`pp5sim config --calibration`):\n\n";
+            std::cout << calibration_table(MachineConfig::defaults());
             return 0;
           }};
 }

@@ -1,0 +1,416 @@
+#include "sim/analysis/validate.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#define SC_INCLUDE_DYNAMIC_PROCESSES
+#include <systemc>
+
+#include "models/machine.hpp"
+#include "models/pixel_array/backends.hpp"
+#include "models/ring/ring.hpp"
+#include "sim/kernel.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
+
+namespace pp5 {
+
+namespace {
+
+// Published figures (../shared/design/pixel-planes-5.md gives each with its source).
+constexpr double kDesignGoal = 1.0e6;       // P: "1 M Phong-shaded triangles per second"
+constexpr double kReported = 2.0e6;         // S (weak): Usenet, 1991
+constexpr double kHandCoded = 1.0e6;        // S: Banks, "well over 1 million polygons/second"
+constexpr double kCompiled = 1.0e5;         // S: Banks, "about 100,000 polygons/second"
+constexpr double kRingBitsPerSecond = 5e9;  // P: "5 gigabit ring network"
+constexpr int kPixelMemoryBits = 208;       // P: bits per pixel processor
+// Banks, sec. 5: the two-pass fixed-width algorithm needs a second normal (48 bits), a second
+// depth (24) and epsilon scratch (64) beside the PHIGS fields: 136 bits more than fit.
+constexpr int kBanksExtraBits = 48 + 24 + 64;
+// S/A: Goldfeather, Hultquist & Fuchs, SIGGRAPH 1986 (Pixel-Powers at 10 MHz): 24 CSG
+// primitives as about 1,900 quadratic operations in about 7.5 ms.
+constexpr int kPixelPowersOperations = 1900;
+constexpr double kPixelPowersClockHz = 10e6;
+constexpr double kPixelPowersSeconds = 7.5e-3;
+
+const char* kFuchs = "Fuchs et al., SIGGRAPH 1989, abstract (P)";
+const char* kBanks = "Banks, Screen-Parallel Calculation of Surface Intersections, sec. 5 (S)";
+
+double pipelined_rate(const FrameResult& r) {
+  return r.stats.real("frame.pipelined_triangles_per_second");
+}
+
+// The GP side alone: the rate at which the machine's GPs transform and set up the scene's
+// triangles, from the geometry clocks the simulation charged.
+double gp_rate(const MachineConfig& c, const FrameResult& r) {
+  const double clocks = r.stats.real("frame.gp_clocks_per_triangle");
+  return clocks > 0 ? c.gp.count * c.gp.clock_hz / clocks : 0;
+}
+
+// Senders that keep the ring saturated with queue-sized messages; returns the bits per second
+// it delivered (the last arrival bounds the time, so hop latency counts against it).
+double measured_ring_bandwidth(const MachineConfig& c) {
+  fresh_kernel();
+  RingParams p;
+  p.channels = c.ring.channels;
+  p.word_bits = c.ring.word_bits;
+  p.clock_hz = c.ring.clock_hz;
+  p.hop_latency_cycles = c.ring.hop_latency_cycles;
+  // Every GP sends to a Renderer, as bins do: more senders than channels.
+  const int senders = std::max(c.gp.count, 2 * c.ring.channels);
+  const int stops = senders + c.renderer.count + 1;
+  const int messages = 64;
+  const auto words = static_cast<std::uint64_t>(c.renderer.queue_words);
+  Ring ring("validate_ring", p, stops);
+  sc_core::sc_time last;
+  for (int s = 0; s < senders; ++s) {
+    const int to = senders + s % c.renderer.count;
+    sc_core::sc_spawn(
+        [&ring, &last, s, to, messages, words] {
+          for (int m = 0; m < messages; ++m) {
+            ring.transfer(s, to, words);
+            last = std::max(last, sc_core::sc_time_stamp());
+          }
+        },
+        sc_core::sc_gen_unique_name("sender"));
+  }
+  run_kernel();
+  const double bits = static_cast<double>(ring.words()) * p.word_bits;
+  return bits / last.to_seconds();
+}
+
+int declared_bits(const Program& p) {
+  int bits = 0;
+  for (const FieldDecl& f : p.fields) bits += f.width;
+  return bits;
+}
+
+std::string fit_note(const Program& p) {
+  int spilled = 0;
+  for (const FieldDecl& f : p.fields) spilled += f.spilled ? 1 : 0;
+  if (spilled == 0) return fmt::format("fits: {} of {} bits used", p.bits_used(), p.memory_bits);
+  return fmt::format("does not fit: {} fields spill to the backing store", spilled);
+}
+
+// One Pixel-Powers quadratic operation as this machine's firmware: a quadric evaluated at
+// every pixel and compared with the pixel's stored depth, the result left in E.
+const char* kQuadricOperation = R"(; Pixel-Powers' quadratic operation (pp5sim validate)
+field z 24
+field c 8
+output c c c
+proc clear
+  eall
+  mov z, 0xFFFFFF
+end
+proc triangle
+  eall
+  qcmp.lt z, depth
+end
+)";
+
+// Runs `operations` quadratic operations on a Renderer's array (the bit backend) with the
+// quadrics of spheres spread over the region, and returns the array cycles they cost.
+std::uint64_t quadric_operation_cycles(const MachineConfig& c, int operations) {
+  const Program program = assemble(kQuadricOperation, "validate-quadric", assembler_options(c));
+  PixelBackendParams params;
+  params.array.width = c.renderer.region_width;
+  params.array.height = c.renderer.region_height;
+  params.array.memory_bits = c.renderer.memory_bits;
+  params.array.enable_stack_depth = c.renderer.enable_stack_depth;
+  params.array.backing_store_bits = c.renderer.backing_store_bits;
+  params.array.block_bits = c.renderer.block_bits;
+  params.evaluator.coefficient_bits = c.evaluator.coefficient_bits;
+  params.evaluator.result_bits = c.evaluator.result_bits;
+  params.fraction_bits = c.evaluator.fraction_bits;
+  auto array = make_pixel_backend("bit", params);
+  const TimingParams timing = timing_params(c);
+  OwnedValues values;
+  auto run = [&](Procedure procedure) {
+    std::uint64_t cycles = 0;
+    ExecutionContext ctx{*array, values};
+    for (const Instruction& ins : program.procedure(procedure).code) {
+      const InstructionInfo& info = instruction_info(ins.op);
+      info.execute(ins, ctx);
+      cycles += info.cost(ins, timing, values).count;
+    }
+    return cycles;
+  };
+  run(Procedure::clear);
+  std::uint64_t cycles = 0;
+  const std::int64_t one = std::int64_t{1} << c.evaluator.fraction_bits;
+  for (int k = 0; k < operations; ++k) {
+    // A sphere's front depth, to second order about its centre: z0 + s((x-cx)^2 + (y-cy)^2).
+    const std::int64_t cx = (k * 37) % c.renderer.region_width;
+    const std::int64_t cy = (k * 53) % c.renderer.region_height;
+    const std::int64_t s = 64 + k % 64;
+    const std::int64_t z0 = 1000000 + 997 * k;
+    QuadraticCoefficients q;
+    q.A = s * one;
+    q.C = s * one;
+    q.D = -2 * s * cx * one;
+    q.E = -2 * s * cy * one;
+    q.F = (z0 + s * (cx * cx + cy * cy)) * one;
+    values.expressions[static_cast<int>(Expression::depth)] = q;
+    cycles += run(Procedure::triangle);
+  }
+  return cycles;
+}
+
+std::string thousands(double v) {
+  const auto n = static_cast<long long>(std::llround(v));
+  std::string digits = std::to_string(n < 0 ? -n : n);
+  for (int i = static_cast<int>(digits.size()) - 3; i > 0; i -= 3) digits.insert(i, ",");
+  return (n < 0 ? "-" : "") + digits;
+}
+
+std::string value_text(double v, const std::string& unit) {
+  if (unit == "ms") return fmt::format("{:.2f}", v);
+  if (unit == "Gb/s") return fmt::format("{:.2f}", v);
+  return thousands(v);
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char ch : s) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return out + "\"";
+}
+
+std::string md(const std::string& s) {
+  std::string out;
+  for (char ch : s) out += ch == '|' ? std::string("\\|") : std::string(1, ch);
+  return out;
+}
+
+}  // namespace
+
+std::vector<ValidationRow> validate_against_record(const MachineConfig& base,
+                                                   const ProgramLoader& load,
+                                                   const ValidationOptions& options) {
+  std::vector<ValidationRow> rows;
+  MachineConfig assembly = base;
+  assembly.gp.code = MachineConfig::Gp::Code::assembly;
+  MachineConfig compiled = base;
+  compiled.gp.code = MachineConfig::Gp::Code::compiled;
+
+  // The full machine on a large triangle scene, against the design goal.
+  {
+    const Scene big = make_builtin_scene("torus", {options.tessellation_u, options.tessellation_v});
+    const FrameResult r = project_frame(assembly, big, load("phong", assembly));
+    const std::string workload =
+        fmt::format("torus, {} triangles, phong, hand-coded GPs, {} GPs, {} Renderers, {} x {}",
+                    thousands(static_cast<double>(big.mesh.triangles.size())), base.gp.count,
+                    base.renderer.count, base.screen.width, base.screen.height);
+    const std::string bottleneck = r.stats.text("timing.bottleneck");
+    rows.push_back(
+        {"design goal: Phong-shaded triangles/s of the full machine", kFuchs, "1,000,000",
+         kDesignGoal, workload + ", one frame", r.triangles_per_second, "triangles/s", "predicted",
+         fmt::format("frame {:.2f} ms, bottleneck {}", r.frame_seconds * 1e3, bottleneck)});
+    rows.push_back(
+        {"design goal, frames pipelined", kFuchs, "1,000,000", kDesignGoal,
+         workload + ", GPs on frame n+1 while the Renderers finish frame n", pipelined_rate(r),
+         "triangles/s", "predicted",
+         fmt::format("period {:.2f} ms", r.stats.real("frame.pipelined_frame_seconds") * 1e3)});
+    rows.push_back({"reported: Phong-shaded polygons/s", "Usenet, 1991 (S, weak)", "2,000,000",
+                    kReported, workload + ", frames pipelined", pipelined_rate(r), "triangles/s",
+                    "predicted", "a second-hand figure; scene and shading unknown"});
+  }
+
+  // The GPs alone, transforming and setting up Phong triangles: the two code profiles.
+  {
+    const Scene torus = make_builtin_scene("torus");
+    const FrameResult fast = project_frame(assembly, torus, load("phong", assembly));
+    const FrameResult slow = project_frame(compiled, torus, load("phong", compiled));
+    const std::string workload = fmt::format(
+        "GP geometry of the torus (8,192 triangles, phong): {} GPs x {} MHz / i860 clocks per "
+        "triangle",
+        base.gp.count, base.gp.clock_hz / 1e6);
+    rows.push_back({"transform + Phong, hand-coded i860 assembly", kBanks, "well over 1,000,000",
+                    kHandCoded, workload, gp_rate(assembly, fast), "triangles/s", "fitted",
+                    fmt::format("gp.overhead_factor fitted to 1.2 M on one unclipped triangle; "
+                                "{:.0f} clocks per torus triangle",
+                                fast.stats.real("frame.gp_clocks_per_triangle"))});
+    rows.push_back({"transform + Phong, compiled C", kBanks, "about 100,000", kCompiled,
+                    workload + ", gp.code=compiled", gp_rate(compiled, slow), "triangles/s",
+                    "predicted",
+                    fmt::format("{:.0f} clocks per triangle; rests on the assumed "
+                                "gp.compiled_code_bytes and gp.icache_miss_clocks (sensitivity)",
+                                slow.stats.real("frame.gp_clocks_per_triangle"))});
+  }
+
+  // The ring's bandwidth, measured by saturating the Ring module.
+  rows.push_back({"ring bandwidth", kFuchs, "5 gigabit", kRingBitsPerSecond / 1e9,
+                  fmt::format("every GP sends queue-sized messages ({} words) to Renderers "
+                              "back to back",
+                              base.renderer.queue_words),
+                  measured_ring_bandwidth(base) / 1e9, "Gb/s", "derived",
+                  fmt::format("ring.channels x ring.word_bits x ring.clock_hz = {} x {} x {:g} "
+                              "MHz; the organisation is assumed",
+                              base.ring.channels, base.ring.word_bits, base.ring.clock_hz / 1e6)});
+
+  // Pixel memory: what fits in 208 bits.
+  {
+    const Program phong = load("phong", base);
+    const Program epsilon = load("epsilon", base);
+    const Program folded = load("epsilon_folded", base);
+    rows.push_back({"208 bits per pixel hold Phong rendering", kFuchs, "208 bits", kPixelMemoryBits,
+                    "phong.pp5's fields (z, colour, normal, scratch)",
+                    static_cast<double>(declared_bits(phong)), "bits", "predicted",
+                    fit_note(phong)});
+    rows.push_back(
+        {"two-pass fixed-width epsilon does not fit beside the PHIGS fields (136 bits more)",
+         kBanks, fmt::format("more than {} bits", kPixelMemoryBits), kPixelMemoryBits,
+         "epsilon.pp5's fields", static_cast<double>(declared_bits(epsilon)), "bits", "predicted",
+         fmt::format("{}; Banks: the PHIGS fields + {} bits exceed 208", fit_note(epsilon),
+                     kBanksExtraBits)});
+    rows.push_back({"folded epsilon ran on the machine", kBanks,
+                    fmt::format("at most {} bits", kPixelMemoryBits), kPixelMemoryBits,
+                    "epsilon_folded.pp5's fields", static_cast<double>(declared_bits(folded)),
+                    "bits", "predicted", fit_note(folded)});
+  }
+
+  // Pixel-Powers' CSG timing, at its 10 MHz, on this machine's instruction set.
+  {
+    const std::uint64_t cycles = quadric_operation_cycles(base, kPixelPowersOperations);
+    rows.push_back({"Pixel-Powers: 24 CSG primitives as about 1,900 quadratic operations",
+                    "Goldfeather, Hultquist & Fuchs, SIGGRAPH 1986 (S)", "about 7.5 ms at 10 MHz",
+                    kPixelPowersSeconds * 1e3,
+                    "1,900 quadrics evaluated and compared with a 24-bit depth on the bit backend "
+                    "(eall; qcmp.lt z, depth), at 10 MHz",
+                    static_cast<double>(cycles) / kPixelPowersClockHz * 1e3, "ms", "predicted",
+                    fmt::format("{:.1f} array cycles per operation against about 39",
+                                static_cast<double>(cycles) / kPixelPowersOperations)});
+  }
+  return rows;
+}
+
+std::string SensitivityWorkload::label() const {
+  return fmt::format("{} ({})", program, name_of(code));
+}
+
+std::vector<SensitivityWorkload> default_sensitivity_workloads() {
+  using Code = MachineConfig::Gp::Code;
+  return {{"phong", Code::assembly},
+          {"threshold", Code::compiled},
+          {"epsilon", Code::compiled},
+          {"transparent", Code::compiled}};
+}
+
+SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& load,
+                             const std::vector<SensitivityWorkload>& workloads,
+                             const std::vector<std::string>& only) {
+  const Scene torus = make_builtin_scene("torus");
+  auto rate = [&](MachineConfig c, const SensitivityWorkload& w,
+                  const std::vector<std::string>& sets) {
+    c.gp.code = w.code;
+    // An end of a range may not combine with what --config/--set changed (a result width
+    // below the coefficients they asked for): that point is not a machine, and has no rate.
+    try {
+      if (!sets.empty()) c.set(sets);
+    } catch (const ConfigError&) {
+      return std::nan("");
+    }
+    // The program is assembled for the point: its layout follows memory and block sizes.
+    return project_frame(c, torus, load(w.program, c)).triangles_per_second;
+  };
+  SensitivityTable table;
+  table.workloads = workloads;
+  for (const SensitivityWorkload& w : workloads) table.defaults.push_back(rate(base, w, {}));
+  for (const ParameterInfo& p : describe_parameters()) {
+    if (p.low.empty() || p.high.empty()) continue;
+    if (!only.empty() && std::find(only.begin(), only.end(), p.key) == only.end()) continue;
+    SensitivityRow row{p.key, p.calibration, p.low, p.high, {}};
+    for (std::size_t k = 0; k < workloads.size(); ++k) {
+      row.rates.push_back(
+          {rate(base, workloads[k], p.low), table.defaults[k], rate(base, workloads[k], p.high)});
+    }
+    table.rows.push_back(std::move(row));
+  }
+  return table;
+}
+
+std::string validation_markdown(const std::vector<ValidationRow>& rows) {
+  std::string out =
+      "| published figure | source | published | simulated | difference | status | simulated "
+      "workload | note |\n|---|---|---|---|---|---|---|---|\n";
+  for (const ValidationRow& r : rows) {
+    out += fmt::format("| {} | {} | {} | {} {} | {:+.0f}% | {} | {} | {} |\n", md(r.figure),
+                       md(r.source), md(r.published), value_text(r.simulated, r.unit), r.unit,
+                       100 * r.difference(), r.status, md(r.workload), md(r.note));
+  }
+  return out;
+}
+
+std::string validation_csv(const std::vector<ValidationRow>& rows) {
+  std::string out =
+      "figure,source,published,published_value,simulated,unit,difference,status,workload,note\n";
+  for (const ValidationRow& r : rows) {
+    out += fmt::format("{},{},{},{:.9g},{:.9g},{},{:.6f},{},{},{}\n", csv_field(r.figure),
+                       csv_field(r.source), csv_field(r.published), r.published_value, r.simulated,
+                       csv_field(r.unit), r.difference(), r.status, csv_field(r.workload),
+                       csv_field(r.note));
+  }
+  return out;
+}
+
+namespace {
+std::string assignments_text(const std::vector<std::string>& sets, const std::string& key) {
+  // The key's own value first, linked keys after it in parentheses.
+  std::string own, linked;
+  for (const std::string& s : sets) {
+    const auto eq = s.find('=');
+    if (s.substr(0, eq) == key) {
+      own = s.substr(eq + 1);
+    } else {
+      linked += (linked.empty() ? "" : ", ") + s;
+    }
+  }
+  return linked.empty() ? own : fmt::format("{} ({})", own, linked);
+}
+// A rate in thousands; '-' where the point was not a valid machine (NaN).
+std::string kilo(double rate) {
+  return std::isnan(rate) ? std::string("-") : fmt::format("{:.0f}", rate / 1e3);
+}
+std::string change(double rate, double base) {
+  return std::isnan(rate) ? std::string("-") : fmt::format("{:+.0f}%", 100 * (rate - base) / base);
+}
+}  // namespace
+
+std::string sensitivity_markdown(const SensitivityTable& t) {
+  std::string out = "| constant | mark | low | high |";
+  std::string rule = "|---|---|---|---|";
+  for (const SensitivityWorkload& w : t.workloads) {
+    out += fmt::format(" {} |", w.label());
+    rule += "---|";
+  }
+  out += "\n" + rule + "\n| (defaults) | | | |";
+  for (double d : t.defaults) out += fmt::format(" {} K |", kilo(d));
+  out += "\n";
+  for (const SensitivityRow& r : t.rows) {
+    out += fmt::format("| `{}` | {} | {} | {} |", r.key, calibration_name(r.calibration),
+                       md(assignments_text(r.low, r.key)), md(assignments_text(r.high, r.key)));
+    for (const auto& v : r.rates) {
+      out += fmt::format(" {} .. {} K ({} .. {}) |", kilo(v[0]), kilo(v[2]), change(v[0], v[1]),
+                         change(v[2], v[1]));
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+std::string sensitivity_csv(const SensitivityTable& t) {
+  std::string out = "key,mark,low,high,workload,rate_low,rate_default,rate_high\n";
+  for (const SensitivityRow& r : t.rows) {
+    for (std::size_t k = 0; k < t.workloads.size(); ++k) {
+      out += fmt::format(
+          "{},{},{},{},{},{:.9g},{:.9g},{:.9g}\n", r.key, calibration_name(r.calibration),
+          csv_field(assignments_text(r.low, r.key)), csv_field(assignments_text(r.high, r.key)),
+          csv_field(t.workloads[k].label()), r.rates[k][0], r.rates[k][1], r.rates[k][2]);
+    }
+  }
+  return out;
+}
+
+}  // namespace pp5

@@ -1,0 +1,97 @@
+#pragma once
+// The simulator against the published record (`pp5sim validate`): every figure the sources
+// give (../shared/design/pixel-planes-5.md) beside the simulator's projection of the same
+// workload, and how far each projection moves over the plausible range of every assumed or
+// fitted timing constant (the sensitivity table).
+//
+// Contract:
+//  - Every simulated value comes from running the models on the workload the row names
+//    (project_frame for frames, the Ring module for bandwidth, the assembler for pixel
+//    memory, the bit backend and the instruction table for the Pixel-Powers operation);
+//    none is read back from a configuration constant or a published figure.
+//  - Each row says whether its figure was fitted (the simulator was tuned to it, so matching
+//    it is a consistency check), derived (the configuration follows from it) or predicted.
+//  - The sensitivity table varies one constant at a time, to each end of its declared
+//    plausible range (ParameterInfo::low/high: the --set assignments that put the machine
+//    there), from `base`; every other key stays as in `base`. Constants come from the
+//    configuration table, so a new assumed constant joins the table without code here.
+//    An end that does not combine with `base` (a ConfigError: e.g. result bits below the
+//    coefficient bits `base` asks for) has the rate NaN, printed '-'.
+//  - Deterministic: the same inputs give the same rows.
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/config/machine_config.hpp"
+
+namespace pp5 {
+
+// Assembles a firmware program by name ("phong", ...) for a configuration.
+using ProgramLoader = std::function<Program(const std::string& name, const MachineConfig& config)>;
+
+struct ValidationRow {
+  std::string figure;          // what the record says
+  std::string source;          // where, with its confidence (P, S)
+  std::string published;       // the figure as the source gives it ("well over 1,000,000")
+  double published_value = 0;  // the number compared with (the bound of an inequality)
+  std::string workload;        // what the simulator ran
+  double simulated = 0;
+  std::string unit;
+  std::string status;  // "fitted", "derived" or "predicted"
+  std::string note;    // what else the run showed (a second figure, a caveat)
+  // (simulated - published_value) / published_value
+  double difference() const {
+    return published_value != 0 ? (simulated - published_value) / published_value : 0;
+  }
+};
+
+struct ValidationOptions {
+  // The large triangle scene the full machine runs against the design goal: the torus at
+  // this tessellation (512 x 128: 131,072 triangles).
+  int tessellation_u = 512;
+  int tessellation_v = 128;
+};
+
+std::vector<ValidationRow> validate_against_record(const MachineConfig& base,
+                                                   const ProgramLoader& load,
+                                                   const ValidationOptions& options = {});
+
+// One workload of the sensitivity table: a program on the torus with a GP code profile.
+struct SensitivityWorkload {
+  std::string program;
+  MachineConfig::Gp::Code code;
+  std::string label() const;  // "phong (assembly)"
+};
+// The four: Phong on hand-coded assembly; threshold, epsilon and transparency on
+// compiled C (the code Banks modified).
+std::vector<SensitivityWorkload> default_sensitivity_workloads();
+
+struct SensitivityRow {
+  std::string key;
+  Calibration calibration = Calibration::none;
+  std::vector<std::string> low, high;  // the assignments of the range's ends
+  // Per workload: projected triangles/s at the low end, the default and the high end.
+  std::vector<std::array<double, 3>> rates;
+};
+
+struct SensitivityTable {
+  std::vector<SensitivityWorkload> workloads;
+  std::vector<double> defaults;  // per workload, at `base`
+  std::vector<SensitivityRow> rows;
+};
+
+// Rates are projected on the built-in torus (8,192 triangles) for every workload, at `base`
+// and at each end of every fitted or assumed constant's range.
+// `only`, if not empty, restricts the rows to those keys.
+SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& load,
+                             const std::vector<SensitivityWorkload>& workloads,
+                             const std::vector<std::string>& only = {});
+
+std::string validation_markdown(const std::vector<ValidationRow>& rows);
+std::string validation_csv(const std::vector<ValidationRow>& rows);
+std::string sensitivity_markdown(const SensitivityTable& table);
+std::string sensitivity_csv(const SensitivityTable& table);
+
+}  // namespace pp5

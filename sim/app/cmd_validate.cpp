@@ -1,0 +1,78 @@
+// pp5sim validate: the simulator beside every figure of the published record, and the
+// sensitivity of the projected rates to each assumed constant (sim/analysis/validate.hpp).
+#include <fmt/format.h>
+
+#include <iostream>
+#include <memory>
+
+#include "models/machine.hpp"
+#include "sim/analysis/validate.hpp"
+#include "sim/app/commands.hpp"
+#include "sim/output/output_set.hpp"
+
+namespace pp5 {
+
+namespace {
+
+struct ValidateOptions {
+  std::string config_path;
+  std::vector<std::string> sets;
+  std::string out = "out/validate";
+  bool sensitivity = true;
+  std::vector<int> tessellation{512, 128};
+};
+
+int run_validate(const ValidateOptions& o) {
+  const MachineConfig config = load_config(o.config_path, o.sets);
+  prepare_output_folder(o.out, "--out");
+  const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
+    return assemble_file(resolve_firmware(name), assembler_options(c));
+  };
+  ValidationOptions options;
+  options.tessellation_u = o.tessellation[0];
+  options.tessellation_v = o.tessellation[1];
+  const auto rows = validate_against_record(config, load, options);
+  std::string report =
+      "Published figures beside the simulator's projection of the same workload:\n\n" +
+      validation_markdown(rows);
+  OutputSet outputs;
+  outputs.add(o.out + "/validate.csv", validation_csv(rows));
+  if (o.sensitivity) {
+    const SensitivityTable table = sensitivity(config, load, default_sensitivity_workloads());
+    report +=
+        "\nSensitivity: projected triangles/s of the torus (8,192 triangles) at the low and high "
+        "end of each fitted or assumed constant's plausible range, the others at their "
+        "values:\n\n" +
+        sensitivity_markdown(table);
+    outputs.add(o.out + "/sensitivity.csv", sensitivity_csv(table));
+  }
+  outputs.add(o.out + "/validate.md", report);
+  outputs.commit();
+  std::cout << report;
+  return 0;
+}
+
+}  // namespace
+
+Command add_validate_command(CLI::App& app) {
+  auto o = std::make_shared<ValidateOptions>();
+  auto* cmd = app.add_subcommand(
+      "validate",
+      "Every figure the published record gives (design goal, GP rates, ring bandwidth, pixel "
+      "memory, Pixel-Powers CSG timing) beside the simulator's projection of the same "
+      "workload, the difference, and whether the figure was fitted, derived or is predicted; "
+      "then the sensitivity of the torus's projected rates to every assumed constant. Writes "
+      "validate.md, validate.csv and sensitivity.csv into --out.");
+  add_config_options(*cmd, o->config_path, o->sets);
+  cmd->add_option("-o,--out", o->out, "Output folder (default out/validate)");
+  cmd->add_flag("!--no-sensitivity", o->sensitivity,
+                "Skip the sensitivity table (about 170 projections of the torus, some seconds)");
+  cmd->add_option("--tessellation", o->tessellation,
+                  "Tessellation U V of the large torus the full machine renders against the "
+                  "design goal (default 512 128: 131,072 triangles)")
+      ->expected(2)
+      ->check(CLI::Range(3, 4096));
+  return {cmd, [o] { return run_validate(*o); }};
+}
+
+}  // namespace pp5

@@ -1,0 +1,189 @@
+// Calibration and validation (issue 17): every timing constant says how it was obtained, the
+// plausible ranges are machines the configuration accepts, `pp5sim validate` projects what it
+// reports by running the models, and the GP's multipass policy costs what it says.
+#include <fmt/format.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <set>
+
+#include "models/machine.hpp"
+#include "sim/analysis/validate.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
+#include "tests/support.hpp"
+
+using namespace pp5;
+using namespace pp5::test;
+
+namespace {
+const ProgramLoader kLoad = [](const std::string& name, const MachineConfig& c) {
+  return load_program(name, c);
+};
+}  // namespace
+
+TEST_CASE("calibration: every timing constant is marked, and each range is a valid machine",
+          "[calibration]") {
+  std::set<std::string> keys;
+  for (const ParameterInfo& p : describe_parameters()) {
+    keys.insert(p.key);
+    INFO(p.key);
+    // A clock, a latency or a cycle count is a timing constant: it must say where it is from.
+    const bool timing = p.unit.find("clocks") != std::string::npos ||
+                        p.unit.find("cycles") != std::string::npos || p.unit == "Hz";
+    if (timing) CHECK(p.calibration != Calibration::none);
+    if (p.calibration == Calibration::none) {
+      CHECK(p.low.empty());
+      continue;
+    }
+    CHECK(!p.basis.empty());
+    if (p.calibration == Calibration::derived) {
+      CHECK(p.low.empty());
+      continue;
+    }
+    // Fitted and assumed: both ends are machines the configuration accepts, and each moves
+    // the key itself.
+    REQUIRE(!p.low.empty());
+    REQUIRE(!p.high.empty());
+    for (const auto& end : {p.low, p.high}) {
+      MachineConfig c = MachineConfig::defaults();
+      CHECK_NOTHROW(c.set(end));
+      bool moves_key = false;
+      for (const std::string& s : end) moves_key = moves_key || s.rfind(p.key + "=", 0) == 0;
+      CHECK(moves_key);
+    }
+  }
+  // The one fitted constant names the figure it was fitted to.
+  for (const ParameterInfo& p : describe_parameters()) {
+    if (p.calibration == Calibration::fitted) {
+      CHECK(p.key == "gp.overhead_factor");
+      CHECK_THAT(p.basis, Catch::Contains("1 million polygons/second"));
+    }
+  }
+  CHECK(keys.count("gp.multipass") == 1);
+}
+
+TEST_CASE("project_frame: the timing model alone gives simulate_frame's time and statistics",
+          "[calibration][validate]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=256", "screen.height=256", "gp.count=3", "renderer.count=2"});
+  const Scene scene = make_builtin_scene("torus", {32, 8});
+  const Program program = load_program("phong", config);
+  const FrameResult full = simulate_frame(config, scene, program, 1);
+  const FrameResult projected = project_frame(config, scene, program);
+  CHECK(projected.frame_seconds == full.frame_seconds);
+  CHECK(without_host(projected.stats_json) == without_host(full.stats_json));
+}
+
+TEST_CASE("gp.multipass: retraversal costs one traversal per pass and changes no pixel",
+          "[calibration][gp]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=256", "screen.height=256", "gp.count=2", "renderer.count=2"});
+  const Scene scene = make_builtin_scene("crossing-quads");
+  const Program program = load_program("transparent", config);
+  REQUIRE(program.passes > 1);
+  const FrameResult resend = simulate_frame(config, scene, program, 2);
+  config.set("gp.multipass=retraverse");
+  const FrameResult retraverse = simulate_frame(config, scene, program, 2);
+  CHECK(resend.image.rgb == retraverse.image.rgb);
+  for (std::size_t k = 0; k < resend.stats.elements("gp"); ++k) {
+    const std::string p = fmt::format("gp.{}.", k);
+    const auto once = count(resend.stats, p + "geometry_clocks");
+    CHECK(count(retraverse.stats, p + "geometry_clocks") == once * program.passes);
+    CHECK(count(retraverse.stats, p + "busy_clocks") - count(resend.stats, p + "busy_clocks") ==
+          once * (program.passes - 1));
+    CHECK(count(retraverse.stats, p + "operations.fmul") ==
+          count(resend.stats, p + "operations.fmul") * program.passes);
+  }
+  CHECK(retraverse.frame_seconds >= resend.frame_seconds);
+  // A single-pass program never retraverses: the policies agree to the last statistic.
+  const Program phong = load_program("phong", config);
+  const FrameResult a = simulate_frame(config, scene, phong, 1);
+  config.set("gp.multipass=resend");
+  const FrameResult b = simulate_frame(config, scene, phong, 1);
+  CHECK(without_host(a.stats_json) == without_host(b.stats_json));
+}
+
+TEST_CASE("validate: every projection comes from running the models", "[validate]") {
+  MachineConfig config = MachineConfig::defaults();
+  ValidationOptions small;
+  small.tessellation_u = 64;
+  small.tessellation_v = 16;
+  const auto rows = validate_against_record(config, kLoad, small);
+  auto find = [](const std::vector<ValidationRow>& rs, const std::string& start) {
+    for (const ValidationRow& r : rs) {
+      if (r.figure.rfind(start, 0) == 0) return r;
+    }
+    FAIL("no row " << start);
+    return ValidationRow{};
+  };
+  for (const ValidationRow& r : rows) {
+    INFO(r.figure);
+    CHECK((r.status == "fitted" || r.status == "derived" || r.status == "predicted"));
+    CHECK(r.simulated > 0);
+    CHECK(!r.source.empty());
+  }
+  // The ring delivers what its organisation carries (the last messages' hops aside) ...
+  const ValidationRow ring = find(rows, "ring bandwidth");
+  CHECK(ring.simulated == Approx(5.12).epsilon(0.01));
+  // ... and the GP rate is the simulated clocks': twice the overhead, half the rate.
+  const ValidationRow fast = find(rows, "transform + Phong, hand-coded");
+  CHECK(fast.status == "fitted");
+  CHECK(find(rows, "transform + Phong, compiled").status == "predicted");
+  // A Pixel-Powers operation costs eall and qcmp of a 24-bit field, from the instruction table.
+  const ValidationRow csg = find(rows, "Pixel-Powers");
+  const double per_op =
+      1 + (config.evaluator.fraction_bits + 24 + config.evaluator.latency_cycles + 1);
+  CHECK(csg.simulated == Approx(1900 * per_op / 10e6 * 1e3).epsilon(1e-9));
+
+  MachineConfig other = config;
+  other.set({"gp.overhead_factor=6.52", "ring.channels=4", "evaluator.latency_cycles=16"});
+  const auto moved = validate_against_record(other, kLoad, small);
+  CHECK(find(moved, "transform + Phong, hand-coded").simulated ==
+        Approx(fast.simulated / 2).epsilon(0.01));
+  CHECK(find(moved, "ring bandwidth").simulated == Approx(2.56).epsilon(0.01));
+  CHECK(find(moved, "Pixel-Powers").simulated > csg.simulated);
+  CHECK(find(moved, "design goal: ").simulated < find(rows, "design goal: ").simulated);
+  // The report's tables have a row per figure.
+  const std::string md = validation_markdown(rows);
+  const std::string csv = validation_csv(rows);
+  CHECK(std::count(csv.begin(), csv.end(), '\n') == static_cast<long>(rows.size() + 1));
+  CHECK_THAT(md, Catch::Contains("| fitted |"));
+}
+
+TEST_CASE("sensitivity: each end of a range is projected, and the rates move the right way",
+          "[validate]") {
+  const MachineConfig config = MachineConfig::defaults();
+  const std::vector<SensitivityWorkload> workloads = {
+      {"threshold", MachineConfig::Gp::Code::compiled},
+      {"transparent", MachineConfig::Gp::Code::compiled}};
+  const SensitivityTable t =
+      sensitivity(config, kLoad, workloads, {"gp.icache_miss_clocks", "gp.multipass"});
+  REQUIRE(t.rows.size() == 2);
+  const SensitivityRow& miss = t.rows[0].key == "gp.icache_miss_clocks" ? t.rows[0] : t.rows[1];
+  const SensitivityRow& multipass = t.rows[0].key == "gp.multipass" ? t.rows[0] : t.rows[1];
+  // Compiled code misses the instruction cache: a slower refill is a slower machine.
+  CHECK(miss.rates[0][0] > miss.rates[0][1]);
+  CHECK(miss.rates[0][1] > miss.rates[0][2]);
+  // threshold has one pass: the policy changes nothing; transparent has four, and
+  // retraversing them costs time (resend is the default, the low end).
+  CHECK(multipass.rates[0][0] == multipass.rates[0][2]);
+  CHECK(multipass.rates[1][0] == multipass.rates[1][1]);
+  CHECK(multipass.rates[1][2] < multipass.rates[1][1]);
+  const std::string md = sensitivity_markdown(t);
+  CHECK_THAT(md, Catch::Contains("`gp.multipass` | assumed | resend | retraverse |"));
+  CHECK_THAT(sensitivity_csv(t), Catch::StartsWith("key,mark,low,high,workload"));
+}
+
+TEST_CASE("sensitivity: an end that does not combine with the configuration has no rate",
+          "[validate]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"evaluator.coefficient_bits=44", "evaluator.result_bits=44"});
+  const SensitivityTable t = sensitivity(
+      config, kLoad, {{"phong", MachineConfig::Gp::Code::assembly}}, {"evaluator.result_bits"});
+  REQUIRE(t.rows.size() == 1);
+  // 40 result bits below 44-bit coefficients is no machine; 48 is one.
+  CHECK(std::isnan(t.rows[0].rates[0][0]));
+  CHECK(t.rows[0].rates[0][2] > 0);
+  CHECK_THAT(sensitivity_markdown(t), Catch::Contains("| - .. "));
+}
