@@ -89,23 +89,6 @@ T ceil_div(T n, T d) {  // d > 0
 
 int clamp_to(i128 v, int hi) { return v < 0 ? 0 : v > hi ? hi : static_cast<int>(v); }
 
-// Columns i in [0, width) with slope * i + offset < 0 end at lt_end; those with <= 0 end at
-// le_end. slope > 0.
-void linear_row_bounds(i128 slope, i128 offset, int width, int* lt_end, int* le_end) {
-  const i128 n = -offset;
-  i128 lt, le;
-  if (slope <= INT64_MAX && n >= -INT64_MAX && n <= INT64_MAX) {  // 64-bit division is far cheaper
-    const auto s = static_cast<std::int64_t>(slope), m = static_cast<std::int64_t>(n);
-    lt = ceil_div(m, s);
-    le = floor_div(m, s) + 1;
-  } else {
-    lt = ceil_div(n, slope);
-    le = floor_div(n, slope) + 1;
-  }
-  *lt_end = clamp_to(lt, width);
-  *le_end = clamp_to(le, width);
-}
-
 #if defined(__AVX2__)
 
 // Vector forward differences with stride 4: lane l holds f(x + 4q + l) at step q. Stepping by
@@ -303,15 +286,79 @@ std::int64_t ExpressionEvaluator::value_at(const QuadraticCoefficients& c, int x
 }
 
 void ExpressionEvaluator::planes(const QuadraticCoefficients& c, int first_bit, int count,
-                                 WordRange range, Word* out) const {
+                                 WordRange range, Word* out, const Word* live) const {
   assert(first_bit >= 0 && count >= 1 && count <= 64);
   assert(range.begin >= 0 && range.end <= words_);
+  if (c.is_linear()) {
+    linear_planes(c, first_bit, count, range, out, live);
+    return;
+  }
   alignas(32) Word t[kWordBits];
   for (int w = range.begin; w < range.end; ++w) {
+    if (live != nullptr && live[w] == 0) {
+      for (int k = 0; k < count; ++k) out[static_cast<std::size_t>(k) * words_ + w] = 0;
+      continue;
+    }
     word_planes(seed(c, word_x(w), word_y(w)), params_.result_bits, t);
     // Values are sign-extended to 64 bits, so plane 63 stands for every bit above.
     for (int k = 0; k < count; ++k)
       out[static_cast<std::size_t>(k) * words_ + w] = t[std::min(first_bit + k, 63)];
+  }
+}
+
+// A linear expression's 64 pixels of a word are v + j D (j = 0..63, v its first pixel's value),
+// and the planes of j D are the same for every word: transposed once, each word's planes are
+// then a bit-serial addition of the broadcast constant v to them, LSB first, as the hardware's
+// adder tree would do it, over only the planes up to the highest one asked for (carries run
+// upwards only). Modulo 2^64 throughout, so the bits below result_bits are exact; the planes
+// above the result's sign bit repeat it. Eight words at a time, whose carry chains are
+// independent (the compiler turns each step into one vector operation).
+void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int first_bit, int count,
+                                        WordRange range, Word* out, const Word* live) const {
+  alignas(32) Word lane[kWordBits];
+  word_planes(RowSeed{0, static_cast<u64>(c.D), 0}, 64, lane);
+  const int sign_bit = params_.result_bits - 1;
+  const int last = first_bit + count - 1;    // the highest plane asked for
+  const int top = std::min(last, sign_bit);  // the highest plane computed
+  const u64 D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  constexpr int kBatch = 8;
+  for (int w0 = range.begin; w0 < range.end; w0 += kBatch) {
+    const int n = std::min(kBatch, range.end - w0);
+    if (live != nullptr) {
+      Word any = 0;
+      for (int l = 0; l < n; ++l) any |= live[w0 + l];
+      if (any == 0) {
+        for (int k = 0; k < count; ++k)
+          std::fill_n(out + static_cast<std::size_t>(k) * words_ + w0, n, Word{0});
+        continue;
+      }
+    }
+    u64 base[kBatch];
+    Word carry[kBatch] = {};
+    Word sum[kBatch] = {};
+    for (int l = 0; l < kBatch; ++l) {
+      const int w = w0 + std::min(l, n - 1);
+      base[l] = D * static_cast<u64>(word_x(w)) + E * static_cast<u64>(word_y(w)) + F;
+    }
+    auto store = [&](int plane) {
+      Word* o = out + static_cast<std::size_t>(plane - first_bit) * words_ + w0;
+      if (n == kBatch) {
+        for (int l = 0; l < kBatch; ++l) o[l] = sum[l];
+      } else {
+        for (int l = 0; l < n; ++l) o[l] = sum[l];
+      }
+    };
+    for (int k = 0; k <= top; ++k) {
+      const Word p = lane[k];
+      for (int l = 0; l < kBatch; ++l) {
+        const Word kb = Word{0} - ((base[l] >> k) & 1);
+        const Word x = p ^ kb;
+        sum[l] = x ^ carry[l];
+        carry[l] = (p & kb) | (carry[l] & x);
+      }
+      if (k >= first_bit) store(k);
+    }
+    for (int b = std::max(first_bit, top + 1); b <= last; ++b) store(b);
   }
 }
 
@@ -332,11 +379,15 @@ bool ExpressionEvaluator::linear_fast_path(const QuadraticCoefficients& c, WordR
 }
 
 void ExpressionEvaluator::test_plane(const QuadraticCoefficients& c, Condition cond,
-                                     WordRange range, Word* out) const {
+                                     WordRange range, Word* out, const Word* live) const {
   assert(range.begin >= 0 && range.end <= words_);
   if (range.empty()) return;
   if (!linear_fast_path(c, range)) {
     for (int w = range.begin; w < range.end; ++w) {
+      if (live != nullptr && live[w] == 0) {
+        out[w] = 0;
+        continue;
+      }
       Word lt, eq;
       word_sign_zero(seed(c, word_x(w), word_y(w)), params_.result_bits, &lt, &eq);
       out[w] = select_condition(cond, lt, eq);
@@ -348,24 +399,37 @@ void ExpressionEvaluator::test_plane(const QuadraticCoefficients& c, Condition c
   // ne, the complement of one.
   const int row_first = range.begin / words_per_row_;
   const int row_last = (range.end - 1) / words_per_row_;
+  i128 slope = c.D;
+  i128 offset = i128{c.D} * x0_ + i128{c.E} * (y0_ + row_first) + c.F;  // at column 0
+  i128 row_step = c.E;
+  Condition k = cond;
+  if (slope < 0) {
+    slope = -slope;
+    offset = -offset;
+    row_step = -row_step;
+    k = mirror(cond);
+  }
+  // With n = -offset = q * slope + r (0 <= r < slope), the columns where the value is < 0 end
+  // at ceil(n / slope) = q + (r != 0), those where it is <= 0 at floor(n / slope) + 1 = q + 1.
+  // From row to row n drops by row_step: q and r follow with one addition and one
+  // comparison, so the walk divides twice per call instead of once per row.
+  i128 q = 0, r = 0, step_q = 0, step_r = 0;
+  if (slope != 0) {
+    q = floor_div<i128>(-offset, slope);
+    r = -offset - q * slope;
+    step_q = floor_div<i128>(-row_step, slope);
+    step_r = -row_step - step_q * slope;
+  }
   for (int row = row_first; row <= row_last; ++row) {
-    i128 slope = c.D;
-    i128 offset = i128{c.D} * x0_ + i128{c.E} * (y0_ + row) + c.F;  // value at column 0
-    Condition k = cond;
     int lo = 0, hi = 0;
     bool invert = false;
     if (slope == 0) {
-      hi = select_condition(cond, offset < 0 ? kAllOnes : 0, offset == 0 ? kAllOnes : 0) != 0
-               ? width_
-               : 0;
+      hi = select_condition(k, offset < 0 ? kAllOnes : 0, offset == 0 ? kAllOnes : 0) != 0 ? width_
+                                                                                           : 0;
+      offset += row_step;
     } else {
-      if (slope < 0) {
-        slope = -slope;
-        offset = -offset;
-        k = mirror(cond);
-      }
-      int lt_end, le_end;
-      linear_row_bounds(slope, offset, width_, &lt_end, &le_end);
+      const int lt_end = clamp_to(q + (r != 0 ? 1 : 0), width_);
+      const int le_end = clamp_to(q + 1, width_);
       switch (k) {
         case Condition::lt:
         case Condition::ge:
@@ -384,11 +448,21 @@ void ExpressionEvaluator::test_plane(const QuadraticCoefficients& c, Condition c
           invert = k == Condition::ne;
           break;
       }
+      q += step_q;
+      r += step_r;
+      if (r >= slope) {
+        r -= slope;
+        ++q;
+      }
     }
     const int row_base = row * words_per_row_;
     const int w_begin = std::max(range.begin, row_base);
     const int w_end = std::min(range.end, row_base + words_per_row_);
     for (int w = w_begin; w < w_end; ++w) {
+      if (live != nullptr && live[w] == 0) {
+        out[w] = 0;
+        continue;
+      }
       const int col = (w - row_base) * kWordBits;
       const Word m =
           bit_span(std::clamp(lo - col, 0, kWordBits), std::clamp(hi - col, 0, kWordBits));
