@@ -34,7 +34,7 @@ grep -q "coefficient overflow" "$tmp/mesh.log" || fail "no set-up drop report"
 
 "$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \
   --out "$tmp/ok" >"$tmp/ok.log" 2>&1 || fail "render failed: $(cat "$tmp/ok.log")"
-for f in frame.png config.json stats.json; do [ -s "$tmp/ok/$f" ] || fail "missing $f"; done
+for f in frame.png regions.png config.json stats.json; do [ -s "$tmp/ok/$f" ] || fail "missing $f"; done
 grep -q "of 208 bits" "$tmp/ok.log" || fail "no bit-budget table"
 grep -q "projected throughput" "$tmp/ok.log" || fail "no throughput"
 ls "$tmp/ok" | grep -q tmp && fail "temporary file left behind"
