@@ -87,8 +87,6 @@ T ceil_div(T n, T d) {  // d > 0
   return q;
 }
 
-int clamp_to(i128 v, int hi) { return v < 0 ? 0 : v > hi ? hi : static_cast<int>(v); }
-
 #if defined(__AVX2__)
 
 // Vector forward differences with stride 4: lane l holds f(x + 4q + l) at step q. Stepping by
@@ -409,51 +407,70 @@ void ExpressionEvaluator::test_plane(const QuadraticCoefficients& c, Condition c
     row_step = -row_step;
     k = mirror(cond);
   }
+  // 64-bit arithmetic whenever every value of the walk fits it with room to spare (always, at
+  // any configuration the checks allow, but exactness does not depend on it).
+  const i128 limit = i128{1} << 61;
+  const i128 rows = row_last - row_first + 1;
+  const bool narrow =
+      slope < limit && offset < limit && offset > -limit && row_step < limit && row_step > -limit &&
+      (offset < 0 ? -offset : offset) + rows * (row_step < 0 ? -row_step : row_step) < limit;
+  if (narrow) {
+    interval_rows<std::int64_t>(static_cast<std::int64_t>(slope), static_cast<std::int64_t>(offset),
+                                static_cast<std::int64_t>(row_step), k, range, row_first, row_last,
+                                out, live);
+  } else {
+    interval_rows<i128>(slope, offset, row_step, k, range, row_first, row_last, out, live);
+  }
+}
+
+// The rows [row_first, row_last] of test_plane's interval method: the value at column i of a
+// row is slope * i + offset (slope >= 0), offset grows by row_step per row, and cond is k.
+template <class T>
+void ExpressionEvaluator::interval_rows(T slope, T offset, T row_step, Condition k, WordRange range,
+                                        int row_first, int row_last, Word* out,
+                                        const Word* live) const {
+  // Which interval each condition keeps: [lo, hi) from the ends below, or its complement.
+  const bool use_lo = k == Condition::eq || k == Condition::ne;
+  const bool hi_is_le = k == Condition::le || k == Condition::gt || use_lo;
+  const bool invert = k == Condition::ge || k == Condition::gt || k == Condition::ne;
   // With n = -offset = q * slope + r (0 <= r < slope), the columns where the value is < 0 end
   // at ceil(n / slope) = q + (r != 0), those where it is <= 0 at floor(n / slope) + 1 = q + 1.
   // From row to row n drops by row_step: q and r follow with one addition and one
   // comparison, so the walk divides twice per call instead of once per row.
-  i128 q = 0, r = 0, step_q = 0, step_r = 0;
+  T q = 0, r = 0, step_q = 0, step_r = 0;
   if (slope != 0) {
-    q = floor_div<i128>(-offset, slope);
+    q = floor_div<T>(-offset, slope);
     r = -offset - q * slope;
-    step_q = floor_div<i128>(-row_step, slope);
+    step_q = floor_div<T>(-row_step, slope);
     step_r = -row_step - step_q * slope;
   }
+  const T width = width_;
   for (int row = row_first; row <= row_last; ++row) {
     int lo = 0, hi = 0;
-    bool invert = false;
     if (slope == 0) {
-      hi = select_condition(k, offset < 0 ? kAllOnes : 0, offset == 0 ? kAllOnes : 0) != 0 ? width_
-                                                                                           : 0;
+      // The value is offset in every column.
+      const Word lt = offset < 0 ? kAllOnes : 0, eq = offset == 0 ? kAllOnes : 0;
+      hi = select_condition(k, lt, eq) != 0 ? width_ : 0;
+      lo = 0;
       offset += row_step;
-    } else {
-      const int lt_end = clamp_to(q + (r != 0 ? 1 : 0), width_);
-      const int le_end = clamp_to(q + 1, width_);
-      switch (k) {
-        case Condition::lt:
-        case Condition::ge:
-          hi = lt_end;
-          invert = k == Condition::ge;
-          break;
-        case Condition::le:
-        case Condition::gt:
-          hi = le_end;
-          invert = k == Condition::gt;
-          break;
-        case Condition::eq:
-        case Condition::ne:
-          lo = lt_end;
-          hi = le_end;
-          invert = k == Condition::ne;
-          break;
+      const int row_base = row * words_per_row_;
+      const int w_begin = std::max(range.begin, row_base);
+      const int w_end = std::min(range.end, row_base + words_per_row_);
+      for (int w = w_begin; w < w_end; ++w) {
+        out[w] = live != nullptr && live[w] == 0 ? 0 : (hi != 0 ? kAllOnes : 0);
       }
-      q += step_q;
-      r += step_r;
-      if (r >= slope) {
-        r -= slope;
-        ++q;
-      }
+      continue;
+    }
+    const T lt_end = q + (r != 0 ? 1 : 0);
+    const T le_end = q + 1;
+    const T h = hi_is_le ? le_end : lt_end;
+    hi = static_cast<int>(h < 0 ? 0 : h > width ? width : h);
+    lo = use_lo ? static_cast<int>(lt_end < 0 ? 0 : lt_end > width ? width : lt_end) : 0;
+    q += step_q;
+    r += step_r;
+    if (r >= slope) {
+      r -= slope;
+      ++q;
     }
     const int row_base = row * words_per_row_;
     const int w_begin = std::max(range.begin, row_base);

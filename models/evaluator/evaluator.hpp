@@ -70,6 +70,9 @@ class ExpressionEvaluator {
   std::int64_t word_x(int w) const { return x0_ + (w % words_per_row_) * kWordBits; }
   std::int64_t word_y(int w) const { return y0_ + w / words_per_row_; }
   std::int64_t wrap(std::uint64_t v) const;
+  template <class T>
+  void interval_rows(T slope, T offset, T row_step, Condition k, WordRange range, int row_first,
+                     int row_last, Word* out, const Word* live) const;
   // planes() for a linear expression (A = B = C = 0).
   void linear_planes(const QuadraticCoefficients& c, int first_bit, int count, WordRange range,
                      Word* out, const Word* live) const;
