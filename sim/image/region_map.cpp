@@ -101,27 +101,32 @@ RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& r
   out.height = frame.height + kLegendHeight;
   out.rgb.assign(static_cast<std::size_t>(out.width) * out.height * 3, 0);
   // The frame in grey, and each region 60% its heat colour over 40% that grey, so that the
-  // scene stays recognisable under the tint.
-  auto grey_of = [&](std::size_t p) {
-    const std::uint8_t* s = &frame.rgb[p * 3];
-    return (77 * s[0] + 150 * s[1] + 29 * s[2]) >> 8;
-  };
-  for (std::size_t p = 0; p < static_cast<std::size_t>(frame.width) * frame.height; ++p) {
-    const auto grey = static_cast<std::uint8_t>(grey_of(p));
-    out.rgb[p * 3] = out.rgb[p * 3 + 1] = out.rgb[p * 3 + 2] = grey;
+  // scene stays recognisable under the tint (per region a table from grey to tinted colour).
+  const std::size_t pixels = static_cast<std::size_t>(frame.width) * frame.height;
+  std::vector<std::uint8_t> grey(pixels);
+  const std::uint8_t* src = frame.rgb.data();
+  std::uint8_t* dst = out.rgb.data();
+  for (std::size_t p = 0; p < pixels; ++p) {
+    grey[p] = static_cast<std::uint8_t>(
+        (77 * src[3 * p] + 150 * src[3 * p + 1] + 29 * src[3 * p + 2]) >> 8);
   }
+  for (std::size_t p = 0; p < pixels; ++p) dst[3 * p] = dst[3 * p + 1] = dst[3 * p + 2] = grey[p];
+  std::array<std::array<std::uint8_t, 3>, 256> tinted;
   for (const RegionLoad& r : regions) {
     std::uint8_t heat[3];
     heat_colour(peak ? static_cast<double>(r.busy_cycles) / static_cast<double>(peak) : 0, heat);
-    const int tint[3] = {3 * heat[0], 3 * heat[1], 3 * heat[2]};
+    for (int g = 0; g < 256; ++g) {
+      for (int k = 0; k < 3; ++k)
+        tinted[g][k] = static_cast<std::uint8_t>((3 * heat[k] + 2 * g) / 5);
+    }
     for (int y = r.y0; y < r.y0 + r.height; ++y) {
       const std::size_t row = static_cast<std::size_t>(y) * out.width;
       for (int x = r.x0; x < r.x0 + r.width; ++x) {
-        const int g2 = 2 * grey_of(row + x);
-        std::uint8_t* p = &out.rgb[(row + x) * 3];
-        p[0] = static_cast<std::uint8_t>((tint[0] + g2) / 5);
-        p[1] = static_cast<std::uint8_t>((tint[1] + g2) / 5);
-        p[2] = static_cast<std::uint8_t>((tint[2] + g2) / 5);
+        const auto& t = tinted[grey[row + x]];
+        std::uint8_t* q = dst + (row + x) * 3;
+        q[0] = t[0];
+        q[1] = t[1];
+        q[2] = t[2];
       }
     }
   }
