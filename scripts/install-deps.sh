@@ -2,10 +2,12 @@
 # Installs what one job of scripts/pp5 needs from Debian 12's packages, and nothing more:
 #   scripts/install-deps.sh run        build and render
 #   scripts/install-deps.sh test       + the test suite's tools (Catch2, python3, gtkwave's
-#                                      vcd2fst, rsvg-convert)
+#                                      vcd2fst, rsvg-convert, and the slurm group's packages)
 #   scripts/install-deps.sh sanitize   the same as test (gcc's sanitizers come with gcc)
 #   scripts/install-deps.sh fuzz       + clang and its fuzzing runtime
 #   scripts/install-deps.sh bench      + Google Benchmark
+#   scripts/install-deps.sh slurm      + Slurm and munge, for tests/slurm_test.sh (a single-node
+#                                      cluster it starts itself; 9 packages, 4 MB)
 #   scripts/install-deps.sh all        everything above
 set -euo pipefail
 group="${1:-all}"
@@ -14,13 +16,15 @@ run=(build-essential cmake ninja-build pkg-config
 test=(catch2 python3 gtkwave librsvg2-bin)
 fuzz=(clang libclang-rt-dev)
 bench=(libbenchmark-dev)
+slurm=(slurm-wlm munge python3)
 case "$group" in
   run) packages=("${run[@]}") ;;
-  test|sanitize) packages=("${run[@]}" "${test[@]}") ;;
+  test|sanitize) packages=("${run[@]}" "${test[@]}" "${slurm[@]}") ;;
   fuzz) packages=("${run[@]}" "${fuzz[@]}") ;;
   bench) packages=("${run[@]}" "${bench[@]}") ;;
-  all) packages=("${run[@]}" "${test[@]}" "${fuzz[@]}" "${bench[@]}") ;;
-  *) echo "usage: scripts/install-deps.sh run|test|sanitize|fuzz|bench|all" >&2; exit 2 ;;
+  slurm) packages=("${run[@]}" "${slurm[@]}") ;;
+  all) packages=("${run[@]}" "${test[@]}" "${fuzz[@]}" "${bench[@]}" "${slurm[@]}") ;;
+  *) echo "usage: scripts/install-deps.sh run|test|sanitize|fuzz|bench|slurm|all" >&2; exit 2 ;;
 esac
 missing=()
 for p in "${packages[@]}"; do

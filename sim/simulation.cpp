@@ -307,6 +307,14 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
   FrameResult result;
   FrameBuffer& fb = machine->frame_buffer();
   result.image = fb.take_image();
+  for (int k = 0; k < machine->renderer_count(); ++k) {
+    for (const RegionWork& w : machine->renderer(k).work()) {
+      // Regions at the right and bottom edges may reach past the screen: clipped, as in the frame.
+      result.regions.push_back(
+          {w.region, w.x0, w.y0, std::min(config.renderer.region_width, config.screen.width - w.x0),
+           std::min(config.renderer.region_height, config.screen.height - w.y0), k, w.busy_cycles});
+    }
+  }
   result.frame_seconds = fb.frame_complete().to_seconds();
   const double frame_seconds = result.frame_seconds;
   const auto triangles = static_cast<std::int64_t>(scene.mesh.triangles.size());

@@ -10,6 +10,7 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/image/region_map.hpp"
 #include "sim/output/output_set.hpp"
 #include "sim/scene/scene.hpp"
 
@@ -26,6 +27,8 @@ struct FrameResult {
   nlohmann::json stats_json;
   double frame_seconds = 0;         // simulated
   double triangles_per_second = 0;  // projected for the real machine
+  // Every region the Renderers rendered, with its Renderer and busy cycles (regions.png).
+  std::vector<RegionLoad> regions;
 };
 
 // `observe`, if given, attaches an observer to Renderer k's board (tracing, snapshots).

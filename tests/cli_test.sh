@@ -34,7 +34,7 @@ grep -q "coefficient overflow" "$tmp/mesh.log" || fail "no set-up drop report"
 
 "$bin" render --scene two-triangles --set screen.width=256 --set screen.height=128 \
   --out "$tmp/ok" >"$tmp/ok.log" 2>&1 || fail "render failed: $(cat "$tmp/ok.log")"
-for f in frame.png config.json stats.json; do [ -s "$tmp/ok/$f" ] || fail "missing $f"; done
+for f in frame.png regions.png config.json stats.json; do [ -s "$tmp/ok/$f" ] || fail "missing $f"; done
 grep -q "of 208 bits" "$tmp/ok.log" || fail "no bit-budget table"
 grep -q "projected throughput" "$tmp/ok.log" || fail "no throughput"
 ls "$tmp/ok" | grep -q tmp && fail "temporary file left behind"
@@ -76,6 +76,19 @@ expect_error "swept twice" sweep --grid gp.count=1 --grid gp.count=2 --out "$tmp
 n=$("$bin" sweep --grid gp.count=1,2 --grid renderer.count=1,2,4 --scene two-triangles \
   --out "$tmp/sw1" --print-commands | grep -c " render ")
 [ "$n" = 6 ] || fail "--print-commands printed $n commands, expected 6"
+# --slurm writes the same commands to OUT/commands.txt and a submission script that bash
+# accepts, with one array task per point (tests/slurm_test.sh runs it on a real Slurm).
+"$bin" sweep --grid gp.count=1,2 --grid renderer.count=1,2,4 --scene two-triangles \
+  --out "$tmp/sw1" --slurm "$tmp/sw1.sh" >/dev/null || fail "--slurm failed"
+"$bin" sweep --grid gp.count=1,2 --grid renderer.count=1,2,4 --scene two-triangles \
+  --out "$tmp/sw1" --print-commands | cmp -s - "$tmp/sw1/commands.txt" \
+  || fail "commands.txt differs from --print-commands"
+bash -n "$tmp/sw1.sh" || fail "the Slurm script is not valid bash"
+grep -q -- "--array=0-5 " "$tmp/sw1.sh" || fail "the Slurm script has no array of 6 tasks"
+grep -q -- "--dependency=afterok:" "$tmp/sw1.sh" || fail "the aggregation does not wait (afterok)"
+expect_error "the folder $tmp/none does not exist" sweep --grid gp.count=1 --out "$tmp/sw1" \
+  --slurm "$tmp/none/x.sh"
+expect_error "excludes" sweep --grid gp.count=1 --slurm "$tmp/x.sh" --print-commands
 # A printed command runs as is (as GNU parallel or a Slurm task would), and aggregate takes
 # the finished runs and names the missing ones.
 "$bin" sweep --grid gp.count=1,2 --scene two-triangles --set screen.width=256 \

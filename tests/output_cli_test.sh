@@ -13,7 +13,7 @@ a=$!
 b=$!
 wait $a || fail "first concurrent run failed: $(cat "$tmp/a.log")"
 wait $b || fail "second concurrent run failed: $(cat "$tmp/b.log")"
-for f in frame.png config.json stats.json; do [ -s "$tmp/same/$f" ] || fail "no $f"; done
+for f in frame.png regions.png config.json stats.json; do [ -s "$tmp/same/$f" ] || fail "no $f"; done
 [ -z "$(leftovers "$tmp/same")" ] || fail "temporary left: $(leftovers "$tmp/same")"
 
 # Interrupted runs leave no temporary files, whenever the signal comes.
@@ -30,6 +30,7 @@ done
 expect_error "the folder $tmp/missing does not exist" render --scene two-triangles "${small[@]}" \
   --out "$tmp/tl" --timeline "$tmp/missing/t.json"
 [ -e "$tmp/tl/frame.png" ] && fail "frame.png written although the timeline could not be"
+[ -e "$tmp/tl/regions.png" ] && fail "regions.png written although the timeline could not be"
 expect_error "frame.png: named twice" render --scene two-triangles "${small[@]}" --out "$tmp/tl" \
   --timeline "$tmp/tl/frame.png"
 touch "$tmp/file"
@@ -46,8 +47,8 @@ long="$tmp/$(printf 'x%.0s' $(seq 1 250)).json"
 
 # A full disk: a run that cannot write everything leaves the previous run's outputs as they
 # were and no temporary, and names the reason. A 36 KiB tmpfs in a private mount namespace
-# holds the first run's files (4 pages) and the second's frame and config (4 pages) but not
-# its 29 KB stats.json, so writing file by file would leave a new frame beside an old
+# holds the first run's files but not all of the second's (its regions.png or its 29 KB
+# stats.json no longer fit), so writing file by file would leave a new frame beside an old
 # stats.json (skipped where unprivileged namespaces are not allowed).
 if unshare --user --map-root-user --mount true 2>/dev/null; then
   full=$(unshare --user --map-root-user --mount sh -c '
@@ -63,7 +64,7 @@ if unshare --user --map-root-user --mount true 2>/dev/null; then
     exit 0' sh "$bin" "$tmp" "${small[@]}")
   status=$?
   [ $status -eq 0 ] || fail "full disk: step $status failed: $full"
-  echo "$full" | grep -q "stats.json: cannot write (No space left on device)" \
+  echo "$full" | grep -Eq "(regions.png|stats.json): cannot write \(No space left on device\)" \
     || fail "full disk said: $full"
 else
   echo "output_cli: full-disk check skipped (no unprivileged mount namespace here)"

@@ -449,3 +449,40 @@ TEST_CASE("fast path with a 64-bit result reaching its most negative value", "[e
     check_everything(ev, c);
   }
 }
+
+// test_plane's interval walk keeps floor(n / slope) and its remainder in 64-bit integers when
+// every value of the walk fits, and in 128-bit ones otherwise: near the 64-bit result's limits
+// (lines through a pixel with constants around 2^61 and 2^62) both must give every pixel's bit,
+// and so must a disabled word skipped through `live`.
+TEST_CASE("linear fast path near 64-bit limits, and live words", "[evaluator]") {
+  std::mt19937_64 rng(0x5eed0007);
+  ExpressionEvaluator ev({62, 64}, kRegion, kRegion);
+  const WordRange all{0, ev.words()};
+  int wide = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    ev.set_origin(0, 0);
+    const std::int64_t d = uniform(rng, -(std::int64_t{1} << 40), std::int64_t{1} << 40);
+    const std::int64_t e = uniform(rng, -(std::int64_t{1} << 40), std::int64_t{1} << 40);
+    // A constant far from zero: the line crosses the region only for small F, so half the
+    // trials shift it, which leaves whole rows on one side.
+    const std::int64_t f = (trial % 2 ? 1 : -1) * (std::int64_t{1} << (trial < 20 ? 61 : 62)) +
+                           uniform(rng, -(std::int64_t{1} << 40), std::int64_t{1} << 40);
+    const auto c = QuadraticCoefficients::linear(d, e, f);
+    INFO(describe(c));
+    if (!ev.linear_fast_path(c, all)) continue;
+    ++wide;
+    const auto ref = reference(ev, c);
+    for (Condition cond : kConditions) {
+      INFO("condition " << static_cast<int>(cond));
+      CHECK(test_plane_mismatches(ev, c, ref, cond, all) == 0);
+    }
+  }
+  CHECK(wide >= 20);
+  // A word whose live bits are zero is written as zero; the others as without `live`.
+  const auto c = QuadraticCoefficients::linear(3, -5, 100);
+  std::vector<Word> live(ev.words(), kAllOnes), with(ev.words()), without(ev.words());
+  for (int w = 0; w < ev.words(); w += 3) live[w] = 0;
+  ev.test_plane(c, Condition::ge, all, with.data(), live.data());
+  ev.test_plane(c, Condition::ge, all, without.data());
+  for (int w = 0; w < ev.words(); ++w) CHECK(with[w] == (live[w] ? without[w] : 0));
+}

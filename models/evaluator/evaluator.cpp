@@ -87,25 +87,6 @@ T ceil_div(T n, T d) {  // d > 0
   return q;
 }
 
-int clamp_to(i128 v, int hi) { return v < 0 ? 0 : v > hi ? hi : static_cast<int>(v); }
-
-// Columns i in [0, width) with slope * i + offset < 0 end at lt_end; those with <= 0 end at
-// le_end. slope > 0.
-void linear_row_bounds(i128 slope, i128 offset, int width, int* lt_end, int* le_end) {
-  const i128 n = -offset;
-  i128 lt, le;
-  if (slope <= INT64_MAX && n >= -INT64_MAX && n <= INT64_MAX) {  // 64-bit division is far cheaper
-    const auto s = static_cast<std::int64_t>(slope), m = static_cast<std::int64_t>(n);
-    lt = ceil_div(m, s);
-    le = floor_div(m, s) + 1;
-  } else {
-    lt = ceil_div(n, slope);
-    le = floor_div(n, slope) + 1;
-  }
-  *lt_end = clamp_to(lt, width);
-  *le_end = clamp_to(le, width);
-}
-
 #if defined(__AVX2__)
 
 // Vector forward differences with stride 4: lane l holds f(x + 4q + l) at step q. Stepping by
@@ -303,15 +284,79 @@ std::int64_t ExpressionEvaluator::value_at(const QuadraticCoefficients& c, int x
 }
 
 void ExpressionEvaluator::planes(const QuadraticCoefficients& c, int first_bit, int count,
-                                 WordRange range, Word* out) const {
+                                 WordRange range, Word* out, const Word* live) const {
   assert(first_bit >= 0 && count >= 1 && count <= 64);
   assert(range.begin >= 0 && range.end <= words_);
+  if (c.is_linear()) {
+    linear_planes(c, first_bit, count, range, out, live);
+    return;
+  }
   alignas(32) Word t[kWordBits];
   for (int w = range.begin; w < range.end; ++w) {
+    if (live != nullptr && live[w] == 0) {
+      for (int k = 0; k < count; ++k) out[static_cast<std::size_t>(k) * words_ + w] = 0;
+      continue;
+    }
     word_planes(seed(c, word_x(w), word_y(w)), params_.result_bits, t);
     // Values are sign-extended to 64 bits, so plane 63 stands for every bit above.
     for (int k = 0; k < count; ++k)
       out[static_cast<std::size_t>(k) * words_ + w] = t[std::min(first_bit + k, 63)];
+  }
+}
+
+// A linear expression's 64 pixels of a word are v + j D (j = 0..63, v its first pixel's value),
+// and the planes of j D are the same for every word: transposed once, each word's planes are
+// then a bit-serial addition of the broadcast constant v to them, LSB first, as the hardware's
+// adder tree would do it, over only the planes up to the highest one asked for (carries run
+// upwards only). Modulo 2^64 throughout, so the bits below result_bits are exact; the planes
+// above the result's sign bit repeat it. Eight words at a time, whose carry chains are
+// independent (the compiler turns each step into one vector operation).
+void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int first_bit, int count,
+                                        WordRange range, Word* out, const Word* live) const {
+  alignas(32) Word lane[kWordBits];
+  word_planes(RowSeed{0, static_cast<u64>(c.D), 0}, 64, lane);
+  const int sign_bit = params_.result_bits - 1;
+  const int last = first_bit + count - 1;    // the highest plane asked for
+  const int top = std::min(last, sign_bit);  // the highest plane computed
+  const u64 D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  constexpr int kBatch = 8;
+  for (int w0 = range.begin; w0 < range.end; w0 += kBatch) {
+    const int n = std::min(kBatch, range.end - w0);
+    if (live != nullptr) {
+      Word any = 0;
+      for (int l = 0; l < n; ++l) any |= live[w0 + l];
+      if (any == 0) {
+        for (int k = 0; k < count; ++k)
+          std::fill_n(out + static_cast<std::size_t>(k) * words_ + w0, n, Word{0});
+        continue;
+      }
+    }
+    u64 base[kBatch];
+    Word carry[kBatch] = {};
+    Word sum[kBatch] = {};
+    for (int l = 0; l < kBatch; ++l) {
+      const int w = w0 + std::min(l, n - 1);
+      base[l] = D * static_cast<u64>(word_x(w)) + E * static_cast<u64>(word_y(w)) + F;
+    }
+    auto store = [&](int plane) {
+      Word* o = out + static_cast<std::size_t>(plane - first_bit) * words_ + w0;
+      if (n == kBatch) {
+        for (int l = 0; l < kBatch; ++l) o[l] = sum[l];
+      } else {
+        for (int l = 0; l < n; ++l) o[l] = sum[l];
+      }
+    };
+    for (int k = 0; k <= top; ++k) {
+      const Word p = lane[k];
+      for (int l = 0; l < kBatch; ++l) {
+        const Word kb = Word{0} - ((base[l] >> k) & 1);
+        const Word x = p ^ kb;
+        sum[l] = x ^ carry[l];
+        carry[l] = (p & kb) | (carry[l] & x);
+      }
+      if (k >= first_bit) store(k);
+    }
+    for (int b = std::max(first_bit, top + 1); b <= last; ++b) store(b);
   }
 }
 
@@ -332,11 +377,15 @@ bool ExpressionEvaluator::linear_fast_path(const QuadraticCoefficients& c, WordR
 }
 
 void ExpressionEvaluator::test_plane(const QuadraticCoefficients& c, Condition cond,
-                                     WordRange range, Word* out) const {
+                                     WordRange range, Word* out, const Word* live) const {
   assert(range.begin >= 0 && range.end <= words_);
   if (range.empty()) return;
   if (!linear_fast_path(c, range)) {
     for (int w = range.begin; w < range.end; ++w) {
+      if (live != nullptr && live[w] == 0) {
+        out[w] = 0;
+        continue;
+      }
       Word lt, eq;
       word_sign_zero(seed(c, word_x(w), word_y(w)), params_.result_bits, &lt, &eq);
       out[w] = select_condition(cond, lt, eq);
@@ -348,47 +397,89 @@ void ExpressionEvaluator::test_plane(const QuadraticCoefficients& c, Condition c
   // ne, the complement of one.
   const int row_first = range.begin / words_per_row_;
   const int row_last = (range.end - 1) / words_per_row_;
+  i128 slope = c.D;
+  i128 offset = i128{c.D} * x0_ + i128{c.E} * (y0_ + row_first) + c.F;  // at column 0
+  i128 row_step = c.E;
+  Condition k = cond;
+  if (slope < 0) {
+    slope = -slope;
+    offset = -offset;
+    row_step = -row_step;
+    k = mirror(cond);
+  }
+  // 64-bit arithmetic whenever every value of the walk fits it with room to spare (always, at
+  // any configuration the checks allow, but exactness does not depend on it).
+  const i128 limit = i128{1} << 61;
+  const i128 rows = row_last - row_first + 1;
+  const bool narrow =
+      slope < limit && offset < limit && offset > -limit && row_step < limit && row_step > -limit &&
+      (offset < 0 ? -offset : offset) + rows * (row_step < 0 ? -row_step : row_step) < limit;
+  if (narrow) {
+    interval_rows<std::int64_t>(static_cast<std::int64_t>(slope), static_cast<std::int64_t>(offset),
+                                static_cast<std::int64_t>(row_step), k, range, row_first, row_last,
+                                out, live);
+  } else {
+    interval_rows<i128>(slope, offset, row_step, k, range, row_first, row_last, out, live);
+  }
+}
+
+// The rows [row_first, row_last] of test_plane's interval method: the value at column i of a
+// row is slope * i + offset (slope >= 0), offset grows by row_step per row, and cond is k.
+template <class T>
+void ExpressionEvaluator::interval_rows(T slope, T offset, T row_step, Condition k, WordRange range,
+                                        int row_first, int row_last, Word* out,
+                                        const Word* live) const {
+  // Which interval each condition keeps: [lo, hi) from the ends below, or its complement.
+  const bool use_lo = k == Condition::eq || k == Condition::ne;
+  const bool hi_is_le = k == Condition::le || k == Condition::gt || use_lo;
+  const bool invert = k == Condition::ge || k == Condition::gt || k == Condition::ne;
+  // With n = -offset = q * slope + r (0 <= r < slope), the columns where the value is < 0 end
+  // at ceil(n / slope) = q + (r != 0), those where it is <= 0 at floor(n / slope) + 1 = q + 1.
+  // From row to row n drops by row_step: q and r follow with one addition and one
+  // comparison, so the walk divides twice per call instead of once per row.
+  T q = 0, r = 0, step_q = 0, step_r = 0;
+  if (slope != 0) {
+    q = floor_div<T>(-offset, slope);
+    r = -offset - q * slope;
+    step_q = floor_div<T>(-row_step, slope);
+    step_r = -row_step - step_q * slope;
+  }
+  const T width = width_;
   for (int row = row_first; row <= row_last; ++row) {
-    i128 slope = c.D;
-    i128 offset = i128{c.D} * x0_ + i128{c.E} * (y0_ + row) + c.F;  // value at column 0
-    Condition k = cond;
     int lo = 0, hi = 0;
-    bool invert = false;
     if (slope == 0) {
-      hi = select_condition(cond, offset < 0 ? kAllOnes : 0, offset == 0 ? kAllOnes : 0) != 0
-               ? width_
-               : 0;
-    } else {
-      if (slope < 0) {
-        slope = -slope;
-        offset = -offset;
-        k = mirror(cond);
+      // The value is offset in every column.
+      const Word lt = offset < 0 ? kAllOnes : 0, eq = offset == 0 ? kAllOnes : 0;
+      hi = select_condition(k, lt, eq) != 0 ? width_ : 0;
+      lo = 0;
+      offset += row_step;
+      const int row_base = row * words_per_row_;
+      const int w_begin = std::max(range.begin, row_base);
+      const int w_end = std::min(range.end, row_base + words_per_row_);
+      for (int w = w_begin; w < w_end; ++w) {
+        out[w] = live != nullptr && live[w] == 0 ? 0 : (hi != 0 ? kAllOnes : 0);
       }
-      int lt_end, le_end;
-      linear_row_bounds(slope, offset, width_, &lt_end, &le_end);
-      switch (k) {
-        case Condition::lt:
-        case Condition::ge:
-          hi = lt_end;
-          invert = k == Condition::ge;
-          break;
-        case Condition::le:
-        case Condition::gt:
-          hi = le_end;
-          invert = k == Condition::gt;
-          break;
-        case Condition::eq:
-        case Condition::ne:
-          lo = lt_end;
-          hi = le_end;
-          invert = k == Condition::ne;
-          break;
-      }
+      continue;
+    }
+    const T lt_end = q + (r != 0 ? 1 : 0);
+    const T le_end = q + 1;
+    const T h = hi_is_le ? le_end : lt_end;
+    hi = static_cast<int>(h < 0 ? 0 : h > width ? width : h);
+    lo = use_lo ? static_cast<int>(lt_end < 0 ? 0 : lt_end > width ? width : lt_end) : 0;
+    q += step_q;
+    r += step_r;
+    if (r >= slope) {
+      r -= slope;
+      ++q;
     }
     const int row_base = row * words_per_row_;
     const int w_begin = std::max(range.begin, row_base);
     const int w_end = std::min(range.end, row_base + words_per_row_);
     for (int w = w_begin; w < w_end; ++w) {
+      if (live != nullptr && live[w] == 0) {
+        out[w] = 0;
+        continue;
+      }
       const int col = (w - row_base) * kWordBits;
       const Word m =
           bit_span(std::clamp(lo - col, 0, kWordBits), std::clamp(hi - col, 0, kWordBits));

@@ -47,12 +47,18 @@ class ExpressionEvaluator {
   // Bit-planes of result bits [first_bit, first_bit + count): out[k * words() + w] is word w of
   // the plane of bit first_bit + k. Bits at or above result_bits are copies of the sign bit.
   // Requires first_bit >= 0, 1 <= count <= 64 and range within [0, words()). Only words in
-  // `range` of each plane are written.
-  void planes(const QuadraticCoefficients& c, int first_bit, int count, WordRange range,
-              Word* out) const;
+  // `range` of each plane are written. With `live` (a plane of words() words, e.g. the Enable
+  // register), a word w with live[w] == 0 need not be evaluated: its planes hold zero or its
+  // values (the same for the same arguments). The caller promises not to use those pixels'
+  // values (they are disabled); skipping them makes the cost follow the pixels a primitive
+  // covers.
+  void planes(const QuadraticCoefficients& c, int first_bit, int count, WordRange range, Word* out,
+              const Word* live = nullptr) const;
 
-  // One plane: bit set where (wrapped value) <cond> 0. Only words in `range` are written.
-  void test_plane(const QuadraticCoefficients& c, Condition cond, WordRange range, Word* out) const;
+  // One plane: bit set where (wrapped value) <cond> 0. Only words in `range` are written; with
+  // `live`, words with live[w] == 0 are written as zero (as for planes()).
+  void test_plane(const QuadraticCoefficients& c, Condition cond, WordRange range, Word* out,
+                  const Word* live = nullptr) const;
 
   // True when test_plane() answers (c, range) with the exact per-row interval method rather
   // than per-pixel evaluation: c is linear and no pixel in the rows `range` touches can wrap.
@@ -64,6 +70,12 @@ class ExpressionEvaluator {
   std::int64_t word_x(int w) const { return x0_ + (w % words_per_row_) * kWordBits; }
   std::int64_t word_y(int w) const { return y0_ + w / words_per_row_; }
   std::int64_t wrap(std::uint64_t v) const;
+  template <class T>
+  void interval_rows(T slope, T offset, T row_step, Condition k, WordRange range, int row_first,
+                     int row_last, Word* out, const Word* live) const;
+  // planes() for a linear expression (A = B = C = 0).
+  void linear_planes(const QuadraticCoefficients& c, int first_bit, int count, WordRange range,
+                     Word* out, const Word* live) const;
 
   EvaluatorParams params_;
   int width_;

@@ -1,6 +1,7 @@
 #include "models/pixel_array/bit_sliced_backend.hpp"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 
@@ -17,12 +18,15 @@ Bits BitSlicedBackend::source_bits(const Source& src) const {
 }
 
 Bits BitSlicedBackend::expression_bits(const QuadraticCoefficients& expr, const Field& as) {
-  evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data());
+  // Disabled pixels' values are never used (assign keeps them, compare clears their E
+  // anyway), so words whose E is zero are not evaluated.
+  evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data(),
+                    array_.enable());
   return array_.bits_of_planes(scratch_.data(), as.width, as.is_signed);
 }
 
 void BitSlicedBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
-  evaluator_.test_plane(expr, cond, array_.active_words(), scratch_.data());
+  evaluator_.test_plane(expr, cond, array_.active_words(), scratch_.data(), array_.enable());
   array_.and_enable(scratch_.data());
 }
 
@@ -64,17 +68,41 @@ void BitSlicedBackend::multiply_accumulate(const Field& dst, const Field& a, std
   array_.multiply_accumulate(dst, array_.bits_of(a), k);
 }
 
+namespace {
+
+// spread[b] has bit k of b at bit 8k: one plane's byte becomes one bit in each of 8 byte lanes.
+const std::array<std::uint64_t, 256>& spread_table() {
+  static const std::array<std::uint64_t, 256> table = [] {
+    std::array<std::uint64_t, 256> t{};
+    for (int b = 0; b < 256; ++b) {
+      for (int k = 0; k < 8; ++k) t[b] |= static_cast<std::uint64_t>((b >> k) & 1) << (8 * k);
+    }
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
 void BitSlicedBackend::read_field(const Field& field, std::uint64_t* out) const {
-  // Plane by plane, word by word: the same bits PixelArray::read gives pixel by pixel
-  // (pixel p is bit p % 64 of word p / 64), without its per-pixel index arithmetic.
+  // The same bits PixelArray::read gives pixel by pixel (pixel p is bit p % 64 of word
+  // p / 64), eight planes at a time: a table lookup per byte of a plane puts that plane's bit
+  // of 8 pixels into 8 byte lanes, so 8 pixels' bytes are assembled in one register.
+  const auto& spread = spread_table();
   const int words = array_.words();
   std::fill(out, out + array_.pixels(), std::uint64_t{0});
-  for (int i = 0; i < field.width; ++i) {
-    const Word* plane = array_.plane(field.lo + i);
+  for (int g = 0; g < field.width; g += 8) {
+    const int n = std::min(8, field.width - g);
     for (int w = 0; w < words; ++w) {
-      const Word bits = plane[w];
+      std::uint64_t lanes[8] = {};
+      for (int i = 0; i < n; ++i) {
+        const Word bits = array_.plane(field.lo + g + i)[w];
+        for (int b = 0; b < 8; ++b) lanes[b] |= spread[(bits >> (8 * b)) & 0xFF] << i;
+      }
       std::uint64_t* o = out + static_cast<std::size_t>(w) * 64;
-      for (int j = 0; j < 64; ++j) o[j] |= ((bits >> j) & 1) << i;
+      for (int b = 0; b < 8; ++b) {
+        for (int k = 0; k < 8; ++k) o[8 * b + k] |= ((lanes[b] >> (8 * k)) & 0xFF) << g;
+      }
     }
   }
 }

@@ -203,6 +203,7 @@ void Renderer::run() {
     charge(step.code, step.values);
   };
   sc_core::sc_time region_start;
+  std::uint64_t region_busy_start = 0;
   while (!stages_.empty()) {
     const Stage stage = stages_.front();
     stages_.pop_front();
@@ -216,6 +217,7 @@ void Renderer::run() {
         for (auto& v : pass) v.clear();
       step_start.clear();
       region_start = cursor_;
+      region_busy_start = stats_.busy.count;
     }
     stream.before_pass(stage.pass, charge_step);
     catch_up();
@@ -287,6 +289,7 @@ void Renderer::run() {
     for (const auto& pass : starts)
       for (const auto& v : pass) w.packet_start.insert(w.packet_start.end(), v.begin(), v.end());
     ship(stage.region);
+    w.busy_cycles = stats_.busy.count - region_busy_start;
     ++stats_.regions;
     work_.push_back(std::move(w));
   }

@@ -50,6 +50,9 @@ struct RegionWork {
   // without a packet in stream order, and the packets pass-major (pass * packets + i).
   std::vector<std::uint64_t> step_start;
   std::vector<std::uint64_t> packet_start;
+  // The Renderer's busy cycles (RendererStats::busy) from the region's clear to its copy out:
+  // over a Renderer's regions they sum to its busy cycles.
+  std::uint64_t busy_cycles = 0;
 };
 
 struct RendererStats {

@@ -82,6 +82,8 @@ int run_render(RenderOptions o) {
   const fs::path dir(o.out_dir);
   OutputSet outputs;
   outputs.add((dir / "frame.png").string(), encode_png(result.image));
+  outputs.add((dir / "regions.png").string(),
+              encode_png(region_heat_map(result.image, result.regions)));
   outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
   outputs.add((dir / "stats.json").string(), result.stats_json.dump(2) + "\n");
   if (!o.timeline.empty()) outputs.add(o.timeline, timeline.dump() + "\n");
@@ -104,9 +106,9 @@ int run_render(RenderOptions o) {
         "evaluator.coefficient_bits = {} (see 'pp5sim extremes')\n",
         overflow, config.evaluator.coefficient_bits);
   }
-  std::cout << fmt::format("\n{} {}/frame.png, {}/config.json, {}/stats.json\n",
+  std::cout << fmt::format("\n{} {}/frame.png, {}/regions.png, {}/config.json, {}/stats.json\n",
                            replacing ? "wrote (replacing the previous run's)" : "wrote", o.out_dir,
-                           o.out_dir, o.out_dir);
+                           o.out_dir, o.out_dir, o.out_dir);
   if (!o.timeline.empty()) {
     std::cout << fmt::format("wrote {} (open it in ui.perfetto.dev)\n", o.timeline);
   }
@@ -125,9 +127,11 @@ Command add_render_command(CLI::App& app) {
       ->capture_default_str();
   render->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*render, o->config_path, o->sets);
-  render->add_option("-o,--out", o->out_dir,
-                     "Output folder for frame.png, config.json and stats.json [out/SCENE]; a "
-                     "later run into the same folder replaces them");
+  render->add_option(
+      "-o,--out", o->out_dir,
+      "Output folder for frame.png, regions.png (Renderer cycles per region as a heat "
+      "map), config.json and stats.json [out/SCENE]; a "
+      "later run into the same folder replaces them");
   render
       ->add_option("-j,--threads", o->threads,
                    "Host threads for the pixel arrays (results are identical for any number)")

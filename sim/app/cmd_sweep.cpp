@@ -2,6 +2,8 @@
 //
 //   pp5sim sweep --grid gp.count=1,2,4 --grid renderer.count=1,4,16 --out DIR   runs locally
 //   pp5sim sweep ... --print-commands   one `pp5sim render` line per run (GNU parallel, Slurm)
+//   pp5sim sweep ... --slurm FILE       FILE submits the runs as a Slurm job array, and the
+//                                       aggregation as a job that waits for them (afterok)
 //   pp5sim sweep aggregate DIR -o sweep.csv   one CSV row per run, from each run's stats.json
 //   pp5sim sweep plot sweep.csv -o sweep.svg  throughput against the swept parameters
 //
@@ -13,6 +15,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -48,6 +51,7 @@ struct SweepOptions {
   std::vector<std::string> sets;
   std::string out_dir = "out/sweep";
   bool print_commands = false;
+  std::string slurm;  // the job-array script to write, or empty
   int threads = default_threads();
   std::vector<int> tessellation;
   // aggregate
@@ -129,6 +133,81 @@ std::vector<std::string> point(const std::vector<Axis>& axes, std::uint64_t inde
   return values;
 }
 
+// Slurm refuses a job array with more tasks than its MaxArraySize (1001 by default, so
+// indices 0..1000); a larger grid must be split or the site's limit raised.
+constexpr std::uint64_t kSlurmDefaultMaxArraySize = 1001;
+
+// --slurm FILE: OUT/commands.txt, one `pp5sim render` command per grid point (as
+// --print-commands prints them, for `parallel < OUT/commands.txt`), and FILE, a bash script
+// that submits them to Slurm: a job array whose task i runs line i + 1, then `sweep aggregate`
+// as a job that starts only once every task has succeeded (afterok; a failed task cancels it).
+// Both files are written, or neither. Paths in the jobs are relative to the folder `sweep` ran
+// in, which the jobs start in (--chdir).
+int write_slurm_job(const SweepOptions& o, const std::string& program_path, std::uint64_t points,
+                    const std::function<std::string(std::uint64_t)>& command) {
+  const fs::path cwd = fs::current_path();
+  const fs::path out = fs::absolute(o.out_dir).lexically_normal();
+  const fs::path commands = out / "commands.txt";
+  std::string lines;
+  for (std::uint64_t i = 0; i < points; ++i) lines += command(i) + "\n";
+  const std::string q_out = shell_quote(out.string());
+  const std::string q_commands = shell_quote(commands.string());
+  const std::string q_cwd = shell_quote(cwd.string());
+  std::string script = fmt::format(
+      R"(#!/bin/bash
+# Written by `pp5sim sweep --slurm`: submits the sweep in {out} to Slurm.
+#   bash {self}
+# - a job array of {points} tasks, one per grid point: task i runs line i + 1 of
+#   {commands} (the commands `--print-commands` prints, for GNU parallel);
+# - `pp5sim sweep aggregate` into {out}/sweep.csv, as a job that starts once every task
+#   has succeeded (afterok).
+# Each task's output goes to {out}/slurm-JOB_TASK.out. Extra sbatch options (partition,
+# account, time limit) come from PP5_SBATCH_OPTIONS, e.g. PP5_SBATCH_OPTIONS="-p short".
+# Slurm refuses arrays larger than its MaxArraySize (1001 by default).
+set -euo pipefail
+read -r -a extra <<< "${{PP5_SBATCH_OPTIONS:-}}"
+array=$(sbatch --parsable "${{extra[@]}}" --job-name=pp5-sweep --array=0-{last} \
+  --ntasks=1 --cpus-per-task=1 --chdir={cwd} --output={out}/slurm-%A_%a.out <<'TASK'
+#!/bin/bash
+set -euo pipefail
+line=$(sed -n "$((SLURM_ARRAY_TASK_ID + 1))p" {commands})
+[ -n "$line" ] || {{ echo "no command for task $SLURM_ARRAY_TASK_ID in {commands}" >&2; exit 1; }}
+eval "exec $line"
+TASK
+)
+array=${{array%%;*}}
+aggregate=$(sbatch --parsable "${{extra[@]}}" --job-name=pp5-sweep-aggregate \
+  --dependency=afterok:"$array" --kill-on-invalid-dep=yes --ntasks=1 --cpus-per-task=1 \
+  --chdir={cwd} --output={out}/slurm-aggregate-%j.out \
+  --wrap={aggregate})
+aggregate=${{aggregate%%;*}}
+echo "submitted job array $array ({points} tasks) and aggregate job $aggregate"
+echo "$array $aggregate" > {out}/slurm-jobs.txt
+)",
+      fmt::arg("out", q_out), fmt::arg("self", shell_quote(o.slurm)), fmt::arg("points", points),
+      fmt::arg("commands", q_commands), fmt::arg("last", points - 1), fmt::arg("cwd", q_cwd),
+      fmt::arg("aggregate",
+               shell_quote(fmt::format("{} sweep aggregate {} -o {}", shell_quote(program_path),
+                                       q_out, shell_quote((out / "sweep.csv").string())))));
+  OutputSet outputs;
+  outputs.add(commands.string(), lines);
+  outputs.add(o.slurm, script);
+  outputs.commit();
+  fs::permissions(o.slurm, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                  fs::perm_options::add);
+  std::cout << fmt::format(
+      "wrote {} ({} commands, for `parallel < {}`) and {} (a Slurm job array "
+      "of {} tasks and a dependent `sweep aggregate`: bash {})\n",
+      commands.string(), points, commands.string(), o.slurm, points, o.slurm);
+  if (points > kSlurmDefaultMaxArraySize) {
+    std::cerr << fmt::format(
+        "warning: {} array tasks: Slurm's default MaxArraySize is {}; split the grid or raise "
+        "the cluster's limit\n",
+        points, kSlurmDefaultMaxArraySize);
+  }
+  return 0;
+}
+
 int run_sweep(const SweepOptions& o, const std::string& program_path) {
   const std::vector<Axis> axes = parse_grid(o.grid);
   std::uint64_t points = 1;
@@ -184,23 +263,31 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
                                        {"firmware", firmware}}
                                 .dump(2) +
                             "\n");
+  // Point i's `pp5sim render` command, the same for GNU parallel and Slurm.
+  auto command = [&](const std::vector<std::string>& values, const fs::path& dir) {
+    std::string line = fmt::format("{} render --scene {} --firmware {}", shell_quote(program_path),
+                                   shell_quote(o.scene_name), shell_quote(firmware));
+    if (!o.config_path.empty()) line += " --config " + shell_quote(o.config_path);
+    if (o.tessellation.size() == 2) {
+      line += fmt::format(" --tessellation {} {}", o.tessellation[0], o.tessellation[1]);
+    }
+    for (const std::string& s : o.sets) line += " --set " + shell_quote(s);
+    for (std::size_t k = 0; k < axes.size(); ++k) {
+      line += " --set " + shell_quote(axes[k].key + "=" + values[k]);
+    }
+    return line + " --threads 1 --out " + shell_quote(dir.string());
+  };
+  if (!o.slurm.empty()) {
+    return write_slurm_job(o, program_path, points, [&](std::uint64_t i) {
+      const std::vector<std::string> values = point(axes, i);
+      return command(values, fs::path(o.out_dir) / run_name(axes, values));
+    });
+  }
   for (std::uint64_t i = 0; i < points; ++i) {
     const std::vector<std::string> values = point(axes, i);
     const fs::path dir = fs::path(o.out_dir) / run_name(axes, values);
     if (o.print_commands) {
-      std::string line =
-          fmt::format("{} render --scene {} --firmware {}", shell_quote(program_path),
-                      shell_quote(o.scene_name), shell_quote(firmware));
-      if (!o.config_path.empty()) line += " --config " + shell_quote(o.config_path);
-      if (o.tessellation.size() == 2) {
-        line += fmt::format(" --tessellation {} {}", o.tessellation[0], o.tessellation[1]);
-      }
-      for (const std::string& s : o.sets) line += " --set " + shell_quote(s);
-      for (std::size_t k = 0; k < axes.size(); ++k) {
-        line += " --set " + shell_quote(axes[k].key + "=" + values[k]);
-      }
-      line += " --threads 1 --out " + shell_quote(dir.string());
-      std::cout << line << "\n";
+      std::cout << command(values, dir) << "\n";
       continue;
     }
     const MachineConfig config = config_of(i);
@@ -543,6 +630,12 @@ Command add_sweep_command(CLI::App& app) {
   sweep->add_flag("--print-commands", o->print_commands,
                   "Do not run: print one `pp5sim render` command per run, for GNU parallel "
                   "(`| parallel`) or a Slurm job array; then run `sweep aggregate`");
+  sweep
+      ->add_option("--slurm", o->slurm,
+                   "Do not run: write FILE, a bash script that submits one Slurm job-array task "
+                   "per run and `sweep aggregate` as a job after them (afterok), and "
+                   "OUT/commands.txt, the runs' commands (also for `parallel < OUT/commands.txt`)")
+      ->excludes("--print-commands");
   sweep->add_option("-j,--threads", o->threads, "Host threads for each run's pixel arrays")
       ->check(CLI::Range(1, 256));
   sweep->add_option("--tessellation", o->tessellation, "Tessellation U V of the scene")

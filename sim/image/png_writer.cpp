@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <png.h>
+#include <zlib.h>
 
 #include <cerrno>
 #include <cstddef>
@@ -32,6 +33,41 @@ class PngImageGuard {
   throw std::runtime_error(fmt::format("{} '{}': {}", what, path, reason));
 }
 
+// zlib's level 1 (Z_BEST_SPEED).
+constexpr int kCompressionLevel = 1;
+
+// Where the encoder's bytes and its error go; libpng's callbacks reach it through their
+// user pointers.
+struct PngWriteState {
+  std::string what;
+  std::string bytes;
+  std::string message = "libpng reported an error";
+};
+
+void on_png_write(png_structp png, png_bytep data, png_size_t length) {
+  auto* state = static_cast<PngWriteState*>(png_get_io_ptr(png));
+  state->bytes.append(reinterpret_cast<const char*>(data), length);
+}
+
+[[noreturn]] void on_png_error(png_structp png, png_const_charp message) {
+  auto* state = static_cast<PngWriteState*>(png_get_error_ptr(png));
+  state->message = message;
+  png_longjmp(png, 1);
+}
+
+// Releases the write structures on every exit path.
+class PngWriteGuard {
+ public:
+  PngWriteGuard(png_structp& png, png_infop& info) : png_(png), info_(info) {}
+  ~PngWriteGuard() { png_destroy_write_struct(&png_, &info_); }
+  PngWriteGuard(const PngWriteGuard&) = delete;
+  PngWriteGuard& operator=(const PngWriteGuard&) = delete;
+
+ private:
+  png_structp& png_;
+  png_infop& info_;
+};
+
 }  // namespace
 
 std::string encode_png(const RgbImage& image, const std::string& what) {
@@ -47,22 +83,33 @@ std::string encode_png(const RgbImage& image, const std::string& what) {
          fmt::format("pixel buffer holds {} bytes, a {}x{} RGB image needs {}", image.rgb.size(),
                      image.width, image.height, expected));
   }
-  png_image png{};
-  png.version = PNG_IMAGE_VERSION;
-  png.width = static_cast<png_uint_32>(image.width);
-  png.height = static_cast<png_uint_32>(image.height);
-  png.format = PNG_FORMAT_RGB;
-  PngImageGuard guard(png);
-  // One compression, into a buffer of the largest size libpng can need (asking for the size
-  // first would compress the image twice).
-  png_alloc_size_t size = PNG_IMAGE_PNG_SIZE_MAX(png);
-  std::string bytes(size, '\0');
-  if (png_image_write_to_memory(&png, bytes.data(), &size, /*convert_to_8bit=*/0, image.rgb.data(),
-                                /*row_stride=*/0, /*colormap=*/nullptr) == 0) {
-    fail(kWhat, what, png.message[0] != '\0' ? png.message : "libpng reported an error");
+  // The full libpng API rather than png_image_write_to_memory, for its compression settings:
+  // run-length matches only (Z_RLE) at zlib's fastest level after the Up filter: a rendered
+  // frame's flat areas and repeated rows compress almost as well as with the default search,
+  // in a fraction of the time (the image bits are the same).
+  PngWriteState state;
+  state.what = what;
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error, nullptr);
+  if (png == nullptr) fail(kWhat, what, "libpng could not start");
+  png_infop info = png_create_info_struct(png);
+  PngWriteGuard guard(png, info);
+  if (info == nullptr) fail(kWhat, what, "libpng could not start");
+  if (setjmp(png_jmpbuf(png)) != 0) fail(kWhat, what, state.message);
+  png_set_write_fn(png, &state, on_png_write, nullptr);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(image.width),
+               static_cast<png_uint_32>(image.height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_compression_level(png, kCompressionLevel);
+  png_set_compression_strategy(png, Z_RLE);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
+  png_write_info(png, info);
+  const std::size_t stride = static_cast<std::size_t>(image.width) * 3u;
+  for (int y = 0; y < image.height; ++y) {
+    png_write_row(png,
+                  const_cast<png_bytep>(image.rgb.data() + stride * static_cast<std::size_t>(y)));
   }
-  bytes.resize(size);
-  return bytes;
+  png_write_end(png, nullptr);
+  return std::move(state.bytes);
 }
 
 void write_png(const std::string& path, const RgbImage& image) {

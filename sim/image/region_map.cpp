@@ -1,0 +1,165 @@
+#include "sim/image/region_map.hpp"
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+namespace pp5 {
+
+namespace {
+
+// The scale's stops, evenly spaced: dark blue, purple, red, orange, pale yellow. Brightness
+// rises monotonically along it, so it also reads in grey.
+constexpr std::array<std::array<int, 3>, 5> kStops = {
+    {{20, 20, 90}, {120, 30, 140}, {210, 50, 60}, {245, 150, 30}, {255, 245, 170}}};
+
+// Digits 0-9 as 3 x 5 bitmaps, one row a byte, bit 2 the leftmost column.
+constexpr std::array<std::array<std::uint8_t, 5>, 10> kDigits = {{
+    {7, 5, 5, 5, 7},
+    {2, 6, 2, 2, 7},
+    {7, 1, 7, 4, 7},
+    {7, 1, 7, 1, 7},
+    {5, 5, 7, 1, 1},
+    {7, 4, 7, 1, 7},
+    {7, 4, 7, 5, 7},
+    {7, 1, 1, 1, 1},
+    {7, 5, 7, 5, 7},
+    {7, 5, 7, 1, 7},
+}};
+
+constexpr int kDigitScale = 2;  // each font pixel is 2 x 2 image pixels
+
+void put(RgbImage& image, int x, int y, const std::uint8_t c[3]) {
+  if (x < 0 || y < 0 || x >= image.width || y >= image.height) return;
+  std::uint8_t* p = &image.rgb[(static_cast<std::size_t>(y) * image.width + x) * 3];
+  p[0] = c[0];
+  p[1] = c[1];
+  p[2] = c[2];
+}
+
+// Draws `text` (digits only) with its top-left corner at (x, y); returns its width.
+int draw_number(RgbImage& image, int x, int y, const std::string& text, const std::uint8_t c[3]) {
+  int cx = x;
+  for (char ch : text) {
+    const auto& glyph = kDigits[static_cast<std::size_t>(ch - '0')];
+    for (int row = 0; row < 5; ++row) {
+      for (int col = 0; col < 3; ++col) {
+        if (((glyph[row] >> (2 - col)) & 1) == 0) continue;
+        for (int dy = 0; dy < kDigitScale; ++dy)
+          for (int dx = 0; dx < kDigitScale; ++dx)
+            put(image, cx + col * kDigitScale + dx, y + row * kDigitScale + dy, c);
+      }
+    }
+    cx += 4 * kDigitScale;
+  }
+  return cx - x - kDigitScale;
+}
+
+int number_width(const std::string& text) {
+  return static_cast<int>(text.size()) * 4 * kDigitScale - kDigitScale;
+}
+
+}  // namespace
+
+void heat_colour(double t, std::uint8_t rgb[3]) {
+  t = std::clamp(t, 0.0, 1.0);
+  const double s = t * static_cast<double>(kStops.size() - 1);
+  const auto i = std::min(static_cast<std::size_t>(s), kStops.size() - 2);
+  const double f = s - static_cast<double>(i);
+  for (int k = 0; k < 3; ++k) {
+    const double v = kStops[i][k] + f * (kStops[i + 1][k] - kStops[i][k]);
+    rgb[k] = static_cast<std::uint8_t>(v + 0.5);
+  }
+}
+
+RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& regions) {
+  if (frame.width <= 0 || frame.height <= 0 ||
+      frame.rgb.size() != static_cast<std::size_t>(frame.width) * frame.height * 3) {
+    throw std::invalid_argument("regions.png: the frame's pixel buffer does not match its size");
+  }
+  std::uint64_t peak = 0;
+  std::map<int, std::uint64_t> per_renderer;
+  for (const RegionLoad& r : regions) {
+    if (r.x0 < 0 || r.y0 < 0 || r.width <= 0 || r.height <= 0 || r.x0 + r.width > frame.width ||
+        r.y0 + r.height > frame.height) {
+      throw std::invalid_argument("regions.png: region " + std::to_string(r.region) +
+                                  " lies outside the frame");
+    }
+    peak = std::max(peak, r.busy_cycles);
+    per_renderer[r.renderer] += r.busy_cycles;
+  }
+  int busiest = -1;
+  std::uint64_t busiest_cycles = 0;
+  for (const auto& [renderer, cycles] : per_renderer) {
+    if (busiest < 0 || cycles > busiest_cycles) busiest = renderer, busiest_cycles = cycles;
+  }
+
+  RgbImage out;
+  out.width = frame.width;
+  out.height = frame.height + kLegendHeight;
+  out.rgb.assign(static_cast<std::size_t>(out.width) * out.height * 3, 0);
+  // The frame in grey, and each region 60% its heat colour over 40% that grey, so that the
+  // scene stays recognisable under the tint (per region a table from grey to tinted colour).
+  const std::size_t pixels = static_cast<std::size_t>(frame.width) * frame.height;
+  std::vector<std::uint8_t> grey(pixels);
+  const std::uint8_t* src = frame.rgb.data();
+  std::uint8_t* dst = out.rgb.data();
+  for (std::size_t p = 0; p < pixels; ++p) {
+    grey[p] = static_cast<std::uint8_t>(
+        (77 * src[3 * p] + 150 * src[3 * p + 1] + 29 * src[3 * p + 2]) >> 8);
+  }
+  for (std::size_t p = 0; p < pixels; ++p) dst[3 * p] = dst[3 * p + 1] = dst[3 * p + 2] = grey[p];
+  std::array<std::array<std::uint8_t, 3>, 256> tinted;
+  for (const RegionLoad& r : regions) {
+    std::uint8_t heat[3];
+    heat_colour(peak ? static_cast<double>(r.busy_cycles) / static_cast<double>(peak) : 0, heat);
+    for (int g = 0; g < 256; ++g) {
+      for (int k = 0; k < 3; ++k)
+        tinted[g][k] = static_cast<std::uint8_t>((3 * heat[k] + 2 * g) / 5);
+    }
+    for (int y = r.y0; y < r.y0 + r.height; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * out.width;
+      for (int x = r.x0; x < r.x0 + r.width; ++x) {
+        const auto& t = tinted[grey[row + x]];
+        std::uint8_t* q = dst + (row + x) * 3;
+        q[0] = t[0];
+        q[1] = t[1];
+        q[2] = t[2];
+      }
+    }
+  }
+  // The busiest Renderer's regions: a white frame 2 pixels wide just inside each, lined with
+  // black, so that it shows on the palest colours too.
+  const std::uint8_t white[3] = {255, 255, 255};
+  const std::uint8_t black[3] = {0, 0, 0};
+  for (const RegionLoad& r : regions) {
+    if (r.renderer != busiest) continue;
+    for (int y = r.y0; y < r.y0 + r.height; ++y) {
+      const int dy = std::min(y - r.y0, r.y0 + r.height - 1 - y);
+      for (int x = r.x0; x < r.x0 + r.width; ++x) {
+        const int d = std::min({dy, x - r.x0, r.x0 + r.width - 1 - x});
+        if (d < 2) {
+          put(out, x, y, white);
+        } else if (d == 2) {
+          put(out, x, y, black);
+        }
+      }
+    }
+  }
+  // The legend: "0", the colour bar, the peak's cycles.
+  const int top = frame.height + (kLegendHeight - 5 * kDigitScale) / 2;
+  const std::string peak_text = std::to_string(peak);
+  int x = 4 + draw_number(out, 4, top, "0", white) + 6;
+  const int bar_end = out.width - 4 - number_width(peak_text) - 6;
+  for (int bx = x; bx < bar_end; ++bx) {
+    std::uint8_t c[3];
+    heat_colour(static_cast<double>(bx - x) / std::max(1, bar_end - 1 - x), c);
+    for (int y = frame.height + 4; y < out.height - 4; ++y) put(out, bx, y, c);
+  }
+  if (bar_end > x) draw_number(out, bar_end + 6, top, peak_text, white);
+  return out;
+}
+
+}  // namespace pp5

@@ -1,0 +1,37 @@
+#pragma once
+// regions.png: where a frame's Renderer time went, drawn over the frame itself.
+//
+// Contract:
+//  - region_heat_map() returns an image as wide as the frame and kLegendHeight rows taller:
+//    the frame, greyed, with every region tinted by its Renderer busy cycles on one linear
+//    colour scale from 0 (dark blue) through purple, red and orange to the busiest region's
+//    cycles (pale yellow) (heat_colour()), and every region of the busiest Renderer (the one
+//    with the most busy cycles summed over its regions, the lowest index on a tie) outlined in
+//    white lined with black; below it a legend: the colour bar, "0" at its left end and the
+//    busiest region's cycles at its right.
+//  - It reads only its arguments: the same frame and loads give the same bytes.
+//  - Throws std::invalid_argument when a region lies outside the frame or the frame's pixel
+//    buffer does not match its size.
+#include <cstdint>
+#include <vector>
+
+#include "models/frame_buffer/image.hpp"
+
+namespace pp5 {
+
+// One region of the frame and the Renderer work it took.
+struct RegionLoad {
+  int region = 0;
+  int x0 = 0, y0 = 0, width = 0, height = 0;  // in frame pixels
+  int renderer = 0;
+  std::uint64_t busy_cycles = 0;
+};
+
+constexpr int kLegendHeight = 24;
+
+// The colour of `t` in [0, 1] on the heat scale (t is clamped).
+void heat_colour(double t, std::uint8_t rgb[3]);
+
+RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& regions);
+
+}  // namespace pp5
