@@ -141,6 +141,15 @@ TEST_CASE("visible surfaces: painter's fails where the slides say it must", "[vi
       CHECK(r.rows[3].difference.differing == 0);
     }
   }
+  SECTION("the registered statistics say so too") {
+    const Statistics stats = visible_statistics({analyse("pierced-quad")});
+    CHECK(stats.text("scene.0.name") == "pierced-quad");
+    CHECK(stats.integer("scene.0.depth_sort.unorderable") > 0);
+    CHECK(stats.integer("scene.0.depth_sort.tests_run.projection") > 0);
+    CHECK(stats.integer("scene.0.algorithm.painter.differing_pixels") > 0);
+    CHECK(stats.integer("scene.0.algorithm.zbuffer.differing_pixels") == 0);
+    CHECK(stats.elements("scene.0.depth_sort.gp") == 4);
+  }
   SECTION("the sticks' and the sliver's planes cut the others: no test orders them") {
     CHECK(analyse("cyclic-overlap").sort.unorderable > 0);
     CHECK(analyse("pierced-quad").sort.unorderable > 0);

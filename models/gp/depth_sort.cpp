@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/statistics.hpp"
+
 namespace pp5 {
 
 namespace {
@@ -390,6 +392,46 @@ DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps) {
     }
   }
   return r;
+}
+
+void register_depth_sort_statistics(Statistics& stats, const std::string& prefix,
+                                    const DepthSortResult& r,
+                                    const std::vector<GpClocks>& gp_clocks, GpClocks merge_clocks,
+                                    double seconds) {
+  namespace u = stat_unit;
+  auto count = [](std::uint64_t v) { return [v] { return static_cast<std::int64_t>(v); }; };
+  const std::string p = prefix + ".";
+  stats.add_integer(p + "key_comparisons", u::count,
+                    "Far-depth comparisons of the depth sort (the GPs' sorts and the merge)",
+                    count(r.key_comparisons));
+  stats.add_integer(p + "pairs_checked", u::count,
+                    "Pairs whose depth extents overlap, checked with the overlap tests",
+                    count(r.pairs_checked));
+  for (int t = 0; t < kOverlapTests; ++t) {
+    const std::string name = overlap_test_name(static_cast<OverlapTest>(t));
+    stats.add_integer(p + "tests_run." + name, u::count, "Times the overlap test ran",
+                      count(r.tests_run[t]));
+    stats.add_integer(p + "decided." + name, u::count, "Pairs the overlap test settled",
+                      count(r.decided[t]));
+  }
+  stats.add_integer(p + "reorders", u::count, "Polygons moved ahead of a farther one",
+                    count(r.reorders));
+  stats.add_integer(p + "cycles", u::count,
+                    "Pairs unresolved because a moved polygon would have to move again",
+                    count(r.cycles));
+  stats.add_integer(p + "unorderable", u::count,
+                    "Pairs unresolved because no test orders them either way",
+                    count(r.unorderable));
+  for (std::size_t k = 0; k < gp_clocks.size(); ++k) {
+    stats.add_integer(p + "gp." + std::to_string(k) + ".clocks", u::gp_clocks,
+                      "The GP's depth-sort clocks: its share's prepare and sort, and its checks",
+                      count(gp_clocks[k].count));
+  }
+  stats.add_integer(p + "merge_clocks", u::gp_clocks, "GP 0's clocks merging the sorted runs",
+                    count(merge_clocks.count));
+  stats.add_real(p + "seconds", u::seconds,
+                 "The sort's time: the slowest prepare, the merge, the slowest checks",
+                 [seconds] { return seconds; });
 }
 
 }  // namespace pp5

@@ -120,4 +120,14 @@ struct DepthSortResult {
 
 DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps);
 
+class Statistics;
+// Registers PREFIX.key_comparisons, .pairs_checked, .tests_run.TEST, .decided.TEST,
+// .reorders, .cycles, .unorderable, .gp.N.clocks (prepare and checks, per GP),
+// .merge_clocks and .seconds (the sort's time on the GPs). The values are copied: `result`
+// need not outlive the registry.
+void register_depth_sort_statistics(Statistics& stats, const std::string& prefix,
+                                    const DepthSortResult& result,
+                                    const std::vector<GpClocks>& gp_clocks, GpClocks merge_clocks,
+                                    double seconds);
+
 }  // namespace pp5

@@ -251,6 +251,61 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
   return rep;
 }
 
+Statistics visible_statistics(const std::vector<VisibleSceneReport>& reports) {
+  namespace u = stat_unit;
+  Statistics stats;
+  auto count = [](std::uint64_t v) { return [v] { return static_cast<std::int64_t>(v); }; };
+  const char* const keys[] = {"zbuffer", "painter", "scanline", "warnock"};
+  for (std::size_t k = 0; k < reports.size(); ++k) {
+    const VisibleSceneReport& r = reports[k];
+    const std::string p = fmt::format("scene.{}.", k);
+    const std::string name = r.scene;
+    stats.add_text(p + "name", u::name, "The scene", [name] { return name; });
+    stats.add_integer(p + "triangles", u::count, "Triangles in the scene", count(r.triangles));
+    register_depth_sort_statistics(stats, p + "depth_sort", r.sort, r.sort_clocks, r.merge_clocks,
+                                   r.sort_seconds);
+    for (std::size_t a = 0; a < r.rows.size() && a < 4; ++a) {
+      const AlgorithmRow& row = r.rows[a];
+      const std::string q = p + "algorithm." + keys[a] + ".";
+      stats.add_integer(q + "differing_pixels", u::count,
+                        "Certain pixels whose visible triangle differs from the reference",
+                        count(row.difference.differing));
+      stats.add_integer(q + "uncertain_pixels", u::count,
+                        "Uncertain pixels that differ (not counted as differing)",
+                        count(row.difference.uncertain));
+      stats.add_integer(q + "regions", u::count, "Regions with a differing pixel",
+                        count(row.difference.regions));
+      stats.add_integer(q + "renderer_cycles", u::array_cycles,
+                        "Renderer busy cycles of the shaded run (0: a CPU reference)",
+                        count(row.renderer_cycles));
+      const double clocks = row.gp_clocks_per_primitive, rate = row.primitives_per_second;
+      stats.add_real(q + "gp_clocks_per_primitive", u::gp_clocks,
+                     "GP clocks per triangle, depth sort included (0: a CPU reference)",
+                     [clocks] { return clocks; });
+      stats.add_real(q + "primitives_per_second", u::per_second,
+                     "Projected triangles per second (0: a CPU reference)",
+                     [rate] { return rate; });
+    }
+    stats.add_integer(p + "perspective.flips", u::count,
+                      "Certain pixels whose visible triangle differs between eye depth "
+                      "interpolated in screen space and screen depth",
+                      count(r.flips));
+    stats.add_integer(p + "perspective.bad_differing_pixels", u::count,
+                      "Certain pixels where the eye-depth z-buffer differs from the reference",
+                      count(r.bad_depth.differing));
+    stats.add_integer(p + "back_faces.culled", u::count, "Back-facing triangles culled",
+                      count(r.culled));
+    stats.add_integer(p + "back_faces.renderer_cycles", u::array_cycles,
+                      "Renderer busy cycles of the z-buffer with back faces culled",
+                      count(r.renderer_cycles_culled));
+    stats.add_integer(p + "back_faces.differing_pixels", u::count,
+                      "Certain pixels where the culled z-buffer differs from the reference",
+                      count(r.culled_difference.differing));
+  }
+  stats.freeze();
+  return stats;
+}
+
 std::string format_visible_report(const std::vector<VisibleSceneReport>& reports,
                                   const MachineConfig& config) {
   std::string out =

@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "common/statistics.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
 #include "models/frame_buffer/image.hpp"
@@ -142,6 +143,12 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config, const S
                                             const Program& zbuffer, const Program& painter,
                                             int threads);
 // The comparison table and the per-scene notes (markdown).
+// The reports as a statistics registry (frozen), written as visible.json: per scene
+// (scene.N.*) its name, triangles, the depth sort's (scene.N.depth_sort.*, registered by
+// register_depth_sort_statistics), each algorithm's differing and uncertain pixels, regions,
+// Renderer cycles, GP clocks per primitive and primitives per second, the perspective flips
+// and back-face removal.
+Statistics visible_statistics(const std::vector<VisibleSceneReport>& reports);
 // `config` gives the region size the clusters are counted in.
 std::string format_visible_report(const std::vector<VisibleSceneReport>& reports,
                                   const MachineConfig& config);

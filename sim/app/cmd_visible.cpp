@@ -66,8 +66,11 @@ int run_visible(const VisibleOptions& o) {
     outputs.add((dir / (stem + "-depth-flips.png")).string(), encode_png(r.flip_image));
   }
   outputs.add((dir / "visible.md").string(), table);
+  outputs.add((dir / "visible.json").string(),
+              visible_statistics(reports).to_json().dump(2) + "\n");
   outputs.commit();
-  std::cout << fmt::format("\nwrote {}/visible.md and the difference images\n", o.out_dir);
+  std::cout << fmt::format("\nwrote {}/visible.md, visible.json and the difference images\n",
+                           o.out_dir);
   return 0;
 }
 
@@ -83,7 +86,8 @@ Command add_visible_command(CLI::App& app) {
       "that differ and the regions they cluster in, bits, GP clocks per primitive, Renderer "
       "cycles, projected primitives per second; then the depth sort's tests, bad against "
       "correct perspective depth, and back-face removal. Writes the table (visible.md), the "
-      "shaded frames and a difference image per algorithm (red: differs from the reference).");
+      "same figures as statistics (visible.json), the shaded frames and a difference image per "
+      "algorithm (red: differs from the reference).");
   cmd->add_option("-s,--scene", o->scenes,
                   "A scene to compare (repeatable): a built-in name, a mesh file or a scene "
                   "file; default every built-in scene");
