@@ -326,7 +326,7 @@ std::string format_visible_report(const std::vector<VisibleSceneReport>& reports
   out += "\n";
   for (const VisibleSceneReport& r : reports) {
     const DepthSortResult& s = r.sort;
-    out += fmt::format("{}: {} triangles, {} after the transform.\n", r.scene, r.triangles,
+    out += fmt::format("- {}: {} triangles, {} after the transform.\n", r.scene, r.triangles,
                        r.polygons);
     std::string tests;
     for (int t = 0; t < kOverlapTests; ++t) {
@@ -335,34 +335,34 @@ std::string format_visible_report(const std::vector<VisibleSceneReport>& reports
                       s.decided[t], s.tests_run[t]);
     }
     out += fmt::format(
-        "  depth sort: {} key comparisons, {} pairs checked; tests (settled/run): {}; {} moved "
+        "  - depth sort: {} key comparisons, {} pairs checked; tests (settled/run): {}; {} moved "
         "ahead; {:.3f} ms on the GPs.\n",
         s.key_comparisons, s.pairs_checked, tests, s.reorders, 1e3 * r.sort_seconds);
     const Difference& painter = r.rows[1].difference;
     if (s.unresolved.empty()) {
       out += fmt::format(
-          "  painter's: every overlapping pair ordered; {} pixels differ from the reference.\n",
+          "  - painter's: every overlapping pair ordered; {} pixels differ from the reference.\n",
           painter.differing);
     } else if (painter.differing > 0) {
       out += fmt::format(
-          "  painter's: {} pairs the tests cannot order ({} closing a cycle, {} that no test "
+          "  - painter's: {} pairs the tests cannot order ({} closing a cycle, {} that no test "
           "orders either way: interpenetration, or a cyclic overlap whose planes cut each "
           "other), not split: painter's must fail here, as the slides say; {} pixels differ "
           "from the reference.\n",
           s.unresolved.size(), s.cycles, s.unorderable, painter.differing);
     } else {
       out += fmt::format(
-          "  painter's: {} pairs the tests cannot order ({} closing a cycle, {} no test orders), "
+          "  - painter's: {} pairs the tests cannot order ({} closing a cycle, {} no test orders), "
           "left in far-depth order, and no pixel shows it: 0 differ from the reference.\n",
           s.unresolved.size(), s.cycles, s.unorderable);
     }
     out += fmt::format(
-        "  perspective depth: eye depth interpolated linearly in screen space (bad) against "
+        "  - perspective depth: eye depth interpolated linearly in screen space (bad) against "
         "screen depth (correct): {} pixels flip; bad against the reference: {} differ.\n",
         r.flips, r.bad_depth.differing);
     const std::uint64_t full = r.rows[0].renderer_cycles;
     out += fmt::format(
-        "  back faces: {} of {} culled ({:.1f}%); Renderer cycles {} -> {} ({:.1f}% saved); {} "
+        "  - back faces: {} of {} culled ({:.1f}%); Renderer cycles {} -> {} ({:.1f}% saved); {} "
         "pixels differ from the reference with culling.\n",
         r.culled, r.triangles, r.triangles ? 100.0 * r.culled / r.triangles : 0.0, full,
         r.renderer_cycles_culled,
