@@ -205,3 +205,32 @@ TEST_CASE(
   for (std::size_t k = 0; k < sorted.size(); ++k) CHECK(sorted[k] == static_cast<int>(k));
   CHECK(four.unresolved.empty());
 }
+
+TEST_CASE("visible surfaces: scan-line and Warnock resolve the torus's self-intersections",
+          "[visible]") {
+  const MachineConfig config = small_machine();
+  const auto polygons = project_scene(config, make_builtin_scene("torus"));
+  const ReferenceImage reference =
+      exact_reference(polygons, 256, 256, config.gp.subpixel_bits, config.gp.depth_bits);
+  ScanlineWork sw;
+  WarnockWork ww;
+  const Difference s =
+      compare_visibility(scanline_visible(polygons, 256, 256, sw), reference, 128, 128);
+  const Difference w =
+      compare_visibility(warnock_visible(polygons, 256, 256, ww), reference, 128, 128);
+  INFO("spans " << sw.spans << " splits " << sw.splits << " areas " << ww.areas << " single "
+                << ww.single << " pixels " << ww.pixels << " levels " << ww.max_level);
+  const auto covered =
+      std::count_if(reference.id.begin(), reference.id.end(), [](int id) { return id >= 0; });
+  CHECK(covered > 256 * 256 / 4);
+  CHECK(s.differing == 0);
+  CHECK(w.differing == 0);
+  // Both did the work their method implies: many spans, each resolved by depth compares;
+  // areas subdivided to at most log2(256) = 8 levels, where a pixel-sized area holds only
+  // surrounding polygons, settled by the surrounding cases.
+  CHECK(sw.spans > 256);
+  CHECK(sw.depth_comparisons > sw.spans);
+  CHECK(ww.empty > 0);
+  CHECK(ww.front_surrounding > 0);
+  CHECK(ww.max_level <= 8);
+}
