@@ -30,6 +30,7 @@ Command add_trace_command(CLI::App& app);
 Command add_highlight_command(CLI::App& app);
 Command add_extremes_command(CLI::App& app);
 Command add_validate_command(CLI::App& app);
+Command add_visible_command(CLI::App& app);
 
 // Shared by the commands.
 

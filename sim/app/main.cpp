@@ -96,6 +96,7 @@ int main(int argc, char** argv) {
       add_highlight_command(app),
       add_extremes_command(app),
       add_validate_command(app),
+      add_visible_command(app),
   };
 
   try {

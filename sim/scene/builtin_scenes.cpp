@@ -288,17 +288,113 @@ Scene make_receding_pairs() {
   return scene;
 }
 
+// Appends the planar convex polygon `corners` (3 or 4, in order) in one colour, wound
+// counter-clockwise as seen from the side `toward_eye` points to, as a fan of triangles.
+void add_facing_polygon(Mesh& mesh, const std::vector<glm::dvec3>& corners, glm::vec3 color,
+                        const glm::dvec3& toward_eye) {
+  glm::dvec3 normal = glm::normalize(glm::cross(corners[1] - corners[0], corners[2] - corners[0]));
+  const bool flip = glm::dot(normal, toward_eye) < 0.0;
+  if (flip) normal = -normal;
+  const auto base = static_cast<unsigned>(mesh.vertices.size());
+  for (const glm::dvec3& c : corners)
+    mesh.vertices.push_back({glm::vec3(c), glm::vec3(normal), color});
+  for (unsigned k = 1; k + 1 < corners.size(); ++k) {
+    mesh.triangles.push_back(flip ? glm::uvec3(base, base + k + 1, base + k)
+                                  : glm::uvec3(base, base + k, base + k + 1));
+  }
+}
+
+Scene make_cyclic_overlap() {
+  // Three sticks along the sides of an equilateral triangle (lines at 120 degrees tangent to
+  // a circle of radius 0.3), each tilted in depth along its length (z = 0.25 s at position s
+  // along it). Stick k crosses stick k + 1 at s = +0.3 sqrt(3) on itself and s = -0.3 sqrt(3)
+  // on the other, so at every crossing k lies in front of k + 1: 0 over 1, 1 over 2, 2 over
+  // 0, a cyclic overlap with 0.26 of depth between the sticks at each crossing (no two
+  // intersect). No order of the six triangles paints it right.
+  const glm::dvec3 toward_eye(0.0, 0.0, 1.0);
+  const glm::vec3 colors[3] = {{0.9f, 0.25f, 0.2f}, {0.25f, 0.8f, 0.3f}, {0.25f, 0.4f, 0.95f}};
+  constexpr double kRadius = 0.3, kTilt = 0.25, kHalfWidth = 0.08, kHalfLength = 1.0;
+  Mesh mesh;
+  for (int k = 0; k < 3; ++k) {
+    const double a = kTwoPi * k / 3.0;
+    const glm::dvec2 d(std::cos(a), std::sin(a)), n(-std::sin(a), std::cos(a));
+    auto at = [&](double s, double t) {
+      const glm::dvec2 p = (kRadius + t) * n + s * d;
+      return glm::dvec3(p.x, p.y, kTilt * s);
+    };
+    add_facing_polygon(mesh,
+                       {at(-kHalfLength, -kHalfWidth), at(kHalfLength, -kHalfWidth),
+                        at(kHalfLength, kHalfWidth), at(-kHalfLength, kHalfWidth)},
+                       colors[k], toward_eye);
+  }
+  return finish_scene("cyclic-overlap",
+                      "Three sticks overlapping cyclically, each in front of the next: no "
+                      "back-to-front order exists (painter's hard case)",
+                      std::move(mesh), glm::vec3(toward_eye));
+}
+
+Scene make_pierced_quad() {
+  // A square in the plane z = 0 and a long thin triangle through it, from z = -0.8 at the
+  // left to z = +0.8 at the right: they interpenetrate along x = 0, so neither is wholly in
+  // front of the other.
+  const glm::dvec3 toward_eye(0.0, 0.0, 1.0);
+  Mesh mesh;
+  add_facing_polygon(mesh, {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}},
+                     glm::vec3(0.3f, 0.5f, 0.9f), toward_eye);
+  add_facing_polygon(mesh, {{-1.2, -0.15, -0.8}, {1.2, 0.0, 0.8}, {-1.2, 0.15, -0.8}},
+                     glm::vec3(0.95f, 0.6f, 0.15f), toward_eye);
+  return finish_scene("pierced-quad",
+                      "A long thin triangle piercing a square: interpenetration (painter's "
+                      "hard case)",
+                      std::move(mesh), glm::vec3(0.3, 0.2, 1.0));
+}
+
+Scene make_long_thin() {
+  // Two layers of six long thin triangles (slivers 2.4 long, 0.1 wide at the base) on
+  // parallel tilted planes z = 0.4 y and z = 0.4 y + 0.08: horizontal ones behind,
+  // vertical ones in front. Every sliver spans most of the depth range, so the depth extents
+  // of crossing slivers overlap and the minimax tests cannot order them; the plane tests
+  // can. Painter's is right here when the tests run, wrong when sorting by depth alone.
+  const glm::dvec3 toward_eye(0.0, 0.0, 1.0);
+  constexpr int kSlivers = 6;
+  constexpr double kHalfBase = 0.05, kHalfLength = 1.2, kTilt = 0.4, kGap = 0.08;
+  Mesh mesh;
+  for (int i = 0; i < kSlivers; ++i) {
+    const double c = -1.0 + 2.0 * (i + 0.5) / kSlivers;
+    auto back = [&](double x, double y) { return glm::dvec3(x, y, kTilt * y); };
+    add_facing_polygon(mesh,
+                       {back(-kHalfLength, c - kHalfBase), back(kHalfLength, c),
+                        back(-kHalfLength, c + kHalfBase)},
+                       hue_ramp(0.1 + 0.05 * i), toward_eye);
+  }
+  for (int i = 0; i < kSlivers; ++i) {
+    const double c = -1.0 + 2.0 * (i + 0.5) / kSlivers;
+    auto front = [&](double x, double y) { return glm::dvec3(x, y, kTilt * y + kGap); };
+    add_facing_polygon(mesh,
+                       {front(c - kHalfBase, -kHalfLength), front(c + kHalfBase, -kHalfLength),
+                        front(c, kHalfLength)},
+                       hue_ramp(0.55 + 0.05 * i), toward_eye);
+  }
+  return finish_scene("long-thin",
+                      "Two crossing layers of long thin triangles on parallel tilted planes: "
+                      "overlapping depth extents that only the plane tests order",
+                      std::move(mesh), glm::vec3(0.0, 0.1, 1.0));
+}
+
 }  // namespace
 
 std::vector<std::string> builtin_scene_names() {
-  return {"torus", "two-triangles", "sphere", "figure-eight", "crossing-quads", "receding-pairs"};
+  return {"torus",          "two-triangles",  "sphere",       "figure-eight", "crossing-quads",
+          "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin"};
 }
 
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "torus") return make_torus(options);
   if (name == "sphere") return make_sphere(options);
   if (name == "figure-eight") return make_figure_eight(options);
-  const bool fixed = name == "two-triangles" || name == "crossing-quads" || name == "receding-pairs";
+  const bool fixed = name == "two-triangles" || name == "crossing-quads" ||
+                     name == "receding-pairs" || name == "cyclic-overlap" ||
+                     name == "pierced-quad" || name == "long-thin";
   if (fixed && (options.tessellation_u != 0 || options.tessellation_v != 0)) {
     throw std::invalid_argument(fmt::format(
         "--tessellation: scene '{}' has fixed geometry; only torus, sphere and figure-eight "
@@ -308,6 +404,9 @@ Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "two-triangles") return make_two_triangles();
   if (name == "crossing-quads") return make_crossing_quads();
   if (name == "receding-pairs") return make_receding_pairs();
+  if (name == "cyclic-overlap") return make_cyclic_overlap();
+  if (name == "pierced-quad") return make_pierced_quad();
+  if (name == "long-thin") return make_long_thin();
   std::string valid;
   for (const std::string& n : builtin_scene_names()) valid += (valid.empty() ? "" : ", ") + n;
   throw std::invalid_argument(fmt::format("unknown scene '{}'; valid scenes: {}", name, valid));

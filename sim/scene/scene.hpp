@@ -13,14 +13,15 @@ namespace pp5 {
 
 // Tessellation overrides; 0 keeps the scene's default. For the torus, u runs along the knot and v
 // around the revolution; for the sphere, u runs around the equator and v from pole to pole. The
-// scenes of fixed geometry (two-triangles, crossing-quads, receding-pairs) and files refuse them.
+// scenes of fixed geometry (two-triangles, crossing-quads, receding-pairs, cyclic-overlap,
+// pierced-quad, long-thin) and files refuse them.
 struct SceneOptions {
   int tessellation_u = 0;
   int tessellation_v = 0;
 };
 
 // The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere", "figure-eight",
-// "crossing-quads", "receding-pairs"}.
+// "crossing-quads", "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin"}.
 std::vector<std::string> builtin_scene_names();
 
 // Builds a scene deterministically from its arguments alone. Throws std::invalid_argument for an
@@ -31,6 +32,9 @@ std::vector<std::string> builtin_scene_names();
 //   figure-eight: 2*u*v triangles, default u=96, v=48; u in [8, 2048], v in [2, 2048].
 //   crossing-quads: 4 triangles, 8 vertices.
 //   receding-pairs: 10 triangles, 30 vertices; a fixed camera at the origin looking down -z.
+//   cyclic-overlap: 6 triangles (three sticks, each in front of the next: painter's cannot
+//   order them); pierced-quad: 3 triangles (a sliver through a square); long-thin: 12
+//   slivers on two parallel tilted planes (only the plane tests order them).
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
 
 struct BoundingSphere {
