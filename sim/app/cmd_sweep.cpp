@@ -291,6 +291,7 @@ int run_aggregate(const SweepOptions& o) {
   std::string csv;
   std::vector<std::pair<std::vector<double>, std::string>> sorted_rows;
   for (const auto& k : keys) csv += k + ",";
+  csv += "fidelity_pixels,fidelity_timing,";  // the level each row was simulated at
   for (const auto& [column, name] : metric_columns()) csv += column + ",";
   csv.back() = '\n';
   int rows = 0;
@@ -312,6 +313,13 @@ int run_aggregate(const SweepOptions& o) {
       order.push_back(v.is_number() ? v.get<double>() : 0.0);
       row += csv_value(v) + ",";
     }
+    // A run from before the fidelity keys was simulated at the only level there was.
+    const auto level = [&](const char* key, const char* before) {
+      const auto f = config.find("fidelity");
+      if (f == config.end() || !f->contains(key)) return std::string(before);
+      return csv_value(f->at(key));
+    };
+    row += level("pixels", "bit") + "," + level("timing", "event") + ",";
     for (const auto& [column, name] : metric_columns()) {
       if (!stats.contains(name)) {
         throw std::runtime_error(fmt::format("{}: no '{}' in stats.json (from an older pp5sim?)",
@@ -538,6 +546,7 @@ Command add_sweep_command(CLI::App& app) {
       ->capture_default_str();
   sweep->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*sweep, o->config_path, o->sets);
+  add_fidelity_option(*sweep, o->sets);
   sweep->add_option("-o,--out", o->out_dir, "Folder for sweep.json and one folder per run")
       ->capture_default_str();
   sweep->add_flag("--print-commands", o->print_commands,
