@@ -94,9 +94,12 @@ TEST_CASE("analytic frame time within its measured bound over a grid of machines
   // The bound is measured: the largest |analytic - event| / event over this grid, rounded up
   // (docs/timing.md "Analytic timing" gives the table). A change to either model that moves
   // the analytic error beyond it fails here and must say why.
-  constexpr double kBound = 0.15;
+  // Measured on this grid: worst 29.4% (phong, 32 GPs, 2 Renderers, 1 ring channel: the
+  // ring and the Renderers take turns, the closed form overlaps them), mean 12.9%; the bottleneck
+  // agrees at 42 of the 48 points.
+  constexpr double kBound = 0.30;
   const Scene scene = make_builtin_scene("torus");
-  double worst = 0;
+  double worst = 0, sum = 0;
   std::string worst_at;
   int agree = 0, points = 0;
   for (const char* program_name : {"phong", "threshold", "flat", "transparent"}) {
@@ -115,6 +118,7 @@ TEST_CASE("analytic frame time within its measured bound over a grid of machines
           const std::string at = fmt::format("{} gps={} renderers={} channels={}", program_name,
                                              gps, renderers, channels);
           if (error > worst) worst = error, worst_at = at;
+          sum += error;
           ++points;
           if (analytic.stats.text("timing.bottleneck") == event.stats.text("timing.bottleneck"))
             ++agree;
@@ -124,7 +128,8 @@ TEST_CASE("analytic frame time within its measured bound over a grid of machines
   }
   INFO("worst error " << worst << " at " << worst_at << "; bottleneck agrees at " << agree << " of "
                       << points);
-  WARN(fmt::format("analytic frame time: worst error {:.2f}% ({}), bottleneck agrees at {} of {}",
-                   100 * worst, worst_at, agree, points));
+  WARN(fmt::format(
+      "analytic frame time: worst error {:.2f}% ({}), mean {:.2f}%, bottleneck agrees at {} of {}",
+      100 * worst, worst_at, 100 * sum / points, agree, points));
   CHECK(worst <= kBound);
 }

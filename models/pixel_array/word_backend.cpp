@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cstring>
+#include <iterator>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace pp5 {
 
@@ -88,8 +90,8 @@ WordBackend::WordBackend(const PixelBackendParams& params)
   memory_.assign(static_cast<std::size_t>(lanes_) * n, 0);
   enable_.assign(n, 1);
   stack_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth) * n, 0);
-  bound_ = {0, pixels_};
-  stack_bound_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), Range{});
+  spans_ = {Range{0, pixels_}};
+  stack_spans_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
   s0_.assign(n, 0);
   s1_.assign(n, 0);
   s2_.assign(n, 0);
@@ -104,28 +106,6 @@ void WordBackend::check_field(const Field& f, const char* what) const {
                             std::to_string(f.lo + f.width) + ") outside pixel memory of " +
                             std::to_string(geometry_.memory_bits) + " bits");
   }
-}
-
-WordBackend::Range WordBackend::active() const {
-  if (!active_valid_) {
-    const std::uint8_t* e = enable_.data();
-    int b = bound_.begin;
-    // Eight pixels at a time while they are all 0.
-    for (u64 w = 0; b + 8 <= bound_.end; b += 8) {
-      std::memcpy(&w, e + b, 8);
-      if (w != 0) break;
-    }
-    while (b < bound_.end && e[b] == 0) ++b;
-    int end = bound_.end;
-    for (u64 w = 0; end - 8 >= b; end -= 8) {
-      std::memcpy(&w, e + end - 8, 8);
-      if (w != 0) break;
-    }
-    while (end > b && e[end - 1] == 0) --end;
-    active_ = {b, end};
-    active_valid_ = true;
-  }
-  return active_;
 }
 
 void WordBackend::load(const u64* lanes, const Field& f, Range r, u64* out, bool extend) const {
@@ -183,18 +163,23 @@ void WordBackend::store(u64* lanes, const Field& f, Range r, const u64* in, bool
 // Exact modulo 2^64 (hence modulo 2^result_bits): per call, the column terms A X^2 + D X and
 // B X of the region's columns; per row, the row term C Y^2 + E Y + F; per pixel two adds and,
 // only for a cross term, one multiply.
-void WordBackend::evaluate(const QuadraticCoefficients& c, Range r, u64* out) const {
-  if (r.begin >= r.end) return;
-  const int width = geometry_.width;
-  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), C = static_cast<u64>(c.C);
-  const u64 D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+void WordBackend::prepare_columns(const QuadraticCoefficients& c) const {
+  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), D = static_cast<u64>(c.D);
   u64* ta = row_a_.data();
   u64* tb = row_b_.data();
-  for (int x = 0; x < width; ++x) {
+  for (int x = 0; x < geometry_.width; ++x) {
     const u64 X = static_cast<u64>(static_cast<i64>(x0_) + x);
     ta[x] = A * X * X + D * X;
     tb[x] = B * X;
   }
+}
+
+void WordBackend::evaluate(const QuadraticCoefficients& c, Range r, u64* out) const {
+  if (r.begin >= r.end) return;
+  const int width = geometry_.width;
+  const u64 C = static_cast<u64>(c.C), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  const u64* ta = row_a_.data();
+  const u64* tb = row_b_.data();
   const int R = evaluator_.result_bits;
   const int s = 64 - R;
   for (int y = r.begin / width; y * width < r.end; ++y) {
@@ -237,9 +222,7 @@ void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& 
 
 void WordBackend::enable_all() {
   std::fill(enable_.begin(), enable_.end(), std::uint8_t{1});
-  active_ = {0, pixels_};
-  active_valid_ = true;
-  bound_ = active_;
+  spans_ = {Range{0, pixels_}};
 }
 
 void WordBackend::push_enable() {
@@ -249,7 +232,7 @@ void WordBackend::push_enable() {
   }
   std::copy(enable_.begin(), enable_.end(),
             stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * pixels_);
-  stack_bound_[static_cast<std::size_t>(stack_top_)] = active_valid_ ? active_ : bound_;
+  stack_spans_[static_cast<std::size_t>(stack_top_)] = spans_;
   ++stack_top_;
 }
 
@@ -258,39 +241,44 @@ void WordBackend::pop_enable() {
   --stack_top_;
   const auto saved = stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * pixels_;
   std::copy(saved, saved + pixels_, enable_.begin());
-  bound_ = stack_bound_[static_cast<std::size_t>(stack_top_)];
-  enable_changed();
+  spans_ = stack_spans_[static_cast<std::size_t>(stack_top_)];
 }
 
 void WordBackend::else_enable() {
   if (stack_top_ == 0) throw std::underflow_error("else without a saved enable");
   const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_ - 1) * pixels_];
   std::uint8_t* e = enable_.data();
-  // The result lies within the saved level's bound; E outside it becomes 0.
-  const Range keep = stack_bound_[static_cast<std::size_t>(stack_top_ - 1)];
-  const Range now = active();
-  for (int p = std::min(now.begin, keep.begin); p < std::max(now.end, keep.end); ++p) {
-    e[p] = saved[p] & (e[p] ^ 1);
+  const std::vector<Range>& keep = stack_spans_[static_cast<std::size_t>(stack_top_ - 1)];
+  // E <- saved & ~E, once over the union of both span lists: outside it both are 0. The
+  // result lies within the saved level's spans.
+  std::vector<Range> all;
+  std::merge(spans_.begin(), spans_.end(), keep.begin(), keep.end(), std::back_inserter(all),
+             [](const Range& x, const Range& y) { return x.begin < y.begin; });
+  int done = 0;  // pixels below this are updated
+  for (const Range& r : all) {
+    for (int p = std::max(r.begin, done); p < r.end; ++p) e[p] = saved[p] & (e[p] ^ 1);
+    done = std::max(done, r.end);
   }
-  bound_ = keep;
-  enable_changed();
+  spans_ = keep;
 }
 
 int WordBackend::count_enabled() const {
-  const Range r = active();
   int n = 0;
-  for (int p = r.begin; p < r.end; ++p) n += enable_[static_cast<std::size_t>(p)];
+  for (const Range& r : spans_) {
+    for (int p = r.begin; p < r.end; ++p) n += enable_[static_cast<std::size_t>(p)];
+  }
   return n;
 }
 
-bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond, Range r) {
+bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
   using i128 = __int128;
   if (!c.is_linear()) return false;
+  if (spans_.empty()) return true;
   const int width = geometry_.width;
   const int R = evaluator_.result_bits;
   const i128 lo = -(i128(1) << (R - 1)), hi = (i128(1) << (R - 1)) - 1;
-  const int first = r.begin / width, last = (r.end - 1) / width;
-  // The value is monotonic along a row: exact (no wrap) when both ends of every row are.
+  const int first = spans_.front().begin / width, last = (spans_.back().end - 1) / width;
+  // The value is linear: exact (no wrap) over the band of rows when it is at its corners.
   for (const int y : {first, last}) {
     const i128 row = i128(c.E) * (y0_ + y) + c.F;
     for (const int x : {0, width - 1}) {
@@ -299,97 +287,115 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond, Ran
     }
   }
   std::uint8_t* e = enable_.data();
-  auto clear = [&](int row_start, int from, int to) {  // columns [from, to) of a row
-    if (to > from) std::memset(e + row_start + from, 0, static_cast<std::size_t>(to - from));
-  };
-  for (int y = first; y <= last; ++y) {
+  std::vector<Range> kept;
+  kept.reserve(spans_.size() + static_cast<std::size_t>(last - first + 1));
+  // Row y's columns where the condition holds: up to two intervals [a0, a1), [b0, b1).
+  int row_y = -1, a0 = 0, a1 = 0, b0 = 0, b1 = 0;
+  auto row_intervals = [&](int y) {
     const i128 f0 = i128(c.E) * (y0_ + y) + c.F + i128(c.D) * x0_;  // column 0
-    const int start = y * width;
     // In an increasing coordinate u (u = x when D >= 0, u = width - 1 - x otherwise) the
     // value is g(u) = g0 + s u with s >= 0: "< 0" holds for u < lt, "<= 0" for u < le.
-    const i128 s = c.D >= 0 ? i128(c.D) : -i128(c.D);
+    const i128 sl = c.D >= 0 ? i128(c.D) : -i128(c.D);
     const i128 g0 = c.D >= 0 ? f0 : f0 + i128(c.D) * (width - 1);
     int lt, le;
-    if (s == 0) {
+    if (sl == 0) {
       lt = g0 < 0 ? width : 0;
       le = g0 <= 0 ? width : 0;
     } else {
-      // lt = ceil(-g0 / s), le = floor(-g0 / s) + 1, clamped to [0, width].
+      // lt = ceil(-g0 / sl), le = floor(-g0 / sl) + 1, clamped to [0, width].
       const i128 n = -g0;
-      i128 q = n / s;
-      if (n % s != 0 && n < 0) --q;  // floor
-      const i128 ceil = (n % s != 0) ? q + 1 : q;
+      i128 q = n / sl;
+      if (n % sl != 0 && n < 0) --q;  // floor
+      const i128 ceil = (n % sl != 0) ? q + 1 : q;
       lt = static_cast<int>(std::max<i128>(0, std::min<i128>(width, ceil)));
       le = static_cast<int>(std::max<i128>(0, std::min<i128>(width, q + 1)));
     }
-    // The u interval(s) where the condition holds; E is cleared elsewhere.
-    int a0 = 0, a1 = 0, b0 = 0, b1 = 0;  // [a0, a1) and [b0, b1)
+    int u[4] = {0, 0, 0, 0};  // [u0, u1) and [u2, u3) in u
     switch (cond) {
       case Compare::lt:
-        a1 = lt;
+        u[1] = lt;
         break;
       case Compare::le:
-        a1 = le;
+        u[1] = le;
         break;
       case Compare::eq:
-        a0 = lt, a1 = le;
+        u[0] = lt, u[1] = le;
         break;
       case Compare::ne:
-        a1 = lt, b0 = le, b1 = width;
+        u[1] = lt, u[2] = le, u[3] = width;
         break;
       case Compare::ge:
-        a0 = lt, a1 = width;
+        u[0] = lt, u[1] = width;
         break;
       case Compare::gt:
-        a0 = le, a1 = width;
+        u[0] = le, u[1] = width;
         break;
     }
-    // Clear the complement of [a0, a1) u [b0, b1) in u, mapped back to x.
-    auto clear_u = [&](int u0, int u1) {
-      if (c.D >= 0) {
-        clear(start, u0, u1);
-      } else {
-        clear(start, width - u1, width - u0);
+    if (c.D >= 0) {
+      a0 = u[0], a1 = u[1], b0 = u[2], b1 = u[3];
+    } else {  // x = width - u: the intervals mirror, and swap order
+      a0 = width - u[3], a1 = width - u[2], b0 = width - u[1], b1 = width - u[0];
+      if (u[3] <= u[2]) a0 = a1 = 0;  // the second was empty
+    }
+    row_y = y;
+  };
+  // Within a segment [from, to) of row y (pixel indices): clear E outside the row's
+  // intervals and keep what is inside.
+  auto apply = [&](int start, int from, int to, int i0, int i1) {
+    const int k0 = std::max(from, start + i0), k1 = std::min(to, start + i1);
+    if (k1 > k0) kept.push_back({k0, k1});
+  };
+  for (const Range& sp : spans_) {
+    for (int y = sp.begin / width; y * width < sp.end; ++y) {
+      if (y != row_y) row_intervals(y);
+      const int start = y * width;
+      const int from = std::max(sp.begin, start), to = std::min(sp.end, start + width);
+      // Clear [from, to) minus [a0, a1) and [b0, b1) (both relative to start).
+      int at = from;
+      for (const auto& [i0, i1] : {std::pair<int, int>{a0, a1}, std::pair<int, int>{b0, b1}}) {
+        if (i1 <= i0) continue;
+        const int k0 = std::max(from, start + i0), k1 = std::min(to, start + i1);
+        if (k1 <= k0) continue;
+        if (k0 > at) std::memset(e + at, 0, static_cast<std::size_t>(k0 - at));
+        at = std::max(at, k1);
+        apply(start, from, to, i0, i1);
       }
-    };
-    if (b1 > b0) {
-      clear_u(0, a0);
-      clear_u(a1, b0);
-      clear_u(b1, width);
-    } else {
-      clear_u(0, a0);
-      clear_u(a1, width);
+      if (to > at) std::memset(e + at, 0, static_cast<std::size_t>(to - at));
     }
   }
-  enable_changed();
+  spans_ = std::move(kept);
   return true;
 }
 
 void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
-  const Range r = active();
-  if (r.begin >= r.end) return;
-  if (qtest_linear(expr, cond, r)) return;
+  if (qtest_linear(expr, cond)) return;
+  prepare_columns(expr);
   u64* v = s0_.data();
-  evaluate(expr, r, v);
-  and_compare(
-      enable_.data(), v, [](int) { return i64{0}; }, cond, r.begin, r.end);
-  enable_changed();
+  for (const Range& r : spans_) {
+    evaluate(expr, r, v);
+    and_compare(
+        enable_.data(), v, [](int) { return i64{0}; }, cond, r.begin, r.end);
+  }
 }
 
 void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
   check_field(dst, "assign");
-  const Range r = active();
-  expression_field(expr, dst, r, s0_.data());
-  store(memory_.data(), dst, r, s0_.data(), true);
+  prepare_columns(expr);
+  for (const Range& r : spans_) {
+    expression_field(expr, dst, r, s0_.data());
+    store(memory_.data(), dst, r, s0_.data(), true);
+  }
 }
 
 void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) {
   check_field(field, "operand");
-  const Range r = active();
-  expression_field(expr, field, r, s0_.data());
-  load(memory_.data(), field, r, s1_.data(), true);
+  prepare_columns(expr);
   const bool wide = !field.is_signed && field.width == 64;
-  compare_values(s0_.data(), wide, s1_.data(), wide, cond, r);
+  for (const Range& r : spans_) {
+    expression_field(expr, field, r, s0_.data());
+    load(memory_.data(), field, r, s1_.data(), true);
+    compare_values(s0_.data(), wide, s1_.data(), wide, cond, r);
+  }
 }
 
 void WordBackend::compare_values(const u64* a, bool a_unsigned64, const u64* b, bool b_unsigned64,
@@ -413,7 +419,10 @@ void WordBackend::compare_values(const u64* a, bool a_unsigned64, const u64* b, 
 void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
   check_field(a, "operand");
   if (b.is_field) check_field(b.field, "operand");
-  const Range r = active();
+  for (const Range& r : spans_) compare_range(a, b, cond, r);
+}
+
+void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {
   load(memory_.data(), a, r, s0_.data(), true);
   const bool a_wide = !a.is_signed && a.width == 64;
   if (b.is_field) {
@@ -437,11 +446,18 @@ void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
                    : op == Alu::add ? "add"
                    : op == Alu::sub ? "sub"
                                     : "logic");
-  const Range r = active();
-  if (r.begin >= r.end) return;
-  if (src.is_field && src.field.lo < dst.lo && src.field.lo + src.field.width > dst.lo) {
-    return alu_serial(dst, src.field, op, r);
+  const bool serial =
+      src.is_field && src.field.lo < dst.lo && src.field.lo + src.field.width > dst.lo;
+  for (const Range& r : spans_) {
+    if (serial) {
+      alu_serial(dst, src.field, op, r);
+    } else {
+      alu_range(dst, src, op, r);
+    }
   }
+}
+
+void WordBackend::alu_range(const Field& dst, const Source& src, Alu op, Range r) {
   u64* a = s0_.data();
   u64* out = s2_.data();
   if (op != Alu::mov) load(memory_.data(), dst, r, a, false);
@@ -549,11 +565,12 @@ void WordBackend::logic(const Field& dst, const Source& src, Logic op) {
 
 void WordBackend::invert(const Field& dst) {
   check_field(dst, "not");
-  const Range r = active();
   u64* a = s0_.data();
-  load(memory_.data(), dst, r, a, false);
-  for (int p = r.begin; p < r.end; ++p) a[p] = ~a[p];
-  store(memory_.data(), dst, r, a, true);
+  for (const Range& r : spans_) {
+    load(memory_.data(), dst, r, a, false);
+    for (int p = r.begin; p < r.end; ++p) a[p] = ~a[p];
+    store(memory_.data(), dst, r, a, true);
+  }
 }
 
 namespace {
@@ -569,27 +586,29 @@ void WordBackend::multiply(const Field& dst, const Field& a, const Field& b) {
   if (overlaps(dst, a) || overlaps(dst, b)) {
     throw std::invalid_argument("mul: destination overlaps a source");
   }
-  const Range r = active();
   u64* x = s0_.data();
   u64* y = s1_.data();
-  load(memory_.data(), a, r, x, true);
-  load(memory_.data(), b, r, y, true);
-  for (int p = r.begin; p < r.end; ++p) x[p] *= y[p];
-  store(memory_.data(), dst, r, x, true);
+  for (const Range& r : spans_) {
+    load(memory_.data(), a, r, x, true);
+    load(memory_.data(), b, r, y, true);
+    for (int p = r.begin; p < r.end; ++p) x[p] *= y[p];
+    store(memory_.data(), dst, r, x, true);
+  }
 }
 
 void WordBackend::multiply_accumulate(const Field& dst, const Field& a, i64 k) {
   check_field(a, "operand");
   check_field(dst, "mac");
   if (overlaps(dst, a)) throw std::invalid_argument("mac: destination overlaps a source");
-  const Range r = active();
   u64* x = s0_.data();
   u64* d = s1_.data();
-  load(memory_.data(), a, r, x, true);
-  load(memory_.data(), dst, r, d, false);
   const u64 m = static_cast<u64>(k);
-  for (int p = r.begin; p < r.end; ++p) d[p] += x[p] * m;
-  store(memory_.data(), dst, r, d, true);
+  for (const Range& r : spans_) {
+    load(memory_.data(), a, r, x, true);
+    load(memory_.data(), dst, r, d, false);
+    for (int p = r.begin; p < r.end; ++p) d[p] += x[p] * m;
+    store(memory_.data(), dst, r, d, true);
+  }
 }
 
 u64* WordBackend::backing() {
@@ -696,10 +715,9 @@ void WordBackend::copy_state_from(const PixelBackend& other) {
   enable_ = o->enable_;
   stack_ = o->stack_;
   stack_top_ = o->stack_top_;
-  stack_bound_ = o->stack_bound_;
-  bound_ = o->bound_;
+  spans_ = o->spans_;
+  stack_spans_ = o->stack_spans_;
   backing_ = o->backing_;
-  active_valid_ = false;
 }
 
 }  // namespace pp5

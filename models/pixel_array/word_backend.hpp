@@ -10,8 +10,9 @@
 // in lane lo / 64 at bit lo % 64, or straddles two lanes; it is read with a shift and a mask
 // and written with a masked merge under E. E is one byte per pixel (0 or 1), the Enable stack
 // a copy of E per level, the backing store lanes like pixel memory (allocated on first use).
-// Every operation runs only over the pixels between the first and the last with E = 1,
-// which is exact (E = 0 is never written) and makes its cost the rows a primitive covers.
+// Every operation runs only over spans of pixels outside which E is 0 (after a triangle's
+// edge tests, its own columns of each of its rows), which is exact (E = 0 is never written)
+// and makes its cost the pixels a primitive's bounding rows and edges leave.
 //
 // Contract: implements PixelBackend (firmware/isa/backend.hpp), including its one bit-serial
 // corner: an ALU source field that overlaps its destination from below (src.lo < dst.lo)
@@ -69,19 +70,20 @@ class WordBackend final : public PixelBackend {
 
  private:
   enum class Alu { mov, add, sub, and_, or_, xor_ };
-  // The pixels [begin, end) outside which E is 0.
+  // Pixels [begin, end).
   struct Range {
     int begin = 0;
     int end = 0;
   };
-  // Exact, found by scanning E within bound_.
-  Range active() const;
-  // After E was ANDed with something: E's set pixels are still within bound_.
-  void enable_changed() { active_valid_ = false; }
+  // After E was ANDed with something: it is still 0 outside spans_, which stay as they are.
+  void enable_changed() {}
   // qtest of a linear expression whose value cannot wrap along a row: E cleared outside the
   // interval of each row where the condition holds, found by division, as the evaluator's
-  // own fast path does. False (nothing done) when the expression is not such.
-  bool qtest_linear(const QuadraticCoefficients& c, Compare cond, Range r);
+  // own fast path does, and spans_ narrowed to those intervals. False (nothing done) when
+  // the expression is not such.
+  bool qtest_linear(const QuadraticCoefficients& c, Compare cond);
+  // The evaluator's column terms for `c` (row_a_, row_b_), before evaluate.
+  void prepare_columns(const QuadraticCoefficients& c) const;
   // The field's values at pixels [r.begin, r.end) into out[p], extended to 64 bits by the
   // field's signedness (read_field's unsigned values when `extend` is false).
   void load(const std::uint64_t* lanes, const Field& f, Range r, std::uint64_t* out,
@@ -89,12 +91,15 @@ class WordBackend final : public PixelBackend {
   // out[p] into the field at pixels [r.begin, r.end), modulo 2^width, only where E = 1
   // (everywhere when `masked` is false).
   void store(std::uint64_t* lanes, const Field& f, Range r, const std::uint64_t* in, bool masked);
-  // The expression's value at every pixel of r, wrapped to result_bits and sign-extended.
+  // The expression's value at every pixel of r, wrapped to result_bits and sign-extended
+  // (after prepare_columns(c)).
   void evaluate(const QuadraticCoefficients& c, Range r, std::uint64_t* out) const;
   // qload and qcmp's operand: bits [fraction_bits, fraction_bits + width) of the value.
   void expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
                         std::uint64_t* out) const;
   void alu(const Field& dst, const Source& src, Alu op);
+  void alu_range(const Field& dst, const Source& src, Alu op, Range r);
+  void compare_range(const Field& a, const Source& b, Compare cond, Range r);
   void alu_serial(const Field& dst, const Field& src, Alu op, Range r);
   // E &= (a cond b) over r, a and b extended values; wide when either is an unsigned 64-bit
   // field (a 65-bit comparison).
@@ -115,12 +120,11 @@ class WordBackend final : public PixelBackend {
   std::vector<std::uint8_t> stack_;    // enable_stack_depth x pixels_
   int stack_top_ = 0;
   std::vector<std::uint64_t> backing_;  // backing lanes x pixels_, allocated on first use
-  mutable Range active_{};
-  mutable bool active_valid_ = false;
-  // A range E's set pixels are known to lie in (scanning for the exact one starts there),
-  // and the same for each saved level of the stack.
-  Range bound_{};
-  std::vector<Range> stack_bound_;
+  // Disjoint pixel ranges, in order, outside which E is 0 (a superset of E's set pixels, one
+  // range per row after a linear qtest): every operation walks only these. The same for each
+  // saved level of the stack.
+  std::vector<Range> spans_;
+  std::vector<std::vector<Range>> stack_spans_;
   // Scratch of pixels_ values each: operands, results, the evaluator's row tables.
   mutable std::vector<std::uint64_t> s0_, s1_, s2_;
   mutable std::vector<std::uint64_t> row_a_, row_b_;  // width entries each
