@@ -247,13 +247,13 @@ const std::vector<Entry>& parameter_table() {
       // Not the machine: how much of it a run simulates (README "Fidelity levels").
       {"fidelity.pixels", "level", "A", 0, 0, 0,
        "What executes the firmware on the pixel arrays: 'bit' (bit-serial on bit-planes, as "
-       "the hardware; traces need it), 'word' (a whole field at a time, bit-identical pixel "
-       "memory, faster) or 'none' (timing only: no image).",
+       "the hardware; traces need it), 'word' (a whole field at a time: bit-identical pixel "
+       "memory, no per-bit state) or 'none' (timing only: no image).",
        [](MachineConfig& c) -> Ref { return choice(&c.fidelity.pixels); }, "bit|word|none"},
       {"fidelity.timing", "level", "A", 0, 0, 0,
        "Where the frame time comes from: 'event' (the SystemC model of every unit, with "
        "contention) or 'analytic' (each unit's work from the same cost tables and a closed "
-       "form, docs/timing.md; no contention, far faster).",
+       "form, docs/timing.md; no contention, no events).",
        [](MachineConfig& c) -> Ref { return choice(&c.fidelity.timing); }, "event|analytic"},
       {"fidelity.window_x", "regions", "A", 0, 0, 1024,
        "First column of regions whose pixels execute; the others are timed only (black).",

@@ -291,9 +291,8 @@ int run_aggregate(const SweepOptions& o) {
   std::string csv;
   std::vector<std::pair<std::vector<double>, std::string>> sorted_rows;
   for (const auto& k : keys) csv += k + ",";
-  csv += "fidelity_pixels,fidelity_timing,";  // the level each row was simulated at
   for (const auto& [column, name] : metric_columns()) csv += column + ",";
-  csv.back() = '\n';
+  csv += "fidelity_pixels,fidelity_timing\n";  // the level each row was simulated at
   int rows = 0;
   int missing = 0;
   for (const fs::path& run : runs) {
@@ -313,13 +312,6 @@ int run_aggregate(const SweepOptions& o) {
       order.push_back(v.is_number() ? v.get<double>() : 0.0);
       row += csv_value(v) + ",";
     }
-    // A run from before the fidelity keys was simulated at the only level there was.
-    const auto level = [&](const char* key, const char* before) {
-      const auto f = config.find("fidelity");
-      if (f == config.end() || !f->contains(key)) return std::string(before);
-      return csv_value(f->at(key));
-    };
-    row += level("pixels", "bit") + "," + level("timing", "event") + ",";
     for (const auto& [column, name] : metric_columns()) {
       if (!stats.contains(name)) {
         throw std::runtime_error(fmt::format("{}: no '{}' in stats.json (from an older pp5sim?)",
@@ -327,7 +319,13 @@ int run_aggregate(const SweepOptions& o) {
       }
       row += csv_value(stats.value(name)) + ",";
     }
-    row.back() = '\n';
+    // A run from before the fidelity keys was simulated at the only level there was.
+    const auto level = [&](const char* key, const char* before) {
+      const auto f = config.find("fidelity");
+      if (f == config.end() || !f->contains(key)) return std::string(before);
+      return csv_value(f->at(key));
+    };
+    row += level("pixels", "bit") + "," + level("timing", "event") + "\n";
     sorted_rows.push_back({order, row});
     ++rows;
   }
