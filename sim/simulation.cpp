@@ -15,6 +15,7 @@
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/graphics_processor.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/analytic.hpp"
 #include "models/renderer/execute_pixels.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
@@ -286,6 +287,210 @@ void check_time_did_not_wrap(Machine& machine) {
   }
 }
 
+// fidelity.timing=analytic: the machine is built but its kernel never runs; the analytic
+// model (models/renderer/analytic.hpp) gives every unit's work and the frame time, and the
+// boards execute the regions it assigned. It registers the statistics the summary, sweeps and
+// `pp5sim fidelity` read, under the event model's names, and its own terms as analytic.*.
+FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, const Program& program,
+                           int threads) {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_memory(config, scene, program, threads);
+  fresh_kernel();
+  auto machine = std::make_unique<Machine>("pp5", config, scene, program);
+  auto a = std::make_shared<const AnalyticTiming>(analytic_timing(*machine));
+  const double timing_seconds = seconds_since(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  std::vector<const std::vector<RegionWork>*> work;
+  for (const auto& w : a->work) work.push_back(&w);
+  execute_pixels(*machine, work, threads);
+  const double pixel_seconds = seconds_since(t1);
+  const double host_seconds = seconds_since(t0);
+
+  FrameResult result;
+  result.image = machine->frame_buffer().take_image();
+  const double T = a->frame_seconds;
+  result.frame_seconds = T;
+  const auto triangles = static_cast<std::int64_t>(scene.mesh.triangles.size());
+  result.triangles_per_second = T > 0 ? static_cast<double>(triangles) / T : 0;
+
+  namespace u = stat_unit;
+  Statistics& s = result.stats;
+  const std::string scene_name = scene.name;
+  const std::string program_name = program.name;
+  const double gp_hz = config.gp.clock_hz;
+  const double array_hz = config.renderer.clock_hz;
+  s.add_text("frame.scene", u::name, "The scene's name", [scene_name] { return scene_name; });
+  s.add_text("frame.firmware", u::name, "The firmware program (the path it was assembled from)",
+             [program_name] { return program_name; });
+  s.add_integer("frame.triangles", u::count, "Triangles in the display list",
+                [triangles] { return triangles; });
+  s.add_real("frame.simulated_seconds", u::seconds,
+             "The frame time: analytic.fill_seconds + analytic.busiest_seconds + "
+             "analytic.drain_seconds",
+             [T] { return T; });
+  s.add_integer("frame.array_cycles", u::array_cycles,
+                "The frame time in Renderer array cycles (rounded)",
+                [T, array_hz] { return static_cast<std::int64_t>(std::llround(T * array_hz)); });
+  const double tps = result.triangles_per_second;
+  s.add_real("frame.projected_triangles_per_second", u::per_second,
+             "Triangles per second the real machine would reach: triangles / frame time",
+             [tps] { return tps; });
+  s.add_real("frame.projected_frames_per_second", u::per_second, "1 / frame time",
+             [T] { return T > 0 ? 1.0 / T : 0; });
+  double gp_busy_max = 0, gp_busy_sum = 0, geometry_clocks = 0;
+  for (const GpStats& g : a->gps) {
+    gp_busy_max = std::max(gp_busy_max, static_cast<double>(g.busy.count) / gp_hz);
+    gp_busy_sum += static_cast<double>(g.busy.count) / gp_hz;
+    geometry_clocks += static_cast<double>(g.geometry.count);
+  }
+  const double pipelined = std::max(gp_busy_max, T - a->geometry_seconds);
+  s.add_real("frame.pipelined_frame_seconds", u::seconds,
+             "Frame period with frames pipelined: the longer of the GPs' busiest time and the "
+             "frame time after the last GP's geometry",
+             [pipelined] { return pipelined; });
+  s.add_real("frame.pipelined_triangles_per_second", u::per_second,
+             "triangles / pipelined_frame_seconds", [pipelined, triangles] {
+               return pipelined > 0 ? static_cast<double>(triangles) / pipelined : 0;
+             });
+  s.add_real("frame.gp_clocks_per_triangle", u::gp_clocks,
+             "geometry_clocks summed over the GPs per display-list triangle (rounded)",
+             [geometry_clocks, triangles] {
+               return triangles ? std::round(geometry_clocks / static_cast<double>(triangles))
+                                : 0.0;
+             });
+  for (std::size_t k = 0; k < a->gps.size(); ++k) {
+    const std::string p = fmt::format("gp.{}.", k);
+    s.add_integer(p + "busy_clocks", u::gp_clocks, "Clocks computing: geometry and messages",
+                  [a, k] { return static_cast<std::int64_t>(a->gps[k].busy.count); });
+    s.add_integer(p + "geometry_clocks", u::gp_clocks, "Clocks of the geometry pass",
+                  [a, k] { return static_cast<std::int64_t>(a->gps[k].geometry.count); });
+    s.add_integer(p + "messages", u::count, "Ring messages it sends (its bin map included)",
+                  [a, k] { return static_cast<std::int64_t>(a->gp_messages[k]); });
+    s.add_real(p + "utilisation", u::ratio, "busy time / frame time", [a, k, gp_hz, T] {
+      return T > 0 ? static_cast<double>(a->gps[k].busy.count) / gp_hz / T : 0;
+    });
+  }
+  std::vector<const GpStats*> gp_stats;
+  for (const GpStats& g : a->gps) gp_stats.push_back(&g);
+  register_setup_statistics(s, gp_stats);
+  std::uint64_t renderer_busy = 0;
+  double renderer_util_max = 0;
+  for (std::size_t k = 0; k < a->renderer_busy_cycles.size(); ++k) {
+    const std::string p = fmt::format("renderer.{}.", k);
+    renderer_busy += a->renderer_busy_cycles[k];
+    const double util = T > 0 ? static_cast<double>(a->renderer_busy_cycles[k]) / array_hz / T : 0;
+    renderer_util_max = std::max(renderer_util_max, util);
+    s.add_integer(p + "busy_cycles", u::array_cycles,
+                  "Cycles executing micro-instructions, decoding packets, copying out",
+                  [a, k] { return static_cast<std::int64_t>(a->renderer_busy_cycles[k]); });
+    s.add_integer(p + "regions", u::count, "Regions it rendered",
+                  [a, k] { return static_cast<std::int64_t>(a->work[k].size()); });
+    s.add_real(p + "utilisation", u::ratio, "busy time / frame time", [util] { return util; });
+  }
+  s.add_integer("renderers_total.busy_cycles", u::array_cycles, "busy_cycles summed",
+                [renderer_busy] { return static_cast<std::int64_t>(renderer_busy); });
+  const double bandwidth =
+      static_cast<double>(config.ring.channels) * config.ring.word_bits * config.ring.clock_hz;
+  const double ring_util = T > 0 ? a->ring_seconds / T : 0;
+  s.add_integer("ring.words", u::ring_words, "Words all messages carried",
+                [a] { return static_cast<std::int64_t>(a->ring_words); });
+  s.add_integer("ring.messages", u::count, "Messages",
+                [a] { return static_cast<std::int64_t>(a->ring_messages); });
+  s.add_real("ring.bandwidth_bits_per_second", u::bits_per_second,
+             "channels x word_bits x clock_hz", [bandwidth] { return bandwidth; });
+  s.add_real("ring.utilisation", u::ratio, "Words carried / (bandwidth x frame time)",
+             [ring_util] { return ring_util; });
+
+  // The critical path of the closed form: the GPs' geometry, then the map's trip, the
+  // busiest unit, and the last region's trip.
+  FrameAttribution at;
+  at.critical_renderer = a->busiest_renderer;
+  at.gp_seconds = a->geometry_seconds + (a->busiest_unit == "GPs" ? a->busiest_seconds : 0);
+  at.ring_seconds = (a->fill_seconds - a->geometry_seconds) + a->drain_seconds +
+                    (a->busiest_unit == "ring" ? a->busiest_seconds : 0);
+  at.renderer_seconds = a->busiest_unit == "Renderers" ? a->busiest_seconds : 0;
+  at.unattributed_seconds = 0;
+  at.bottleneck = "Renderers";
+  double top = at.renderer_seconds;
+  if (at.gp_seconds > top) at.bottleneck = "GPs", top = at.gp_seconds;
+  if (at.ring_seconds > top) at.bottleneck = "ring", top = at.ring_seconds;
+  auto attribution = std::make_shared<const FrameAttribution>(at);
+  s.add_integer("timing.critical_renderer", u::index, "The busiest Renderer",
+                [attribution] { return std::int64_t{attribution->critical_renderer}; });
+  s.add_real("timing.gp_seconds", u::seconds,
+             "Of the frame time: the slowest GP's geometry, and the GPs' sending if they are the "
+             "busiest unit",
+             [attribution] { return attribution->gp_seconds; });
+  s.add_real("timing.ring_seconds", u::seconds,
+             "Of the frame time: the bin map's and the last region's trips, and the ring's words "
+             "if it is the busiest unit",
+             [attribution] { return attribution->ring_seconds; });
+  s.add_real("timing.renderer_seconds", u::seconds,
+             "Of the frame time: the busiest Renderer's cycles if the Renderers are the busiest "
+             "unit",
+             [attribution] { return attribution->renderer_seconds; });
+  s.add_real("timing.unattributed_seconds", u::seconds,
+             "Always 0: the closed form is all explained", [] { return 0.0; });
+  s.add_text("timing.bottleneck", u::name,
+             "The largest of gp_seconds, ring_seconds and renderer_seconds: GPs, ring or Renderers",
+             [attribution] { return attribution->bottleneck; });
+  const double gps = static_cast<double>(std::max<std::size_t>(1, a->gps.size()));
+  const double renderers = static_cast<double>(std::max<std::size_t>(1, a->work.size()));
+  s.add_real("timing.gp_utilisation_mean", u::ratio, "Mean of gp.N.utilisation",
+             [gp_busy_sum, gps, T] { return T > 0 ? gp_busy_sum / gps / T : 0; });
+  s.add_real("timing.gp_utilisation_max", u::ratio, "Largest gp.N.utilisation",
+             [gp_busy_max, T] { return T > 0 ? gp_busy_max / T : 0; });
+  s.add_real("timing.renderer_utilisation_mean", u::ratio, "Mean of renderer.N.utilisation",
+             [renderer_busy, array_hz, renderers, T] {
+               return T > 0 ? static_cast<double>(renderer_busy) / array_hz / renderers / T : 0;
+             });
+  s.add_real("timing.renderer_utilisation_max", u::ratio, "Largest renderer.N.utilisation",
+             [renderer_util_max] { return renderer_util_max; });
+  s.add_real("timing.ring_utilisation", u::ratio, "ring.utilisation, repeated here",
+             [ring_util] { return ring_util; });
+  s.add_real("timing.ring_channel_utilisation_max", u::ratio,
+             "The analytic model spreads words evenly over the channels: ring.utilisation",
+             [ring_util] { return ring_util; });
+  const std::string gp_code = name_of(config.gp.code);
+  s.add_text("timing.gp_code", u::name, "gp.code of the run: assembly or compiled",
+             [gp_code] { return gp_code; });
+  const std::string balancing = name_of(config.renderer.balancing);
+  s.add_text("timing.balancing", u::name, "renderer.balancing of the run: static or dynamic",
+             [balancing] { return balancing; });
+  s.add_real("analytic.geometry_seconds", u::seconds, "The slowest GP's geometry pass",
+             [a] { return a->geometry_seconds; });
+  s.add_real("analytic.fill_seconds", u::seconds,
+             "Until the last bin map is in: the slowest GP's geometry, then its map",
+             [a] { return a->fill_seconds; });
+  s.add_real("analytic.busiest_seconds", u::seconds,
+             "The busiest unit's work: a Renderer's cycles, the ring's words or a GP's sending",
+             [a] { return a->busiest_seconds; });
+  s.add_real("analytic.drain_seconds", u::seconds, "The last region's trip to the frame buffer",
+             [a] { return a->drain_seconds; });
+  s.add_text("analytic.busiest_unit", u::name, "Which unit is the busiest: GPs, ring or Renderers",
+             [a] { return a->busiest_unit; });
+  register_program_statistics(s, program);
+  s.add_real("host.seconds", u::host_seconds, "Host time of the whole frame (timing + pixels)",
+             [host_seconds] { return host_seconds; });
+  s.add_real("host.timing_seconds", u::host_seconds,
+             "Host time of the timing model (the analytic model, with the GPs' geometry)",
+             [timing_seconds] { return timing_seconds; });
+  s.add_real("host.pixel_seconds", u::host_seconds,
+             "Host time executing the firmware on the pixel arrays",
+             [pixel_seconds] { return pixel_seconds; });
+  s.add_integer("host.threads", u::count, "Host threads for the pixel arrays (--threads)",
+                [threads] { return std::int64_t{threads}; });
+  s.add_real("host.simulated_array_cycles_per_host_second", u::per_second,
+             "renderers_total.busy_cycles per host second (per host second, not simulated)",
+             [renderer_busy, host_seconds] {
+               return host_seconds > 0 ? static_cast<double>(renderer_busy) / host_seconds : 0;
+             });
+  s.freeze();
+  result.stats_json = s.to_json();
+  machine.reset();
+  return result;
+}
+
 // simulate_frame, or with `pixels` false project_frame: the timing model alone.
 FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                       int threads, const std::function<BoardObserver*(int renderer)>& observe,
@@ -426,10 +631,26 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                            int threads, const std::function<BoardObserver*(int renderer)>& observe,
                            nlohmann::json* timeline) {
+  if (config.fidelity.timing == MachineConfig::Fidelity::Timing::analytic) {
+    if (observe || timeline) {
+      throw std::invalid_argument(
+          "traces, snapshots and timelines need fidelity.timing=event (the analytic model runs "
+          "no events and records no start cycles)");
+    }
+    return analytic_frame(config, scene, program, threads);
+  }
+  if (observe && config.fidelity.pixels == MachineConfig::Fidelity::Pixels::none) {
+    throw std::invalid_argument("an observer of the boards needs fidelity.pixels=bit or word");
+  }
   return run_frame(config, scene, program, threads, observe, timeline, true);
 }
 
 FrameResult project_frame(const MachineConfig& config, const Scene& scene, const Program& program) {
+  if (config.fidelity.timing == MachineConfig::Fidelity::Timing::analytic) {
+    MachineConfig timing_only = config;
+    timing_only.fidelity.pixels = MachineConfig::Fidelity::Pixels::none;
+    return analytic_frame(timing_only, scene, program, 1);
+  }
   return run_frame(config, scene, program, 1, {}, nullptr, false);
 }
 

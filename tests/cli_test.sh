@@ -181,4 +181,18 @@ grep -q "directory cycle: models/a <-> models/b" "$tmp/layers.log" || fail "no d
   || fail "check-includes failed a clean tree: $(cat "$tmp/layers.log")"
 "$check" --root "$tmp/layers" --allow firmware/isa/i.hpp:models/a/a.hpp --dir-cycles=error >/dev/null 2>&1 \
   && fail "--dir-cycles=error passed a cycle"
+# Fidelity levels (README "Fidelity levels"): timing only writes no image and removes an earlier
+# one; a bad --fidelity item and a trace below the bit level are usage errors (status 2).
+"$bin" render --scene two-triangles --out "$tmp/fid" >/dev/null || fail "render failed"
+[ -f "$tmp/fid/frame.png" ] || fail "no frame.png at the bit level"
+"$bin" render --scene two-triangles --fidelity timing --out "$tmp/fid" >"$tmp/fid.log" || fail "render --fidelity timing failed"
+[ -f "$tmp/fid/frame.png" ] && fail "--fidelity timing left a frame.png"
+grep -q "no frame.png" "$tmp/fid.log" || fail "render --fidelity timing did not say there is no image"
+"$bin" render --scene two-triangles --fidelity pixels=wide --out "$tmp/fid" >/dev/null 2>&1 && fail "pixels=wide accepted"
+"$bin" render --fidelity bitt --out "$tmp/fid" >/dev/null 2>"$tmp/fid.err"
+[ $? -eq 2 ] || fail "--fidelity bitt: expected status 2"
+grep -q "'bitt' is not a level" "$tmp/fid.err" || fail "--fidelity bitt: $(cat "$tmp/fid.err")"
+"$bin" trace record --scene two-triangles --pixel 10,10 --set fidelity.pixels=word -o "$tmp/fid.pp5t" >/dev/null 2>"$tmp/fid.err"
+[ $? -eq 2 ] || fail "trace at pixels=word: expected status 2"
+grep -q "needs per-bit state" "$tmp/fid.err" || fail "trace at pixels=word: $(cat "$tmp/fid.err")"
 echo "1 passed, 0 failed"

@@ -371,6 +371,30 @@ const std::vector<Entry>& parameter_table() {
               "24-bit colour (P: the frame buffer), sent packed (24) or in a word (32)",
               "frame_buffer.bits_per_pixel=24", "frame_buffer.bits_per_pixel=32"),
 
+      // Not the machine: how much of it a run simulates (README "Fidelity levels").
+      {"fidelity.pixels", "level", "A", 0, 0, 0,
+       "What executes the firmware on the pixel arrays: 'bit' (bit-serial on bit-planes, as "
+       "the hardware; traces need it), 'word' (a whole field at a time: bit-identical pixel "
+       "memory, no per-bit state) or 'none' (timing only: no image).",
+       [](MachineConfig& c) -> Ref { return choice(&c.fidelity.pixels); }, "bit|word|none"},
+      {"fidelity.timing", "level", "A", 0, 0, 0,
+       "Where the frame time comes from: 'event' (the SystemC model of every unit, with "
+       "contention) or 'analytic' (each unit's work from the same cost tables and a closed "
+       "form, docs/timing.md; no contention, no events).",
+       [](MachineConfig& c) -> Ref { return choice(&c.fidelity.timing); }, "event|analytic"},
+      {"fidelity.window_x", "regions", "A", 0, 0, 1024,
+       "First column of regions whose pixels execute; the others are timed only (black).",
+       [](MachineConfig& c) -> Ref { return &c.fidelity.window_x; }},
+      {"fidelity.window_y", "regions", "A", 0, 0, 1024,
+       "First row of regions whose pixels execute.",
+       [](MachineConfig& c) -> Ref { return &c.fidelity.window_y; }},
+      {"fidelity.window_columns", "regions", "A", 0, 0, 1024,
+       "Columns of regions whose pixels execute, from window_x; 0: to the screen's edge.",
+       [](MachineConfig& c) -> Ref { return &c.fidelity.window_columns; }},
+      {"fidelity.window_rows", "regions", "A", 0, 0, 1024,
+       "Rows of regions whose pixels execute, from window_y; 0: to the screen's edge.",
+       [](MachineConfig& c) -> Ref { return &c.fidelity.window_rows; }},
+
       // The firmware's frame parameters (firmware/isa/interface.hpp names them), sent once per
       // frame; `pp5sim isa` lists them from here. Settable: firmware options of the
       // highlighting and transparency programs. Computed: the GP's, from the scene and the
@@ -581,6 +605,12 @@ void validate(const MachineConfig& c, const std::string& origin) {
   if (c.renderer.backing_store_bits % c.renderer.block_bits != 0) {
     fail("key 'renderer.backing_store_bits' must be a multiple of 'renderer.block_bits'");
   }
+  if (c.fidelity.window_x >= c.regions_x() || c.fidelity.window_y >= c.regions_y()) {
+    fail(fmt::format(
+        "keys 'fidelity.window_x' ({}) and 'fidelity.window_y' ({}) must name a region of the "
+        "screen, which has {} x {} regions",
+        c.fidelity.window_x, c.fidelity.window_y, c.regions_x(), c.regions_y()));
+  }
   for (int k = 0; k < static_cast<int>(Parameter::count); ++k) {
     if (const auto& v = c.frame.set[static_cast<std::size_t>(k)]) {
       check_frame_parameter(static_cast<Parameter>(k), *v, c.gp.depth_bits, origin);
@@ -744,6 +774,16 @@ const char* calibration_name(Calibration c) {
       break;
   }
   return "-";
+}
+
+std::string name_of(MachineConfig::Fidelity::Pixels pixels) {
+  return split_choices(
+      find_parameter("fidelity.pixels")->choices)[static_cast<std::size_t>(pixels)];
+}
+
+std::string name_of(MachineConfig::Fidelity::Timing timing) {
+  return split_choices(
+      find_parameter("fidelity.timing")->choices)[static_cast<std::size_t>(timing)];
 }
 
 bool frame_parameter_computed(Parameter k) { return frame_entry(k).computed_from != nullptr; }

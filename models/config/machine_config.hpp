@@ -86,6 +86,26 @@ struct MachineConfig {
   struct FrameBuffer {
     int bits_per_pixel = 0;
   } frame_buffer;
+  // How much of the machine a run simulates (README "Fidelity levels"): what executes the
+  // pixels (bit-serial, a whole field at a time, or nothing), whether time comes from the
+  // event model or a closed form, and the window of regions whose pixels execute (columns and
+  // rows of regions from window_x, window_y; 0 columns or rows: to the screen's edge).
+  struct Fidelity {
+    enum class Pixels { bit, word, none };
+    Pixels pixels = Pixels::bit;
+    enum class Timing { event, analytic };
+    Timing timing = Timing::event;
+    int window_x = 0;
+    int window_y = 0;
+    int window_columns = 0;
+    int window_rows = 0;
+    // Whether region (column, row) executes its pixels.
+    bool executes(int column, int row) const {
+      return pixels != Pixels::none && column >= window_x && row >= window_y &&
+             (window_columns == 0 || column < window_x + window_columns) &&
+             (window_rows == 0 || row < window_y + window_rows);
+    }
+  } fidelity;
   // Frame parameters set by the configuration (file, --set frame.NAME, --param NAME); unset
   // ones take their declared default. Indexed by Parameter; computed ones are never set.
   struct Frame {
@@ -128,6 +148,8 @@ std::string name_of(MachineConfig::Gp::Multipass multipass);
 // `none`: not a timing constant (sizes of the workload, firmware options, capacities).
 enum class Calibration { none, fitted, derived, assumed };
 const char* calibration_name(Calibration c);  // "fitted", "derived", "assumed" or "-"
+std::string name_of(MachineConfig::Fidelity::Pixels pixels);
+std::string name_of(MachineConfig::Fidelity::Timing timing);
 
 // One row of the parameter table, for documentation (`pp5sim config --describe`).
 struct ParameterInfo {

@@ -67,11 +67,17 @@ void GraphicsProcessor::register_statistics(Statistics& stats, double frame_seco
 }
 
 void register_setup_statistics(Statistics& stats, std::vector<const GraphicsProcessor*> gps) {
+  std::vector<const GpStats*> of;
+  for (const GraphicsProcessor* gp : gps) of.push_back(&gp->stats());
+  register_setup_statistics(stats, std::move(of));
+}
+
+void register_setup_statistics(Statistics& stats, std::vector<const GpStats*> gps) {
   namespace u = stat_unit;
   auto sum = [gps](auto get) {
     return [gps, get] {
       std::uint64_t total = 0;
-      for (const GraphicsProcessor* gp : gps) total += get(gp->stats());
+      for (const GpStats* gp : gps) total += get(*gp);
       return integer(total);
     };
   };

@@ -64,19 +64,11 @@ void GraphicsProcessor::spend(GpClocks clocks) {
   wait(clock_ * static_cast<double>(clocks.count));
 }
 
-void GraphicsProcessor::run() {
-  // With fewer triangles than GPs, a GP may have none: it takes no part in the frame, and
-  // the Renderers expect no bin map from it (Machine::busy_gp_count).
-  if (first_ == last_) {
-    begin(GpActivity::done);
-    return;
-  }
-  const MachineConfig& config = machine_.config();
-  const GeometryEngine& geometry = machine_.geometry();
+void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
+                   std::vector<std::vector<std::shared_ptr<const Packet>>>& bins) {
+  const MachineConfig& config = machine.config();
+  const GeometryEngine& geometry = machine.geometry();
   const DisplayList& display_list = geometry.display_list();
-  // The message loop below sizes messages by one packet length, the machine workload's (the
-  // triangle procedure's): while the triangle is the only kind, every packet has it.
-  const std::uint64_t words = machine_.gp_workload().packet_words;
 
   // Per registered kind: this GP's worker, the expressions its procedure uses and the
   // workload the cost model charges (the machine's, with that procedure's expressions).
@@ -87,27 +79,27 @@ void GraphicsProcessor::run() {
   };
   std::vector<KindState> kinds;
   for (const PrimitiveKind* k : primitive_kinds()) {
-    GpWorkload w = machine_.gp_workload();
-    w.expressions = machine_.program().procedure(k->procedure()).expressions;
-    w.packet_words = machine_.packet_words(w.expressions);
+    GpWorkload w = machine.gp_workload();
+    w.expressions = machine.program().procedure(k->procedure()).expressions;
+    w.packet_words = machine.packet_words(w.expressions);
     kinds.push_back({k, k->start(geometry), w});
   }
 
   // A bin per region: the packets this GP sends it, in display-list order. With a multipass
   // program the same packets go out once per pass.
-  std::vector<std::vector<std::shared_ptr<const Packet>>> bins(config.regions());
+  bins.assign(static_cast<std::size_t>(config.regions()), {});
   std::vector<int> regions;
-  for (int i = first_; i < last_; ++i) {
+  for (int i = first; i < last; ++i) {
     const PrimitiveRef ref = display_list.at(i);
     KindState& k = kinds[static_cast<std::size_t>(ref.kind)];
     PrimitiveTally tally;
-    tally.pieces = k.worker->transform(ref.index, stats_.setup);
-    ++stats_.triangles_in;
+    tally.pieces = k.worker->transform(ref.index, stats.setup);
+    ++stats.triangles_in;
     for (int piece = 0; piece < tally.pieces; ++piece) {
-      ++stats_.screen_triangles;
+      ++stats.screen_triangles;
       ++tally.setups;
       SetupResult result;
-      if (!k.worker->setup(piece, k.workload.expressions, result, stats_.setup)) continue;
+      if (!k.worker->setup(piece, k.workload.expressions, result, stats.setup)) continue;
       auto packet = std::make_shared<Packet>();
       packet->procedure = k.kind->procedure();
       packet->kind = ref.kind;
@@ -118,14 +110,29 @@ void GraphicsProcessor::run() {
       k.worker->bin(result, regions);
       for (int r : regions) {
         bins[r].push_back(packet);
-        ++stats_.packets;
+        ++stats.packets;
         ++tally.regions;
       }
     }
     const OpCounts ops = k.kind->operations(k.workload, tally);
-    stats_.ops += ops;
-    stats_.geometry += machine_.i860().clocks(ops, 1);
+    stats.ops += ops;
+    stats.geometry += machine.i860().clocks(ops, 1);
   }
+}
+
+void GraphicsProcessor::run() {
+  // With fewer triangles than GPs, a GP may have none: it takes no part in the frame, and
+  // the Renderers expect no bin map from it (Machine::busy_gp_count).
+  if (first_ == last_) {
+    begin(GpActivity::done);
+    return;
+  }
+  const MachineConfig& config = machine_.config();
+  // The message loop below sizes messages by one packet length, the machine workload's (the
+  // triangle procedure's): while the triangle is the only kind, every packet has it.
+  const std::uint64_t words = machine_.gp_workload().packet_words;
+  std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
+  geometry_pass(machine_, first_, last_, stats_, bins);
   // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
   stats_.busy += stats_.geometry;
   wait(clock_ * static_cast<double>(stats_.geometry.count));

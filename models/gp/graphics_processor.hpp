@@ -80,7 +80,17 @@ class GraphicsProcessor : public sc_core::sc_module {
       {sc_core::SC_ZERO_TIME, GpActivity::compute}};
 };
 
+// A GP's geometry phase as plain C++ (no simulated time): transforms, clips, sets up and
+// bins the display-list range [first, last), adding its operations, i860 geometry clocks,
+// packets and set-up counts to `stats` and leaving one bin per region in `bins`, each in
+// display-list order. GraphicsProcessor::run and the analytic timing model
+// (models/renderer/analytic.hpp) both use it, so both see the same packets and clocks.
+void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
+                   std::vector<std::vector<std::shared_ptr<const Packet>>>& bins);
+
 // Registers setup.*: the packets and the set-up counts summed over `gps`.
 void register_setup_statistics(Statistics& stats, std::vector<const GraphicsProcessor*> gps);
+// The same from the GPs' statistics (the analytic model has no GraphicsProcessor modules).
+void register_setup_statistics(Statistics& stats, std::vector<const GpStats*> gps);
 
 }  // namespace pp5

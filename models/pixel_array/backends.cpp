@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "models/pixel_array/bit_sliced_backend.hpp"
+#include "models/pixel_array/word_backend.hpp"
 
 namespace pp5 {
 
@@ -13,6 +14,10 @@ const std::vector<PixelBackendInfo>& pixel_backends() {
        "operands one bit-plane per array cycle",
        [](const PixelBackendParams& p) -> std::unique_ptr<PixelBackend> {
          return std::make_unique<BitSlicedBackend>(p);
+       }},
+      {"word", "one host integer per field and pixel, executed a whole field at a time (wide SIMD)",
+       [](const PixelBackendParams& p) -> std::unique_ptr<PixelBackend> {
+         return std::make_unique<WordBackend>(p);
        }},
   };
   return backends;

@@ -11,8 +11,19 @@ namespace pp5 {
 
 void execute_pixels(Machine& machine, int threads,
                     const std::function<BoardObserver*(int renderer)>& observe) {
+  std::vector<const std::vector<RegionWork>*> work;
+  for (int k = 0; k < machine.renderer_count(); ++k) work.push_back(&machine.renderer(k).work());
+  execute_pixels(machine, work, threads, observe);
+}
+
+void execute_pixels(Machine& machine, const std::vector<const std::vector<RegionWork>*>& work,
+                    int threads, const std::function<BoardObserver*(int renderer)>& observe) {
   const Program& program = machine.program();
-  RendererBoardParams params = board_params(machine.config());
+  const MachineConfig& config = machine.config();
+  using Pixels = MachineConfig::Fidelity::Pixels;
+  if (config.fidelity.pixels == Pixels::none) return;  // timing only: the frame stays black
+  RendererBoardParams params = board_params(config);
+  params.backend = name_of(config.fidelity.pixels);
   // Only the bits the program declares are allocated and processed: fields beyond them would
   // be refused by the pixel array's bounds checks, never silently dropped.
   params.array.memory_bits = std::max(1, program.bits_used());
@@ -22,13 +33,17 @@ void execute_pixels(Machine& machine, int threads,
   RendererBoard first(params);
   std::vector<std::uint8_t> empty_rgb;
   first.run_empty_region(0, 0, program, machine.frame_values(), empty_rgb);
-  parallel_for(machine.renderer_count(), threads, [&](int k) {
-    const Renderer& renderer = machine.renderer(k);
-    if (renderer.work().empty()) return;  // a Renderer the frame did not use
+  parallel_for(static_cast<int>(work.size()), threads, [&](int k) {
+    const std::vector<RegionWork>& regions = *work[static_cast<std::size_t>(k)];
+    if (regions.empty()) return;  // a Renderer the frame did not use
     RendererBoard board(params);
     if (observe) board.set_observer(observe(k));
     board.share_empty_region(first);
-    renderer.execute(board, program, machine.frame_buffer(), machine.frame_values());
+    const int columns = config.regions_x();
+    execute_regions(regions, board, program, machine.frame_buffer(), machine.frame_values(),
+                    [&](const RegionWork& w) {
+                      return config.fidelity.executes(w.region % columns, w.region / columns);
+                    });
   });
 }
 

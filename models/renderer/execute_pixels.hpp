@@ -3,6 +3,9 @@
 // regions the timing pass recorded (Renderer::execute) and the frame buffer gets the colours.
 //
 // Contract:
+//  - The level is the configuration's (fidelity.*): the boards' backend is fidelity.pixels
+//    ("bit" or "word"); with "none" nothing executes and the frame stays black; only the
+//    regions inside the fidelity window execute.
 //  - Deterministic: each board executes its own regions in order, whatever the thread count,
 //    so the image never depends on `threads`.
 //  - `observe`, if given, returns an observer (or null) for Renderer k's board; see
@@ -10,13 +13,19 @@
 //  - An exception thrown while a board executes (e.g. std::out_of_range from a backing-store
 //    block) is rethrown here, on the caller's thread, once the other boards have stopped.
 #include <functional>
+#include <vector>
 
 namespace pp5 {
 
 class Machine;
 class BoardObserver;
+struct RegionWork;
 
 void execute_pixels(Machine& machine, int threads,
                     const std::function<BoardObserver*(int renderer)>& observe = {});
+// The same for work that did not come from the event model (the analytic timing model's):
+// work[k] is board k's regions, in order.
+void execute_pixels(Machine& machine, const std::vector<const std::vector<RegionWork>*>& work,
+                    int threads, const std::function<BoardObserver*(int renderer)>& observe = {});
 
 }  // namespace pp5

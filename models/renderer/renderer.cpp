@@ -299,11 +299,19 @@ void Renderer::run() {
 }
 
 void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,
-                       const FrameValues& values) const {
+                       const FrameValues& values,
+                       const std::function<bool(const RegionWork&)>& executes) const {
+  execute_regions(work_, board, program, frame_buffer, values, executes);
+}
+
+void execute_regions(const std::vector<RegionWork>& work, RendererBoard& board,
+                     const Program& program, FrameBuffer& frame_buffer, const FrameValues& values,
+                     const std::function<bool(const RegionWork&)>& executes) {
   const RegionStream stream(program, values);
   const auto& geometry = board.array().geometry();
   std::vector<std::uint8_t> rgb;
-  for (const RegionWork& w : work_) {
+  for (const RegionWork& w : work) {
+    if (executes && !executes(w)) continue;
     // An empty region's stream is the same every time: executed once, then reused (a traced
     // board runs every instruction, so that the trace shows them).
     if (w.triangles.empty() && !board.observed()) {

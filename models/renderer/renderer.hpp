@@ -21,6 +21,7 @@
 //    the ring (it was sending, or the message was crossing) or the Renderers (it was waiting
 //    for another Renderer), so the frame time splits into GP, ring and Renderer time.
 #include <deque>
+#include <functional>
 #include <memory>
 #include <string>
 #include <systemc>
@@ -98,9 +99,11 @@ class Renderer : public sc_core::sc_module, public RingEndpoint {
   // has run.
   void register_statistics(Statistics& stats, double frame_seconds) const;
   const std::vector<RegionWork>& work() const { return work_; }
-  // The functional model: runs this board's regions on its pixel array.
+  // The functional model: runs this board's regions on its pixel array; with `executes`,
+  // only the regions it accepts (the others leave the frame buffer as it was).
   void execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,
-               const FrameValues& frame_values) const;
+               const FrameValues& frame_values,
+               const std::function<bool(const RegionWork&)>& executes = {}) const;
 
  private:
   struct Stage {
@@ -149,6 +152,13 @@ class Renderer : public sc_core::sc_module, public RingEndpoint {
   RendererStats stats_;
   std::vector<RegionWork> work_;
 };
+
+// Runs `work` (one board's regions, in order) on `board` and stores each region's colours in
+// the frame buffer: Renderer::execute with its recorded work, and the analytic model's
+// (models/renderer/analytic.hpp) with its own. `executes` as for Renderer::execute.
+void execute_regions(const std::vector<RegionWork>& work, RendererBoard& board,
+                     const Program& program, FrameBuffer& frame_buffer, const FrameValues& values,
+                     const std::function<bool(const RegionWork&)>& executes = {});
 
 // Registers renderers_total.* (sums over `renderers`) and primitives_per_region.R for each of
 // the `regions` screen regions.

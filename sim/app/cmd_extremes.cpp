@@ -54,6 +54,7 @@ Command add_extremes_command(CLI::App& app) {
   cmd->add_option("-s,--scene", o->scene_name,
                   "Also check this scene: a built-in name, a mesh file or a scene file");
   add_config_options(*cmd, o->config_path, o->sets);
+  add_fidelity_option(*cmd, o->sets);
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
   cmd->add_flag("!--no-synthetic", o->synthetic, "Only the checks on --scene");

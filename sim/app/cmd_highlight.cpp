@@ -239,6 +239,7 @@ Command add_highlight_command(CLI::App& app) {
                   "pixels that change (order sensitivity), or 'none' to skip")
       ->capture_default_str();
   add_config_options(*cmd, o->config_path, o->sets);
+  add_fidelity_option(*cmd, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder for the table and images")
       ->capture_default_str();
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any number)")

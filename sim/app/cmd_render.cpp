@@ -61,6 +61,13 @@ void warn_about_ignored_scene_parts(const Scene& scene, const Program& program) 
 
 int run_render(RenderOptions o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
+  const bool pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
+  if (!o.timeline.empty() && config.fidelity.timing != MachineConfig::Fidelity::Timing::event) {
+    std::cerr << "pp5sim: error: --timeline records the event model's units; this run asks for "
+                 "fidelity.timing=analytic, which has no events (drop --timeline or use "
+                 "--fidelity timing)\n";
+    return 2;
+  }
   SceneOptions scene_options;
   if (o.tessellation.size() == 2) {
     scene_options.tessellation_u = o.tessellation[0];
@@ -81,13 +88,22 @@ int run_render(RenderOptions o) {
   // All of the run's outputs, or none of them (sim/output/output_set.hpp).
   const fs::path dir(o.out_dir);
   OutputSet outputs;
-  outputs.add((dir / "frame.png").string(), encode_png(result.image));
-  outputs.add((dir / "regions.png").string(),
-              encode_png(region_heat_map(result.image, result.regions)));
+  // With fidelity.pixels=none no pixel executed: there is no image to write; regions.png
+  // needs the event model's per-region cycles (fidelity.timing=event).
+  if (pixels) outputs.add((dir / "frame.png").string(), encode_png(result.image));
+  const bool heat_map = !result.regions.empty();
+  if (heat_map) {
+    outputs.add((dir / "regions.png").string(),
+                encode_png(region_heat_map(result.image, result.regions)));
+  }
   outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
   outputs.add((dir / "stats.json").string(), result.stats_json.dump(2) + "\n");
   if (!o.timeline.empty()) outputs.add(o.timeline, timeline.dump() + "\n");
   outputs.commit();
+  // A frame.png or regions.png left by an earlier run into this folder is not this run's.
+  std::error_code ignored;
+  if (!pixels) fs::remove(dir / "frame.png", ignored);
+  if (!heat_map) fs::remove(dir / "regions.png", ignored);
 
   std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n{}\n\n", scene.name,
                            scene.mesh.triangles.size(), program.name, scene.description);
@@ -106,9 +122,11 @@ int run_render(RenderOptions o) {
         "evaluator.coefficient_bits = {} (see 'pp5sim extremes')\n",
         overflow, config.evaluator.coefficient_bits);
   }
-  std::cout << fmt::format("\n{} {}/frame.png, {}/regions.png, {}/config.json, {}/stats.json\n",
-                           replacing ? "wrote (replacing the previous run's)" : "wrote", o.out_dir,
-                           o.out_dir, o.out_dir, o.out_dir);
+  std::cout << fmt::format("\n{} {}{}{}/config.json, {}/stats.json{}\n",
+                           replacing ? "wrote (replacing the previous run's)" : "wrote",
+                           pixels ? o.out_dir + "/frame.png, " : "",
+                           heat_map ? o.out_dir + "/regions.png, " : "", o.out_dir, o.out_dir,
+                           pixels ? "" : " (fidelity.pixels=none: no frame.png)");
   if (!o.timeline.empty()) {
     std::cout << fmt::format("wrote {} (open it in ui.perfetto.dev)\n", o.timeline);
   }
@@ -127,11 +145,12 @@ Command add_render_command(CLI::App& app) {
       ->capture_default_str();
   render->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*render, o->config_path, o->sets);
-  render->add_option(
-      "-o,--out", o->out_dir,
-      "Output folder for frame.png, regions.png (Renderer cycles per region as a heat "
-      "map), config.json and stats.json [out/SCENE]; a "
-      "later run into the same folder replaces them");
+  add_fidelity_option(*render, o->sets);
+  render->add_option("-o,--out", o->out_dir,
+                     "Output folder for frame.png, regions.png (Renderer cycles per region as a "
+                     "heat map), config.json and stats.json [out/SCENE]; a later run into the "
+                     "same folder replaces them (no frame.png with --fidelity timing or "
+                     "analytic, no regions.png with analytic timing)");
   render
       ->add_option("-j,--threads", o->threads,
                    "Host threads for the pixel arrays (results are identical for any number)")

@@ -379,7 +379,7 @@ int run_aggregate(const SweepOptions& o) {
   std::vector<std::pair<std::vector<double>, std::string>> sorted_rows;
   for (const auto& k : keys) csv += k + ",";
   for (const auto& [column, name] : metric_columns()) csv += column + ",";
-  csv.back() = '\n';
+  csv += "fidelity_pixels,fidelity_timing\n";  // the level each row was simulated at
   int rows = 0;
   int missing = 0;
   for (const fs::path& run : runs) {
@@ -406,7 +406,13 @@ int run_aggregate(const SweepOptions& o) {
       }
       row += csv_value(stats.value(name)) + ",";
     }
-    row.back() = '\n';
+    // A run from before the fidelity keys was simulated at the only level there was.
+    const auto level = [&](const char* key, const char* before) {
+      const auto f = config.find("fidelity");
+      if (f == config.end() || !f->contains(key)) return std::string(before);
+      return csv_value(f->at(key));
+    };
+    row += level("pixels", "bit") + "," + level("timing", "event") + "\n";
     sorted_rows.push_back({order, row});
     ++rows;
   }
@@ -625,6 +631,7 @@ Command add_sweep_command(CLI::App& app) {
       ->capture_default_str();
   sweep->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*sweep, o->config_path, o->sets);
+  add_fidelity_option(*sweep, o->sets);
   sweep->add_option("-o,--out", o->out_dir, "Folder for sweep.json and one folder per run")
       ->capture_default_str();
   sweep->add_flag("--print-commands", o->print_commands,

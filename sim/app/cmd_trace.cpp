@@ -72,6 +72,7 @@ struct RecordOptions {
 
 int run_record(const RecordOptions& o) {
   const MachineConfig config = load_config(o.run.config_path, o.run.sets);
+  if (refuse_below_bit_level(config, "pp5sim trace record")) return 2;
   const Scene scene = o.run.scene();
   const Program program =
       assemble_file(firmware_for(o.run.firmware, scene), assembler_options(config));
@@ -272,6 +273,7 @@ Command add_trace_command(CLI::App& app) {
            return 0;
          }
          const MachineConfig config = load_config(so->run.config_path, so->run.sets);
+         if (refuse_below_bit_level(config, "pp5sim trace snapshot")) return 2;
          int region = so->region;
          if (const auto p = pixel_option(so->pixel)) {
            if (p->first >= config.screen.width || p->second >= config.screen.height) {

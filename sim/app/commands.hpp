@@ -31,6 +31,7 @@ Command add_highlight_command(CLI::App& app);
 Command add_extremes_command(CLI::App& app);
 Command add_validate_command(CLI::App& app);
 Command add_visible_command(CLI::App& app);
+Command add_fidelity_command(CLI::App& app);
 
 // Shared by the commands.
 
@@ -56,6 +57,25 @@ MachineConfig load_config(const std::string& path, const std::vector<std::string
 // KEY=VALUE is appended to `sets`, and each --param NAME=VALUE as frame.NAME=VALUE (the
 // shorthand for a frame parameter), --set ones first.
 void add_config_options(CLI::App& command, std::string& path, std::vector<std::string>& sets);
+
+// --fidelity SPEC: comma-separated levels and KEY=VALUE items, turned into --set assignments
+// of the fidelity.* keys in order (a later item wins). Throws std::invalid_argument naming
+// the item for anything else.
+inline constexpr const char* kFidelityHelp =
+    "bit (the default: bit-serial pixels, event timing), word (pixels a whole field at a "
+    "time, bit-identical), timing (no pixels, event timing), analytic (no pixels, closed-form "
+    "timing), or items pixels=bit|word|none, timing=event|analytic, window=COLUMNSxROWS+X+Y "
+    "(regions whose pixels execute) or window=all, separated by commas, e.g. "
+    "pixels=word,window=2x2+4+3";
+std::vector<std::string> fidelity_assignments(const std::string& spec);
+// Adds --fidelity SPEC to a command, appending its assignments to `sets`; add it after
+// add_config_options so that it applies after --set.
+void add_fidelity_option(CLI::App& command, std::vector<std::string>& sets);
+
+// Traces, snapshots and anything else that reads per-bit-cycle state need the most detailed
+// level: for any other, prints an error naming `what` and the level, and returns true (the
+// caller then exits with status 2).
+bool refuse_below_bit_level(const MachineConfig& config, const std::string& what);
 
 // Markdown table cells must not contain a bare '|'.
 std::string markdown_cell(const std::string& text);

@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <iostream>
 #include <optional>
+#include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "sim/app/commands.hpp"
@@ -118,6 +121,93 @@ void add_config_options(CLI::App& command, std::string& path, std::vector<std::s
       "--param", append("frame."),
       "Set a frame parameter, NAME=VALUE (repeatable): short for --set frame.NAME=VALUE, e.g. "
       "--param highlight_opacity=128 (pp5sim isa lists them)");
+}
+
+std::vector<std::string> fidelity_assignments(const std::string& spec) {
+  std::vector<std::string> sets;
+  auto bad = [&](const std::string& what) {
+    return std::invalid_argument(fmt::format("--fidelity {}: {} ({})", spec, what, kFidelityHelp));
+  };
+  std::size_t start = 0;
+  while (start <= spec.size()) {
+    const std::size_t comma = std::min(spec.find(',', start), spec.size());
+    const std::string item = spec.substr(start, comma - start);
+    start = comma + 1;
+    const std::size_t eq = item.find('=');
+    if (eq == std::string::npos) {
+      if (item == "bit" || item == "word") {
+        sets.push_back("fidelity.pixels=" + item);
+        sets.push_back("fidelity.timing=event");
+      } else if (item == "timing") {
+        sets.push_back("fidelity.pixels=none");
+        sets.push_back("fidelity.timing=event");
+      } else if (item == "analytic") {
+        sets.push_back("fidelity.pixels=none");
+        sets.push_back("fidelity.timing=analytic");
+      } else {
+        throw bad(fmt::format("'{}' is not a level", item));
+      }
+      continue;
+    }
+    const std::string key = item.substr(0, eq);
+    const std::string value = item.substr(eq + 1);
+    if (key == "pixels" || key == "timing") {
+      // The configuration checks the value against the key's choices, naming both.
+      sets.push_back("fidelity." + key + "=" + value);
+    } else if (key == "window") {
+      if (value == "all") {
+        for (const char* k : {"x", "y", "columns", "rows"}) {
+          sets.push_back(fmt::format("fidelity.window_{}=0", k));
+        }
+        continue;
+      }
+      // COLUMNSxROWS+X+Y, in regions (the X11 geometry form).
+      int columns = 0, rows = 0, x = 0, y = 0;
+      char sep1 = 0, sep2 = 0, sep3 = 0;
+      std::istringstream in(value);
+      if (!(in >> columns >> sep1 >> rows >> sep2 >> x >> sep3 >> y) || sep1 != 'x' ||
+          sep2 != '+' || sep3 != '+' || in.peek() != std::char_traits<char>::eof() || columns < 1 ||
+          rows < 1 || x < 0 || y < 0) {
+        throw bad(
+            fmt::format("window '{}' is not COLUMNSxROWS+X+Y in regions, e.g. 2x2+0+0", value));
+      }
+      sets.push_back(fmt::format("fidelity.window_x={}", x));
+      sets.push_back(fmt::format("fidelity.window_y={}", y));
+      sets.push_back(fmt::format("fidelity.window_columns={}", columns));
+      sets.push_back(fmt::format("fidelity.window_rows={}", rows));
+    } else {
+      throw bad(fmt::format("unknown key '{}'", key));
+    }
+  }
+  return sets;
+}
+
+void add_fidelity_option(CLI::App& command, std::vector<std::string>& sets) {
+  command.add_option_function<std::string>(
+      "--fidelity",
+      [&sets](const std::string& spec) {
+        try {
+          for (std::string& s : fidelity_assignments(spec)) sets.push_back(std::move(s));
+        } catch (const std::invalid_argument& e) {
+          throw CLI::ValidationError(e.what());
+        }
+      },
+      std::string("How much of the machine to simulate (README \"Fidelity levels\"): ") +
+          kFidelityHelp + ". Applied after --set.");
+}
+
+bool refuse_below_bit_level(const MachineConfig& config, const std::string& what) {
+  using F = MachineConfig::Fidelity;
+  const F& f = config.fidelity;
+  const bool whole =
+      f.window_x == 0 && f.window_y == 0 && f.window_columns == 0 && f.window_rows == 0;
+  if (f.pixels == F::Pixels::bit && f.timing == F::Timing::event && whole) return false;
+  std::cerr << fmt::format(
+      "pp5sim: error: {} needs per-bit state, which only fidelity.pixels=bit with "
+      "fidelity.timing=event and every region executing has; this run asks for pixels={}, "
+      "timing={}{} (drop --fidelity, or use --fidelity bit,window=all)\n",
+      what, name_of(f.pixels), name_of(f.timing), whole ? "" : " and a window of regions");
+  return true;
 }
 
 std::string markdown_cell(const std::string& text) {

@@ -97,6 +97,7 @@ int main(int argc, char** argv) {
       add_extremes_command(app),
       add_validate_command(app),
       add_visible_command(app),
+      add_fidelity_command(app),
   };
 
   try {

@@ -1,0 +1,723 @@
+#include "models/pixel_array/word_backend.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace pp5 {
+
+namespace {
+
+using u64 = std::uint64_t;
+using i64 = std::int64_t;
+
+u64 low_mask(int width) { return width >= 64 ? ~u64{0} : (u64{1} << width) - 1; }
+
+// v's low `width` bits read as two's complement, extended to 64 bits.
+inline u64 sign_extend(u64 v, int width) {
+  if (width >= 64) return v;
+  const int s = 64 - width;
+  return static_cast<u64>(static_cast<i64>(v << s) >> s);
+}
+
+template <class T>
+inline bool holds(Compare cond, T a, T b) {
+  switch (cond) {
+    case Compare::lt:
+      return a < b;
+    case Compare::le:
+      return a <= b;
+    case Compare::eq:
+      return a == b;
+    case Compare::ne:
+      return a != b;
+    case Compare::ge:
+      return a >= b;
+    case Compare::gt:
+      return a > b;
+  }
+  return false;
+}
+
+// E &= (a[p] cond b[p]) as signed 64-bit values; one loop per condition so that each
+// vectorises.
+template <class GetB>
+void and_compare(std::uint8_t* e, const u64* a, GetB b, Compare cond, int begin, int end) {
+  switch (cond) {
+    case Compare::lt:
+      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) < b(p);
+      break;
+    case Compare::le:
+      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) <= b(p);
+      break;
+    case Compare::eq:
+      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) == b(p);
+      break;
+    case Compare::ne:
+      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) != b(p);
+      break;
+    case Compare::ge:
+      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) >= b(p);
+      break;
+    case Compare::gt:
+      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) > b(p);
+      break;
+  }
+}
+
+}  // namespace
+
+WordBackend::WordBackend(const PixelBackendParams& params)
+    : geometry_(params.array),
+      evaluator_(params.evaluator),
+      fraction_bits_(params.fraction_bits),
+      pixels_(params.array.width * params.array.height),
+      lanes_((params.array.memory_bits + 63) / 64) {
+  if (geometry_.width <= 0 || geometry_.width % 64 != 0 || geometry_.height <= 0) {
+    throw std::invalid_argument("pixel array: width must be a positive multiple of 64, height > 0");
+  }
+  if (geometry_.memory_bits < 1 || geometry_.enable_stack_depth < 0 ||
+      geometry_.backing_store_bits < 0 || geometry_.block_bits < 1) {
+    throw std::invalid_argument("pixel array: bad memory geometry");
+  }
+  if (evaluator_.result_bits < 2 || evaluator_.result_bits > 64 || fraction_bits_ < 0) {
+    throw std::invalid_argument("word backend: result_bits must be 2..64, fraction_bits >= 0");
+  }
+  const auto n = static_cast<std::size_t>(pixels_);
+  memory_.assign(static_cast<std::size_t>(lanes_) * n, 0);
+  enable_.assign(n, 1);
+  stack_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth) * n, 0);
+  spans_ = {Range{0, pixels_}};
+  stack_spans_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
+  s0_.assign(n, 0);
+  s1_.assign(n, 0);
+  s2_.assign(n, 0);
+  row_a_.assign(static_cast<std::size_t>(geometry_.width), 0);
+  row_b_.assign(static_cast<std::size_t>(geometry_.width), 0);
+}
+
+void WordBackend::check_field(const Field& f, const char* what) const {
+  if (f.width < 1 || f.width > kMaxFieldBits || f.lo < 0 ||
+      f.lo + f.width > geometry_.memory_bits) {
+    throw std::out_of_range(std::string(what) + ": field [" + std::to_string(f.lo) + ", " +
+                            std::to_string(f.lo + f.width) + ") outside pixel memory of " +
+                            std::to_string(geometry_.memory_bits) + " bits");
+  }
+}
+
+void WordBackend::load(const u64* lanes, const Field& f, Range r, u64* out, bool extend) const {
+  const int lane = f.lo / 64;
+  const int off = f.lo % 64;
+  const int w = f.width;
+  const u64 mask = low_mask(w);
+  const u64* lo = lanes + static_cast<std::size_t>(lane) * pixels_;
+  if (off + w <= 64) {
+    for (int p = r.begin; p < r.end; ++p) out[p] = (lo[p] >> off) & mask;
+  } else {
+    const u64* hi = lo + pixels_;
+    const int up = 64 - off;
+    for (int p = r.begin; p < r.end; ++p) out[p] = ((lo[p] >> off) | (hi[p] << up)) & mask;
+  }
+  if (extend && f.is_signed && w < 64) {
+    const int s = 64 - w;
+    for (int p = r.begin; p < r.end; ++p)
+      out[p] = static_cast<u64>(static_cast<i64>(out[p] << s) >> s);
+  }
+}
+
+void WordBackend::store(u64* lanes, const Field& f, Range r, const u64* in, bool masked) {
+  const int lane = f.lo / 64;
+  const int off = f.lo % 64;
+  const int w = f.width;
+  const u64 mask = low_mask(w);
+  u64* lo = lanes + static_cast<std::size_t>(lane) * pixels_;
+  const std::uint8_t* e = enable_.data();
+  const u64 lo_bits = mask << off;
+  if (masked) {
+    for (int p = r.begin; p < r.end; ++p) {
+      const u64 m = lo_bits & (u64{0} - e[p]);
+      lo[p] = (lo[p] & ~m) | ((in[p] << off) & m);
+    }
+  } else {
+    for (int p = r.begin; p < r.end; ++p) lo[p] = (lo[p] & ~lo_bits) | ((in[p] << off) & lo_bits);
+  }
+  if (off + w > 64) {
+    u64* hi = lo + pixels_;
+    const int down = 64 - off;
+    const u64 hi_bits = mask >> down;
+    if (masked) {
+      for (int p = r.begin; p < r.end; ++p) {
+        const u64 m = hi_bits & (u64{0} - e[p]);
+        hi[p] = (hi[p] & ~m) | ((in[p] >> down) & m);
+      }
+    } else {
+      for (int p = r.begin; p < r.end; ++p)
+        hi[p] = (hi[p] & ~hi_bits) | ((in[p] >> down) & hi_bits);
+    }
+  }
+}
+
+// Exact modulo 2^64 (hence modulo 2^result_bits): per call, the column terms A X^2 + D X and
+// B X of the region's columns; per row, the row term C Y^2 + E Y + F; per pixel two adds and,
+// only for a cross term, one multiply.
+void WordBackend::prepare_columns(const QuadraticCoefficients& c) const {
+  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), D = static_cast<u64>(c.D);
+  u64* ta = row_a_.data();
+  u64* tb = row_b_.data();
+  for (int x = 0; x < geometry_.width; ++x) {
+    const u64 X = static_cast<u64>(static_cast<i64>(x0_) + x);
+    ta[x] = A * X * X + D * X;
+    tb[x] = B * X;
+  }
+}
+
+void WordBackend::evaluate(const QuadraticCoefficients& c, Range r, u64* out) const {
+  if (r.begin >= r.end) return;
+  const int width = geometry_.width;
+  const u64 C = static_cast<u64>(c.C), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  const u64* ta = row_a_.data();
+  const u64* tb = row_b_.data();
+  const int R = evaluator_.result_bits;
+  const int s = 64 - R;
+  for (int y = r.begin / width; y * width < r.end; ++y) {
+    const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
+    const u64 row = C * Y * Y + E * Y + F;
+    const int from = std::max(r.begin - y * width, 0);
+    const int to = std::min(r.end - y * width, width);
+    u64* o = out + static_cast<std::size_t>(y) * width;
+    if (c.B == 0) {
+      for (int x = from; x < to; ++x) o[x] = ta[x] + row;
+    } else {
+      for (int x = from; x < to; ++x) o[x] = ta[x] + Y * tb[x] + row;
+    }
+    if (s > 0) {
+      for (int x = from; x < to; ++x) o[x] = static_cast<u64>(static_cast<i64>(o[x] << s) >> s);
+    }
+  }
+}
+
+void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
+                                   u64* out) const {
+  evaluate(c, r, out);
+  // Bits at and above 64 of the sign-extended value copy its sign, as the evaluator's planes
+  // above result_bits do.
+  const int shift = std::min(fraction_bits_, 63);
+  const int w = as.width;
+  if (as.is_signed && w < 64) {
+    const int s = 64 - w;
+    for (int p = r.begin; p < r.end; ++p) {
+      const u64 v = static_cast<u64>(static_cast<i64>(out[p]) >> shift);
+      out[p] = static_cast<u64>(static_cast<i64>(v << s) >> s);
+    }
+  } else {
+    const u64 mask = low_mask(w);
+    for (int p = r.begin; p < r.end; ++p) {
+      out[p] = static_cast<u64>(static_cast<i64>(out[p]) >> shift) & mask;
+    }
+  }
+}
+
+void WordBackend::enable_all() {
+  std::fill(enable_.begin(), enable_.end(), std::uint8_t{1});
+  spans_ = {Range{0, pixels_}};
+}
+
+void WordBackend::push_enable() {
+  if (stack_top_ >= geometry_.enable_stack_depth) {
+    throw std::overflow_error("enable stack overflow: depth " +
+                              std::to_string(geometry_.enable_stack_depth));
+  }
+  std::copy(enable_.begin(), enable_.end(),
+            stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * pixels_);
+  stack_spans_[static_cast<std::size_t>(stack_top_)] = spans_;
+  ++stack_top_;
+}
+
+void WordBackend::pop_enable() {
+  if (stack_top_ == 0) throw std::underflow_error("enable stack underflow");
+  --stack_top_;
+  const auto saved = stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * pixels_;
+  std::copy(saved, saved + pixels_, enable_.begin());
+  spans_ = stack_spans_[static_cast<std::size_t>(stack_top_)];
+}
+
+void WordBackend::else_enable() {
+  if (stack_top_ == 0) throw std::underflow_error("else without a saved enable");
+  const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_ - 1) * pixels_];
+  std::uint8_t* e = enable_.data();
+  const std::vector<Range>& keep = stack_spans_[static_cast<std::size_t>(stack_top_ - 1)];
+  // E <- saved & ~E, once over the union of both span lists: outside it both are 0. The
+  // result lies within the saved level's spans.
+  std::vector<Range> all;
+  std::merge(spans_.begin(), spans_.end(), keep.begin(), keep.end(), std::back_inserter(all),
+             [](const Range& x, const Range& y) { return x.begin < y.begin; });
+  int done = 0;  // pixels below this are updated
+  for (const Range& r : all) {
+    for (int p = std::max(r.begin, done); p < r.end; ++p) e[p] = saved[p] & (e[p] ^ 1);
+    done = std::max(done, r.end);
+  }
+  spans_ = keep;
+}
+
+int WordBackend::count_enabled() const {
+  int n = 0;
+  for (const Range& r : spans_) {
+    for (int p = r.begin; p < r.end; ++p) n += enable_[static_cast<std::size_t>(p)];
+  }
+  return n;
+}
+
+bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
+  using i128 = __int128;
+  if (!c.is_linear()) return false;
+  if (spans_.empty()) return true;
+  const int width = geometry_.width;
+  const int R = evaluator_.result_bits;
+  const i128 lo = -(i128(1) << (R - 1)), hi = (i128(1) << (R - 1)) - 1;
+  const int first = spans_.front().begin / width, last = (spans_.back().end - 1) / width;
+  // The value is linear: exact (no wrap) over the band of rows when it is at its corners.
+  for (const int y : {first, last}) {
+    const i128 row = i128(c.E) * (y0_ + y) + c.F;
+    for (const int x : {0, width - 1}) {
+      const i128 v = row + i128(c.D) * (x0_ + x);
+      if (v < lo || v > hi) return false;
+    }
+  }
+  std::uint8_t* e = enable_.data();
+  std::vector<Range> kept;
+  kept.reserve(spans_.size() + static_cast<std::size_t>(last - first + 1));
+  // Row y's columns where the condition holds: up to two intervals [a0, a1), [b0, b1).
+  int row_y = -1, a0 = 0, a1 = 0, b0 = 0, b1 = 0;
+  auto row_intervals = [&](int y) {
+    const i128 f0 = i128(c.E) * (y0_ + y) + c.F + i128(c.D) * x0_;  // column 0
+    // In an increasing coordinate u (u = x when D >= 0, u = width - 1 - x otherwise) the
+    // value is g(u) = g0 + s u with s >= 0: "< 0" holds for u < lt, "<= 0" for u < le.
+    const i128 sl = c.D >= 0 ? i128(c.D) : -i128(c.D);
+    const i128 g0 = c.D >= 0 ? f0 : f0 + i128(c.D) * (width - 1);
+    int lt, le;
+    if (sl == 0) {
+      lt = g0 < 0 ? width : 0;
+      le = g0 <= 0 ? width : 0;
+    } else {
+      // lt = ceil(-g0 / sl), le = floor(-g0 / sl) + 1, clamped to [0, width].
+      const i128 n = -g0;
+      i128 q = n / sl;
+      if (n % sl != 0 && n < 0) --q;  // floor
+      const i128 ceil = (n % sl != 0) ? q + 1 : q;
+      lt = static_cast<int>(std::max<i128>(0, std::min<i128>(width, ceil)));
+      le = static_cast<int>(std::max<i128>(0, std::min<i128>(width, q + 1)));
+    }
+    int u[4] = {0, 0, 0, 0};  // [u0, u1) and [u2, u3) in u
+    switch (cond) {
+      case Compare::lt:
+        u[1] = lt;
+        break;
+      case Compare::le:
+        u[1] = le;
+        break;
+      case Compare::eq:
+        u[0] = lt, u[1] = le;
+        break;
+      case Compare::ne:
+        u[1] = lt, u[2] = le, u[3] = width;
+        break;
+      case Compare::ge:
+        u[0] = lt, u[1] = width;
+        break;
+      case Compare::gt:
+        u[0] = le, u[1] = width;
+        break;
+    }
+    if (c.D >= 0) {
+      a0 = u[0], a1 = u[1], b0 = u[2], b1 = u[3];
+    } else {  // x = width - u: the intervals mirror, and swap order
+      a0 = width - u[3], a1 = width - u[2], b0 = width - u[1], b1 = width - u[0];
+      if (u[3] <= u[2]) a0 = a1 = 0;  // the second was empty
+    }
+    row_y = y;
+  };
+  // Within a segment [from, to) of row y (pixel indices): clear E outside the row's
+  // intervals and keep what is inside.
+  auto apply = [&](int start, int from, int to, int i0, int i1) {
+    const int k0 = std::max(from, start + i0), k1 = std::min(to, start + i1);
+    if (k1 > k0) kept.push_back({k0, k1});
+  };
+  for (const Range& sp : spans_) {
+    for (int y = sp.begin / width; y * width < sp.end; ++y) {
+      if (y != row_y) row_intervals(y);
+      const int start = y * width;
+      const int from = std::max(sp.begin, start), to = std::min(sp.end, start + width);
+      // Clear [from, to) minus [a0, a1) and [b0, b1) (both relative to start).
+      int at = from;
+      for (const auto& [i0, i1] : {std::pair<int, int>{a0, a1}, std::pair<int, int>{b0, b1}}) {
+        if (i1 <= i0) continue;
+        const int k0 = std::max(from, start + i0), k1 = std::min(to, start + i1);
+        if (k1 <= k0) continue;
+        if (k0 > at) std::memset(e + at, 0, static_cast<std::size_t>(k0 - at));
+        at = std::max(at, k1);
+        apply(start, from, to, i0, i1);
+      }
+      if (to > at) std::memset(e + at, 0, static_cast<std::size_t>(to - at));
+    }
+  }
+  spans_ = std::move(kept);
+  return true;
+}
+
+void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
+  if (qtest_linear(expr, cond)) return;
+  prepare_columns(expr);
+  u64* v = s0_.data();
+  for (const Range& r : spans_) {
+    evaluate(expr, r, v);
+    and_compare(
+        enable_.data(), v, [](int) { return i64{0}; }, cond, r.begin, r.end);
+  }
+}
+
+void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
+  check_field(dst, "assign");
+  prepare_columns(expr);
+  for (const Range& r : spans_) {
+    expression_field(expr, dst, r, s0_.data());
+    store(memory_.data(), dst, r, s0_.data(), true);
+  }
+}
+
+void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) {
+  check_field(field, "operand");
+  prepare_columns(expr);
+  const bool wide = !field.is_signed && field.width == 64;
+  for (const Range& r : spans_) {
+    expression_field(expr, field, r, s0_.data());
+    load(memory_.data(), field, r, s1_.data(), true);
+    compare_values(s0_.data(), wide, s1_.data(), wide, cond, r);
+  }
+}
+
+void WordBackend::compare_values(const u64* a, bool a_unsigned64, const u64* b, bool b_unsigned64,
+                                 Compare cond, Range r) {
+  std::uint8_t* e = enable_.data();
+  if (!a_unsigned64 && !b_unsigned64) {
+    and_compare(
+        e, a, [b](int p) { return static_cast<i64>(b[p]); }, cond, r.begin, r.end);
+  } else {
+    // A 64-bit unsigned field does not fit int64: compare as 65-bit values.
+    using i128 = __int128;
+    for (int p = r.begin; p < r.end; ++p) {
+      const i128 x = a_unsigned64 ? i128(a[p]) : i128(static_cast<i64>(a[p]));
+      const i128 y = b_unsigned64 ? i128(b[p]) : i128(static_cast<i64>(b[p]));
+      e[p] &= holds(cond, x, y) ? 1 : 0;
+    }
+  }
+  enable_changed();
+}
+
+void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
+  check_field(a, "operand");
+  if (b.is_field) check_field(b.field, "operand");
+  for (const Range& r : spans_) compare_range(a, b, cond, r);
+}
+
+void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {
+  load(memory_.data(), a, r, s0_.data(), true);
+  const bool a_wide = !a.is_signed && a.width == 64;
+  if (b.is_field) {
+    load(memory_.data(), b.field, r, s1_.data(), true);
+    compare_values(s0_.data(), a_wide, s1_.data(), !b.field.is_signed && b.field.width == 64, cond,
+                   r);
+  } else if (!a_wide) {
+    const i64 k = b.constant;
+    and_compare(
+        enable_.data(), s0_.data(), [k](int) { return k; }, cond, r.begin, r.end);
+    enable_changed();
+  } else {
+    std::fill(s1_.begin() + r.begin, s1_.begin() + r.end, static_cast<u64>(b.constant));
+    compare_values(s0_.data(), true, s1_.data(), false, cond, r);
+  }
+}
+
+void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
+  if (src.is_field) check_field(src.field, "operand");
+  check_field(dst, op == Alu::mov   ? "assign"
+                   : op == Alu::add ? "add"
+                   : op == Alu::sub ? "sub"
+                                    : "logic");
+  const bool serial =
+      src.is_field && src.field.lo < dst.lo && src.field.lo + src.field.width > dst.lo;
+  for (const Range& r : spans_) {
+    if (serial) {
+      alu_serial(dst, src.field, op, r);
+    } else {
+      alu_range(dst, src, op, r);
+    }
+  }
+}
+
+void WordBackend::alu_range(const Field& dst, const Source& src, Alu op, Range r) {
+  u64* a = s0_.data();
+  u64* out = s2_.data();
+  if (op != Alu::mov) load(memory_.data(), dst, r, a, false);
+  if (src.is_field) {
+    u64* b = s1_.data();
+    load(memory_.data(), src.field, r, b, true);
+    switch (op) {
+      case Alu::mov:
+        return store(memory_.data(), dst, r, b, true);
+      case Alu::add:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] + b[p];
+        break;
+      case Alu::sub:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] - b[p];
+        break;
+      case Alu::and_:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] & b[p];
+        break;
+      case Alu::or_:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] | b[p];
+        break;
+      case Alu::xor_:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] ^ b[p];
+        break;
+    }
+  } else {
+    const u64 k = static_cast<u64>(src.constant);
+    switch (op) {
+      case Alu::mov:
+        std::fill(out + r.begin, out + r.end, k);
+        break;
+      case Alu::add:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] + k;
+        break;
+      case Alu::sub:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] - k;
+        break;
+      case Alu::and_:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] & k;
+        break;
+      case Alu::or_:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] | k;
+        break;
+      case Alu::xor_:
+        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] ^ k;
+        break;
+    }
+  }
+  store(memory_.data(), dst, r, out, true);
+}
+
+// The bit-serial walk itself, for a source that overlaps its destination from below: at bit
+// i it reads source bit i from memory as the walk has left it (bits the walk wrote already
+// are the result's), and above the source's width its original sign (the bit backend keeps
+// a copy of that plane before the walk).
+void WordBackend::alu_serial(const Field& dst, const Field& src, Alu op, Range r) {
+  u64* mem = memory_.data();
+  const std::size_t n = static_cast<std::size_t>(pixels_);
+  auto bit = [&](int b, int p) -> u64 { return (mem[(b / 64) * n + p] >> (b % 64)) & 1; };
+  auto set = [&](int b, int p, u64 v) {
+    u64& word = mem[(b / 64) * n + p];
+    word = (word & ~(u64{1} << (b % 64))) | (v << (b % 64));
+  };
+  for (int p = r.begin; p < r.end; ++p) {
+    if (!enable_[static_cast<std::size_t>(p)]) continue;
+    const u64 sign = src.is_signed ? bit(src.lo + src.width - 1, p) : 0;
+    u64 carry = op == Alu::sub ? 1 : 0;
+    for (int i = 0; i < dst.width; ++i) {
+      const u64 x = bit(dst.lo + i, p);
+      u64 y = i < src.width ? bit(src.lo + i, p) : sign;
+      u64 s = 0;
+      switch (op) {
+        case Alu::mov:
+          s = y;
+          break;
+        case Alu::sub:
+          y ^= 1;
+          [[fallthrough]];
+        case Alu::add:
+          s = x ^ y ^ carry;
+          carry = (x & y) | (carry & (x ^ y));
+          break;
+        case Alu::and_:
+          s = x & y;
+          break;
+        case Alu::or_:
+          s = x | y;
+          break;
+        case Alu::xor_:
+          s = x ^ y;
+          break;
+      }
+      set(dst.lo + i, p, s);
+    }
+  }
+}
+
+void WordBackend::mov(const Field& dst, const Source& src) { alu(dst, src, Alu::mov); }
+void WordBackend::add(const Field& dst, const Source& src) { alu(dst, src, Alu::add); }
+void WordBackend::sub(const Field& dst, const Source& src) { alu(dst, src, Alu::sub); }
+
+void WordBackend::logic(const Field& dst, const Source& src, Logic op) {
+  alu(dst, src, op == Logic::and_ ? Alu::and_ : op == Logic::or_ ? Alu::or_ : Alu::xor_);
+}
+
+void WordBackend::invert(const Field& dst) {
+  check_field(dst, "not");
+  u64* a = s0_.data();
+  for (const Range& r : spans_) {
+    load(memory_.data(), dst, r, a, false);
+    for (int p = r.begin; p < r.end; ++p) a[p] = ~a[p];
+    store(memory_.data(), dst, r, a, true);
+  }
+}
+
+namespace {
+bool overlaps(const Field& a, const Field& b) {
+  return a.lo < b.lo + b.width && b.lo < a.lo + a.width;
+}
+}  // namespace
+
+void WordBackend::multiply(const Field& dst, const Field& a, const Field& b) {
+  check_field(a, "operand");
+  check_field(b, "operand");
+  check_field(dst, "mul");
+  if (overlaps(dst, a) || overlaps(dst, b)) {
+    throw std::invalid_argument("mul: destination overlaps a source");
+  }
+  u64* x = s0_.data();
+  u64* y = s1_.data();
+  for (const Range& r : spans_) {
+    load(memory_.data(), a, r, x, true);
+    load(memory_.data(), b, r, y, true);
+    for (int p = r.begin; p < r.end; ++p) x[p] *= y[p];
+    store(memory_.data(), dst, r, x, true);
+  }
+}
+
+void WordBackend::multiply_accumulate(const Field& dst, const Field& a, i64 k) {
+  check_field(a, "operand");
+  check_field(dst, "mac");
+  if (overlaps(dst, a)) throw std::invalid_argument("mac: destination overlaps a source");
+  u64* x = s0_.data();
+  u64* d = s1_.data();
+  const u64 m = static_cast<u64>(k);
+  for (const Range& r : spans_) {
+    load(memory_.data(), a, r, x, true);
+    load(memory_.data(), dst, r, d, false);
+    for (int p = r.begin; p < r.end; ++p) d[p] += x[p] * m;
+    store(memory_.data(), dst, r, d, true);
+  }
+}
+
+u64* WordBackend::backing() {
+  if (backing_.empty()) {
+    backing_.assign(static_cast<std::size_t>((geometry_.backing_store_bits + 63) / 64) * pixels_,
+                    0);
+  }
+  return backing_.data();
+}
+
+void WordBackend::store_to_backing(const Field& field, int block) {
+  check_field(field, "backing-store transfer");
+  const int first = block * geometry_.block_bits;
+  if (block < 0 || first + field.width > geometry_.backing_store_bits) {
+    throw std::out_of_range("backing store: block " + std::to_string(block) + " out of range");
+  }
+  const Range all{0, pixels_};
+  load(memory_.data(), field, all, s0_.data(), false);
+  store(backing(), Field{first, field.width, false}, all, s0_.data(), false);
+}
+
+void WordBackend::load_from_backing(const Field& field, int block) {
+  check_field(field, "backing-store transfer");
+  const int first = block * geometry_.block_bits;
+  if (block < 0 || first + field.width > geometry_.backing_store_bits) {
+    throw std::out_of_range("backing store: block " + std::to_string(block) + " out of range");
+  }
+  const Range all{0, pixels_};
+  load(backing(), Field{first, field.width, false}, all, s0_.data(), false);
+  store(memory_.data(), field, all, s0_.data(), false);
+}
+
+u64 WordBackend::read(int pixel, const Field& field) const {
+  const int lane = field.lo / 64;
+  const int off = field.lo % 64;
+  const std::size_t n = static_cast<std::size_t>(pixels_);
+  u64 v = memory_[lane * n + pixel] >> off;
+  if (off + field.width > 64) v |= memory_[(lane + 1) * n + pixel] << (64 - off);
+  return v & low_mask(field.width);
+}
+
+void WordBackend::read_field(const Field& field, u64* out) const {
+  check_field(field, "read");
+  load(memory_.data(), field, Range{0, pixels_}, out, false);
+}
+
+void WordBackend::read_memory_planes(std::vector<u64>& planes) const {
+  const int words = pixels_ / 64;
+  const int bits = geometry_.memory_bits;
+  planes.assign(static_cast<std::size_t>(bits) * words, 0);
+  for (int b = 0; b < bits; ++b) {
+    const u64* lane = &memory_[static_cast<std::size_t>(b / 64) * pixels_];
+    const int off = b % 64;
+    u64* plane = &planes[static_cast<std::size_t>(b) * words];
+    for (int w = 0; w < words; ++w) {
+      u64 bitsw = 0;
+      for (int j = 0; j < 64; ++j) bitsw |= ((lane[w * 64 + j] >> off) & 1) << j;
+      plane[w] = bitsw;
+    }
+  }
+}
+
+void WordBackend::write(int pixel, const Field& field, u64 value) {
+  check_field(field, "write");
+  const int lane = field.lo / 64;
+  const int off = field.lo % 64;
+  const std::size_t n = static_cast<std::size_t>(pixels_);
+  const u64 mask = low_mask(field.width);
+  u64& lo = memory_[lane * n + pixel];
+  lo = (lo & ~(mask << off)) | ((value & mask) << off);
+  if (off + field.width > 64) {
+    u64& hi = memory_[(lane + 1) * n + pixel];
+    const u64 hi_bits = mask >> (64 - off);
+    hi = (hi & ~hi_bits) | ((value & mask) >> (64 - off));
+  }
+}
+
+std::unique_ptr<PixelBackend> WordBackend::clone() const {
+  return std::make_unique<WordBackend>(*this);
+}
+
+bool WordBackend::same_state(const PixelBackend& other) const {
+  const auto* o = dynamic_cast<const WordBackend*>(&other);
+  if (o == nullptr || o->geometry_ != geometry_) return false;
+  if (stack_top_ != o->stack_top_ || memory_ != o->memory_ || enable_ != o->enable_) return false;
+  // Stack levels above the top are never read before a push overwrites them.
+  const auto used = static_cast<std::ptrdiff_t>(stack_top_) * pixels_;
+  if (!std::equal(stack_.begin(), stack_.begin() + used, o->stack_.begin())) return false;
+  // A backing store never allocated is all 0.
+  auto zero = [](const std::vector<u64>& v) {
+    return std::all_of(v.begin(), v.end(), [](u64 x) { return x == 0; });
+  };
+  if (backing_.empty() || o->backing_.empty()) return zero(backing_) && zero(o->backing_);
+  return backing_ == o->backing_;
+}
+
+void WordBackend::copy_state_from(const PixelBackend& other) {
+  const auto* o = dynamic_cast<const WordBackend*>(&other);
+  if (o == nullptr || o->geometry() != geometry()) {
+    throw std::invalid_argument(std::string("word backend: cannot take the state of a '") +
+                                other.name() + "' backend of another kind or geometry");
+  }
+  memory_ = o->memory_;
+  enable_ = o->enable_;
+  stack_ = o->stack_;
+  stack_top_ = o->stack_top_;
+  spans_ = o->spans_;
+  stack_spans_ = o->stack_spans_;
+  backing_ = o->backing_;
+}
+
+}  // namespace pp5

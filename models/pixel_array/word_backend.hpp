@@ -1,0 +1,133 @@
+#pragma once
+// The "word" pixel backend: the instruction set executed a whole field at a time, every
+// field a host integer per pixel, with loops over contiguous arrays of pixels that the
+// compiler vectorises. It keeps no per-bit-cycle state (no carries, no bit-serial order), so
+// it cannot be traced bit by bit; its pixel memory is bit-identical to "bit" after every
+// instruction (tests/test_word_backend.cpp runs both in lockstep).
+//
+// Layout: pixel memory is ceil(memory_bits / 64) lanes of 64 bits per pixel, lane-major
+// (lane k of every pixel in one contiguous array of pixels()). A field [lo, lo + width) lies
+// in lane lo / 64 at bit lo % 64, or straddles two lanes; it is read with a shift and a mask
+// and written with a masked merge under E. E is one byte per pixel (0 or 1), the Enable stack
+// a copy of E per level, the backing store lanes like pixel memory (allocated on first use).
+// Every operation runs only over spans of pixels outside which E is 0 (after a triangle's
+// edge tests, its own columns of each of its rows), which is exact (E = 0 is never written)
+// and makes its cost the pixels a primitive's bounding rows and edges leave.
+//
+// Contract: implements PixelBackend (firmware/isa/backend.hpp), including its one bit-serial
+// corner: an ALU source field that overlaps its destination from below (src.lo < dst.lo)
+// reads, at bit i, what the walk already wrote there; that case runs a per-pixel
+// bit-serial emulation, every other one whole words.
+#include <memory>
+#include <vector>
+
+#include "firmware/isa/backend.hpp"
+
+namespace pp5 {
+
+class WordBackend final : public PixelBackend {
+ public:
+  explicit WordBackend(const PixelBackendParams& params);
+
+  const char* name() const override { return "word"; }
+  const PixelArrayGeometry& geometry() const override { return geometry_; }
+  void set_origin(int x0, int y0) override {
+    x0_ = x0;
+    y0_ = y0;
+  }
+
+  void enable_all() override;
+  void push_enable() override;
+  void pop_enable() override;
+  void else_enable() override;
+
+  void qtest(const QuadraticCoefficients& expr, Compare cond) override;
+  void qload(const Field& dst, const QuadraticCoefficients& expr) override;
+  void qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) override;
+
+  void mov(const Field& dst, const Source& src) override;
+  void add(const Field& dst, const Source& src) override;
+  void sub(const Field& dst, const Source& src) override;
+  void logic(const Field& dst, const Source& src, Logic op) override;
+  void invert(const Field& dst) override;
+  void compare(const Field& a, const Source& b, Compare cond) override;
+  void multiply(const Field& dst, const Field& a, const Field& b) override;
+  void multiply_accumulate(const Field& dst, const Field& a, std::int64_t k) override;
+  void store_to_backing(const Field& field, int block) override;
+  void load_from_backing(const Field& field, int block) override;
+
+  std::uint64_t read(int pixel, const Field& field) const override;
+  void read_field(const Field& field, std::uint64_t* out) const override;
+  void read_memory_planes(std::vector<std::uint64_t>& planes) const override;
+  bool enabled(int pixel) const override { return enable_[static_cast<std::size_t>(pixel)] != 0; }
+  int count_enabled() const override;
+  int enable_depth() const override { return stack_top_; }
+  void write(int pixel, const Field& field, std::uint64_t value) override;
+
+  std::unique_ptr<PixelBackend> clone() const override;
+  bool same_state(const PixelBackend& other) const override;
+  void copy_state_from(const PixelBackend& other) override;
+
+ private:
+  enum class Alu { mov, add, sub, and_, or_, xor_ };
+  // Pixels [begin, end).
+  struct Range {
+    int begin = 0;
+    int end = 0;
+  };
+  // After E was ANDed with something: it is still 0 outside spans_, which stay as they are.
+  void enable_changed() {}
+  // qtest of a linear expression whose value cannot wrap along a row: E cleared outside the
+  // interval of each row where the condition holds, found by division, as the evaluator's
+  // own fast path does, and spans_ narrowed to those intervals. False (nothing done) when
+  // the expression is not such.
+  bool qtest_linear(const QuadraticCoefficients& c, Compare cond);
+  // The evaluator's column terms for `c` (row_a_, row_b_), before evaluate.
+  void prepare_columns(const QuadraticCoefficients& c) const;
+  // The field's values at pixels [r.begin, r.end) into out[p], extended to 64 bits by the
+  // field's signedness (read_field's unsigned values when `extend` is false).
+  void load(const std::uint64_t* lanes, const Field& f, Range r, std::uint64_t* out,
+            bool extend) const;
+  // out[p] into the field at pixels [r.begin, r.end), modulo 2^width, only where E = 1
+  // (everywhere when `masked` is false).
+  void store(std::uint64_t* lanes, const Field& f, Range r, const std::uint64_t* in, bool masked);
+  // The expression's value at every pixel of r, wrapped to result_bits and sign-extended
+  // (after prepare_columns(c)).
+  void evaluate(const QuadraticCoefficients& c, Range r, std::uint64_t* out) const;
+  // qload and qcmp's operand: bits [fraction_bits, fraction_bits + width) of the value.
+  void expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
+                        std::uint64_t* out) const;
+  void alu(const Field& dst, const Source& src, Alu op);
+  void alu_range(const Field& dst, const Source& src, Alu op, Range r);
+  void compare_range(const Field& a, const Source& b, Compare cond, Range r);
+  void alu_serial(const Field& dst, const Field& src, Alu op, Range r);
+  // E &= (a cond b) over r, a and b extended values; wide when either is an unsigned 64-bit
+  // field (a 65-bit comparison).
+  void compare_values(const std::uint64_t* a, bool a_unsigned64, const std::uint64_t* b,
+                      bool b_unsigned64, Compare cond, Range r);
+  void check_field(const Field& f, const char* what) const;
+  std::uint64_t* backing();
+
+  PixelArrayGeometry geometry_;
+  EvaluatorParams evaluator_;
+  int fraction_bits_;
+  int pixels_;
+  int lanes_;  // 64-bit lanes of pixel memory per pixel
+  int x0_ = 0;
+  int y0_ = 0;
+  std::vector<std::uint64_t> memory_;  // lanes_ x pixels_
+  std::vector<std::uint8_t> enable_;   // pixels_
+  std::vector<std::uint8_t> stack_;    // enable_stack_depth x pixels_
+  int stack_top_ = 0;
+  std::vector<std::uint64_t> backing_;  // backing lanes x pixels_, allocated on first use
+  // Disjoint pixel ranges, in order, outside which E is 0 (a superset of E's set pixels, one
+  // range per row after a linear qtest): every operation walks only these. The same for each
+  // saved level of the stack.
+  std::vector<Range> spans_;
+  std::vector<std::vector<Range>> stack_spans_;
+  // Scratch of pixels_ values each: operands, results, the evaluator's row tables.
+  mutable std::vector<std::uint64_t> s0_, s1_, s2_;
+  mutable std::vector<std::uint64_t> row_a_, row_b_;  // width entries each
+};
+
+}  // namespace pp5

@@ -1,0 +1,232 @@
+// pp5sim fidelity: what each fidelity level costs and what it loses, measured. Every level
+// runs on every chosen scene and program; the table gives host time (the minimum of --runs
+// runs), the speed-up over the most detailed level (bit), the frame-time error and whether
+// the bottleneck agrees with it, and the pixels and pixel-memory bits that differ from it.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/machine.hpp"
+#include "models/renderer/renderer_board.hpp"
+#include "sim/app/commands.hpp"
+#include "sim/output/output_set.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/scene/scene_loader.hpp"
+#include "sim/simulation.hpp"
+
+namespace fs = std::filesystem;
+
+namespace pp5 {
+
+namespace {
+
+struct Level {
+  const char* name;
+  const char* spec;  // --fidelity
+};
+// Most detailed first: the reference every other level is measured against.
+constexpr Level kLevels[] = {{"bit", "bit"},
+                             {"word", "word"},
+                             {"timing", "timing"},
+                             {"analytic", "analytic"},
+                             {"word+analytic", "pixels=word,timing=analytic"}};
+
+struct FidelityOptions {
+  std::vector<std::string> scenes;
+  std::vector<std::string> firmware{"threshold"};
+  std::string config_path;
+  std::vector<std::string> sets;
+  int runs = 3;
+  int threads = default_threads();
+  std::string out_dir = "out/fidelity";
+};
+
+// Every region's whole pixel memory after the region, as the snapshot layout, for counting
+// the bits a level leaves different from bit. Each board has its own.
+class MemoryKeeper final : public BoardObserver {
+ public:
+  void begin_packet(const PacketContext&, const ProcedureCode&, const RendererBoard&) override {}
+  void after_instruction(int, const Instruction&, ArrayCycles, const RendererBoard&) override {}
+  void end_region(int region, const RendererBoard& board) override {
+    board.array().read_memory_planes(regions[region]);
+  }
+  std::map<int, std::vector<std::uint64_t>> regions;
+};
+
+// The regions' memories of a whole frame at a pixel level, from a run with an observer on
+// every board (not timed: observed boards execute every empty region too).
+std::map<int, std::vector<std::uint64_t>> frame_memory(const MachineConfig& config,
+                                                       const Scene& scene, const Program& program,
+                                                       int threads) {
+  std::vector<std::unique_ptr<MemoryKeeper>> keepers;
+  for (int k = 0; k < config.renderer.count; ++k)
+    keepers.push_back(std::make_unique<MemoryKeeper>());
+  simulate_frame(config, scene, program, threads, [&](int k) -> BoardObserver* {
+    return keepers[static_cast<std::size_t>(k)].get();
+  });
+  std::map<int, std::vector<std::uint64_t>> all;
+  for (auto& k : keepers) all.insert(k->regions.begin(), k->regions.end());
+  return all;
+}
+
+std::uint64_t differing_bits(const std::map<int, std::vector<std::uint64_t>>& a,
+                             const std::map<int, std::vector<std::uint64_t>>& b) {
+  std::uint64_t bits = 0;
+  for (const auto& [region, planes] : a) {
+    const auto it = b.find(region);
+    if (it == b.end() || it->second.size() != planes.size()) {
+      throw std::logic_error(
+          fmt::format("fidelity: region {} was not executed at both levels", region));
+    }
+    for (std::size_t i = 0; i < planes.size(); ++i)
+      bits += static_cast<std::uint64_t>(__builtin_popcountll(planes[i] ^ it->second[i]));
+  }
+  return bits;
+}
+
+struct Row {
+  std::string scene, program, level;
+  double host_seconds = 0;
+  double speedup = 0;
+  double frame_seconds = 0;
+  double frame_error = 0;  // relative to bit's frame time
+  std::string bottleneck;
+  bool bottleneck_agrees = false;
+  bool has_pixels = false;
+  std::uint64_t pixels_differing = 0;
+  bool has_memory = false;
+  std::uint64_t bits_differing = 0;
+};
+
+int run_fidelity(FidelityOptions o) {
+  if (o.scenes.empty()) o.scenes = builtin_scene_names();
+  const MachineConfig base = load_config(o.config_path, o.sets);
+  if (refuse_below_bit_level(base, "pp5sim fidelity (it measures every level against bit)")) {
+    return 2;
+  }
+  prepare_output_folder(o.out_dir, "--out");
+  std::vector<Row> rows;
+  for (const std::string& scene_name : o.scenes) {
+    const Scene scene = load_scene(scene_name);
+    for (const std::string& firmware : o.firmware) {
+      const Program program = assemble_file(resolve_firmware(firmware), assembler_options(base));
+      const std::string program_name = fs::path(program.name).stem().string();
+      FrameResult reference;
+      std::map<int, std::vector<std::uint64_t>> reference_memory;
+      double reference_host = 0;
+      for (const Level& level : kLevels) {
+        MachineConfig config = base;
+        config.set(fidelity_assignments(level.spec));
+        Row row;
+        row.scene = scene.name;
+        row.program = program_name;
+        row.level = level.name;
+        FrameResult best;
+        for (int run = 0; run < o.runs; ++run) {
+          const auto t0 = std::chrono::steady_clock::now();
+          FrameResult r = simulate_frame(config, scene, program, o.threads);
+          const double host =
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          if (run == 0 || host < row.host_seconds) row.host_seconds = host;
+          if (run == 0) best = std::move(r);
+        }
+        if (std::string(level.name) == "bit") {
+          reference = best;
+          reference_host = row.host_seconds;
+        }
+        row.frame_seconds = best.frame_seconds;
+        row.speedup = reference_host / row.host_seconds;
+        row.frame_error = (best.frame_seconds - reference.frame_seconds) / reference.frame_seconds;
+        row.bottleneck = best.stats.text("timing.bottleneck");
+        row.bottleneck_agrees = row.bottleneck == reference.stats.text("timing.bottleneck");
+        row.has_pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
+        if (row.has_pixels) {
+          for (std::size_t p = 0; p + 2 < best.image.rgb.size(); p += 3) {
+            if (!std::equal(best.image.rgb.begin() + p, best.image.rgb.begin() + p + 3,
+                            reference.image.rgb.begin() + p)) {
+              ++row.pixels_differing;
+            }
+          }
+        }
+        // Memory is compared region by region, which needs the event model's regions (an
+        // observer); the analytic model runs the same regions, on boards in another order.
+        if (row.has_pixels && config.fidelity.timing == MachineConfig::Fidelity::Timing::event) {
+          auto memory = frame_memory(config, scene, program, o.threads);
+          if (std::string(level.name) == "bit") reference_memory = std::move(memory);
+          row.has_memory = true;
+          row.bits_differing =
+              std::string(level.name) == "bit" ? 0 : differing_bits(reference_memory, memory);
+        }
+        std::cerr << fmt::format("{} / {} / {}: {:.3f} s\n", row.scene, row.program, row.level,
+                                 row.host_seconds);
+        rows.push_back(row);
+      }
+    }
+  }
+
+  auto pct = [](double e) { return fmt::format("{:+.2f}%", 100 * e); };
+  std::string md = fmt::format(
+      "| scene | program | level | host s (min of {}) | speed-up | frame ms | frame-time error | "
+      "bottleneck | agrees | pixels differing | memory bits differing |\n"
+      "|---|---|---|---:|---:|---:|---:|---|---|---:|---:|\n",
+      o.runs);
+  std::string csv =
+      "scene,program,level,host_seconds,speedup,frame_seconds,frame_time_error,bottleneck,"
+      "bottleneck_agrees,pixels_differing,memory_bits_differing\n";
+  for (const Row& r : rows) {
+    const std::string pixels = r.has_pixels ? std::to_string(r.pixels_differing) : "no image";
+    const std::string bits = r.has_memory   ? std::to_string(r.bits_differing)
+                             : r.has_pixels ? "not compared"
+                                            : "no memory";
+    md += fmt::format("| {} | {} | {} | {:.4f} | {:.1f} | {:.3f} | {} | {} | {} | {} | {} |\n",
+                      markdown_cell(r.scene), markdown_cell(r.program), r.level, r.host_seconds,
+                      r.speedup, r.frame_seconds * 1e3, pct(r.frame_error), r.bottleneck,
+                      r.bottleneck_agrees ? "yes" : "no", pixels, bits);
+    csv += fmt::format("{},{},{},{:.6f},{:.3f},{:.9g},{:.6g},{},{},{},{}\n", r.scene, r.program,
+                       r.level, r.host_seconds, r.speedup, r.frame_seconds, r.frame_error,
+                       r.bottleneck, r.bottleneck_agrees ? 1 : 0,
+                       r.has_pixels ? std::to_string(r.pixels_differing) : "",
+                       r.has_memory ? std::to_string(r.bits_differing) : "");
+  }
+  const fs::path dir(o.out_dir);
+  OutputSet outputs;
+  outputs.add((dir / "fidelity.md").string(), md);
+  outputs.add((dir / "fidelity.csv").string(), csv);
+  outputs.commit();
+  std::cout << md;
+  std::cout << fmt::format("\nwrote {}/fidelity.md, {}/fidelity.csv\n", o.out_dir, o.out_dir);
+  return 0;
+}
+
+}  // namespace
+
+Command add_fidelity_command(CLI::App& app) {
+  auto o = std::make_shared<FidelityOptions>();
+  auto* cmd = app.add_subcommand(
+      "fidelity",
+      "Run every fidelity level (bit, word, timing, analytic, word+analytic) on scenes and "
+      "programs and tabulate what each costs in host time and loses against bit");
+  cmd->add_option("-s,--scene", o->scenes,
+                  "A scene (repeatable): built-in name, mesh or scene file [every built-in scene]");
+  cmd->add_option("-f,--firmware", o->firmware,
+                  "A program (repeatable), resolved as render's --firmware does")
+      ->capture_default_str();
+  add_config_options(*cmd, o->config_path, o->sets);
+  cmd->add_option("--runs", o->runs, "Runs of each level; the table gives the fastest")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  cmd->add_option("-j,--threads", o->threads, "Host threads for the pixel arrays")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  cmd->add_option("-o,--out", o->out_dir, "Output folder for fidelity.md and fidelity.csv")
+      ->capture_default_str();
+  return {cmd, [o] { return run_fidelity(*o); }};
+}
+
+}  // namespace pp5

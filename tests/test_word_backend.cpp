@@ -1,0 +1,405 @@
+// The word backend against the bit backend: (a) whole frames, every shipped program with
+// every built-in scene, the whole pixel memory of every region compared after the region;
+// (b) a scoreboard running random instruction streams on both backends in lockstep and
+// comparing all memory, E and the stack after every instruction. Seeded, so every run tests
+// the same streams.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <map>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "firmware/isa/isa.hpp"
+#include "models/pixel_array/backends.hpp"
+#include "models/renderer/renderer_board.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
+#include "support.hpp"
+
+namespace fs = std::filesystem;
+using namespace pp5;
+
+namespace {
+
+std::vector<std::string> shipped_programs() {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(fs::path(PP5_SOURCE_DIR) / "firmware" / "programs")) {
+    if (e.path().extension() == ".pp5") names.push_back(e.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// Every region's whole pixel memory (the snapshot layout), E and stack depth after the region,
+// keyed by region.
+struct RegionMemory {
+  std::vector<std::uint64_t> planes;
+  int enabled = 0;
+  int depth = 0;
+};
+
+class Keeper final : public BoardObserver {
+ public:
+  explicit Keeper(std::map<int, RegionMemory>& out) : out_(out) {}
+  void begin_packet(const PacketContext&, const ProcedureCode&, const RendererBoard&) override {}
+  void after_instruction(int, const Instruction&, ArrayCycles, const RendererBoard&) override {}
+  void end_region(int region, const RendererBoard& board) override {
+    RegionMemory& m = out_[region];
+    board.array().read_memory_planes(m.planes);
+    m.enabled = board.array().count_enabled();
+    m.depth = board.array().enable_depth();
+  }
+
+ private:
+  std::map<int, RegionMemory>& out_;
+};
+
+// Runs the frame at `level` with a keeper on every board; each Renderer owns its regions, so
+// the maps of the boards never share a key.
+std::map<int, RegionMemory> frame_memory(MachineConfig config, const char* level,
+                                         const Scene& scene, const Program& program,
+                                         RgbImage& image) {
+  config.set(std::string("fidelity.pixels=") + level);
+  std::vector<std::map<int, RegionMemory>> per_board(
+      static_cast<std::size_t>(config.renderer.count));
+  std::vector<std::unique_ptr<Keeper>> keepers;
+  for (auto& m : per_board) keepers.push_back(std::make_unique<Keeper>(m));
+  FrameResult r = simulate_frame(config, scene, program, 2,
+                                 [&](int k) -> BoardObserver* { return keepers[k].get(); });
+  image = std::move(r.image);
+  std::map<int, RegionMemory> all;
+  for (auto& m : per_board) all.insert(m.begin(), m.end());
+  return all;
+}
+
+}  // namespace
+
+TEST_CASE("word leaves every region's whole pixel memory as bit does: every program x scene",
+          "[word][backend]") {
+  MachineConfig config = MachineConfig::defaults();
+  // Four regions of 64 x 64, two Renderers, so that a board runs regions one after another
+  // on the memory the previous one left; small, so that 2 x 78 frames take seconds.
+  config.set({"screen.width=128", "screen.height=128", "renderer.region_width=64",
+              "renderer.region_height=64", "gp.count=2", "renderer.count=2"});
+  for (const std::string& scene_name : builtin_scene_names()) {
+    // Tessellated scenes coarser than their defaults (thousands of triangles in four small
+    // regions would take minutes); the fixed ones as they are.
+    Scene scene;
+    try {
+      scene = make_builtin_scene(scene_name, SceneOptions{24, 12});
+    } catch (const std::invalid_argument&) {
+      scene = make_builtin_scene(scene_name);
+    }
+    for (const std::string& name : shipped_programs()) {
+      INFO("scene " << scene_name << ", program " << name);
+      const Program program = test::load_program(name, config);
+      RgbImage bit_image, word_image;
+      const auto bit = frame_memory(config, "bit", scene, program, bit_image);
+      const auto word = frame_memory(config, "word", scene, program, word_image);
+      REQUIRE(bit.size() == static_cast<std::size_t>(config.regions()));
+      REQUIRE(word.size() == bit.size());
+      for (const auto& [region, want] : bit) {
+        INFO("region " << region);
+        const RegionMemory& got = word.at(region);
+        REQUIRE(got.planes.size() == want.planes.size());
+        CHECK(got.planes == want.planes);
+        CHECK(got.enabled == want.enabled);
+        CHECK(got.depth == want.depth);
+      }
+      CHECK(word_image.rgb == bit_image.rgb);
+    }
+  }
+}
+
+namespace {
+
+// Random instruction streams that stress what a whole-field backend could get wrong: fields
+// of every width up to 64 at every alignment (straddling 64-bit lanes), signed and unsigned,
+// sources overlapping their destination from above and below, 64-bit unsigned compares,
+// constants of every size, quadratic expressions with cross terms, the backing store and
+// the Enable stack at its limits.
+class Scoreboard {
+ public:
+  Scoreboard(const PixelBackendParams& p, unsigned seed)
+      : p_(p),
+        rng_(seed),
+        bit_(make_pixel_backend("bit", p)),
+        word_(make_pixel_backend("word", p)) {}
+
+  void run(int packets, int per_packet) {
+    const int x0 = static_cast<int>(pick(-300, 3000)), y0 = static_cast<int>(pick(-300, 3000));
+    bit_->set_origin(x0, y0);
+    word_->set_origin(x0, y0);
+    std::mt19937_64 fill(rng_());
+    for (int px = 0; px < bit_->pixels(); ++px) {
+      for (int lo = 0; lo < p_.array.memory_bits; lo += 64) {
+        const Field f{lo, std::min(64, p_.array.memory_bits - lo), false};
+        const std::uint64_t v = fill();
+        bit_->write(px, f, v);
+        word_->write(px, f, v);
+      }
+    }
+    same("initial memory");
+    for (int k = 0; k < packets; ++k) {
+      const OwnedValues values = make_values();
+      for (int n = 0; n < per_packet; ++n) {
+        const Instruction ins = next();
+        const std::string what =
+            fmt::format("packet {} instruction {}: {}", k, n, disassemble(ins));
+        ExecutionContext cb{*bit_, values};
+        ExecutionContext cw{*word_, values};
+        instruction_info(ins.op).execute(ins, cb);
+        instruction_info(ins.op).execute(ins, cw);
+        ++executed_[static_cast<std::size_t>(ins.op)];
+        same(what);
+      }
+    }
+  }
+  const std::vector<int>& executed() const { return executed_; }
+
+ private:
+  void same(const std::string& what) {
+    INFO(what);
+    REQUIRE(word_->enable_depth() == bit_->enable_depth());
+    bit_->read_memory_planes(bit_planes_);
+    word_->read_memory_planes(word_planes_);
+    REQUIRE(word_planes_.size() == bit_planes_.size());
+    if (word_planes_ != bit_planes_) {
+      const int words = bit_->pixels() / 64;
+      for (std::size_t i = 0; i < bit_planes_.size(); ++i) {
+        INFO("bit " << i / words << ", pixels from " << (i % words) * 64);
+        REQUIRE(word_planes_[i] == bit_planes_[i]);
+      }
+    }
+    for (int px = 0; px < bit_->pixels(); ++px) {
+      if (word_->enabled(px) != bit_->enabled(px)) {
+        INFO("E of pixel " << px);
+        REQUIRE(word_->enabled(px) == bit_->enabled(px));
+      }
+    }
+    REQUIRE(word_->count_enabled() == bit_->count_enabled());
+  }
+
+  std::int64_t pick(std::int64_t lo, std::int64_t hi) {
+    return std::uniform_int_distribution<std::int64_t>(lo, hi)(rng_);
+  }
+  std::int64_t any_bits(int bits) {
+    if (bits >= 64) return static_cast<std::int64_t>(rng_());
+    return pick(-(std::int64_t{1} << (bits - 1)), (std::int64_t{1} << (bits - 1)) - 1);
+  }
+
+  OwnedValues make_values() {
+    OwnedValues v;
+    const int c = p_.evaluator.coefficient_bits;
+    for (auto& e : v.expressions) {
+      switch (pick(0, 3)) {
+        case 0:  // a constant
+          e.F = any_bits(c);
+          break;
+        case 1:  // a plane of ordinary slope
+          e.D = pick(-(1 << 16), 1 << 16);
+          e.E = pick(-(1 << 16), 1 << 16);
+          e.F = any_bits(std::min(c, 36));
+          break;
+        case 2:  // coefficients of any size: the value wraps
+          e.D = any_bits(c);
+          e.E = any_bits(c);
+          e.F = any_bits(c);
+          break;
+        default:  // quadratic, with a cross term
+          e.A = pick(-5000, 5000);
+          e.B = pick(-5000, 5000);
+          e.C = pick(-5000, 5000);
+          e.D = pick(-(1 << 20), 1 << 20);
+          e.E = pick(-(1 << 20), 1 << 20);
+          e.F = any_bits(std::min(c, 40));
+          break;
+      }
+    }
+    for (auto& k : v.parameters)
+      k = pick(0, 1) ? pick(-1000, 1000) : any_bits(static_cast<int>(pick(1, 64)));
+    return v;
+  }
+
+  Operand field(int lo_min, int lo_max_end, int max_width = 64) {
+    Operand o;
+    o.kind = Operand::Kind::field;
+    const int room = lo_max_end - lo_min;
+    o.field.width = static_cast<int>(pick(1, std::min(max_width, room)));
+    // Widths 1 and 64 and lane boundaries are where a shift or a mask goes wrong.
+    if (pick(0, 4) == 0) o.field.width = std::min(room, pick(0, 1) ? 64 : 1);
+    o.field.lo = static_cast<int>(pick(lo_min, lo_max_end - o.field.width));
+    o.field.is_signed = pick(0, 1) == 1;
+    o.text = fmt::format("[{}+{}{}]", o.field.lo, o.field.width, o.field.is_signed ? "s" : "");
+    return o;
+  }
+  Operand any_field() { return field(0, p_.array.memory_bits); }
+  // A field overlapping `d`, starting below it, at it or above it.
+  Operand overlapping(const Field& d) {
+    Operand o = any_field();
+    const int lo = static_cast<int>(pick(std::max(0, d.lo - 20), d.lo + d.width - 1));
+    const int width =
+        static_cast<int>(pick(std::max(1, d.lo - lo + 1), std::min(64, p_.array.memory_bits - lo)));
+    o.field.lo = lo;
+    o.field.width = width;
+    o.text = fmt::format("[{}+{}{}]", lo, width, o.field.is_signed ? "s" : "");
+    return o;
+  }
+  Operand constant() {
+    Operand o;
+    if (pick(0, 1) == 0) {
+      o.kind = Operand::Kind::parameter;
+      o.index = static_cast<int>(pick(0, static_cast<int>(Parameter::count) - 1));
+      o.text = parameter_name(static_cast<Parameter>(o.index));
+    } else {
+      o.kind = Operand::Kind::literal;
+      o.literal = any_bits(static_cast<int>(pick(1, 64)));
+    }
+    return o;
+  }
+  Operand expression() {
+    Operand o;
+    o.kind = Operand::Kind::expression;
+    o.index = static_cast<int>(pick(0, static_cast<int>(Expression::count) - 1));
+    o.text = kExpressions[o.index].name;
+    return o;
+  }
+
+  Instruction next() {
+    Instruction i;
+    i.condition = static_cast<Compare>(pick(0, 5));
+    const int depth = bit_->enable_depth();
+    for (;;) {
+      i.op = static_cast<Opcode>(pick(0, static_cast<int>(Opcode::count) - 1));
+      if (i.op == Opcode::epush && depth >= p_.array.enable_stack_depth) continue;
+      if ((i.op == Opcode::epop || i.op == Opcode::eelse) && depth == 0) continue;
+      // Keep some pixels enabled most of the time, as firmware does.
+      if (i.op == Opcode::eall && pick(0, 2) != 0) continue;
+      break;
+    }
+    auto& o = i.operands;
+    const int half = p_.array.memory_bits / 2;
+    switch (i.op) {
+      case Opcode::qtest:
+        o[0] = expression();
+        break;
+      case Opcode::qload:
+      case Opcode::qcmp:
+        o[0] = any_field();
+        o[1] = expression();
+        break;
+      case Opcode::mov:
+      case Opcode::add:
+      case Opcode::sub:
+      case Opcode::cmp:
+      case Opcode::and_:
+      case Opcode::or_:
+      case Opcode::xor_: {
+        o[0] = any_field();
+        const auto kind = pick(0, 3);
+        o[1] = kind == 0 ? constant() : kind == 1 ? overlapping(o[0].field) : any_field();
+        break;
+      }
+      case Opcode::not_:
+        o[0] = any_field();
+        break;
+      case Opcode::mul:
+        o[0] = field(half, p_.array.memory_bits);
+        o[1] = field(0, half);
+        o[2] = field(0, half);
+        break;
+      case Opcode::mac:
+        o[0] = field(half, p_.array.memory_bits);
+        o[1] = field(0, half);
+        o[2] = constant();
+        break;
+      case Opcode::bsld:
+      case Opcode::bsst: {
+        o[0] = any_field();
+        const int blocks = (o[0].field.width + p_.array.block_bits - 1) / p_.array.block_bits;
+        o[1].kind = Operand::Kind::literal;
+        o[1].literal = pick(0, p_.array.backing_store_bits / p_.array.block_bits - blocks);
+        break;
+      }
+      default:
+        break;
+    }
+    return i;
+  }
+
+  PixelBackendParams p_;
+  std::mt19937_64 rng_;
+  std::unique_ptr<PixelBackend> bit_;
+  std::unique_ptr<PixelBackend> word_;
+  std::vector<std::uint64_t> bit_planes_, word_planes_;
+  std::vector<int> executed_ = std::vector<int>(static_cast<std::size_t>(Opcode::count), 0);
+};
+
+}  // namespace
+
+TEST_CASE("word and bit run random instruction streams in lockstep (scoreboard)",
+          "[word][backend]") {
+  struct Shape {
+    int width, height, memory_bits, result_bits, coefficient_bits, fraction_bits;
+  };
+  // The real board's memory (208 bits: four 64-bit lanes, the last partial), a narrow one,
+  // a 64-bit evaluator result, no fraction bits and many.
+  const Shape shapes[] = {{128, 8, 208, 40, 40, 12},
+                          {64, 3, 70, 64, 62, 0},
+                          {192, 2, 130, 48, 30, 20},
+                          {128, 4, 256, 64, 40, 63}};
+  std::vector<int> executed(static_cast<std::size_t>(Opcode::count), 0);
+  unsigned seed = 1;
+  for (const Shape& s : shapes) {
+    for (int k = 0; k < 4; ++k, ++seed) {
+      INFO("shape " << s.width << "x" << s.height << ", " << s.memory_bits << " bits, seed "
+                    << seed);
+      PixelBackendParams p;
+      p.array.width = s.width;
+      p.array.height = s.height;
+      p.array.memory_bits = s.memory_bits;
+      p.array.enable_stack_depth = 4;
+      p.array.backing_store_bits = 512;
+      p.array.block_bits = 32;
+      p.evaluator.coefficient_bits = s.coefficient_bits;
+      p.evaluator.result_bits = s.result_bits;
+      p.fraction_bits = s.fraction_bits;
+      Scoreboard board(p, seed);
+      board.run(6, 80);
+      for (std::size_t op = 0; op < executed.size(); ++op) executed[op] += board.executed()[op];
+    }
+  }
+  for (std::size_t op = 0; op < executed.size(); ++op) {
+    INFO("opcode " << instruction_info(static_cast<Opcode>(op)).mnemonic);
+    CHECK(executed[op] > 10);
+  }
+}
+
+TEST_CASE("the word backend's state: empty-region reuse and a bad geometry", "[word][backend]") {
+  PixelBackendParams p;
+  p.array.width = 64;
+  p.array.height = 2;
+  p.array.memory_bits = 100;
+  auto a = make_pixel_backend("word", p);
+  auto b = make_pixel_backend("word", p);
+  // A backing store that was never allocated is the same state as one that holds zeros.
+  b->store_to_backing(Field{0, 8, false}, 0);
+  CHECK(a->same_state(*b));
+  a->write(3, Field{60, 10, false}, 0x3ff);  // across the first lane boundary
+  CHECK(a->read(3, Field{60, 10, false}) == 0x3ff);
+  CHECK(a->read(3, Field{59, 12, false}) == 0x7fe);
+  CHECK_FALSE(a->same_state(*b));
+  b->copy_state_from(*a);
+  CHECK(a->same_state(*b));
+  // Not the state of a bit backend, even an equal one.
+  auto bit = make_pixel_backend("bit", p);
+  CHECK_FALSE(a->same_state(*bit));
+  CHECK_THROWS_AS(a->copy_state_from(*bit), std::invalid_argument);
+  p.array.width = 100;
+  CHECK_THROWS_AS(make_pixel_backend("word", p), std::invalid_argument);
+}
