@@ -183,8 +183,13 @@ class Assembler {
     }
     if (w.size() == 3 && w[1] == "passes") {
       std::int64_t n = 0;
+      if (const int k = parameter_index(w[2]); k >= 0) {
+        program_.passes_parameter = k;
+        return;
+      }
       if (!parse_integer(w[2], n) || n < 1 || n > kMaxPasses) {
-        fail("option passes: expected an integer from 1 to {} (got '{}')", kMaxPasses, w[2]);
+        fail("option passes: expected an integer from 1 to {} or a frame parameter (got '{}')",
+             kMaxPasses, w[2]);
       }
       program_.passes = static_cast<int>(n);
       return;
@@ -421,9 +426,10 @@ class Assembler {
       const FieldDecl& f = program_.fields[output_fields_[k]];
       if (f.scratch) {
         line_ = f.line;
-        fail("output field '{}' is scratch; the frame buffer reads it after the procedures, so "
-             "declare it with 'field'",
-             f.name);
+        fail(
+            "output field '{}' is scratch; the frame buffer reads it after the procedures, so "
+            "declare it with 'field'",
+            f.name);
       }
     }
     count_uses();
@@ -475,7 +481,8 @@ class Assembler {
   void check_scratch_liveness() {
     std::vector<std::uint64_t> written(program_.fields.size(), 0);
     auto mask = [](const FieldUse& u) {
-      const std::uint64_t ones = u.width >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << u.width) - 1;
+      const std::uint64_t ones =
+          u.width >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << u.width) - 1;
       return ones << u.offset;
     };
     for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
@@ -488,10 +495,11 @@ class Assembler {
           if (u.field < 0 || !program_.fields[u.field].scratch || !reads(info, k)) continue;
           if ((mask(u) & ~written[u.field]) != 0) {
             line_ = p.ins.line;
-            fail("scratch field '{}' is read in procedure '{}' before it is written there "
-                 "(scratch keeps no value between procedures: declare it with 'field' to keep "
-                 "one)",
-                 program_.fields[u.field].name, kProcedureNames[proc]);
+            fail(
+                "scratch field '{}' is read in procedure '{}' before it is written there "
+                "(scratch keeps no value between procedures: declare it with 'field' to keep "
+                "one)",
+                program_.fields[u.field].name, kProcedureNames[proc]);
           }
         }
         const FieldUse& dst = p.uses[0];
@@ -573,8 +581,8 @@ class Assembler {
     if (resident > options_.memory_bits && !program_.spill_allowed) {
       std::string table;
       for (const auto& f : fields) {
-        table += fmt::format("\n  {:<12} {:>3} bits{}", f.name, f.width,
-                             f.scratch ? " (scratch)" : "");
+        table +=
+            fmt::format("\n  {:<12} {:>3} bits{}", f.name, f.width, f.scratch ? " (scratch)" : "");
       }
       throw AssemblyError(fmt::format(
           "{}: the fields need {} bits but pixel memory has {} (renderer.memory_bits);{}\n"
@@ -602,8 +610,8 @@ class Assembler {
       // among equals. Outputs (the frame buffer reads them) and scratch never move.
       std::vector<int> order;
       for (int f = 0; f < static_cast<int>(fields.size()); ++f) {
-        const bool output = std::find(output_fields_.begin(), output_fields_.end(), f) !=
-                            output_fields_.end();
+        const bool output =
+            std::find(output_fields_.begin(), output_fields_.end(), f) != output_fields_.end();
         if (!fields[f].scratch && !output) order.push_back(f);
       }
       std::sort(order.begin(), order.end(), [&](int a, int b) {
@@ -637,9 +645,9 @@ class Assembler {
       fields[k].block = block;
       block += round_to_block(fields[k].width) / options_.block_bits;
       if (block > blocks) {
-        throw AssemblyError(fmt::format(
-            "{}: spilled fields need {} backing-store blocks; the store has {}", program_.name,
-            block, blocks));
+        throw AssemblyError(
+            fmt::format("{}: spilled fields need {} backing-store blocks; the store has {}",
+                        program_.name, block, blocks));
       }
     }
     program_.resident_bits = resident;
@@ -732,6 +740,17 @@ const FieldDecl* Program::find_field(const std::string& name) const {
   return nullptr;
 }
 
+int Program::pass_count(const ParameterValues& frame) const {
+  if (passes_parameter < 0) return passes;
+  const std::int64_t n = frame[static_cast<std::size_t>(passes_parameter)];
+  if (n < 1 || n > kMaxPasses) {
+    throw std::runtime_error(
+        fmt::format("{}: option passes {}: the frame parameter is {}, expected 1 to {}", name,
+                    kParameters[passes_parameter].name, n, kMaxPasses));
+  }
+  return static_cast<int>(n);
+}
+
 Program assemble(const std::string& source, const std::string& name,
                  const AssemblerOptions& options) {
   return Assembler(name, options).run(source);
@@ -750,7 +769,8 @@ Program assemble_file(const std::string& path, const AssemblerOptions& options) 
 std::string listing(const Program& program, const TimingParams& timing) {
   std::string out = fmt::format("program {}\n\nfield map ({} of {} bits used", program.name,
                                 program.bits_used(), program.memory_bits);
-  if (program.overlay_bits) out += fmt::format(", {} of them scratch overlay", program.overlay_bits);
+  if (program.overlay_bits)
+    out += fmt::format(", {} of them scratch overlay", program.overlay_bits);
   if (program.staging_bits) out += fmt::format(", {} of them spill staging", program.staging_bits);
   out += ")\n";
   auto users = [](const FieldDecl& f) {
@@ -789,8 +809,8 @@ std::string listing(const Program& program, const TimingParams& timing) {
     std::vector<std::string> terms;
     for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
       if (f.uses[p]) {
-        terms.push_back(fmt::format("{} in {} x {}", f.uses[p], kProcedureNames[p],
-                                    kProcedureWeight[p]));
+        terms.push_back(
+            fmt::format("{} in {} x {}", f.uses[p], kProcedureNames[p], kProcedureWeight[p]));
       }
     }
     out += fmt::format("spilled {}: {} (weighted uses {}{}{})\n", f.name,

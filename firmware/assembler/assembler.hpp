@@ -84,16 +84,22 @@ struct Program {
   std::array<ProcedureCode, static_cast<int>(Procedure::count)> procedures;
   std::array<Field, 3> outputs{};  // red, green, blue sent to the frame buffer
   bool spill_allowed = false;
-  int passes = 1;         // times the GPs send each region's triangles (`option passes N`)
-  int memory_bits = 0;    // the budget
-  int resident_bits = 0;  // bits of the fields kept in pixel memory, overlay included
-  int overlay_bits = 0;   // bits of the scratch overlay (part of resident_bits)
-  int overlay_lo = 0;     // its first bit
-  int staging_bits = 0;   // bits reserved for spilled fields while an instruction uses them
+  int passes = 1;             // times the GPs send each region's triangles (`option passes N`)
+  int passes_parameter = -1;  // or a frame parameter's index (`option passes PARAMETER`)
+  int memory_bits = 0;        // the budget
+  int resident_bits = 0;      // bits of the fields kept in pixel memory, overlay included
+  int overlay_bits = 0;       // bits of the scratch overlay (part of resident_bits)
+  int overlay_lo = 0;         // its first bit
+  int staging_bits = 0;       // bits reserved for spilled fields while an instruction uses them
 
   int bits_used() const { return resident_bits + staging_bits; }
   const ProcedureCode& procedure(Procedure p) const { return procedures[static_cast<int>(p)]; }
   const FieldDecl* find_field(const std::string& name) const;
+  // The pass count of a frame with these parameters: `passes`, or the parameter's value.
+  // Throws std::runtime_error naming the program if that value is outside 1..kMaxPasses.
+  int pass_count(const ParameterValues& frame) const;
+  // Whether the program may run more than one pass (a transparency program).
+  bool multipass() const { return passes_parameter >= 0 || passes > 1; }
 };
 
 Program assemble(const std::string& source, const std::string& name,

@@ -1,7 +1,5 @@
 #include "models/config/machine_config.hpp"
 
-#include "common/read_file.hpp"
-
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -12,6 +10,7 @@
 #include <sstream>
 #include <variant>
 
+#include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 
 namespace pp5 {
@@ -309,6 +308,9 @@ const std::vector<Entry>& parameter_table() {
                "at the camera's target distance (epsilon_normal: slopes recovered from "
                "normals).",
                "frame.delta, gp.depth_bits and the scene's camera (derived)"),
+      settable(Parameter::layers, "passes", 4, 1, 64,
+               "Layers the multipass programs peel (transparent*): their pass count, as they "
+               "say `option passes layers`; each pass resends the region's triangles."),
   };
   return table;
 }

@@ -145,7 +145,7 @@ void GraphicsProcessor::run() {
   // lowest open stage whose Renderer's queue has room for it, so a full queue holds up only
   // the bins bound for it. A multipass program gets the same packets again for every pass:
   // the GP keeps its set-up packets, so only the sending repeats.
-  const int passes = machine_.program().passes;
+  const int passes = machine_.passes();
   const int n = config.regions();
   const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
   std::vector<std::size_t> next(static_cast<std::size_t>(passes) * n, 0);
