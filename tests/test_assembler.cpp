@@ -190,7 +190,7 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
       {"transparent.pp5",
        {"edge0", "edge1", "edge2", "depth", "red", "green", "blue", "opacity"},
        {"background_red", "background_green", "background_blue"},
-       182},
+       173},
   };
   for (const Expected& e : programs) {
     SECTION(e.file) {
@@ -199,19 +199,26 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
       CHECK(p.memory_bits == 208);
       CHECK_FALSE(p.spill_allowed);
 
+      // Fields in declaration order from bit 0; scratch fields after them or in bits of
+      // fields dead in shade, within the budget.
       int lo = 0;
       for (const FieldDecl& f : p.fields) {
         INFO("field " << f.name);
         CHECK_FALSE(f.spilled);
-        CHECK(f.lo == lo);
         CHECK(f.block == -1);
         CHECK(p.find_field(f.name) == &f);
+        if (f.scratch) {
+          CHECK(f.lo >= 0);
+          CHECK(f.lo + f.width <= p.resident_bits);
+          continue;
+        }
+        CHECK(f.lo == lo);
         lo += f.width;
       }
-      CHECK(lo == e.bits);
-      CHECK(p.resident_bits == lo);
+      CHECK(lo + p.overlay_bits == e.bits);
+      CHECK(p.resident_bits == e.bits);
       CHECK(p.staging_bits == 0);
-      CHECK(p.bits_used() == lo);
+      CHECK(p.bits_used() == e.bits);
       CHECK(p.find_field("no_such_field") == nullptr);
 
       const char* output_names[] = {"red", "green", "blue"};
@@ -253,7 +260,18 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
             (file == "phong.pp5" || file == "transparent.pp5"));
       CHECK(p.procedure(Procedure::light).defined == (file == "phong.pp5"));
       CHECK(p.procedure(Procedure::pass).defined == (file == "transparent.pp5"));
-      CHECK(p.passes == (file == "transparent.pp5" ? 4 : 1));
+      // The transparency program's pass count is the frame parameter `layers` (4 by default).
+      CHECK(p.passes_parameter ==
+            (file == "transparent.pp5" ? static_cast<int>(Parameter::layers) : -1));
+      CHECK(p.multipass() == (file == "transparent.pp5"));
+      ParameterValues frame{};
+      frame[static_cast<int>(Parameter::layers)] = 6;
+      CHECK(p.pass_count(frame) == (file == "transparent.pp5" ? 6 : 1));
+      frame[static_cast<int>(Parameter::layers)] = 0;
+      if (file == "transparent.pp5") {
+        CHECK_THROWS_WITH(p.pass_count(frame), Catch::Contains("option passes layers") &&
+                                                   Catch::Contains("expected 1 to 64"));
+      }
     }
   }
 }
@@ -463,21 +481,15 @@ TEST_CASE("spilled fields are bracketed by backing-store transfers", "[assembler
   CHECK(p.staging_bits > 0);
   CHECK(p.bits_used() == p.resident_bits + p.staging_bits);
   CHECK(p.bits_used() <= p.memory_bits);
-  // The least used fields spill first, static uses weighted by how often their procedure runs
-  // (triangle 256, the others 1), the last declared first among equals: counted by hand from
-  // tests/data/firmware/spill.pp5,
-  //   flag 514 (clear 1 + triangle 2 x 256 + shade 1), acc 514 (the same), prod 768
-  //   (triangle 3 x 256), k 771, s1 ..., seed 1024, s3 1282,
-  // and spilling stops as soon as the rest fits: 225 - 1 - 48 - 32 = 144 resident bits and 64
-  // staging bits (its instructions use at most two spilled fields).
-  CHECK(p.find_field("flag")->weight == 514);
-  CHECK(p.find_field("acc")->weight == 514);
-  CHECK(p.find_field("prod")->weight == 768);
-  CHECK(p.find_field("k")->weight == 771);
-  CHECK(p.find_field("s3")->weight == 1282);
-  CHECK(spilled_names == std::set<std::string>{"flag", "acc", "prod"});
-  CHECK(p.resident_bits == 144);
+  // The cold fields spill first (k, s1, s2, s3 and flag), the least used of them first
+  // (flag 514, s1 770, k 771, s2 772, s3 more: static uses weighted by procedure frequency),
+  // and spilling stops as soon as the rest fits: 225 - 1 - 24 - 32 - 32 = 136 resident bits
+  // and 64 staging bits (its instructions use at most two spilled fields).
+  CHECK(spilled_names == std::set<std::string>{"flag", "s2", "k", "s1"});
+  CHECK(p.resident_bits == 136);
   CHECK(p.staging_bits == 64);
+  // The listing says why.
+  CHECK(listing(p, TimingParams{}).find("spilled s1: marked cold") != std::string::npos);
 
   int total_transfers = 0;
   for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
@@ -597,6 +609,33 @@ TEST_CASE("spilling fails cleanly when even spilling cannot fit", "[assembler]")
   no_store.backing_store_bits = 64;
   const std::string full = assembly_error(source, no_store);
   CHECK(full.find("backing-store blocks; the store has 2") != std::string::npos);
+}
+
+TEST_CASE("without cold fields the least used spill first, weighted by procedure frequency",
+          "[assembler]") {
+  // Uses, counted by hand: a 1 in triangle (256); b 3 in shade (3); c 2 in clear and 1 in
+  // shade (3); d 2 in triangle (512). 216 bits: two 32-bit fields must go, with one staging
+  // block: c and b (equal weights: the last declared first), though a and d come first and
+  // last in the declarations.
+  const std::string source =
+      "option spill\nfield a 32\nfield b 32\nfield c 32\nfield red 8\nfield green 8\n"
+      "field blue 8\nfield d 32\nfield e 64\noutput red green blue\n"
+      "proc clear\n  mov c, 0\n  mov c, 1\nend\n"
+      "proc triangle\n  mov a, 1\n  mov d, 1\n  add d, 2\n  mov e, 9\nend\n"
+      "proc shade\n  mov b, 1\n  add b, 2\n  add red, b[7:0]\n  add green, c[7:0]\nend\n";
+  const Program p = assemble(source, "weights.pp5", AssemblerOptions{});
+  CHECK(p.find_field("a")->weight == 256);
+  CHECK(p.find_field("b")->weight == 3);
+  CHECK(p.find_field("c")->weight == 3);
+  CHECK(p.find_field("d")->weight == 512);
+  CHECK(p.find_field("c")->spilled);
+  CHECK(p.find_field("b")->spilled);
+  for (const char* name : {"a", "d", "e", "red", "green", "blue"})
+    CHECK_FALSE(p.find_field(name)->spilled);
+  CHECK(p.bits_used() == 216 - 64 + 32);
+  CHECK(listing(p, TimingParams{})
+            .find("spilled c: among the least used (weighted uses 3 = 2 in clear x 1 + 1 in shade "
+                  "x 1)") != std::string::npos);
 }
 
 TEST_CASE("output fields never spill; cold fields spill first", "[assembler]") {
@@ -739,8 +778,9 @@ TEST_CASE("scratch fields reuse the bits of fields dead in shade", "[assembler]"
 }
 
 TEST_CASE("a scratch field read before it is written in a procedure is refused", "[assembler]") {
-  const std::string head = "field z 24\nfield red 8\nfield green 8\nfield blue 8\n"
-                           "scratch t 16\noutput red green blue\n";
+  const std::string head =
+      "field z 24\nfield red 8\nfield green 8\nfield blue 8\n"
+      "scratch t 16\noutput red green blue\n";
   // Read outright, read by a read-modify-write, and a bit range never written.
   check_error_here(head + "proc triangle\n  mov z, t ; HERE\nend\n",
                    "scratch field 't' is read in procedure 'triangle' before it is written there");
@@ -752,9 +792,10 @@ TEST_CASE("a scratch field read before it is written in a procedure is refused",
   check_error_here(head + "proc clear\n  mov t, 5\nend\nproc triangle\n  mov z, t ; HERE\nend\n",
                    "scratch keeps no value between procedures");
   // Output fields are read by the frame buffer after shade: they cannot be scratch.
-  check_error_here("field z 24\nscratch red 8 ; HERE\nfield green 8\nfield blue 8\n"
-                       "output red green blue\nproc triangle\n  mov red, 1\nend\n",
-                   "output field 'red' is scratch");
+  check_error_here(
+      "field z 24\nscratch red 8 ; HERE\nfield green 8\nfield blue 8\n"
+      "output red green blue\nproc triangle\n  mov red, 1\nend\n",
+      "output field 'red' is scratch");
   // A scratch field does not spill, so 'cold' is refused on it.
   check_error_here("scratch t 8 cold ; HERE\n", "a scratch field never spills");
   CHECK_NOTHROW(assemble(head + "proc triangle\n  mov t, 1\n  add t, 2\n  mov z, t\nend\n",
