@@ -21,6 +21,7 @@
 #include "sim/analysis/intersections.hpp"
 #include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
 
 using namespace pp5;
 
@@ -609,4 +610,25 @@ TEST_CASE("threshold is the paper's figure 1 with line (4''); threshold_keep kee
     CHECK(count(name, {near, distant}) == 0);
     CHECK(count(name, {distant, near}) == 0);
   }
+}
+
+TEST_CASE("The transparency programs peel as many layers as frame.layers says", "[banks]") {
+  // crossing-quads is two surfaces deep: one layer shows only the front one; two and more
+  // show both, and passes beyond the depth complexity change no pixel.
+  const Scene scene = make_builtin_scene("crossing-quads");
+  auto image = [&](int layers) {
+    MachineConfig config = MachineConfig::defaults();
+    config.set(std::vector<std::string>{"screen.width=256", "screen.height=256",
+                                        "frame.layers=" + std::to_string(layers)});
+    // Every surface at surface_opacity (128): the second layer shows through the first.
+    const Program program =
+        assemble_file(program_path("transparent_threshold"), assembler_options(config));
+    const FrameResult r = simulate_frame(config, scene, program, 2);
+    return r.image.rgb;
+  };
+  const auto one = image(1);
+  const auto two = image(2);
+  CHECK(one != two);
+  CHECK(two == image(4));
+  CHECK(two == image(7));
 }
