@@ -638,7 +638,7 @@ TEST_CASE("without cold fields the least used spill first, weighted by procedure
                   "x 1)") != std::string::npos);
 }
 
-TEST_CASE("output fields never spill; cold fields spill first", "[assembler]") {
+TEST_CASE("output fields never spill, cold fields spill first", "[assembler]") {
   // The outputs are declared last, where spilling used to start; a marked field goes first
   // even though it is used more than the others.
   const std::string source =

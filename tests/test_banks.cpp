@@ -578,7 +578,7 @@ TEST_CASE("The GP cost model counts the highlighting expressions like any other 
         5 * assembly.reference_triangle(epsilon).count);
 }
 
-TEST_CASE("threshold is the paper's figure 1 with line (4''); threshold_keep keeps the flag",
+TEST_CASE("threshold is the paper's figure 1 with line (4''), threshold_keep keeps the flag",
           "[banks]") {
   Bench b;
   // Two screen-parallel triangles, the second 0.0005 of the depth range behind the first
