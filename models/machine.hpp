@@ -79,6 +79,8 @@ class Machine : public sc_core::sc_module {
   // The values of clear, pass and shade, and of each light's `light` procedure; a packet
   // binds frame.parameters when it runs (RegionStream); it never carries them.
   const FrameValues& frame_values() const { return frame_values_; }
+  // Times the GPs send each region's triangles this frame (Program::pass_count).
+  int passes() const { return program_.pass_count(frame_values_.frame.parameters); }
 
   Ring& ring() { return *ring_; }
   FrameBuffer& frame_buffer() { return *frame_buffer_; }

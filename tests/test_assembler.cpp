@@ -190,7 +190,7 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
       {"transparent.pp5",
        {"edge0", "edge1", "edge2", "depth", "red", "green", "blue", "opacity"},
        {"background_red", "background_green", "background_blue"},
-       182},
+       173},
   };
   for (const Expected& e : programs) {
     SECTION(e.file) {
@@ -199,19 +199,26 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
       CHECK(p.memory_bits == 208);
       CHECK_FALSE(p.spill_allowed);
 
+      // Fields in declaration order from bit 0; scratch fields after them or in bits of
+      // fields dead in shade, within the budget.
       int lo = 0;
       for (const FieldDecl& f : p.fields) {
         INFO("field " << f.name);
         CHECK_FALSE(f.spilled);
-        CHECK(f.lo == lo);
         CHECK(f.block == -1);
         CHECK(p.find_field(f.name) == &f);
+        if (f.scratch) {
+          CHECK(f.lo >= 0);
+          CHECK(f.lo + f.width <= p.resident_bits);
+          continue;
+        }
+        CHECK(f.lo == lo);
         lo += f.width;
       }
-      CHECK(lo == e.bits);
-      CHECK(p.resident_bits == lo);
+      CHECK(lo + p.overlay_bits == e.bits);
+      CHECK(p.resident_bits == e.bits);
       CHECK(p.staging_bits == 0);
-      CHECK(p.bits_used() == lo);
+      CHECK(p.bits_used() == e.bits);
       CHECK(p.find_field("no_such_field") == nullptr);
 
       const char* output_names[] = {"red", "green", "blue"};
@@ -253,7 +260,18 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
             (file == "phong.pp5" || file == "transparent.pp5"));
       CHECK(p.procedure(Procedure::light).defined == (file == "phong.pp5"));
       CHECK(p.procedure(Procedure::pass).defined == (file == "transparent.pp5"));
-      CHECK(p.passes == (file == "transparent.pp5" ? 4 : 1));
+      // The transparency program's pass count is the frame parameter `layers` (4 by default).
+      CHECK(p.passes_parameter ==
+            (file == "transparent.pp5" ? static_cast<int>(Parameter::layers) : -1));
+      CHECK(p.multipass() == (file == "transparent.pp5"));
+      ParameterValues frame{};
+      frame[static_cast<int>(Parameter::layers)] = 6;
+      CHECK(p.pass_count(frame) == (file == "transparent.pp5" ? 6 : 1));
+      frame[static_cast<int>(Parameter::layers)] = 0;
+      if (file == "transparent.pp5") {
+        CHECK_THROWS_WITH(p.pass_count(frame), Catch::Contains("option passes layers") &&
+                                                   Catch::Contains("expected 1 to 64"));
+      }
     }
   }
 }
@@ -353,7 +371,7 @@ TEST_CASE("errors name the file, the line and what was expected", "[assembler]")
   }
   SECTION("declarations") {
     check_error_here("field a ; HERE\n" + with_triangle(""),
-                     "expected 'field NAME WIDTH [signed]'");
+                     "expected 'field NAME WIDTH [signed] [cold]'");
     check_error_here("field a 0 ; HERE\n" + with_triangle(""), "from 1 to 64");
     check_error_here("field a 65 ; HERE\n" + with_triangle(""), "from 1 to 64");
     check_error_here("field a 8 unsigned ; HERE\n" + with_triangle(""), "expected 'signed'");
@@ -437,39 +455,41 @@ TEST_CASE("spilled fields are bracketed by backing-store transfers", "[assembler
   const Program p = assemble(source, "spill.pp5", AssemblerOptions{});
   CHECK(p.spill_allowed);
 
-  // Spilled fields are a suffix of the declaration list; the rest keep contiguous bits.
-  int first_spilled = -1;
+  // The resident fields keep contiguous bits in declaration order; spilled ones get disjoint
+  // blocks.
   int lo = 0;
   int resident = 0;
   std::set<std::pair<int, int>> blocks;  // [first, end) of every spilled field
+  std::set<std::string> spilled_names;
   for (std::size_t k = 0; k < p.fields.size(); ++k) {
     const FieldDecl& f = p.fields[k];
     INFO("field " << f.name);
     if (f.spilled) {
-      if (first_spilled < 0) first_spilled = static_cast<int>(k);
+      spilled_names.insert(f.name);
       CHECK(f.block >= 0);
       const int n = (f.width + 31) / 32;
       CHECK((f.block + n) * 32 <= 4096);
       for (const auto& [b, e] : blocks) CHECK((f.block >= e || f.block + n <= b));
       blocks.insert({f.block, f.block + n});
     } else {
-      CHECK(first_spilled < 0);
       CHECK(f.lo == lo);
       lo += f.width;
       resident += f.width;
     }
   }
-  REQUIRE(first_spilled > 0);
-  CHECK(p.fields.size() - first_spilled >= 3);
   CHECK(p.resident_bits == resident);
   CHECK(p.staging_bits > 0);
   CHECK(p.bits_used() == p.resident_bits + p.staging_bits);
   CHECK(p.bits_used() <= p.memory_bits);
-  // Spilling stops as soon as the rest fits: this program needs the last five fields moved
-  // (its instructions use at most two spilled fields, 64 staging bits).
-  CHECK(first_spilled == 6);
-  CHECK(p.resident_bits == 120);
+  // The cold fields spill first (k, s1, s2, s3 and flag), the least used of them first
+  // (flag 514, s1 770, k 771, s2 772, s3 more: static uses weighted by procedure frequency),
+  // and spilling stops as soon as the rest fits: 225 - 1 - 24 - 32 - 32 = 136 resident bits
+  // and 64 staging bits (its instructions use at most two spilled fields).
+  CHECK(spilled_names == std::set<std::string>{"flag", "s2", "k", "s1"});
+  CHECK(p.resident_bits == 136);
   CHECK(p.staging_bits == 64);
+  // The listing says why.
+  CHECK(listing(p, TimingParams{}).find("spilled s1: marked cold") != std::string::npos);
 
   int total_transfers = 0;
   for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
@@ -584,19 +604,59 @@ TEST_CASE("spilling fails cleanly when even spilling cannot fit", "[assembler]")
   const std::string source = read_text(kSpillProgram);
   // Two spilled fields of one 32-bit block each need 64 staging bits: more than 40.
   const std::string tiny = assembly_error(source, options_with_memory(40));
-  CHECK(tiny.rfind("bad.pp5: even with every field spilled, one instruction needs", 0) == 0);
+  CHECK(tiny.rfind("bad.pp5: even with every field but the outputs spilled", 0) == 0);
   AssemblerOptions no_store;
   no_store.backing_store_bits = 64;
   const std::string full = assembly_error(source, no_store);
   CHECK(full.find("backing-store blocks; the store has 2") != std::string::npos);
 }
 
-TEST_CASE("an output field may not be spilled", "[assembler]") {
-  // Spilling starts at the end of the declarations, where this program declares its outputs.
+TEST_CASE("without cold fields the least used spill first, weighted by procedure frequency",
+          "[assembler]") {
+  // Uses, counted by hand: a 1 in triangle (256); b 3 in shade (3); c 2 in clear and 1 in
+  // shade (3); d 2 in triangle (512). 216 bits: two 32-bit fields must go, with one staging
+  // block: c and b (equal weights: the last declared first), though a and d come first and
+  // last in the declarations.
   const std::string source =
-      "option spill\nfield a 64\nfield b 64\nfield c 64\nfield red 8\nfield green 8\n"
-      "field blue 8 ; HERE\noutput red green blue\nproc triangle\n  mov a, 1\nend\n";
-  check_error_here(source, "output field 'blue' was spilled to the backing store");
+      "option spill\nfield a 32\nfield b 32\nfield c 32\nfield red 8\nfield green 8\n"
+      "field blue 8\nfield d 32\nfield e 64\noutput red green blue\n"
+      "proc clear\n  mov c, 0\n  mov c, 1\nend\n"
+      "proc triangle\n  mov a, 1\n  mov d, 1\n  add d, 2\n  mov e, 9\nend\n"
+      "proc shade\n  mov b, 1\n  add b, 2\n  add red, b[7:0]\n  add green, c[7:0]\nend\n";
+  const Program p = assemble(source, "weights.pp5", AssemblerOptions{});
+  CHECK(p.find_field("a")->weight == 256);
+  CHECK(p.find_field("b")->weight == 3);
+  CHECK(p.find_field("c")->weight == 3);
+  CHECK(p.find_field("d")->weight == 512);
+  CHECK(p.find_field("c")->spilled);
+  CHECK(p.find_field("b")->spilled);
+  for (const char* name : {"a", "d", "e", "red", "green", "blue"})
+    CHECK_FALSE(p.find_field(name)->spilled);
+  CHECK(p.bits_used() == 216 - 64 + 32);
+  CHECK(listing(p, TimingParams{})
+            .find("spilled c: among the least used (weighted uses 3 = 2 in clear x 1 + 1 in shade "
+                  "x 1)") != std::string::npos);
+}
+
+TEST_CASE("output fields never spill, cold fields spill first", "[assembler]") {
+  // The outputs are declared last, where spilling used to start; a marked field goes first
+  // even though it is used more than the others.
+  const std::string source =
+      "option spill\nfield a 32 cold\nfield e 32 cold\nfield b 64\nfield c 64\nfield red 8\n"
+      "field green 8\nfield blue 8\noutput red green blue\nproc triangle\n  mov a, 1\n"
+      "  add a, 2\n  mov e, 1\n  mov b, 1\n  mov c, 1\nend\n";
+  const Program p = assemble(source, "cold.pp5", AssemblerOptions{});
+  CHECK(p.find_field("a")->spilled);
+  CHECK(p.find_field("e")->spilled);
+  CHECK_FALSE(p.find_field("b")->spilled);
+  CHECK_FALSE(p.find_field("c")->spilled);
+  for (const char* name : {"red", "green", "blue"}) CHECK_FALSE(p.find_field(name)->spilled);
+  const std::string text = listing(p, TimingParams{});
+  CHECK(text.find("spilled a: marked cold (weighted uses 512 = 2 in triangle x 256)") !=
+        std::string::npos);
+  // Without room for the outputs themselves, the error says so.
+  CHECK(assembly_error(source, options_with_memory(20))
+            .rfind("bad.pp5: even with every field but the outputs spilled", 0) == 0);
 }
 
 TEST_CASE("cmp may compare overlapping slices of one field", "[assembler]") {
@@ -663,4 +723,81 @@ TEST_CASE("the listing shows every field and instruction", "[assembler]") {
   CHECK(text.find("spill staging") != std::string::npos);
   CHECK(text.find("backing store block") != std::string::npos);
   CHECK(text.find("(spill)") != std::string::npos);
+}
+
+TEST_CASE("scratch fields share bits unless one procedure needs both at once", "[assembler]") {
+  const std::string source =
+      "field z 24\nfield red 8\nfield green 8\nfield blue 8\nfield keep 16\n"
+      "scratch t 20 signed\nscratch u 12\nscratch v 12\nscratch s 16\n"
+      "output red green blue\n"
+      "proc triangle\n  qload t, depth\n  mov u, t[11:0]\n  add u, 1\n  mov keep, u\n"
+      "  mov v, 3\n  add v, keep[11:0]\n  mov z, v\nend\n"
+      "proc shade\n  mov s, keep\n  add s, z[15:0]\n  mov red, s[7:0]\nend\n";
+  const Program p = assemble(source, "share.pp5", AssemblerOptions{});
+  const FieldDecl& t = *p.find_field("t");
+  const FieldDecl& u = *p.find_field("u");
+  const FieldDecl& v = *p.find_field("v");
+  const FieldDecl& s = *p.find_field("s");
+  auto overlap = [](const FieldDecl& a, const FieldDecl& b) {
+    return a.lo < b.lo + b.width && b.lo < a.lo + a.width;
+  };
+  // The fields keep bits 0..63; t and u are live together (u is written from t), v starts
+  // after both have died, and s (shade) meets none of them; shade still needs keep and z, so
+  // s goes past the fields.
+  CHECK(p.find_field("keep")->lo == 48);
+  CHECK(t.lo == 64);
+  CHECK_FALSE(overlap(t, u));
+  CHECK(overlap(v, t));
+  CHECK(v.lo == 64);
+  CHECK(s.lo == 64);
+  CHECK(p.overlay_bits == 32);
+  CHECK(p.resident_bits == 96);
+  CHECK(p.bits_used() == 96);
+  for (const FieldDecl& f : p.fields) CHECK(f.scratch == (f.name.size() == 1 && f.name != "z"));
+  const std::string text = listing(p, TimingParams{});
+  CHECK(text.find("overlay (triangle)") != std::string::npos);
+  CHECK(text.find("scratch: 60 bits of scratch fields in 32 bits past the fields") !=
+        std::string::npos);
+}
+
+TEST_CASE("scratch fields reuse the bits of fields dead in shade", "[assembler]") {
+  // In shade, z and n are read first and never again, and red is an output: a scratch field
+  // written after their last use takes their bits; an output's bits are never taken.
+  const std::string source =
+      "field z 24\nfield n 8\nfield red 8\nfield green 8\nfield blue 8\n"
+      "scratch a 24\nscratch b 8\n"
+      "output red green blue\n"
+      "proc triangle\n  qload z, depth\n  qload n, nx\nend\n"
+      "proc shade\n  mov red, n\n  add red, z[7:0]\n  mov a, 7\n  add a, a\n  mov b, a[7:0]\n"
+      "  add green, b\nend\n";
+  const Program p = assemble(source, "dead.pp5", AssemblerOptions{});
+  CHECK(p.find_field("a")->lo == 0);   // z's bits
+  CHECK(p.find_field("b")->lo == 24);  // n's bits (a is live while b is written)
+  CHECK(p.overlay_bits == 0);
+  CHECK(p.bits_used() == 56);
+}
+
+TEST_CASE("a scratch field read before it is written in a procedure is refused", "[assembler]") {
+  const std::string head =
+      "field z 24\nfield red 8\nfield green 8\nfield blue 8\n"
+      "scratch t 16\noutput red green blue\n";
+  // Read outright, read by a read-modify-write, and a bit range never written.
+  check_error_here(head + "proc triangle\n  mov z, t ; HERE\nend\n",
+                   "scratch field 't' is read in procedure 'triangle' before it is written there");
+  check_error_here(head + "proc triangle\n  mov t, 1\nend\nproc shade\n  add t, 1 ; HERE\nend\n",
+                   "scratch field 't' is read in procedure 'shade' before it is written there");
+  check_error_here(head + "proc triangle\n  mov t[7:0], 1\n  mov z, t[8:0] ; HERE\nend\n",
+                   "scratch field 't' is read in procedure 'triangle'");
+  // Written in one procedure and read in another: the value does not survive.
+  check_error_here(head + "proc clear\n  mov t, 5\nend\nproc triangle\n  mov z, t ; HERE\nend\n",
+                   "scratch keeps no value between procedures");
+  // Output fields are read by the frame buffer after shade: they cannot be scratch.
+  check_error_here(
+      "field z 24\nscratch red 8 ; HERE\nfield green 8\nfield blue 8\n"
+      "output red green blue\nproc triangle\n  mov red, 1\nend\n",
+      "output field 'red' is scratch");
+  // A scratch field does not spill, so 'cold' is refused on it.
+  check_error_here("scratch t 8 cold ; HERE\n", "a scratch field never spills");
+  CHECK_NOTHROW(assemble(head + "proc triangle\n  mov t, 1\n  add t, 2\n  mov z, t\nend\n",
+                         "ok.pp5", AssemblerOptions{}));
 }

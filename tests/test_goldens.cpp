@@ -38,6 +38,7 @@ const char* const kPrograms[] = {"epsilon",
                                  "phong",
                                  "threshold",
                                  "threshold_eyez",
+                                 "threshold_keep",
                                  "transparent",
                                  "transparent_exactmatch",
                                  "transparent_threshold"};

@@ -209,7 +209,9 @@ TEST_CASE("simulated time past SystemC's 2^64 ps is refused, not wrapped", "[inp
   options.tessellation_u = 640;
   options.tessellation_v = 128;
   const Scene scene = make_builtin_scene("torus", options);
-  const Program program = test::load_program("epsilon_folded", config);
+  const Program program =
+      assemble_file(std::string(PP5_SOURCE_DIR) + "/tests/data/firmware/spill_folded_epsilon.pp5",
+                    assembler_options(config));
   CHECK_THROWS_WITH(simulate_frame(config, scene, program, 2),
                     Catch::Contains("simulated time ran past what SystemC can count") &&
                         Catch::Contains("renderer0 was busy"));

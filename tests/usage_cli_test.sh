@@ -29,10 +29,12 @@ lines=$( (ulimit -v $limit; "$bin" sweep --grid gp.count=$ten --grid renderer.co
   --print-commands --out "$tmp/sweep") | wc -l)
 [ "$lines" = 100000 ] || fail "a 100,000-point sweep printed $lines commands"
 # A frame too large for the host is refused before anything is allocated, saying what to reduce
-# (checked where an address-space limit can be set).
+# (checked where an address-space limit can be set). The program must spill, so that every pixel
+# has its backing store: the test data's spill.pp5 (the shipped programs fit since issue 17).
 [ "$limit" = unlimited ] && { echo "usage_cli: all checks passed (memory limit not tested under ASan)"; exit 0; }
 out=$( (ulimit -v $((2 * 1024 * 1024)); "$bin" render --set renderer.region_width=1024 \
-  --set renderer.region_height=1024 --set renderer.backing_store_bits=65536 --firmware epsilon \
+  --set renderer.region_height=1024 --set renderer.backing_store_bits=65536 \
+  --firmware "$(dirname "$0")/data/firmware/spill.pp5" \
   --set screen.width=1024 --out "$tmp/big") 2>&1) && fail "a 72 GiB frame ran under a 2 GiB limit"
 echo "$out" | grep -q "this frame needs about .* GiB .* smaller renderer.backing_store_bits" \
   || fail "memory refusal said: $out"

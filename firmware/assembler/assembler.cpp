@@ -1,6 +1,7 @@
 #include "firmware/assembler/assembler.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cctype>
@@ -106,7 +107,7 @@ class Assembler {
   void statement(const std::string& text) {
     const auto words = split_words(text);
     const std::string& head = words[0];
-    if (head == "field") return declare_field(words);
+    if (head == "field" || head == "scratch") return declare_field(words);
     if (head == "output") return declare_output(words);
     if (head == "option") return declare_option(words);
     if (head == "proc") return begin_procedure(words);
@@ -118,14 +119,19 @@ class Assembler {
       return;
     }
     if (current_ < 0) {
-      fail("'{}' outside a procedure: expected field, output, option or proc", head);
+      fail("'{}' outside a procedure: expected field, scratch, output, option or proc", head);
     }
     instruction(text);
   }
 
+  // field NAME WIDTH [signed] [cold], or scratch NAME WIDTH [signed].
   void declare_field(const std::vector<std::string>& w) {
-    if (current_ >= 0) fail("field declarations belong before the procedures");
-    if (w.size() < 3 || w.size() > 4) fail("expected 'field NAME WIDTH [signed]'");
+    const bool scratch = w[0] == "scratch";
+    if (current_ >= 0) fail("{} declarations belong before the procedures", w[0]);
+    if (w.size() < 3 || w.size() > 5) {
+      fail(scratch ? "expected 'scratch NAME WIDTH [signed]'"
+                   : "expected 'field NAME WIDTH [signed] [cold]'");
+    }
     const std::string& name = w[1];
     if (!is_identifier(name)) fail("'{}' is not a valid field name", name);
     if (field_index(name) >= 0) fail("field '{}' is declared twice", name);
@@ -137,13 +143,22 @@ class Assembler {
     if (!parse_integer(w[2], width) || width < 1 || width > kMaxFieldBits) {
       fail("field width must be an integer from 1 to {} (got '{}')", kMaxFieldBits, w[2]);
     }
-    bool is_signed = false;
-    if (w.size() == 4) {
-      if (w[3] != "signed") fail("expected 'signed' after the width, got '{}'", w[3]);
-      is_signed = true;
+    FieldDecl decl{name, static_cast<int>(width), false, line_};
+    decl.scratch = scratch;
+    for (std::size_t k = 3; k < w.size(); ++k) {
+      if (w[k] == "signed" && !decl.is_signed) {
+        decl.is_signed = true;
+      } else if (w[k] == "cold" && !scratch && !decl.cold) {
+        decl.cold = true;
+      } else if (w[k] == "cold" && scratch) {
+        fail("a scratch field never spills: 'cold' is for fields");
+      } else {
+        fail("expected {} after the width, got '{}'", scratch ? "'signed'" : "'signed' or 'cold'",
+             w[k]);
+      }
     }
     field_by_name_.emplace(name, static_cast<int>(program_.fields.size()));
-    program_.fields.push_back({name, static_cast<int>(width), is_signed, line_});
+    program_.fields.push_back(decl);
   }
 
   void declare_output(const std::vector<std::string>& w) {
@@ -168,8 +183,13 @@ class Assembler {
     }
     if (w.size() == 3 && w[1] == "passes") {
       std::int64_t n = 0;
+      if (const int k = parameter_index(w[2]); k >= 0) {
+        program_.passes_parameter = k;
+        return;
+      }
       if (!parse_integer(w[2], n) || n < 1 || n > kMaxPasses) {
-        fail("option passes: expected an integer from 1 to {} (got '{}')", kMaxPasses, w[2]);
+        fail("option passes: expected an integer from 1 to {} or a frame parameter (got '{}')",
+             kMaxPasses, w[2]);
       }
       program_.passes = static_cast<int>(n);
       return;
@@ -402,76 +422,232 @@ class Assembler {
     if (!have_output_) {
       throw AssemblyError(program_.name + ": the program has no 'output RED GREEN BLUE' line");
     }
+    for (int k = 0; k < 3; ++k) {
+      const FieldDecl& f = program_.fields[output_fields_[k]];
+      if (f.scratch) {
+        line_ = f.line;
+        fail(
+            "output field '{}' is scratch; the frame buffer reads it after the procedures, so "
+            "declare it with 'field'",
+            f.name);
+      }
+    }
+    count_uses();
+    check_scratch_liveness();
     layout();
     for (int p = 0; p < static_cast<int>(Procedure::count); ++p) emit(p);
     for (int k = 0; k < 3; ++k) {
       const FieldDecl& f = program_.fields[output_fields_[k]];
-      if (f.spilled) {
-        throw AssemblyError(
-            fmt::format("{}:{}: output field '{}' was spilled to the backing store; "
-                        "declare it earlier so it stays in pixel memory",
-                        program_.name, f.line, f.name));
-      }
       program_.outputs[k] = Field{f.lo, f.width, false};
     }
+  }
+
+  // Static uses of every field, by procedure, their weighted sum (the spill order) and the
+  // first and last instruction of each procedure that names the field (its live range there).
+  void count_uses() {
+    ranges_.assign(program_.fields.size(), {});
+    for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
+      const auto& code = parsed_[proc];
+      for (int i = 0; i < static_cast<int>(code.size()); ++i) {
+        const ParsedInstruction& p = code[i];
+        int seen[3] = {-1, -1, -1};
+        for (int k = 0; k < 3; ++k) {
+          const int f = p.uses[k].field;
+          if (f < 0 || f == seen[0] || f == seen[1]) continue;
+          seen[k] = f;
+          ++program_.fields[f].uses[proc];
+          program_.fields[f].weight += static_cast<std::uint64_t>(kProcedureWeight[proc]);
+          Range& r = ranges_[f][proc];
+          if (r.first < 0) r.first = i;
+          r.last = i;
+        }
+      }
+    }
+  }
+
+  // Whether an instruction's operand k reads its field (a written operand is also read unless
+  // the instruction replaces it outright).
+  static bool reads(const InstructionInfo& info, int k) {
+    const char kind = info.operands[k];
+    if (kind == 'R' || kind == 'V') return true;
+    if (kind != 'F') return false;
+    return info.op != Opcode::mov && info.op != Opcode::qload && info.op != Opcode::mul &&
+           info.op != Opcode::bsld;
+  }
+
+  // A scratch field starts every procedure run with whatever another procedure's scratch
+  // left in its bits: each bit must be written before it is read (program order; a write
+  // under a partial Enable counts, as the author keeps the reads under the same condition).
+  void check_scratch_liveness() {
+    std::vector<std::uint64_t> written(program_.fields.size(), 0);
+    auto mask = [](const FieldUse& u) {
+      const std::uint64_t ones =
+          u.width >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << u.width) - 1;
+      return ones << u.offset;
+    };
+    for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
+      std::fill(written.begin(), written.end(), 0);
+      for (const ParsedInstruction& p : parsed_[proc]) {
+        const InstructionInfo& info = instruction_info(p.ins.op);
+        const int n = static_cast<int>(std::char_traits<char>::length(info.operands));
+        for (int k = 0; k < n; ++k) {
+          const FieldUse& u = p.uses[k];
+          if (u.field < 0 || !program_.fields[u.field].scratch || !reads(info, k)) continue;
+          if ((mask(u) & ~written[u.field]) != 0) {
+            line_ = p.ins.line;
+            fail(
+                "scratch field '{}' is read in procedure '{}' before it is written there "
+                "(scratch keeps no value between procedures: declare it with 'field' to keep "
+                "one)",
+                program_.fields[u.field].name, kProcedureNames[proc]);
+          }
+        }
+        const FieldUse& dst = p.uses[0];
+        if (dst.field >= 0 && info.operands[0] == 'F') written[dst.field] |= mask(dst);
+      }
+    }
+  }
+
+  // Whether two scratch fields are ever needed at once: some procedure uses both, and their
+  // live ranges there (first to last instruction naming them) overlap.
+  bool interfere(int f, int g) const {
+    for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
+      const Range& a = ranges_[f][p];
+      const Range& b = ranges_[g][p];
+      if (a.first >= 0 && b.first >= 0 && a.first <= b.last && b.first <= a.last) return true;
+    }
+    return false;
+  }
+
+  // Whether the resident field `field` holds a value while scratch field `s` is in use. Only
+  // `shade` runs after everything else, so only there can a field be dead: from its last use
+  // on, unless the frame buffer reads it (an output). Elsewhere every field is taken as live.
+  bool live_during(int field, int s) const {
+    const int shade = static_cast<int>(Procedure::shade);
+    for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
+      if (p != shade && ranges_[s][p].first >= 0) return true;
+    }
+    if (std::find(output_fields_.begin(), output_fields_.end(), field) != output_fields_.end())
+      return true;
+    return ranges_[field][shade].last >= ranges_[s][shade].first;
+  }
+
+  // Places the resident fields in declaration order from bit 0, then every scratch field at
+  // the lowest offset where it overlaps no scratch field it interferes with and (with `holes`)
+  // no resident field live while it is in use, or (without) nothing resident at all. Returns
+  // the bits used (the highest end).
+  int place(const std::vector<bool>& spilled, bool holes) {
+    auto& fields = program_.fields;
+    int lo = 0;
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      if (fields[k].scratch || spilled[k]) continue;
+      fields[k].lo = lo;
+      lo += fields[k].width;
+    }
+    const int resident_end = lo;
+    int end = resident_end;
+    std::vector<int> placed;
+    std::vector<std::pair<int, int>> busy;  // [lo, end) the current field must avoid
+    for (int f = 0; f < static_cast<int>(fields.size()); ++f) {
+      if (!fields[f].scratch) continue;
+      busy.clear();
+      if (!holes) busy.push_back({0, resident_end});
+      for (int g = 0; holes && g < static_cast<int>(fields.size()); ++g) {
+        if (!fields[g].scratch && !spilled[g] && live_during(g, f))
+          busy.push_back({fields[g].lo, fields[g].lo + fields[g].width});
+      }
+      for (int g : placed) {
+        if (interfere(f, g)) busy.push_back({fields[g].lo, fields[g].lo + fields[g].width});
+      }
+      std::sort(busy.begin(), busy.end());
+      int offset = 0;
+      for (const auto& [b, e] : busy) {
+        if (offset + fields[f].width <= b) break;
+        offset = std::max(offset, e);
+      }
+      fields[f].lo = offset;
+      placed.push_back(f);
+      end = std::max(end, offset + fields[f].width);
+    }
+    program_.overlay_lo = resident_end;
+    program_.overlay_bits = end - resident_end;
+    return end;
   }
 
   void layout() {
     auto& fields = program_.fields;
     std::vector<bool> spilled(fields.size(), false);
-    int resident = 0;
-    for (const auto& f : fields) resident += f.width;
-    // The instructions that use each field: spilling a field changes only their staging need,
-    // and no need ever shrinks as more fields spill, so the staging area is a running maximum
-    // (linear in the program, not fields x instructions).
-    std::vector<std::vector<const ParsedInstruction*>> users(fields.size());
-    for (const auto& code : parsed_) {
-      for (const auto& p : code) {
-        for (const FieldUse& u : p.uses) {
-          if (u.field >= 0 && (users[u.field].empty() || users[u.field].back() != &p))
-            users[u.field].push_back(&p);
-        }
+    int resident = place(spilled, true);
+    if (resident > options_.memory_bits && !program_.spill_allowed) {
+      std::string table;
+      for (const auto& f : fields) {
+        table +=
+            fmt::format("\n  {:<12} {:>3} bits{}", f.name, f.width, f.scratch ? " (scratch)" : "");
       }
+      throw AssemblyError(fmt::format(
+          "{}: the fields need {} bits but pixel memory has {} (renderer.memory_bits);{}\n"
+          "add 'option spill' to move fields to the backing store, or shrink them",
+          program_.name, resident, options_.memory_bits, table));
     }
     int staging = 0;
-    for (int next = static_cast<int>(fields.size()) - 1;; --next) {
-      if (resident + staging <= options_.memory_bits) break;
-      if (!program_.spill_allowed) {
-        std::string table;
-        for (const auto& f : fields) table += fmt::format("\n  {:<12} {:>3} bits", f.name, f.width);
-        throw AssemblyError(fmt::format(
-            "{}: the fields need {} bits but pixel memory has {} (renderer.memory_bits);{}\n"
-            "add 'option spill' to move fields to the backing store, or shrink them",
-            program_.name, resident, options_.memory_bits, table));
+    if (resident > options_.memory_bits) {
+      // Spilling is decided on the layout without dead-field reuse, whose size only falls
+      // by each spilled field's width (the scratch fields then start after the resident ones).
+      resident = place(spilled, false);
+      // The instructions that use each field: spilling a field changes only their staging
+      // need, and no need ever shrinks as more fields spill, so the staging area is a running
+      // maximum (linear in the program, not fields x instructions).
+      std::vector<std::vector<const ParsedInstruction*>> users(fields.size());
+      for (const auto& code : parsed_) {
+        for (const auto& p : code) {
+          for (const FieldUse& u : p.uses) {
+            if (u.field >= 0 && (users[u.field].empty() || users[u.field].back() != &p))
+              users[u.field].push_back(&p);
+          }
+        }
       }
-      if (next < 0) {
-        throw AssemblyError(fmt::format(
-            "{}: even with every field spilled, one instruction needs {} staging bits and pixel "
-            "memory has {}",
-            program_.name, staging, options_.memory_bits));
+      // The spill order: cold fields first, then the least used, the last declared first
+      // among equals. Outputs (the frame buffer reads them) and scratch never move.
+      std::vector<int> order;
+      for (int f = 0; f < static_cast<int>(fields.size()); ++f) {
+        const bool output =
+            std::find(output_fields_.begin(), output_fields_.end(), f) != output_fields_.end();
+        if (!fields[f].scratch && !output) order.push_back(f);
       }
-      spilled[next] = true;
-      resident -= fields[next].width;
-      for (const ParsedInstruction* p : users[next])
-        staging = std::max(staging, staging_need(*p, spilled));
+      std::sort(order.begin(), order.end(), [&](int a, int b) {
+        if (fields[a].cold != fields[b].cold) return fields[a].cold;
+        if (fields[a].weight != fields[b].weight) return fields[a].weight < fields[b].weight;
+        return a > b;
+      });
+      for (std::size_t next = 0; resident + staging > options_.memory_bits; ++next) {
+        if (next == order.size()) {
+          throw AssemblyError(fmt::format(
+              "{}: even with every field but the outputs spilled, the outputs, the scratch "
+              "fields and {} staging bits need {} bits and pixel memory has {}",
+              program_.name, staging, resident + staging, options_.memory_bits));
+        }
+        const int f = order[next];
+        spilled[f] = true;
+        resident -= fields[f].width;
+        for (const ParsedInstruction* p : users[f])
+          staging = std::max(staging, staging_need(*p, spilled));
+      }
+      // Reuse dead fields where that still fits; the layout without reuse always does.
+      resident = place(spilled, true);
+      if (resident + staging > options_.memory_bits) resident = place(spilled, false);
     }
-    int lo = 0;
     int block = explicit_end_block_;  // spilled fields go after blocks the program uses itself
     const int blocks = options_.backing_store_bits / options_.block_bits;
     for (std::size_t k = 0; k < fields.size(); ++k) {
       fields[k].spilled = spilled[k];
-      if (spilled[k]) {
-        fields[k].block = block;
-        block += round_to_block(fields[k].width) / options_.block_bits;
-        if (block > blocks) {
-          throw AssemblyError(
-              fmt::format("{}: spilled fields need {} backing-store blocks; the "
-                          "store has {}",
-                          program_.name, block, blocks));
-        }
-      } else {
-        fields[k].lo = lo;
-        lo += fields[k].width;
+      if (!spilled[k]) continue;
+      fields[k].lo = -1;
+      fields[k].block = block;
+      block += round_to_block(fields[k].width) / options_.block_bits;
+      if (block > blocks) {
+        throw AssemblyError(
+            fmt::format("{}: spilled fields need {} backing-store blocks; the store has {}",
+                        program_.name, block, blocks));
       }
     }
     program_.resident_bits = resident;
@@ -548,6 +724,10 @@ class Assembler {
   std::array<int, 3> output_fields_{};
   std::array<std::vector<ParsedInstruction>, static_cast<int>(Procedure::count)> parsed_;
   int explicit_end_block_ = 0;  // one past the last block that explicit bsld/bsst use
+  struct Range {
+    int first = -1, last = -1;  // instruction indices in one procedure; -1: not used there
+  };
+  std::vector<std::array<Range, static_cast<int>(Procedure::count)>> ranges_;
   std::unordered_map<std::string, int> field_by_name_;
 };
 
@@ -558,6 +738,17 @@ const FieldDecl* Program::find_field(const std::string& name) const {
     if (f.name == name) return &f;
   }
   return nullptr;
+}
+
+int Program::pass_count(const ParameterValues& frame) const {
+  if (passes_parameter < 0) return passes;
+  const std::int64_t n = frame[static_cast<std::size_t>(passes_parameter)];
+  if (n < 1 || n > kMaxPasses) {
+    throw std::runtime_error(
+        fmt::format("{}: option passes {}: the frame parameter is {}, expected 1 to {}", name,
+                    kParameters[passes_parameter].name, n, kMaxPasses));
+  }
+  return static_cast<int>(n);
 }
 
 Program assemble(const std::string& source, const std::string& name,
@@ -578,16 +769,53 @@ Program assemble_file(const std::string& path, const AssemblerOptions& options) 
 std::string listing(const Program& program, const TimingParams& timing) {
   std::string out = fmt::format("program {}\n\nfield map ({} of {} bits used", program.name,
                                 program.bits_used(), program.memory_bits);
+  if (program.overlay_bits)
+    out += fmt::format(", {} of them scratch overlay", program.overlay_bits);
   if (program.staging_bits) out += fmt::format(", {} of them spill staging", program.staging_bits);
   out += ")\n";
-  for (const auto& f : program.fields) {
-    if (f.spilled) {
-      out += fmt::format("  {:<14} {:>3} bits{}  backing store block {}\n", f.name, f.width,
-                         f.is_signed ? " signed" : "       ", f.block);
-    } else {
-      out += fmt::format("  {:<14} {:>3} bits{}  pixel memory [{}:{}]\n", f.name, f.width,
-                         f.is_signed ? " signed" : "       ", f.lo + f.width - 1, f.lo);
+  auto users = [](const FieldDecl& f) {
+    std::vector<std::string> names;
+    for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
+      if (f.uses[p]) names.push_back(kProcedureNames[p]);
     }
+    return names.empty() ? std::string("unused") : fmt::format("{}", fmt::join(names, " "));
+  };
+  for (const auto& f : program.fields) {
+    const char* sign = f.is_signed ? " signed" : "       ";
+    if (f.spilled) {
+      out += fmt::format("  {:<14} {:>3} bits{}  backing store block {}\n", f.name, f.width, sign,
+                         f.block);
+    } else if (f.scratch) {
+      out += fmt::format("  {:<14} {:>3} bits{}  pixel memory [{}:{}], overlay ({})\n", f.name,
+                         f.width, sign, f.lo + f.width - 1, f.lo, users(f));
+    } else {
+      out += fmt::format("  {:<14} {:>3} bits{}  pixel memory [{}:{}]\n", f.name, f.width, sign,
+                         f.lo + f.width - 1, f.lo);
+    }
+  }
+  int scratch_bits = 0;
+  for (const auto& f : program.fields) scratch_bits += f.scratch ? f.width : 0;
+  if (scratch_bits) {
+    out += fmt::format(
+        "scratch: {} bits of scratch fields in {} bits past the fields [{}:{}] and the bits of "
+        "fields dead in shade (scratch fields share bits unless one procedure needs both at "
+        "once)\n",
+        scratch_bits, program.overlay_bits,
+        program.overlay_lo + std::max(program.overlay_bits, 1) - 1, program.overlay_lo);
+  }
+  // What spilled and why: cold, or the fewest uses weighted by how often each procedure runs.
+  for (const auto& f : program.fields) {
+    if (!f.spilled) continue;
+    std::vector<std::string> terms;
+    for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
+      if (f.uses[p]) {
+        terms.push_back(
+            fmt::format("{} in {} x {}", f.uses[p], kProcedureNames[p], kProcedureWeight[p]));
+      }
+    }
+    out += fmt::format("spilled {}: {} (weighted uses {}{}{})\n", f.name,
+                       f.cold ? "marked cold" : "among the least used", f.weight,
+                       terms.empty() ? "" : " = ", fmt::format("{}", fmt::join(terms, " + ")));
   }
   const OwnedValues values{};
   for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {

@@ -2,16 +2,26 @@
 // The firmware assembler: turns a text program (see firmware/README.md) into the
 // instruction streams the Renderer executes, and lays its fields out in pixel memory.
 //
-// Contract: a program that assembles fits the machine. Fields are placed in declaration
-// order from bit 0. If they do not fit in renderer.memory_bits the program is rejected,
-// unless it says `option spill`: then fields are moved to the backing store from the end of
-// the declaration list until the rest, plus a staging area for the spilled fields that one
-// instruction uses, fit; every use of a spilled field is bracketed by real bsld/bsst
-// instructions, whose cost the Renderer charges like any other. Errors are AssemblyError
-// with the message "FILE:LINE: what was expected".
+// Contract: a program that assembles fits the machine.
+//  - `field`s keep their value from one procedure to the next; they are placed in
+//    declaration order from bit 0.
+//  - `scratch` fields hold a value only within one run of one procedure: they share one
+//    overlay after the fields, where two scratch fields overlap only if no procedure uses
+//    both. Every bit of a scratch field a procedure reads must have been written earlier in
+//    that procedure (in program order), or the program is refused naming the line: so no
+//    overlap is ever live across procedures.
+//  - If the fields and the overlay do not fit in renderer.memory_bits the program is
+//    rejected, unless it says `option spill`: then fields move to the backing store, those
+//    marked `cold` first, then the least used (static uses weighted by how often their
+//    procedure runs, kProcedureWeight), until the rest plus a staging area for the spilled
+//    fields one instruction uses fit. Output fields and scratch fields never spill. Every use
+//    of a spilled field is bracketed by real bsld/bsst instructions, whose cost the Renderer
+//    charges like any other.
+//  - Errors are AssemblyError with the message "FILE:LINE: what was expected".
 #include <array>
 #include <bitset>
 #include <cstdint>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -31,14 +41,27 @@ struct AssemblerOptions {
   int enable_stack_depth = 8;
 };
 
+// How often a procedure runs, relative to the others, for choosing what to spill: `triangle`
+// runs once per packet, the others once per region (light once per scene light). The 256 is
+// assumed: a region of the built-in torus at 1280 x 1024 receives on the order of a hundred
+// packets, and any weight well above the number of lights gives the same choices.
+inline constexpr int kProcedureWeight[] = {1, 256, 1, 1, 1};  // clear triangle pass shade light
+static_assert(std::size(kProcedureWeight) == static_cast<std::size_t>(Procedure::count));
+
 struct FieldDecl {
   std::string name;
   int width = 0;
   bool is_signed = false;
   int line = 0;
+  bool scratch = false;  // lives in the overlay: dead between procedure runs
+  bool cold = false;     // the author asks that it spill first
   bool spilled = false;  // lives in the backing store
   int lo = -1;           // first bit in pixel memory (resident fields)
   int block = -1;        // first backing-store block (spilled fields)
+  // Instructions of each procedure that name the field, and their weighted sum (the spill
+  // order: cold first, then the lowest weight, then the last declared).
+  std::array<int, static_cast<int>(Procedure::count)> uses{};
+  std::uint64_t weight = 0;
 };
 
 struct ProcedureCode {
@@ -61,14 +84,22 @@ struct Program {
   std::array<ProcedureCode, static_cast<int>(Procedure::count)> procedures;
   std::array<Field, 3> outputs{};  // red, green, blue sent to the frame buffer
   bool spill_allowed = false;
-  int passes = 1;         // times the GPs send each region's triangles (`option passes N`)
-  int memory_bits = 0;    // the budget
-  int resident_bits = 0;  // bits of the fields kept in pixel memory
-  int staging_bits = 0;   // bits reserved for spilled fields while an instruction uses them
+  int passes = 1;             // times the GPs send each region's triangles (`option passes N`)
+  int passes_parameter = -1;  // or a frame parameter's index (`option passes PARAMETER`)
+  int memory_bits = 0;        // the budget
+  int resident_bits = 0;      // bits of the fields kept in pixel memory, overlay included
+  int overlay_bits = 0;       // bits of the scratch overlay (part of resident_bits)
+  int overlay_lo = 0;         // its first bit
+  int staging_bits = 0;       // bits reserved for spilled fields while an instruction uses them
 
   int bits_used() const { return resident_bits + staging_bits; }
   const ProcedureCode& procedure(Procedure p) const { return procedures[static_cast<int>(p)]; }
   const FieldDecl* find_field(const std::string& name) const;
+  // The pass count of a frame with these parameters: `passes`, or the parameter's value.
+  // Throws std::runtime_error naming the program if that value is outside 1..kMaxPasses.
+  int pass_count(const ParameterValues& frame) const;
+  // Whether the program may run more than one pass (a transparency program).
+  bool multipass() const { return passes_parameter >= 0 || passes > 1; }
 };
 
 Program assemble(const std::string& source, const std::string& name,

@@ -12,7 +12,8 @@ namespace pp5 {
 // Procedures the Renderer runs for every region it renders: clear; the triangles; then
 // `light` once per scene light; then shade. With `option passes N` the GPs send every
 // region's triangles N times, and the Renderer runs `pass` between one pass and the next
-// (multipass algorithms such as depth peeling). Numbered in the order they were added (trace
+// (multipass algorithms such as depth peeling); with `option passes PARAMETER` N is that
+// frame parameter's value (`layers`), set at run time. Numbered in the order they were added (trace
 // files store the number), not the order they run in.
 enum class Procedure { clear, triangle, pass, shade, light, count };
 inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass", "shade", "light"};
@@ -120,6 +121,7 @@ enum class Parameter {
   surface_opacity,
   surface_keep,
   normal_epsilon_scale,
+  layers,
   count
 };
 struct FrameParameterInfo {
@@ -150,6 +152,7 @@ inline constexpr FrameParameterInfo kParameters[] = {
     {"surface_opacity"},
     {"surface_keep"},
     {"normal_epsilon_scale"},
+    {"layers"},
 };
 static_assert(std::size(kParameters) == static_cast<std::size_t>(Parameter::count));
 inline constexpr const char* parameter_name(Parameter k) {

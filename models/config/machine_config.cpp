@@ -459,6 +459,9 @@ const std::vector<Entry>& parameter_table() {
                "at the camera's target distance (epsilon_normal: slopes recovered from "
                "normals).",
                "frame.delta, gp.depth_bits and the scene's camera (derived)"),
+      settable(Parameter::layers, "passes", 4, 1, 64,
+               "Layers the multipass programs peel (transparent*): their pass count, as they "
+               "say `option passes layers`; each pass resends the region's triangles."),
   };
   return table;
 }

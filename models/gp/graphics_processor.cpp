@@ -156,7 +156,7 @@ void GraphicsProcessor::run() {
   // transformed its share k more times, each costing what the first traversal cost; it
   // does the next traversal whenever it has nothing it can send (functionally the packets
   // are the same, so the first traversal's are sent).
-  const int passes = machine_.program().passes;
+  const int passes = machine_.passes();
   const bool retraverse = config.gp.multipass == MachineConfig::Gp::Multipass::retraverse;
   const GpClocks traversal = stats_.geometry;
   const OpCounts traversal_ops = stats_.ops;

@@ -38,7 +38,7 @@ AnalyticTiming analytic_timing(Machine& machine) {
   const int gps = machine.gp_count();
   const int renderers = machine.renderer_count();
   const int regions = config.regions();
-  const int passes = program.passes;
+  const int passes = machine.passes();  // frame.layers for a program whose passes it sets
   const double gp_hz = config.gp.clock_hz;
   const double ring_hz = config.ring.clock_hz;
   const double array_hz = config.renderer.clock_hz;

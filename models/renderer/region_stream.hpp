@@ -5,7 +5,8 @@
 //
 // A region's stream:
 //   clear
-//   for each of the program's passes k = 0 .. passes - 1:
+//   for each of the frame's passes k = 0 .. passes - 1 (the program's `option passes`: a
+//   number, or a frame parameter such as `layers` read from the FrameValues):
 //     `pass` (before every pass but the first)
 //     the region's packets, in display-list order, each running its own procedure
 //   `light` once per scene light (only if the program defines it)
@@ -49,9 +50,10 @@ class RegionStream {
  public:
   // Both are referred to, not copied: they must outlive the stream and its steps.
   RegionStream(const Program& program, const FrameValues& values)
-      : program_(program), values_(values) {}
+      : program_(program), values_(values), passes_(program.pass_count(values.frame.parameters)) {}
 
-  int passes() const { return program_.passes; }
+  // The passes of this frame: the program's count, or its pass parameter's value.
+  int passes() const { return passes_; }
 
   // What runs before pass k's packets: clear before the first, `pass` before the others.
   template <class Visit>
@@ -74,7 +76,7 @@ class RegionStream {
   // What runs after the last pass: each light's `light` procedure, then shade.
   template <class Visit>
   void after_passes(Visit&& visit) const {
-    const int last = program_.passes - 1;
+    const int last = passes_ - 1;
     const ProcedureCode& light = program_.procedure(Procedure::light);
     if (light.defined) {
       for (std::size_t k = 0; k < values_.lights.size(); ++k) {
@@ -89,7 +91,7 @@ class RegionStream {
   // Every step after clear: the passes over `packets` and what follows them.
   template <class Packets, class Visit>
   void after_clear(const Packets& packets, Visit&& visit) const {
-    for (int pass = 0; pass < program_.passes; ++pass) {
+    for (int pass = 0; pass < passes_; ++pass) {
       if (pass > 0) before_pass(pass, visit);
       int index = 0;
       for (const auto& p : packets) visit(packet(deref(p), pass, index++));
@@ -117,6 +119,7 @@ class RegionStream {
 
   const Program& program_;
   const FrameValues& values_;
+  int passes_;
 };
 
 }  // namespace pp5

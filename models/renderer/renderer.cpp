@@ -63,7 +63,7 @@ void Renderer::wait_for_bin_maps() {
 void Renderer::open_next_stage() {
   lasts_delivered_ = 0;
   open_started_ = false;
-  if (open_region_ >= 0 && open_pass_ + 1 < machine_.program().passes) {
+  if (open_region_ >= 0 && open_pass_ + 1 < machine_.passes()) {
     ++open_pass_;
   } else {
     // The last pass of the region is all in the queue: take the next region now, so that
@@ -195,7 +195,7 @@ void Renderer::run() {
   // The array cycle at which each packet started, by pass and GP (for traces): a GP's
   // packets come in the same order in every pass.
   std::vector<std::vector<std::vector<std::uint64_t>>> starts(
-      program.passes, std::vector<std::vector<std::uint64_t>>(gps));
+      stream.passes(), std::vector<std::vector<std::uint64_t>>(gps));
   auto cycle_now = [&] { return static_cast<std::uint64_t>(std::llround(cursor_ / cycle_)); };
   std::vector<std::uint64_t> step_start;
   auto charge_step = [&](const RegionStep& step) {
@@ -275,7 +275,7 @@ void Renderer::run() {
       machine_.scheduler().input_changed().notify(sc_core::SC_ZERO_TIME);
       if (m->last) ++lasts;
     }
-    if (stage.pass + 1 < program.passes) continue;
+    if (stage.pass + 1 < stream.passes()) continue;
     stream.after_passes(charge_step);
     catch_up();
     machine_.add_slice(Unit::renderer, index_, "region " + std::to_string(stage.region),

@@ -26,15 +26,11 @@ namespace {
 struct HighlightOptions {
   std::vector<std::string> scenes = {"two-triangles", "crossing-quads", "figure-eight", "torus",
                                      "receding-pairs"};
-  std::vector<std::string> programs = {"exactmatch",
-                                       "exactmatch_n",
-                                       "threshold",
-                                       "threshold_eyez",
-                                       "epsilon",
-                                       "epsilon_normal",
-                                       "epsilon_folded",
-                                       "transparent_exactmatch",
-                                       "transparent_threshold"};
+  std::vector<std::string> programs = {
+      "exactmatch",           "exactmatch_n",   "threshold",
+      "threshold_keep",       "threshold_eyez", "epsilon",
+      "epsilon_normal",       "epsilon_folded", "transparent_exactmatch",
+      "transparent_threshold"};
   std::string speed_scene = "torus";
   std::string config_path;
   std::vector<std::string> sets;
@@ -149,7 +145,7 @@ int run_highlight(const HighlightOptions& o) {
     const fs::path dir = fs::path(o.out_dir) / scene_name;
     fs::create_directories(dir);
     for (const Entry& e : programs) {
-      const IntersectionTruth& truth = truths[e.program.passes > 1 ? 1 : 0];
+      const IntersectionTruth& truth = truths[e.program.multipass() ? 1 : 0];
       const FieldFrame frame = render_field(config, scene, e.program, "iflag", o.threads);
       std::vector<std::uint8_t> flagged(frame.values.size());
       for (std::size_t p = 0; p < flagged.size(); ++p) flagged[p] = frame.values[p] != 0;
