@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "sim/scene/builtin_folded_slab.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {
@@ -291,14 +292,16 @@ Scene make_receding_pairs() {
 }  // namespace
 
 std::vector<std::string> builtin_scene_names() {
-  return {"torus", "two-triangles", "sphere", "figure-eight", "crossing-quads", "receding-pairs"};
+  return {"torus",          "two-triangles",  "sphere",     "figure-eight",
+          "crossing-quads", "receding-pairs", "folded-slab"};
 }
 
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "torus") return make_torus(options);
   if (name == "sphere") return make_sphere(options);
   if (name == "figure-eight") return make_figure_eight(options);
-  const bool fixed = name == "two-triangles" || name == "crossing-quads" || name == "receding-pairs";
+  const bool fixed = name == "two-triangles" || name == "crossing-quads" ||
+                     name == "receding-pairs" || name == "folded-slab";
   if (fixed && (options.tessellation_u != 0 || options.tessellation_v != 0)) {
     throw std::invalid_argument(fmt::format(
         "--tessellation: scene '{}' has fixed geometry; only torus, sphere and figure-eight "
@@ -308,6 +311,7 @@ Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "two-triangles") return make_two_triangles();
   if (name == "crossing-quads") return make_crossing_quads();
   if (name == "receding-pairs") return make_receding_pairs();
+  if (name == "folded-slab") return make_folded_slab();
   std::string valid;
   for (const std::string& n : builtin_scene_names()) valid += (valid.empty() ? "" : ", ") + n;
   throw std::invalid_argument(fmt::format("unknown scene '{}'; valid scenes: {}", name, valid));

@@ -20,7 +20,7 @@ struct SceneOptions {
 };
 
 // The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere", "figure-eight",
-// "crossing-quads", "receding-pairs"}.
+// "crossing-quads", "receding-pairs", "folded-slab"}.
 std::vector<std::string> builtin_scene_names();
 
 // Builds a scene deterministically from its arguments alone. Throws std::invalid_argument for an
@@ -31,6 +31,7 @@ std::vector<std::string> builtin_scene_names();
 //   figure-eight: 2*u*v triangles, default u=96, v=48; u in [8, 2048], v in [2, 2048].
 //   crossing-quads: 4 triangles, 8 vertices.
 //   receding-pairs: 10 triangles, 30 vertices; a fixed camera at the origin looking down -z.
+//   folded-slab: 1,696 triangles, 850 vertices (sim/scene/builtin_folded_slab.hpp).
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
 
 struct BoundingSphere {
