@@ -52,6 +52,11 @@ struct Reference {
   int width = 0, height = 0;
   std::vector<double> front, hidden;
   std::vector<std::uint8_t> near_edge;
+  // Per pixel, for the 2ME bound: whether the centre is within 2E of a boundary, silhouette
+  // or clipped edge (where a misclassified centre changes layer, not plane), and the largest
+  // depth gradient of the two faces of any shared edge within 2E.
+  std::vector<std::uint8_t> layer_edge;
+  std::vector<float> local_m;
   double M = 0;
 };
 
@@ -62,6 +67,22 @@ double distance_to_segment(double px, double py, const glm::dvec2& a, const glm:
   t = std::clamp(t, 0.0, 1.0);
   const glm::dvec2 q = a + d * t;
   return std::hypot(px - q.x, py - q.y);
+}
+
+// Calls visit(q) for every pixel whose centre lies within r of the segment a-b.
+template <typename Visit>
+void near_segment(const glm::dvec2& a, const glm::dvec2& b, double r, int width, int height,
+                  Visit visit) {
+  const int x_lo = std::max(0, static_cast<int>(std::floor(std::min(a.x, b.x) - r - 0.5)));
+  const int x_hi = std::min(width - 1, static_cast<int>(std::ceil(std::max(a.x, b.x) + r)));
+  const int y_lo = std::max(0, static_cast<int>(std::floor(std::min(a.y, b.y) - r - 0.5)));
+  const int y_hi = std::min(height - 1, static_cast<int>(std::ceil(std::max(a.y, b.y) + r)));
+  for (int y = y_lo; y <= y_hi; ++y) {
+    for (int x = x_lo; x <= x_hi; ++x) {
+      if (distance_to_segment(x + 0.5, y + 0.5, a, b) <= r)
+        visit(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + x);
+    }
+  }
 }
 
 Reference reference(const MachineConfig& config, const Scene& scene) {
@@ -79,6 +100,17 @@ Reference reference(const MachineConfig& config, const Scene& scene) {
   for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
     geometry.transform(i, pieces, counts);
   }
+  // Per scene triangle: its one whole piece, or -1 if it was clipped into several or away.
+  std::vector<int> whole(scene.mesh.triangles.size(), -1);
+  std::vector<int> piece_count(scene.mesh.triangles.size(), 0);
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const auto source = static_cast<std::size_t>(pieces[k].source);
+    if (++piece_count[source] == 1) whole[source] = static_cast<int>(k);
+  }
+  for (std::size_t t = 0; t < whole.size(); ++t) {
+    if (piece_count[t] != 1) whole[t] = -1;
+  }
+  std::vector<double> gradient(pieces.size(), 0.0);
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     const ScreenTriangle& t = pieces[k];
     const glm::dvec2 p0 = t.v[0].position, p1 = t.v[1].position, p2 = t.v[2].position;
@@ -88,7 +120,8 @@ Reference reference(const MachineConfig& config, const Scene& scene) {
                  z2 = t.v[2].depth * depth_max;
     const double a = ((z1 - z0) * (p2.y - p0.y) - (z2 - z0) * (p1.y - p0.y)) / det;
     const double b = ((z2 - z0) * (p1.x - p0.x) - (z1 - z0) * (p2.x - p0.x)) / det;
-    r.M = std::max(r.M, std::hypot(a, b));
+    gradient[k] = std::hypot(a, b);
+    r.M = std::max(r.M, gradient[k]);
     const int x_lo = std::max(0, static_cast<int>(std::floor(std::min({p0.x, p1.x, p2.x}))));
     const int x_hi =
         std::min(r.width - 1, static_cast<int>(std::ceil(std::max({p0.x, p1.x, p2.x}))));
@@ -115,6 +148,86 @@ Reference reference(const MachineConfig& config, const Scene& scene) {
         }
       }
     }
+  }
+  // The bound's terms at each covered centre, from its front triangle F: a centre within 2E
+  // of an edge of F that is a boundary, a silhouette or clipped may change layer; one within
+  // 2E of a shared edge may take the neighbour's plane, and one within 2E of a corner any
+  // plane of the triangles around that corner.
+  const MeshAdjacency adjacency = build_mesh_adjacency(scene.mesh);
+  std::vector<std::vector<int>> around(scene.mesh.vertices.size());
+  for (std::size_t t = 0; t < scene.mesh.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) around[scene.mesh.triangles[t][k]].push_back(static_cast<int>(t));
+  }
+  const double reach = 2.0 * std::sqrt(2.0) * std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
+  r.layer_edge.assign(n, 0);
+  r.local_m.assign(n, 0.0f);
+  auto side = [](const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
+    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x) > 0;
+  };
+  auto gradient_of = [&](int triangle) {
+    const int k = whole[static_cast<std::size_t>(triangle)];
+    return k >= 0 ? gradient[static_cast<std::size_t>(k)] : kInfinity;
+  };
+  // Whether the edge of piece k is a silhouette (both faces on one side of it on the screen),
+  // a boundary, or an edge of a clipped triangle: any of them may hand a centre to another
+  // layer, whichever triangle is in front there.
+  auto layer_changing = [&](std::size_t k, int e) {
+    const ScreenTriangle& t = pieces[k];
+    const int f = t.source;
+    const int nb = adjacency.across(f, e);
+    const int nk = nb >= 0 ? whole[static_cast<std::size_t>(nb)] : -1;
+    if (whole[static_cast<std::size_t>(f)] < 0 || nk < 0) return true;
+    const glm::uvec3 tf = scene.mesh.triangles[static_cast<std::size_t>(f)];
+    const glm::uvec3 tn = scene.mesh.triangles[static_cast<std::size_t>(nb)];
+    int third = 0;
+    while (tn[third] == tf[e] || tn[third] == tf[(e + 1) % 3]) ++third;
+    const glm::dvec2 a = t.v[e].position, b = t.v[(e + 1) % 3].position;
+    return side(a, b, t.v[(e + 2) % 3].position) ==
+           side(a, b, pieces[static_cast<std::size_t>(nk)].v[third].position);
+  };
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    for (int e = 0; e < 3; ++e) {
+      if (!layer_changing(k, e)) continue;
+      near_segment(pieces[k].v[e].position, pieces[k].v[(e + 1) % 3].position, reach, r.width,
+                   r.height, [&](std::size_t q) { r.layer_edge[q] = 1; });
+    }
+  }
+  for (std::size_t q = 0; q < n; ++q) {
+    if (owner[q] < 0) continue;
+    const ScreenTriangle& t = pieces[static_cast<std::size_t>(owner[q])];
+    const int f = t.source;
+    const glm::uvec3 tf = scene.mesh.triangles[static_cast<std::size_t>(f)];
+    const double cx = static_cast<double>(q % static_cast<std::size_t>(r.width)) + 0.5;
+    const double cy = static_cast<double>(q / static_cast<std::size_t>(r.width)) + 0.5;
+    double m = gradient[static_cast<std::size_t>(owner[q])];
+    bool layer = false;
+    for (int e = 0; e < 3; ++e) {
+      const glm::dvec2 a = t.v[e].position, b = t.v[(e + 1) % 3].position;
+      if (whole[static_cast<std::size_t>(f)] < 0) {
+        layer = true;
+        break;
+      }
+      if (std::hypot(cx - a.x, cy - a.y) <= reach) {
+        for (int g : around[tf[e]]) m = std::max(m, gradient_of(g));
+      }
+      if (distance_to_segment(cx, cy, a, b) > reach) continue;
+      const int nb = adjacency.across(f, e);
+      const int nk = nb >= 0 ? whole[static_cast<std::size_t>(nb)] : -1;
+      if (nk < 0) {
+        layer = true;
+        continue;
+      }
+      const glm::uvec3 tn = scene.mesh.triangles[static_cast<std::size_t>(nb)];
+      int third = 0;
+      while (tn[third] == tf[e] || tn[third] == tf[(e + 1) % 3]) ++third;
+      // The faces on one side of the edge on the screen: a silhouette.
+      if (side(a, b, t.v[(e + 2) % 3].position) ==
+          side(a, b, pieces[static_cast<std::size_t>(nk)].v[third].position))
+        layer = true;
+      m = std::max(m, gradient[static_cast<std::size_t>(nk)]);
+    }
+    if (layer) r.layer_edge[q] = 1;
+    r.local_m[q] = static_cast<float>(m);
   }
   r.near_edge.assign(n, 0);
   for (std::size_t q = 0; q < n; ++q) {
@@ -143,7 +256,7 @@ std::uint64_t triangle_cycles(const Program& program, const MachineConfig& confi
 
 ScanConversionMethod measure(const MachineConfig& config, const Scene& scene,
                              const Program& program, const char* coverage_firmware,
-                             const Reference& ref, bool closed, int threads) {
+                             const Reference& ref, double E, bool closed, int threads) {
   ScanConversionMethod m;
   m.program = program.name;
   const FieldDecl* z_decl = program.find_field("z");
@@ -171,6 +284,10 @@ ScanConversionMethod measure(const MachineConfig& config, const Scene& scene,
       ++m.edge_pixels;
       sum += error;
       m.edge_max_error = std::max(m.edge_max_error, error);
+      if (!ref.layer_edge[q]) {
+        m.shared_edge_max_error = std::max(m.shared_edge_max_error, error);
+        m.bound_ratio = std::max(m.bound_ratio, error / (2.0 * ref.local_m[q] * E));
+      }
     } else {
       m.interior_max_error = std::max(m.interior_max_error, error);
     }
@@ -242,9 +359,9 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
   report.M = ref.M;
   report.E = std::sqrt(2.0) * std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
   report.standard =
-      measure(config, scene, standard, kCoverageFirmware, ref, report.closed, threads);
-  report.accurate =
-      measure(config, scene, accurate, kAccurateCoverageFirmware, ref, report.closed, threads);
+      measure(config, scene, standard, kCoverageFirmware, ref, report.E, report.closed, threads);
+  report.accurate = measure(config, scene, accurate, kAccurateCoverageFirmware, ref, report.E,
+                            report.closed, threads);
 
   // Accurate's image at half brightness; red where the two images differ, yellow where the
   // standard one shows a hidden surface.
@@ -268,20 +385,22 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
 
 std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports) {
   std::string out =
-      "| scene | method | edge px | max error | mean error | interior max | hidden shows | "
-      "parity errors | 2ME | cycles/tri | bits | GP clocks/tri | words/packet | frame ms |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      "| scene | method | edge px | max error | mean error | shared-edge max | / 2ME | "
+      "interior max | hidden shows | parity errors | cycles/tri | bits | GP clocks/tri | "
+      "words/packet | frame ms |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const ScanConversionReport& r : reports) {
     for (const ScanConversionMethod* m : {&r.standard, &r.accurate}) {
       const bool first = m == &r.standard;
       out += fmt::format(
-          "| {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {} | {} | {} | {} | {} | {:.0f} | {} | "
-          "{:.2f} |\n",
+          "| {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.3f} | {:.0f} | {} | {} | {} | {} | "
+          "{:.0f} | {} | {:.2f} |\n",
           first ? r.scene : "", first ? "standard" : "accurate", m->edge_pixels, m->edge_max_error,
-          m->edge_mean_error, m->interior_max_error, m->show_through,
+          m->edge_mean_error, m->shared_edge_max_error, m->bound_ratio, m->interior_max_error,
+          m->show_through,
           m->parity_errors < 0 ? std::string("open") : std::to_string(m->parity_errors),
-          first ? fmt::format("{:.0f}", 2.0 * r.M * r.E) : std::string(""), m->triangle_cycles,
-          m->bits, m->gp_clocks_per_triangle, m->packet_words, m->frame_seconds * 1e3);
+          m->triangle_cycles, m->bits, m->gp_clocks_per_triangle, m->packet_words,
+          m->frame_seconds * 1e3);
     }
   }
   return out;

@@ -22,11 +22,17 @@
 //    depth than to the front one.
 //  - Parity errors: pixels covered an odd number of times, counted only on a closed mesh
 //    (every edge shared by two triangles); -1 for an open one.
-//  - M: the largest depth gradient (depth units per pixel, Euclidean) of the scene's
-//    triangles on the screen; E: the farthest a snapped edge lies from the true one,
-//    sqrt(2) 2^-(gp.subpixel_bits + 1) pixels (each vertex moves by at most half a snapped unit in
-//    x and in y). A centre handed to the wrong face is at most E from the true edge, and the
-//    two faces' planes differ there by at most 2ME (the paper's bound, with our M and E).
+//  - The paper's bound, in our terms. E: the farthest a snapped edge lies from the true one,
+//    sqrt(2) 2^-(gp.subpixel_bits + 1) pixels (each vertex moves by at most half a snapped unit
+//    in x and in y; the paper's E is along x only). M: the larger depth gradient (depth units
+//    per pixel, Euclidean, the paper's dZ/dX in any direction) of the two faces of a shared
+//    edge. A centre handed to the wrong one of two faces sharing an edge lies at most E from
+//    it, where their planes differ by at most 2ME. It holds where the two faces lie on
+//    opposite sides of the edge on the screen; across a boundary or silhouette edge a
+//    misclassified centre changes layer (the paper's figure 9.10, bottom row), and the error
+//    is the gap between the layers. So the bound is checked at edge pixels within 2E of a
+//    shared, non-silhouette edge and of no other edge, with M the largest such gradient there
+//    (local); report.M is the scene's largest gradient, for scale.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -45,10 +51,15 @@ inline constexpr double kDepthResolution = 2.0;
 
 struct ScanConversionMethod {
   std::string program;
-  std::uint64_t edge_pixels = 0;    // edge pixels covered by reference and program
-  double edge_max_error = 0;        // depth units
-  double edge_mean_error = 0;       // depth units
-  double interior_max_error = 0;    // depth units, the other covered pixels
+  std::uint64_t edge_pixels = 0;  // edge pixels covered by reference and program
+  double edge_max_error = 0;      // depth units
+  double edge_mean_error = 0;     // depth units
+  double interior_max_error = 0;  // depth units, the other covered pixels
+  // Over edge pixels within 2E of a shared, non-silhouette edge and of no other kind of edge:
+  // the largest error, and the largest error / (2 M E) with M the larger gradient of the
+  // faces of the shared edges there (the paper's bound; 1 = at the bound).
+  double shared_edge_max_error = 0;
+  double bound_ratio = 0;
   std::uint64_t show_through = 0;   // pixels where a hidden surface shows
   std::uint64_t missing = 0;        // covered in the reference, z never written
   std::int64_t parity_errors = -1;  // odd coverage on a closed mesh; -1 if not closed

@@ -59,17 +59,17 @@ int run_scanconvert(const ScanConvertOptions& o) {
     outputs.add(base + "-standard.png", encode_png(r.standard.image));
     outputs.add(base + "-accurate.png", encode_png(r.accurate.image));
     outputs.add(base + "-marked.png", encode_png(r.marked));
+    auto sides = [&r](SideKind k) { return r.sides[static_cast<std::size_t>(k)]; };
     notes += fmt::format(
-        "{}: {} triangles, {} edges ({} boundary, {} non-manifold); accurate set-up: {} edges "
-        "against the neighbour's plane, snapped edge for {} boundary, {} non-manifold, {} "
-        "clipped, {} degenerate, {} coplanar; M = {:.0f} depth units/pixel, E = {:.4f} pixel; "
-        "{} pixels differ\n",
+        "{}: {} triangles, {} edges ({} boundary, {} non-manifold); accurate set-up, triangle "
+        "edges (a shared one twice) classified by the neighbour's plane: {}; by their own "
+        "unsnapped line: {} boundary, {} "
+        "non-manifold, {} degenerate neighbour, {} coplanar; by the snapped edge: {} clipped; "
+        "M = {:.0f} depth units/pixel, E = {:.4f} pixel; {} pixels differ\n",
         r.scene, r.triangles, r.edges, r.boundary_edges, r.non_manifold_edges,
-        r.sides[static_cast<int>(SideKind::plane)], r.sides[static_cast<int>(SideKind::boundary)],
-        r.sides[static_cast<int>(SideKind::non_manifold)],
-        r.sides[static_cast<int>(SideKind::clipped)],
-        r.sides[static_cast<int>(SideKind::degenerate)],
-        r.sides[static_cast<int>(SideKind::coplanar)], r.M, r.E, r.differing);
+        sides(SideKind::plane), sides(SideKind::boundary), sides(SideKind::non_manifold),
+        sides(SideKind::degenerate), sides(SideKind::coplanar), sides(SideKind::clipped), r.M, r.E,
+        r.differing);
   }
   const std::string table = format_scan_conversion(reports);
   outputs.add((fs::path(o.out_dir) / "scanconvert.md").string(), table + "\n" + notes);
