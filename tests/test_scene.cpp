@@ -118,7 +118,7 @@ bool same_scene(const Scene& a, const Scene& b) {
 TEST_CASE("builtin_scene_names lists the scenes", "[scene]") {
   CHECK(pp5::builtin_scene_names() == std::vector<std::string>{"torus", "two-triangles", "sphere",
                                                                "figure-eight", "crossing-quads",
-                                                               "receding-pairs"});
+                                                               "receding-pairs", "folded-slab"});
 }
 
 TEST_CASE("every built-in scene is well formed, lit and framed", "[scene]") {

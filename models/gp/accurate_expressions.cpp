@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <tuple>
 
 namespace pp5 {
 
@@ -62,6 +63,10 @@ bool plane_through(const Projected& p0, const Projected& p1, const Projected& p2
 bool fits(double v, int bits) { return std::fabs(v) < std::ldexp(1.0, bits - 1); }
 
 }  // namespace
+
+static_assert(std::tuple_size<decltype(SetupCounts::sides)>::value ==
+                  static_cast<std::size_t>(SideKind::count),
+              "SetupCounts::sides has one counter per SideKind");
 
 const char* side_kind_name(SideKind kind) {
   switch (kind) {
@@ -251,6 +256,7 @@ bool wide_edge_expression(const SetupContext& c, int e, QuadraticCoefficients& o
 
 bool side_expression(const SetupContext& c, int e, QuadraticCoefficients& out) {
   const SidePlane s = side_plane(c, e);
+  if (c.counts) ++c.counts->sides[static_cast<std::size_t>(s.kind)];
   if (s.snapped) return c.edge(e, 0, true, out);
   out = s.coefficients;
   return true;

@@ -10,7 +10,8 @@
 //  - compute(context, out) writes the expression's coefficients and returns true, or returns
 //    false when a coefficient does not fit evaluator.coefficient_bits (the GP then drops
 //    the primitive and counts it as `overflow`). It reads only the context: results are a
-//    pure function of the primitive, the scene and the machine parameters.
+//    pure function of the primitive, the scene and the machine parameters. Its one side
+//    effect may be a count of its own in context.counts (the side tests' SetupCounts::sides).
 //  - The form bounds what compute may write: a constant sets only F, a linear expression D,
 //    E and F (value D x + E y + F), a quadratic one any of the six. The packet carries
 //    coefficients(form) coefficients for it.
@@ -54,6 +55,8 @@ struct SetupContext {
   // The scene's mesh (its vertices' positions), set together with adjacency: a neighbour's
   // plane is computed from the neighbour's own vertices.
   const Mesh* mesh = nullptr;
+  // Where an entry counts what it decided (SetupCounts::sides); null when nobody counts.
+  SetupCounts* counts = nullptr;
 
   // Vertices snapped to 1/scale pixel (scale = 2^subpixel_bits), half = scale / 2.
   std::array<std::int64_t, 3> xs{};

@@ -222,6 +222,7 @@ bool GeometryEngine::setup(const ScreenTriangle& t, const ExpressionSet& needed,
     c.adjacency = &adjacency();
     c.mesh = &scene_.mesh;
   }
+  c.counts = &counts;
 
   // Only what the program uses, each from its registry entry, in enum order.
   for (const ExpressionEntry& e : expression_registry()) {
