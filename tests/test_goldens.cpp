@@ -27,7 +27,8 @@ using namespace pp5;
 
 namespace {
 
-const char* const kPrograms[] = {"epsilon",
+const char* const kPrograms[] = {"accurate",
+                                 "epsilon",
                                  "epsilon_folded",
                                  "epsilon_normal",
                                  "exactmatch",

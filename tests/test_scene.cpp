@@ -116,10 +116,10 @@ bool same_scene(const Scene& a, const Scene& b) {
 }  // namespace
 
 TEST_CASE("builtin_scene_names lists the scenes", "[scene]") {
-  CHECK(pp5::builtin_scene_names() == std::vector<std::string>{"torus", "two-triangles", "sphere",
-                                                               "figure-eight", "crossing-quads",
-                                                               "receding-pairs", "cyclic-overlap",
-                                                               "pierced-quad", "long-thin"});
+  CHECK(pp5::builtin_scene_names() ==
+        std::vector<std::string>{"torus", "two-triangles", "sphere", "figure-eight",
+                                 "crossing-quads", "receding-pairs", "cyclic-overlap",
+                                 "pierced-quad", "long-thin", "folded-slab"});
 }
 
 TEST_CASE("every built-in scene is well formed, lit and framed", "[scene]") {

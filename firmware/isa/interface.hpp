@@ -51,6 +51,13 @@ enum class Expression {
   slope_y,
   eye_depth,
   opacity,
+  plane_depth,
+  wide0,
+  wide1,
+  wide2,
+  side0,
+  side1,
+  side2,
   count
 };
 
@@ -88,6 +95,20 @@ inline constexpr ExpressionInfo kExpressions[] = {
      "1 at the far plane, interpolated linearly in screen space through the three vertices: "
      "not perspective-correct (threshold_eyez)"},
     {"opacity", "the material's opacity, 0..256 (256 = opaque), interpolated (transparent)"},
+    {"plane_depth",
+     "depth like `depth`, but the plane through the unsnapped vertices (the face's own plane, "
+     "not the sub-pixel-snapped one): accurate scan conversion"},
+    {"wide0",
+     "first edge function moved outward by the vertex round-off: >= 0 on every pixel centre "
+     "the unsnapped triangle may own (the enlarged area of accurate scan conversion)"},
+    {"wide1", "second edge, moved outward by the vertex round-off"},
+    {"wide2", "third edge, moved outward by the vertex round-off"},
+    {"side0",
+     "K0 (Z - Z0): >= 0 where this face's plane lies on the face's side of the plane of the "
+     "neighbour across edge 0 (Rossignac); the unsnapped edge's own line where there is no "
+     "usable neighbour (boundary, non-manifold, coplanar), the snapped edge on a clipped piece"},
+    {"side1", "K1 (Z - Z1), the neighbour across edge 1"},
+    {"side2", "K2 (Z - Z2), the neighbour across edge 2"},
 };
 static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
               static_cast<std::size_t>(Expression::count));

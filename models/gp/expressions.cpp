@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "models/gp/accurate_expressions.hpp"
+
 namespace pp5 {
 
 namespace {
@@ -15,26 +17,10 @@ bool fits(std::int64_t v, int bits) {
   return v >= -limit && v < limit;
 }
 
-// Edge e runs from vertex e to vertex (e + 1) % 3: A x + B y + C >= 0 inside, on pixel
-// indices, from the snapped vertices, so coefficients are exact integers and two triangles
-// sharing the edge get exactly opposite functions.
+// Edge e of the snapped triangle (SetupContext::edge), with the top-left rule.
 template <int e>
 bool edge(const SetupContext& c, QuadraticCoefficients& out) {
-  const int a = e;
-  const int b = (e + 1) % 3;
-  const std::int64_t sigma = c.area2 > 0 ? 1 : -1;
-  const std::int64_t dx = c.xs[b] - c.xs[a];
-  const std::int64_t dy = c.ys[b] - c.ys[a];
-  const std::int64_t A = -sigma * dy * c.scale;
-  const std::int64_t B = sigma * dx * c.scale;
-  std::int64_t C = sigma * (dx * (c.half - c.ys[a]) - dy * (c.half - c.xs[a]));
-  // Top-left rule: a pixel centre exactly on the edge belongs to this triangle only if the
-  // edge is a left edge (inside lies to its right) or a top edge.
-  if (!(A > 0 || (A == 0 && B > 0))) C -= 1;
-  const int cb = c.params.coefficient_bits;
-  if (!fits(A, cb) || !fits(B, cb) || !fits(C, cb)) return false;
-  out = QuadraticCoefficients::linear(A, B, C);
-  return true;
+  return c.edge(e, 0, true, out);
 }
 
 bool depth(const SetupContext& c, QuadraticCoefficients& out) {
@@ -139,6 +125,13 @@ constexpr std::array<ExpressionEntry, static_cast<int>(Expression::count)> kRegi
     {E::slope_y, F::constant, kSlopeCost, false, slope<1>},
     {E::eye_depth, F::linear, kPlaneCost, false, eye_depth},
     {E::opacity, F::linear, kPlaneCost, false, opacity},
+    {E::plane_depth, F::linear, kPlaneDepthCost, false, plane_depth_expression},
+    {E::wide0, F::linear, kWideEdgeCost, false, wide_edge<0>, true},
+    {E::wide1, F::linear, kWideEdgeCost, false, wide_edge<1>, true},
+    {E::wide2, F::linear, kWideEdgeCost, false, wide_edge<2>, true},
+    {E::side0, F::linear, kSideCost, true, side<0>},
+    {E::side1, F::linear, kSideCost, true, side<1>},
+    {E::side2, F::linear, kSideCost, true, side<2>},
 }};
 
 constexpr bool in_enum_order() {
@@ -210,6 +203,28 @@ bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& 
   return true;
 }
 
+// Edge e runs from vertex e to vertex (e + 1) % 3: A x + B y + C >= 0 inside, on pixel
+// indices, from the snapped vertices, so coefficients are exact integers and two triangles
+// sharing the edge get exactly opposite functions.
+bool SetupContext::edge(int e, std::int64_t outward, bool top_left_rule,
+                        QuadraticCoefficients& out) const {
+  const int a = e;
+  const int b = (e + 1) % 3;
+  const std::int64_t sigma = area2 > 0 ? 1 : -1;
+  const std::int64_t dx = xs[b] - xs[a];
+  const std::int64_t dy = ys[b] - ys[a];
+  const std::int64_t A = -sigma * dy * scale;
+  const std::int64_t B = sigma * dx * scale;
+  std::int64_t C = sigma * (dx * (half - ys[a]) - dy * (half - xs[a])) + outward;
+  // Top-left rule: a pixel centre exactly on the edge belongs to this triangle only if the
+  // edge is a left edge (inside lies to its right) or a top edge.
+  if (top_left_rule && !(A > 0 || (A == 0 && B > 0))) C -= 1;
+  const int cb = params.coefficient_bits;
+  if (!fits(A, cb) || !fits(B, cb) || !fits(C, cb)) return false;
+  out = QuadraticCoefficients::linear(A, B, C);
+  return true;
+}
+
 QuadraticCoefficients SetupContext::constant(double value) const {
   // A multiplication, not a shift: constants may be negative.
   return QuadraticCoefficients::constant(std::llround(value) *
@@ -228,6 +243,13 @@ const std::array<ExpressionEntry, static_cast<int>(Expression::count)>& expressi
 bool needs_adjacency(const ExpressionSet& set) {
   for (const ExpressionEntry& e : kRegistry) {
     if (e.needs_adjacency && set.test(static_cast<int>(e.id))) return true;
+  }
+  return false;
+}
+
+bool widens_bounds(const ExpressionSet& set) {
+  for (const ExpressionEntry& e : kRegistry) {
+    if (e.widens && set.test(static_cast<int>(e.id))) return true;
   }
   return false;
 }

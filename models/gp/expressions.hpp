@@ -10,12 +10,16 @@
 //  - compute(context, out) writes the expression's coefficients and returns true, or returns
 //    false when a coefficient does not fit evaluator.coefficient_bits (the GP then drops
 //    the primitive and counts it as `overflow`). It reads only the context: results are a
-//    pure function of the primitive, the scene and the machine parameters.
+//    pure function of the primitive, the scene and the machine parameters. Its one side
+//    effect may be a count of its own in context.counts (the side tests' SetupCounts::sides).
 //  - The form bounds what compute may write: a constant sets only F, a linear expression D,
 //    E and F (value D x + E y + F), a quadratic one any of the six. The packet carries
 //    coefficients(form) coefficients for it.
 //  - An entry with needs_adjacency reads context.adjacency (never null for it): the GP
 //    builds the scene's mesh adjacency once, and only when such an expression is needed.
+//  - An entry with widens may admit pixel centres up to half a snapped unit outside the
+//    snapped triangle; set-up bins the triangle to every region such a centre lies in, and
+//    does not drop a triangle that snapping flattens (SetupContext::area2 == 0).
 //  - cost is charged once per set-up of a primitive whose procedure uses the expression
 //    (I860Work::expression_setup).
 #include <array>
@@ -48,13 +52,18 @@ struct SetupContext {
   // needed expression asks for it. A clipped triangle is one piece of triangle.source: its
   // edges need not be the source's.
   const MeshAdjacency* adjacency = nullptr;
+  // The scene's mesh (its vertices' positions), set together with adjacency: a neighbour's
+  // plane is computed from the neighbour's own vertices.
+  const Mesh* mesh = nullptr;
+  // Where an entry counts what it decided (SetupCounts::sides); null when nobody counts.
+  SetupCounts* counts = nullptr;
 
   // Vertices snapped to 1/scale pixel (scale = 2^subpixel_bits), half = scale / 2.
   std::array<std::int64_t, 3> xs{};
   std::array<std::int64_t, 3> ys{};
   std::int64_t scale = 1;
   std::int64_t half = 0;
-  std::int64_t area2 = 0;  // twice the signed area, in snapped units; never 0 here
+  std::int64_t area2 = 0;  // twice the signed area, in snapped units; 0 only if widens
   // Vertices in pixel-index coordinates (the centre of pixel X is at X + 0.5, so a vertex at
   // x sits at index coordinate x - 0.5), and the determinant of their plane system.
   std::array<double, 3> u{};
@@ -68,6 +77,11 @@ struct SetupContext {
   // The fixed-point plane through the vertices' values f, exact (to rounding) at vertex 0;
   // false if a coefficient does not fit.
   bool plane(const std::array<double, 3>& f, QuadraticCoefficients& out) const;
+  // Edge e's function (from vertex e to vertex (e + 1) % 3) on the snapped vertices: exact
+  // integers, >= 0 inside. `outward` (value units, >= 0) moves the line outward; with
+  // top_left_rule a centre exactly on the (unmoved) edge belongs to the triangle only on a
+  // left or top edge. False if a coefficient does not fit.
+  bool edge(int e, std::int64_t outward, bool top_left_rule, QuadraticCoefficients& out) const;
   // A constant in fixed point (value * 2^fraction_bits; value is an integer).
   QuadraticCoefficients constant(double value) const;
   // Vertex k's depth in depth units, clamped half a unit inside the range.
@@ -80,6 +94,12 @@ struct ExpressionEntry {
   OpCounts cost;  // i860 operations of one set-up
   bool needs_adjacency;
   bool (*compute)(const SetupContext& context, QuadraticCoefficients& out);
+  // The expression can be >= 0 on pixel centres outside the snapped triangle (it classifies
+  // against the unsnapped one, at most half a snapped unit away): set-up then widens the
+  // triangle's pixel bounding box, and so its binning, by one snapped unit, and keeps a
+  // triangle that snapping flattens to zero area (its attribute planes then take their
+  // gradients from the unsnapped positions; area2 is 0 in its context).
+  bool widens = false;
 
   const char* name() const { return kExpressions[static_cast<int>(id)].name; }
   const char* meaning() const { return kExpressions[static_cast<int>(id)].meaning; }
@@ -91,6 +111,8 @@ inline const ExpressionEntry& expression_entry(Expression e) {
 }
 // True if any expression in `set` reads the mesh adjacency.
 bool needs_adjacency(const ExpressionSet& set);
+// True if any expression in `set` widens the bounding box (ExpressionEntry::widens).
+bool widens_bounds(const ExpressionSet& set);
 
 // Ring words of one coefficient: coefficient_bits rounded up to whole ring words.
 int coefficient_words(int coefficient_bits, int word_bits);

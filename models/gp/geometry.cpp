@@ -174,17 +174,25 @@ bool GeometryEngine::setup(const ScreenTriangle& t, const ExpressionSet& needed,
   const auto& xs = c.xs;
   const auto& ys = c.ys;
   c.area2 = (xs[1] - xs[0]) * (ys[2] - ys[0]) - (xs[2] - xs[0]) * (ys[1] - ys[0]);
-  if (c.area2 == 0) {
+  // A program that classifies against the unsnapped triangle (ExpressionEntry::widens) still
+  // owns the centres of a sliver that snapping flattens; its attribute planes then take their
+  // gradients from the unsnapped positions (below).
+  const bool widen = widens_bounds(needed);
+  const bool flattened = c.area2 == 0;
+  if (flattened && !widen) {
     ++counts.degenerate;
     return false;
   }
   // Pixel X is covered only if its centre X * scale + half lies within the triangle's span.
   const std::int64_t scale = c.scale;
   const std::int64_t half = c.half;
-  const std::int64_t x_lo = *std::min_element(xs.begin(), xs.end());
-  const std::int64_t x_hi = *std::max_element(xs.begin(), xs.end());
-  const std::int64_t y_lo = *std::min_element(ys.begin(), ys.end());
-  const std::int64_t y_hi = *std::max_element(ys.begin(), ys.end());
+  // An expression that classifies against the unsnapped triangle reaches half a snapped unit
+  // beyond the snapped one (ExpressionEntry::widens): the box grows by a whole unit.
+  const std::int64_t pad = widen ? 1 : 0;
+  const std::int64_t x_lo = *std::min_element(xs.begin(), xs.end()) - pad;
+  const std::int64_t x_hi = *std::max_element(xs.begin(), xs.end()) + pad;
+  const std::int64_t y_lo = *std::min_element(ys.begin(), ys.end()) - pad;
+  const std::int64_t y_hi = *std::max_element(ys.begin(), ys.end()) + pad;
   out.x_min = static_cast<int>(std::max<std::int64_t>(0, ceil_div(x_lo - half, scale)));
   out.x_max = static_cast<int>(
       std::min<std::int64_t>(params_.screen_width - 1, floor_div(x_hi - half, scale)));
@@ -199,12 +207,22 @@ bool GeometryEngine::setup(const ScreenTriangle& t, const ExpressionSet& needed,
   // What every attribute plane shares: the vertices in pixel-index coordinates.
   c.f_scale = std::ldexp(1.0, params_.fraction_bits);
   for (int k = 0; k < 3; ++k) {
-    c.u[k] = static_cast<double>(xs[k] - half) / static_cast<double>(scale);
-    c.w[k] = static_cast<double>(ys[k] - half) / static_cast<double>(scale);
+    c.u[k] = flattened ? t.v[k].position.x - 0.5
+                       : static_cast<double>(xs[k] - half) / static_cast<double>(scale);
+    c.w[k] = flattened ? t.v[k].position.y - 0.5
+                       : static_cast<double>(ys[k] - half) / static_cast<double>(scale);
   }
   c.det = (c.u[1] - c.u[0]) * (c.w[2] - c.w[0]) - (c.u[2] - c.u[0]) * (c.w[1] - c.w[0]);
+  if (!(c.det != 0)) {
+    ++counts.degenerate;
+    return false;
+  }
   c.depth_max = std::ldexp(1.0, params_.depth_bits) - 1.0;
-  if (needs_adjacency(needed)) c.adjacency = &adjacency();
+  if (needs_adjacency(needed)) {
+    c.adjacency = &adjacency();
+    c.mesh = &scene_.mesh;
+  }
+  c.counts = &counts;
 
   // Only what the program uses, each from its registry entry, in enum order.
   for (const ExpressionEntry& e : expression_registry()) {

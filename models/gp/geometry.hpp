@@ -69,6 +69,10 @@ struct SetupCounts {
   std::uint64_t overflow = 0;      // a coefficient did not fit evaluator.coefficient_bits
   std::uint64_t clip_splits = 0;   // extra triangles made by clipping
   std::uint64_t culled = 0;        // back-facing, dropped (GeometryParams::cull_back_faces)
+  // Accurate scan conversion's side tests (models/gp/accurate_expressions.hpp): triangle edges
+  // set up, by how they were classified, in SideKind order (plane, boundary, non_manifold,
+  // clipped, degenerate, coplanar). All 0 for a program that sends no side0..2.
+  std::array<std::uint64_t, 6> sides{};
 };
 
 // The expressions a procedure uses (ProcedureCode::expressions): what the GP computes.

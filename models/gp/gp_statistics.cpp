@@ -1,8 +1,10 @@
 // The statistics of the Graphics Processors and of set-up, registered from GpStats (see
 // common/statistics.hpp for the registry's contract).
+#include <iterator>
 #include <string>
 
 #include "common/statistics.hpp"
+#include "models/gp/accurate_expressions.hpp"
 #include "models/gp/graphics_processor.hpp"
 
 namespace pp5 {
@@ -97,6 +99,23 @@ void register_setup_statistics(Statistics& stats, std::vector<const GpStats*> gp
   stats.add_integer("setup.no_pixel_centres", u::count,
                     "Triangles dropped that cover no pixel centre",
                     sum([](const GpStats& g) { return g.setup.no_pixels; }));
+  // In SideKind order.
+  static const char* const kSides[] = {
+      "Triangle edges accurate scan conversion classified by the neighbour's plane (side0..2; "
+      "0 for programs without them)",
+      "Triangle edges accurate scan conversion classified by their own line: no neighbour",
+      "Triangle edges classified by their own line: more than one neighbour (non-manifold)",
+      "Triangle edges classified by the snapped edge: a piece of a clipped triangle, or its "
+      "neighbour's triangle is clipped",
+      "Triangle edges classified by their own line: the neighbour is edge-on to the eye",
+      "Triangle edges classified by their own line: the planes are too nearly coplanar",
+  };
+  static_assert(std::size(kSides) == static_cast<std::size_t>(SideKind::count));
+  for (int k = 0; k < static_cast<int>(SideKind::count); ++k) {
+    stats.add_integer(
+        std::string("setup.sides.") + side_kind_name(static_cast<SideKind>(k)), u::count, kSides[k],
+        sum([k](const GpStats& g) { return g.setup.sides[static_cast<std::size_t>(k)]; }));
+  }
   stats.add_integer("setup.coefficient_overflow", u::count,
                     "Triangles dropped because a coefficient did not fit "
                     "evaluator.coefficient_bits",

@@ -98,6 +98,7 @@ int main(int argc, char** argv) {
       add_validate_command(app),
       add_visible_command(app),
       add_fidelity_command(app),
+      add_scanconvert_command(app),
   };
 
   try {

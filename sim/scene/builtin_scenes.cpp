@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "sim/scene/builtin_folded_slab.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {
@@ -385,7 +386,7 @@ Scene make_long_thin() {
 
 std::vector<std::string> builtin_scene_names() {
   return {"torus",          "two-triangles",  "sphere",       "figure-eight", "crossing-quads",
-          "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin"};
+          "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin",    "folded-slab"};
 }
 
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
@@ -394,7 +395,7 @@ Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "figure-eight") return make_figure_eight(options);
   const bool fixed = name == "two-triangles" || name == "crossing-quads" ||
                      name == "receding-pairs" || name == "cyclic-overlap" ||
-                     name == "pierced-quad" || name == "long-thin";
+                     name == "pierced-quad" || name == "long-thin" || name == "folded-slab";
   if (fixed && (options.tessellation_u != 0 || options.tessellation_v != 0)) {
     throw std::invalid_argument(fmt::format(
         "--tessellation: scene '{}' has fixed geometry; only torus, sphere and figure-eight "
@@ -407,6 +408,7 @@ Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "cyclic-overlap") return make_cyclic_overlap();
   if (name == "pierced-quad") return make_pierced_quad();
   if (name == "long-thin") return make_long_thin();
+  if (name == "folded-slab") return make_folded_slab();
   std::string valid;
   for (const std::string& n : builtin_scene_names()) valid += (valid.empty() ? "" : ", ") + n;
   throw std::invalid_argument(fmt::format("unknown scene '{}'; valid scenes: {}", name, valid));

@@ -21,7 +21,8 @@ struct SceneOptions {
 };
 
 // The names make_builtin_scene accepts: {"torus", "two-triangles", "sphere", "figure-eight",
-// "crossing-quads", "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin"}.
+// "crossing-quads", "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin",
+// "folded-slab"}.
 std::vector<std::string> builtin_scene_names();
 
 // Builds a scene deterministically from its arguments alone. Throws std::invalid_argument for an
@@ -35,6 +36,7 @@ std::vector<std::string> builtin_scene_names();
 //   cyclic-overlap: 6 triangles (three sticks, each in front of the next: painter's cannot
 //   order them); pierced-quad: 3 triangles (a sliver through a square); long-thin: 12
 //   slivers on two parallel tilted planes (only the plane tests order them).
+//   folded-slab: 1,696 triangles, 850 vertices (sim/scene/builtin_folded_slab.hpp).
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
 
 struct BoundingSphere {

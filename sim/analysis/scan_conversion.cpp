@@ -1,0 +1,409 @@
+#include "sim/analysis/scan_conversion.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "models/display_list/mesh_adjacency.hpp"
+#include "models/gp/expressions.hpp"
+#include "models/gp/geometry.hpp"
+#include "models/machine.hpp"
+#include "sim/analysis/extremes.hpp"
+#include "sim/analysis/field_render.hpp"
+#include "sim/simulation.hpp"
+
+namespace pp5 {
+
+const char* const kAccurateCoverageFirmware =
+    R"(; Coverage counter with accurate.pp5's tests: each triangle adds 1 to every pixel whose
+; centre it owns by the enlarged area and the three side tests.
+field count  8
+field zero   8
+output count zero zero
+
+proc clear
+  eall
+  mov count, 0
+  mov zero, 0
+end
+
+proc triangle
+  eall
+  qtest.ge wide0
+  qtest.ge wide1
+  qtest.ge wide2
+  qtest.ge side0
+  qtest.ge side1
+  qtest.ge side2
+  add count, 1
+end
+)";
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// The exact picture: per pixel the frontmost depth, the first hidden one, and whether the
+// centre is within a pixel of the front triangle's edges.
+struct Reference {
+  int width = 0, height = 0;
+  std::vector<double> front, hidden;
+  std::vector<std::uint8_t> near_edge;
+  // Per pixel, for the 2ME bound: whether the centre is within 2E of a boundary, silhouette
+  // or clipped edge (where a misclassified centre changes layer, not plane), and the largest
+  // depth gradient of the two faces of any shared edge within 2E.
+  std::vector<std::uint8_t> layer_edge;
+  std::vector<float> local_m;
+  double M = 0;
+};
+
+double distance_to_segment(double px, double py, const glm::dvec2& a, const glm::dvec2& b) {
+  const glm::dvec2 d = b - a;
+  const double len2 = glm::dot(d, d);
+  double t = len2 > 0 ? glm::dot(glm::dvec2(px, py) - a, d) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  const glm::dvec2 q = a + d * t;
+  return std::hypot(px - q.x, py - q.y);
+}
+
+// Calls visit(q) for every pixel whose centre lies within r of the segment a-b.
+template <typename Visit>
+void near_segment(const glm::dvec2& a, const glm::dvec2& b, double r, int width, int height,
+                  Visit visit) {
+  const int x_lo = std::max(0, static_cast<int>(std::floor(std::min(a.x, b.x) - r - 0.5)));
+  const int x_hi = std::min(width - 1, static_cast<int>(std::ceil(std::max(a.x, b.x) + r)));
+  const int y_lo = std::max(0, static_cast<int>(std::floor(std::min(a.y, b.y) - r - 0.5)));
+  const int y_hi = std::min(height - 1, static_cast<int>(std::ceil(std::max(a.y, b.y) + r)));
+  for (int y = y_lo; y <= y_hi; ++y) {
+    for (int x = x_lo; x <= x_hi; ++x) {
+      if (distance_to_segment(x + 0.5, y + 0.5, a, b) <= r)
+        visit(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + x);
+    }
+  }
+}
+
+Reference reference(const MachineConfig& config, const Scene& scene) {
+  const GeometryEngine geometry(geometry_params(config), scene);
+  Reference r;
+  r.width = config.screen.width;
+  r.height = config.screen.height;
+  const std::size_t n = static_cast<std::size_t>(r.width) * r.height;
+  r.front.assign(n, kInfinity);
+  r.hidden.assign(n, kInfinity);
+  std::vector<int> owner(n, -1);
+  const double depth_max = std::ldexp(1.0, config.gp.depth_bits) - 1.0;
+  std::vector<ScreenTriangle> pieces;
+  SetupCounts counts;
+  for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
+    geometry.transform(i, pieces, counts);
+  }
+  // Per scene triangle: its one whole piece, or -1 if it was clipped into several or away.
+  std::vector<int> whole(scene.mesh.triangles.size(), -1);
+  std::vector<int> piece_count(scene.mesh.triangles.size(), 0);
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const auto source = static_cast<std::size_t>(pieces[k].source);
+    if (++piece_count[source] == 1) whole[source] = static_cast<int>(k);
+  }
+  for (std::size_t t = 0; t < whole.size(); ++t) {
+    if (piece_count[t] != 1) whole[t] = -1;
+  }
+  std::vector<double> gradient(pieces.size(), 0.0);
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const ScreenTriangle& t = pieces[k];
+    const glm::dvec2 p0 = t.v[0].position, p1 = t.v[1].position, p2 = t.v[2].position;
+    const double det = (p1.x - p0.x) * (p2.y - p0.y) - (p2.x - p0.x) * (p1.y - p0.y);
+    if (!(std::fabs(det) > 0)) continue;
+    const double z0 = t.v[0].depth * depth_max, z1 = t.v[1].depth * depth_max,
+                 z2 = t.v[2].depth * depth_max;
+    const double a = ((z1 - z0) * (p2.y - p0.y) - (z2 - z0) * (p1.y - p0.y)) / det;
+    const double b = ((z2 - z0) * (p1.x - p0.x) - (z1 - z0) * (p2.x - p0.x)) / det;
+    gradient[k] = std::hypot(a, b);
+    r.M = std::max(r.M, gradient[k]);
+    const int x_lo = std::max(0, static_cast<int>(std::floor(std::min({p0.x, p1.x, p2.x}))));
+    const int x_hi =
+        std::min(r.width - 1, static_cast<int>(std::ceil(std::max({p0.x, p1.x, p2.x}))));
+    const int y_lo = std::max(0, static_cast<int>(std::floor(std::min({p0.y, p1.y, p2.y}))));
+    const int y_hi =
+        std::min(r.height - 1, static_cast<int>(std::ceil(std::max({p0.y, p1.y, p2.y}))));
+    const double s = det > 0 ? 1.0 : -1.0;
+    for (int y = y_lo; y <= y_hi; ++y) {
+      const double cy = y + 0.5;
+      for (int x = x_lo; x <= x_hi; ++x) {
+        const double cx = x + 0.5;
+        const double e0 = s * ((p1.x - p0.x) * (cy - p0.y) - (p1.y - p0.y) * (cx - p0.x));
+        const double e1 = s * ((p2.x - p1.x) * (cy - p1.y) - (p2.y - p1.y) * (cx - p1.x));
+        const double e2 = s * ((p0.x - p2.x) * (cy - p2.y) - (p0.y - p2.y) * (cx - p2.x));
+        if (e0 < 0 || e1 < 0 || e2 < 0) continue;
+        const double z = z0 + a * (cx - p0.x) + b * (cy - p0.y);
+        const std::size_t q = static_cast<std::size_t>(y) * r.width + x;
+        if (z < r.front[q]) {
+          r.hidden[q] = r.front[q];
+          r.front[q] = z;
+          owner[q] = static_cast<int>(k);
+        } else if (z < r.hidden[q]) {
+          r.hidden[q] = z;
+        }
+      }
+    }
+  }
+  // The bound's terms at each covered centre, from its front triangle F: a centre within 2E
+  // of an edge of F that is a boundary, a silhouette or clipped may change layer; one within
+  // 2E of a shared edge may take the neighbour's plane, and one within 2E of a corner any
+  // plane of the triangles around that corner.
+  const MeshAdjacency adjacency = build_mesh_adjacency(scene.mesh);
+  std::vector<std::vector<int>> around(scene.mesh.vertices.size());
+  for (std::size_t t = 0; t < scene.mesh.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) around[scene.mesh.triangles[t][k]].push_back(static_cast<int>(t));
+  }
+  const double reach = 2.0 * std::sqrt(2.0) * std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
+  r.layer_edge.assign(n, 0);
+  r.local_m.assign(n, 0.0f);
+  auto side = [](const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
+    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x) > 0;
+  };
+  auto gradient_of = [&](int triangle) {
+    const int k = whole[static_cast<std::size_t>(triangle)];
+    return k >= 0 ? gradient[static_cast<std::size_t>(k)] : kInfinity;
+  };
+  // Whether the edge of piece k is a silhouette (both faces on one side of it on the screen),
+  // a boundary, or an edge of a clipped triangle: any of them may hand a centre to another
+  // layer, whichever triangle is in front there.
+  auto layer_changing = [&](std::size_t k, int e) {
+    const ScreenTriangle& t = pieces[k];
+    const int f = t.source;
+    const int nb = adjacency.across(f, e);
+    const int nk = nb >= 0 ? whole[static_cast<std::size_t>(nb)] : -1;
+    if (whole[static_cast<std::size_t>(f)] < 0 || nk < 0) return true;
+    const glm::uvec3 tf = scene.mesh.triangles[static_cast<std::size_t>(f)];
+    const glm::uvec3 tn = scene.mesh.triangles[static_cast<std::size_t>(nb)];
+    int third = 0;
+    while (tn[third] == tf[e] || tn[third] == tf[(e + 1) % 3]) ++third;
+    const glm::dvec2 a = t.v[e].position, b = t.v[(e + 1) % 3].position;
+    return side(a, b, t.v[(e + 2) % 3].position) ==
+           side(a, b, pieces[static_cast<std::size_t>(nk)].v[third].position);
+  };
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    for (int e = 0; e < 3; ++e) {
+      if (!layer_changing(k, e)) continue;
+      near_segment(pieces[k].v[e].position, pieces[k].v[(e + 1) % 3].position, reach, r.width,
+                   r.height, [&](std::size_t q) { r.layer_edge[q] = 1; });
+    }
+  }
+  for (std::size_t q = 0; q < n; ++q) {
+    if (owner[q] < 0) continue;
+    const ScreenTriangle& t = pieces[static_cast<std::size_t>(owner[q])];
+    const int f = t.source;
+    const glm::uvec3 tf = scene.mesh.triangles[static_cast<std::size_t>(f)];
+    const double cx = static_cast<double>(q % static_cast<std::size_t>(r.width)) + 0.5;
+    const double cy = static_cast<double>(q / static_cast<std::size_t>(r.width)) + 0.5;
+    double m = gradient[static_cast<std::size_t>(owner[q])];
+    bool layer = false;
+    for (int e = 0; e < 3; ++e) {
+      const glm::dvec2 a = t.v[e].position, b = t.v[(e + 1) % 3].position;
+      if (whole[static_cast<std::size_t>(f)] < 0) {
+        layer = true;
+        break;
+      }
+      if (std::hypot(cx - a.x, cy - a.y) <= reach) {
+        for (int g : around[tf[e]]) m = std::max(m, gradient_of(g));
+      }
+      if (distance_to_segment(cx, cy, a, b) > reach) continue;
+      const int nb = adjacency.across(f, e);
+      const int nk = nb >= 0 ? whole[static_cast<std::size_t>(nb)] : -1;
+      if (nk < 0) {
+        layer = true;
+        continue;
+      }
+      const glm::uvec3 tn = scene.mesh.triangles[static_cast<std::size_t>(nb)];
+      int third = 0;
+      while (tn[third] == tf[e] || tn[third] == tf[(e + 1) % 3]) ++third;
+      // The faces on one side of the edge on the screen: a silhouette.
+      if (side(a, b, t.v[(e + 2) % 3].position) ==
+          side(a, b, pieces[static_cast<std::size_t>(nk)].v[third].position))
+        layer = true;
+      m = std::max(m, gradient[static_cast<std::size_t>(nk)]);
+    }
+    if (layer) r.layer_edge[q] = 1;
+    r.local_m[q] = static_cast<float>(m);
+  }
+  r.near_edge.assign(n, 0);
+  for (std::size_t q = 0; q < n; ++q) {
+    if (owner[q] < 0) continue;
+    const ScreenTriangle& t = pieces[static_cast<std::size_t>(owner[q])];
+    const double cx = static_cast<double>(q % static_cast<std::size_t>(r.width)) + 0.5;
+    const double cy = static_cast<double>(q / static_cast<std::size_t>(r.width)) + 0.5;
+    double d = kInfinity;
+    for (int e = 0; e < 3; ++e) {
+      d = std::min(d, distance_to_segment(cx, cy, t.v[e].position, t.v[(e + 1) % 3].position));
+    }
+    r.near_edge[q] = d <= 1.0 ? 1 : 0;
+  }
+  return r;
+}
+
+std::uint64_t triangle_cycles(const Program& program, const MachineConfig& config) {
+  const TimingParams timing = timing_params(config);
+  const OwnedValues none{};
+  const PacketValues values(none);
+  std::uint64_t cycles = 0;
+  for (const Instruction& ins : program.procedure(Procedure::triangle).code)
+    cycles += static_cast<std::uint64_t>(instruction_cost(ins, timing, values).count);
+  return cycles;
+}
+
+ScanConversionMethod measure(const MachineConfig& config, const Scene& scene,
+                             const Program& program, const char* coverage_firmware,
+                             const Reference& ref, double E, bool closed, int threads) {
+  ScanConversionMethod m;
+  m.program = program.name;
+  const FieldDecl* z_decl = program.find_field("z");
+  if (z_decl == nullptr || z_decl->width < config.gp.depth_bits) {
+    throw std::invalid_argument(fmt::format(
+        "{}: scan conversion is measured on a program's 'z' field, at least gp.depth_bits = {} "
+        "wide",
+        program.name, config.gp.depth_bits));
+  }
+  const FieldFrame frame = render_field(config, scene, program, "z", threads);
+  m.image = frame.image;
+  const std::uint64_t cleared = (std::uint64_t{1} << z_decl->width) - 1;
+  const std::size_t n = frame.values.size();
+  m.shows_hidden.assign(n, 0);
+  double sum = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    if (ref.front[q] == kInfinity) continue;
+    if (frame.values[q] == cleared) {
+      ++m.missing;
+      continue;
+    }
+    const double z = static_cast<double>(frame.values[q]);
+    const double error = std::fabs(z - ref.front[q]);
+    if (ref.near_edge[q]) {
+      ++m.edge_pixels;
+      sum += error;
+      m.edge_max_error = std::max(m.edge_max_error, error);
+      if (!ref.layer_edge[q]) {
+        m.shared_edge_max_error = std::max(m.shared_edge_max_error, error);
+        m.bound_ratio = std::max(m.bound_ratio, error / (2.0 * ref.local_m[q] * E));
+      }
+    } else {
+      m.interior_max_error = std::max(m.interior_max_error, error);
+    }
+    const double hidden = ref.hidden[q];
+    if (hidden != kInfinity && hidden - ref.front[q] > kDepthResolution &&
+        z - ref.front[q] > hidden - z) {
+      ++m.show_through;
+      m.shows_hidden[q] = 1;
+    }
+  }
+  m.edge_mean_error = m.edge_pixels > 0 ? sum / static_cast<double>(m.edge_pixels) : 0.0;
+
+  if (closed) {
+    const Program counter =
+        assemble(coverage_firmware, program.name + "-coverage", assembler_options(config));
+    const FieldFrame coverage = render_field(config, scene, counter, "count", threads);
+    m.parity_errors = 0;
+    for (std::uint64_t c : coverage.values) m.parity_errors += static_cast<std::int64_t>(c & 1);
+  }
+
+  m.triangle_cycles = triangle_cycles(program, config);
+  m.bits = program.bits_used();
+  m.packet_words =
+      packet_words(program.procedure(Procedure::triangle).expressions,
+                   coefficient_words(config.evaluator.coefficient_bits, config.ring.word_bits));
+  const FrameResult r = simulate_frame(config, scene, program, threads);
+  double clocks = 0;
+  for (std::size_t g = 0; g < r.stats.elements("gp"); ++g)
+    clocks += static_cast<double>(r.stats.integer(fmt::format("gp.{}.busy_clocks", g)));
+  m.gp_clocks_per_triangle = scene.mesh.triangles.empty()
+                                 ? 0.0
+                                 : clocks / static_cast<double>(scene.mesh.triangles.size());
+  m.frame_seconds = r.stats.real("frame.simulated_seconds");
+  return m;
+}
+
+}  // namespace
+
+ScanConversionReport measure_scan_conversion(const MachineConfig& config, const Scene& scene,
+                                             const Program& standard, const Program& accurate,
+                                             int threads) {
+  ScanConversionReport report;
+  report.scene = scene.name;
+  report.triangles = scene.mesh.triangles.size();
+  const MeshAdjacency adjacency = build_mesh_adjacency(scene.mesh);
+  report.edges = adjacency.edges;
+  report.boundary_edges = adjacency.boundary_edges;
+  report.non_manifold_edges = adjacency.non_manifold_edges;
+  report.closed = adjacency.closed() && !scene.mesh.triangles.empty();
+
+  // The accurate set-up's classification of every edge of every whole or clipped piece.
+  const GeometryParams params = geometry_params(config);
+  const GeometryEngine geometry(params, scene);
+  std::vector<ScreenTriangle> pieces;
+  SetupCounts counts;
+  for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
+    pieces.clear();
+    geometry.transform(i, pieces, counts);
+    for (const ScreenTriangle& t : pieces) {
+      SetupContext c{params, scene.camera, t};
+      c.adjacency = &adjacency;
+      c.mesh = &scene.mesh;
+      c.depth_max = std::ldexp(1.0, params.depth_bits) - 1.0;
+      for (int e = 0; e < 3; ++e) ++report.sides[static_cast<int>(side_plane(c, e).kind)];
+    }
+  }
+
+  const Reference ref = reference(config, scene);
+  report.M = ref.M;
+  report.E = std::sqrt(2.0) * std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
+  report.standard =
+      measure(config, scene, standard, kCoverageFirmware, ref, report.E, report.closed, threads);
+  report.accurate = measure(config, scene, accurate, kAccurateCoverageFirmware, ref, report.E,
+                            report.closed, threads);
+
+  // Accurate's image at half brightness; red where the two images differ, yellow where the
+  // standard one shows a hidden surface.
+  report.marked = report.accurate.image;
+  const std::size_t n = report.marked.rgb.size() / 3;
+  for (std::size_t q = 0; q < n; ++q) {
+    std::uint8_t* px = &report.marked.rgb[q * 3];
+    const std::uint8_t* s = &report.standard.image.rgb[q * 3];
+    const bool differs = px[0] != s[0] || px[1] != s[1] || px[2] != s[2];
+    if (differs) ++report.differing;
+    if (report.standard.shows_hidden[q]) {
+      px[0] = 255, px[1] = 230, px[2] = 0;
+    } else if (differs) {
+      px[0] = 255, px[1] = 0, px[2] = 0;
+    } else {
+      for (int c = 0; c < 3; ++c) px[c] = static_cast<std::uint8_t>(px[c] / 2);
+    }
+  }
+  return report;
+}
+
+std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports) {
+  std::string out =
+      "| scene | method | edge px | max error | mean error | shared-edge max | / 2ME | "
+      "interior max | hidden shows | parity errors | cycles/tri | bits | GP clocks/tri | "
+      "words/packet | frame ms |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const ScanConversionReport& r : reports) {
+    for (const ScanConversionMethod* m : {&r.standard, &r.accurate}) {
+      const bool first = m == &r.standard;
+      out += fmt::format(
+          "| {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.3f} | {:.0f} | {} | {} | {} | {} | "
+          "{:.0f} | {} | {:.2f} |\n",
+          first ? r.scene : "", first ? "standard" : "accurate", m->edge_pixels, m->edge_max_error,
+          m->edge_mean_error, m->shared_edge_max_error, m->bound_ratio, m->interior_max_error,
+          m->show_through,
+          m->parity_errors < 0 ? std::string("open") : std::to_string(m->parity_errors),
+          m->triangle_cycles, m->bits, m->gp_clocks_per_triangle, m->packet_words,
+          m->frame_seconds * 1e3);
+    }
+  }
+  return out;
+}
+
+}  // namespace pp5

@@ -1,0 +1,103 @@
+#pragma once
+// Standard against accurate scan conversion (Rossignac, sections 9.3 and 9.4), measured on a
+// scene: how far the depth each program leaves in its z-buffer is from the exact depth of the
+// true surface at the pixel centre, where a hidden surface shows through, whether parity
+// holds across a closed mesh, and what the fix costs.
+//
+// Every depth examined comes out of firmware executing on the pixel array: the programs'
+// own `z` field, read back (render_field). Parity is counted by firmware too: a program per
+// method that adds 1 to a per-pixel counter for every triangle that owns the centre, with that
+// method's tests (the snapped edges; the enlarged area and the side tests). The reference is
+// computed in double precision from the projected, unsnapped triangles.
+//
+// Contract (the terms of the report):
+//  - Exact depth at pixel (X, Y): the smallest depth, in depth units (0 .. 2^gp.depth_bits - 1),
+//    of the unsnapped screen triangles containing the centre (X + 0.5, Y + 0.5); the next
+//    larger depth of another triangle there is the first hidden surface.
+//  - An edge pixel: one whose centre is within one pixel of an edge of the frontmost triangle
+//    there. Errors are |z - exact| over edge pixels that both the reference and the program
+//    cover; interior pixels (the rest) are reported separately.
+//  - A hidden surface shows through at a covered pixel when a hidden surface lies more than
+//    kDepthResolution units behind the front one and the program's z is nearer to the hidden
+//    depth than to the front one.
+//  - Parity errors: pixels covered an odd number of times, counted only on a closed mesh
+//    (every edge shared by two triangles); -1 for an open one.
+//  - The paper's bound, in our terms. E: the farthest a snapped edge lies from the true one,
+//    sqrt(2) 2^-(gp.subpixel_bits + 1) pixels (each vertex moves by at most half a snapped unit
+//    in x and in y; the paper's E is along x only). M: the larger depth gradient (depth units
+//    per pixel, Euclidean, the paper's dZ/dX in any direction) of the two faces of a shared
+//    edge. A centre handed to the wrong one of two faces sharing an edge lies at most E from
+//    it, where their planes differ by at most 2ME. It holds where the two faces lie on
+//    opposite sides of the edge on the screen; across a boundary or silhouette edge a
+//    misclassified centre changes layer (the paper's figure 9.10, bottom row), and the error
+//    is the gap between the layers. So the bound is checked at edge pixels within 2E of a
+//    shared, non-silhouette edge and of no other edge, with M the largest such gradient there
+//    (local); report.M is the scene's largest gradient, for scale.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/config/machine_config.hpp"
+#include "models/gp/accurate_expressions.hpp"
+#include "sim/image/png_writer.hpp"
+#include "sim/scene/scene.hpp"
+
+namespace pp5 {
+
+// Depth units within which a rendered depth counts as the surface's own (the z-buffer keeps
+// floor() of the value, and the planes are rounded to evaluator.fraction_bits).
+inline constexpr double kDepthResolution = 2.0;
+
+struct ScanConversionMethod {
+  std::string program;
+  std::uint64_t edge_pixels = 0;  // edge pixels covered by reference and program
+  double edge_max_error = 0;      // depth units
+  double edge_mean_error = 0;     // depth units
+  double interior_max_error = 0;  // depth units, the other covered pixels
+  // Over edge pixels within 2E of a shared, non-silhouette edge and of no other kind of edge:
+  // the largest error, and the largest error / (2 M E) with M the larger gradient of the
+  // faces of the shared edges there (the paper's bound; 1 = at the bound).
+  double shared_edge_max_error = 0;
+  double bound_ratio = 0;
+  std::uint64_t show_through = 0;   // pixels where a hidden surface shows
+  std::uint64_t missing = 0;        // covered in the reference, z never written
+  std::int64_t parity_errors = -1;  // odd coverage on a closed mesh; -1 if not closed
+  // Cost.
+  std::uint64_t triangle_cycles = 0;  // array cycles of one `triangle` invocation
+  int bits = 0;                       // pixel-memory bits the program uses
+  double gp_clocks_per_triangle = 0;  // i860 clocks summed over the GPs / scene triangles
+  std::uint64_t packet_words = 0;     // ring words of one triangle packet
+  double frame_seconds = 0;           // simulated frame time
+  RgbImage image;
+  std::vector<std::uint8_t> shows_hidden;  // per pixel, 1 where a hidden surface shows
+};
+
+struct ScanConversionReport {
+  std::string scene;
+  std::uint64_t triangles = 0;
+  bool closed = false;
+  std::uint64_t edges = 0, boundary_edges = 0, non_manifold_edges = 0;
+  // How the accurate program's GP set-up classified each edge of each drawn triangle
+  // (SideKind order): the neighbour's plane, or why the snapped edge was used instead.
+  std::array<std::uint64_t, static_cast<int>(SideKind::count)> sides{};
+  double M = 0, E = 0;  // see the contract; the bound is 2 M E
+  ScanConversionMethod standard, accurate;
+  std::uint64_t differing = 0;  // pixels whose colour differs between the two
+  RgbImage marked;              // accurate's image, dimmed, with the differing pixels marked
+};
+
+// Measures `standard` (phong.pp5) and `accurate` (accurate.pp5) on `scene` with `config`'s
+// machine. Both programs must have a 24-bit or wider `z` field holding the depth.
+ScanConversionReport measure_scan_conversion(const MachineConfig& config, const Scene& scene,
+                                             const Program& standard, const Program& accurate,
+                                             int threads);
+
+// A Markdown table, one row per scene and method.
+std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports);
+
+// The firmware that counts, per pixel, the triangles that own its centre by accurate.pp5's
+// tests (the enlarged area and the three side tests), in the red output.
+extern const char* const kAccurateCoverageFirmware;
+
+}  // namespace pp5

@@ -1,0 +1,251 @@
+// Accurate scan conversion (Rossignac, 9.4): the GP's side planes (models/gp/
+// accurate_expressions.hpp), accurate.pp5 against phong.pp5 on the provoking scene and on a
+// curved closed mesh (sim/analysis/scan_conversion.hpp), and edges without one neighbour.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <vector>
+
+#include "models/display_list/mesh_adjacency.hpp"
+#include "models/gp/accurate_expressions.hpp"
+#include "models/gp/geometry.hpp"
+#include "sim/analysis/extremes.hpp"
+#include "sim/analysis/field_render.hpp"
+#include "sim/analysis/scan_conversion.hpp"
+#include "sim/scene/scene.hpp"
+#include "support.hpp"
+
+using namespace pp5;
+
+namespace {
+
+MachineConfig machine(int subpixel_bits) {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=256", "screen.height=256", "gp.count=2", "renderer.count=2",
+              "gp.subpixel_bits=" + std::to_string(subpixel_bits)});
+  return config;
+}
+
+ScanConversionReport measure(const MachineConfig& config, const Scene& scene) {
+  return measure_scan_conversion(config, scene, test::load_program("phong", config),
+                                 test::load_program("accurate", config), 2);
+}
+
+// Every edge's side plane as each of its two triangles computes it.
+struct Sides {
+  std::vector<std::array<SidePlane, 3>> of;
+};
+Sides side_planes(const MachineConfig& config, const Scene& scene, const MeshAdjacency& adjacency) {
+  const GeometryParams params = geometry_params(config);
+  const GeometryEngine geometry(params, scene);
+  Sides s;
+  s.of.resize(scene.mesh.triangles.size());
+  std::vector<ScreenTriangle> pieces;
+  SetupCounts counts;
+  for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
+    pieces.clear();
+    geometry.transform(i, pieces, counts);
+    REQUIRE(pieces.size() == 1);  // the built-in scenes are framed whole
+    SetupContext c{params, scene.camera, pieces[0]};
+    c.adjacency = &adjacency;
+    c.mesh = &scene.mesh;
+    c.depth_max = std::ldexp(1.0, params.depth_bits) - 1.0;
+    for (int e = 0; e < 3; ++e)
+      s.of[static_cast<std::size_t>(i)][static_cast<std::size_t>(e)] = side_plane(c, e);
+  }
+  return s;
+}
+
+// Per pixel, the number of unsnapped screen triangles containing its centre, or -1 where the
+// centre lies within 2^-10 pixel of a triangle's edge line (too close to call).
+std::vector<int> exact_coverage(const MachineConfig& config, const Scene& scene) {
+  const GeometryEngine geometry(geometry_params(config), scene);
+  const int w = config.screen.width, h = config.screen.height;
+  std::vector<int> count(static_cast<std::size_t>(w) * h, 0);
+  std::vector<ScreenTriangle> pieces;
+  SetupCounts counts;
+  for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
+    geometry.transform(i, pieces, counts);
+  }
+  for (const ScreenTriangle& t : pieces) {
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const glm::dvec2 c(x + 0.5, y + 0.5);
+        int inside = 0, close = 0;
+        double area = 0;
+        for (int e = 0; e < 3; ++e) {
+          const glm::dvec2 a = t.v[e].position, b = t.v[(e + 1) % 3].position;
+          area += a.x * b.y - b.x * a.y;
+        }
+        for (int e = 0; e < 3; ++e) {
+          const glm::dvec2 a = t.v[e].position, b = t.v[(e + 1) % 3].position;
+          const double cross =
+              ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x)) * (area > 0 ? 1.0 : -1.0);
+          const double distance = cross / glm::length(b - a);
+          if (distance > 0) ++inside;
+          if (std::fabs(distance) < 1.0 / 1024) ++close;
+        }
+        int& n = count[static_cast<std::size_t>(y) * w + x];
+        if (n < 0) continue;
+        if (close > 0 && inside + close >= 3) {
+          n = -1;
+        } else if (inside == 3) {
+          ++n;
+        }
+      }
+    }
+  }
+  return count;
+}
+
+}  // namespace
+
+TEST_CASE("accurate: the two triangles of an edge get opposite side planes", "[accurate]") {
+  const MachineConfig config = machine(4);
+  const Scene scene = make_builtin_scene("sphere");
+  const MeshAdjacency adjacency = build_mesh_adjacency(scene.mesh);
+  const Sides s = side_planes(config, scene, adjacency);
+  int planes = 0, silhouettes = 0;
+  for (int t = 0; t < static_cast<int>(scene.mesh.triangles.size()); ++t) {
+    for (int e = 0; e < 3; ++e) {
+      const SidePlane& a = s.of[static_cast<std::size_t>(t)][static_cast<std::size_t>(e)];
+      const int n = adjacency.across(t, e);
+      REQUIRE(n >= 0);  // closed
+      int f = 0;
+      while (adjacency.across(n, f) != t) ++f;
+      const SidePlane& b = s.of[static_cast<std::size_t>(n)][static_cast<std::size_t>(f)];
+      INFO("triangle " << t << " edge " << e << ", neighbour " << n << " edge " << f);
+      REQUIRE(a.kind == b.kind);
+      if (a.kind != SideKind::plane) continue;
+      ++planes;
+      CHECK(a.fraction_bits == b.fraction_bits);
+      CHECK(a.silhouette == b.silhouette);
+      // K (D - t) and K' (-D - t'): an interior edge has K = K' and t + t' = 1, so that every
+      // integer value of D is owned by exactly one of them; a silhouette K = -K', t = t' = 0.
+      const QuadraticCoefficients& p = a.coefficients;
+      const QuadraticCoefficients& q = b.coefficients;
+      if (a.silhouette) {
+        ++silhouettes;
+        CHECK(a.sign == -b.sign);
+        CHECK(p.D == q.D);
+        CHECK(p.E == q.E);
+        CHECK(p.F == q.F);
+      } else {
+        CHECK(a.sign == b.sign);
+        CHECK(p.D == -q.D);
+        CHECK(p.E == -q.E);
+        CHECK(p.F + q.F == -1);
+      }
+    }
+  }
+  // The sphere's faces are curved enough that most edges use the neighbour's plane, and its
+  // outline is made of silhouette edges.
+  CHECK(planes > 3 * static_cast<int>(scene.mesh.triangles.size()) / 2);
+  CHECK(silhouettes > 0);
+}
+
+TEST_CASE(
+    "accurate: on the folded slab the standard program shows the hidden back, accurate never does",
+    "[accurate]") {
+  // Two sub-pixel bits: vertices snapped to a quarter pixel, so E = 0.18 pixel.
+  const MachineConfig config = machine(2);
+  const Scene scene = make_builtin_scene("folded-slab");
+  const ScanConversionReport r = measure(config, scene);
+  REQUIRE(r.closed);
+  CHECK(r.standard.show_through > 0);
+  CHECK(r.accurate.show_through == 0);
+  // The paper's bound on the standard program's error where a centre can only change plane,
+  // not layer, for this round-off; far larger errors where it changes layer.
+  CHECK(r.standard.bound_ratio <= 1.0);
+  CHECK(r.standard.shared_edge_max_error > 1000.0);
+  CHECK(r.standard.edge_max_error > 2.0 * r.standard.shared_edge_max_error);
+  // Accurate's depth is its own plane at every pixel it owns: within the z-buffer's floor()
+  // and the plane's rounding.
+  CHECK(r.accurate.edge_max_error <= kDepthResolution);
+  CHECK(r.accurate.interior_max_error <= kDepthResolution);
+  CHECK(r.standard.parity_errors == 0);
+  CHECK(r.accurate.parity_errors == 0);
+  CHECK(r.accurate.missing == 0);
+}
+
+TEST_CASE("accurate: a finely tessellated sphere, at the default round-off", "[accurate]") {
+  const MachineConfig config = machine(4);
+  SceneOptions options;
+  options.tessellation_u = 128;
+  options.tessellation_v = 64;
+  const Scene scene = make_builtin_scene("sphere", options);
+  const ScanConversionReport r = measure(config, scene);
+  REQUIRE(r.closed);
+  CHECK(r.accurate.show_through == 0);
+  CHECK(r.standard.bound_ratio <= 1.0);
+  CHECK(r.accurate.edge_max_error <= kDepthResolution);
+  CHECK(r.accurate.edge_max_error < r.standard.edge_max_error);
+  CHECK(r.accurate.parity_errors == 0);
+}
+
+TEST_CASE("accurate: boundary and non-manifold edges are classified by their own lines",
+          "[accurate]") {
+  // Three triangles hinged on one edge {0, 1} (non-manifold), each with two boundary edges,
+  // facing the camera at different slopes, and a fourth sharing a proper edge {1, 2} with the
+  // first.
+  Scene scene = make_builtin_scene("two-triangles");
+  Mesh mesh;
+  const glm::vec3 colour(0.8f, 0.6f, 0.4f);
+  for (const glm::vec3 p :
+       {glm::vec3(0, -1, 0), glm::vec3(0, 1, 0), glm::vec3(1.2f, 0.2f, 0.3f),
+        glm::vec3(-1, 0.1f, 0.5f), glm::vec3(0.9f, -0.9f, -0.6f), glm::vec3(1.4f, 1.1f, 0.1f)})
+    mesh.vertices.push_back({p, {0, 0, 1}, colour});
+  mesh.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}, {1, 5, 2}};
+  compute_smooth_normals(mesh);
+  scene.mesh = mesh;
+  scene.name = "hinge";
+  scene.camera = frame_mesh(scene.mesh, glm::vec3(0.2f, 0.3f, 1.0f), 40.0f);
+  const MachineConfig config = machine(4);
+  const MeshAdjacency adjacency = build_mesh_adjacency(scene.mesh);
+  CHECK(adjacency.non_manifold_edges == 1);
+  CHECK(adjacency.boundary_edges == 7);
+  const Sides s = side_planes(config, scene, adjacency);
+  CHECK(s.of[0][0].kind == SideKind::non_manifold);
+  CHECK(s.of[1][0].kind == SideKind::non_manifold);
+  CHECK(s.of[2][0].kind == SideKind::non_manifold);
+  CHECK(s.of[3][2].kind == SideKind::plane);
+  CHECK(s.of[0][2].kind == SideKind::boundary);
+  // Coverage counted by firmware with accurate.pp5's tests equals the exact count of
+  // unsnapped triangles containing each centre, wherever the centre is not within 2^-10 pixel
+  // of an edge's line; the standard program's (snapped edges) does not.
+  const std::vector<int> exact = exact_coverage(config, scene);
+  const FieldFrame standard =
+      render_field(config, scene,
+                   assemble(kCoverageFirmware, "coverage", assembler_options(config)), "count", 1);
+  const FieldFrame accurate = render_field(
+      config, scene,
+      assemble(kAccurateCoverageFirmware, "accurate-coverage", assembler_options(config)), "count",
+      1);
+  std::uint64_t covered = 0, wrong_standard = 0, wrong_accurate = 0;
+  for (std::size_t q = 0; q < exact.size(); ++q) {
+    if (exact[q] < 0) continue;
+    covered += static_cast<std::uint64_t>(exact[q]);
+    wrong_standard += standard.values[q] != static_cast<std::uint64_t>(exact[q]) ? 1 : 0;
+    wrong_accurate += accurate.values[q] != static_cast<std::uint64_t>(exact[q]) ? 1 : 0;
+  }
+  CHECK(covered > 1000);
+  CHECK(wrong_accurate == 0);
+  CHECK(wrong_standard > 0);
+}
+
+TEST_CASE("accurate: the expressions in the registry", "[accurate]") {
+  ExpressionSet sides, wide;
+  sides.set(static_cast<int>(Expression::side0));
+  wide.set(static_cast<int>(Expression::wide1));
+  CHECK(needs_adjacency(sides));
+  CHECK_FALSE(widens_bounds(sides));
+  CHECK(widens_bounds(wide));
+  CHECK_FALSE(needs_adjacency(wide));
+  // accurate.pp5 sends the enlarged edges, the sides and its own depth plane instead of the
+  // snapped edges and depth: three linear expressions more than phong.
+  const MachineConfig config = machine(4);
+  const Program phong = test::load_program("phong", config);
+  const Program accurate = test::load_program("accurate", config);
+  CHECK(packet_words(accurate.procedure(Procedure::triangle).expressions, 2) ==
+        packet_words(phong.procedure(Procedure::triangle).expressions, 2) + 3 * 3 * 2);
+  CHECK(accurate.bits_used() == phong.bits_used());
+}
