@@ -14,8 +14,9 @@ namespace pp5 {
 // region's triangles N times, and the Renderer runs `pass` between one pass and the next
 // (multipass algorithms such as depth peeling). Numbered in the order they were added (trace
 // files store the number), not the order they run in.
-enum class Procedure { clear, triangle, pass, shade, light, count };
-inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass", "shade", "light"};
+enum class Procedure { clear, triangle, pass, shade, light, sphere, count };
+inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass",
+                                                  "shade", "light",    "sphere"};
 inline constexpr const char* kProcedureMeaning[] = {
     "once per region, before any primitive (initialise every pixel)",
     "once per triangle binned to the region, with the triangle's expressions",
@@ -23,6 +24,7 @@ inline constexpr const char* kProcedureMeaning[] = {
     "once per region, after all primitives and lights (deferred shading)",
     ("once per region and scene light, after the last pass's triangles and before shade, "
      "with that light's light_*, half_*, diffuse and specular (deferred lighting)"),
+    "once per sphere binned to the region, with the sphere's expressions (sphere_*)",
 };
 static_assert(std::size(kProcedureNames) == static_cast<std::size_t>(Procedure::count));
 static_assert(std::size(kProcedureMeaning) == static_cast<std::size_t>(Procedure::count));
@@ -50,6 +52,14 @@ enum class Expression {
   slope_y,
   eye_depth,
   opacity,
+  sphere_inside,
+  sphere_depth,
+  sphere_nx,
+  sphere_ny,
+  sphere_nz,
+  sphere_red,
+  sphere_green,
+  sphere_blue,
   count
 };
 
@@ -87,6 +97,18 @@ inline constexpr ExpressionInfo kExpressions[] = {
      "1 at the far plane, interpolated linearly in screen space through the three vertices: "
      "not perspective-correct (threshold_eyez)"},
     {"opacity", "the material's opacity, 0..256 (256 = opaque), interpolated (transparent)"},
+    {"sphere_inside",
+     "a sphere's outline: the exact screen conic of the cone from the eye tangent to it, >= 0 "
+     "inside (quadratic; models/gp/sphere.hpp)"},
+    {"sphere_depth",
+     "a sphere's depth, as `depth`, quadratic: exact but for the square root of the conic, "
+     "replaced by its minimax line (error bound in models/gp/sphere.hpp)"},
+    {"sphere_nx", "a sphere's eye-space normal x times 127, least-squares quadratic"},
+    {"sphere_ny", "a sphere's normal y times 127, least-squares quadratic"},
+    {"sphere_nz", "a sphere's normal z times 127, least-squares quadratic"},
+    {"sphere_red", "a sphere's unlit material red, 0..255, constant"},
+    {"sphere_green", "a sphere's material green, 0..255, constant"},
+    {"sphere_blue", "a sphere's material blue, 0..255, constant"},
 };
 static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
               static_cast<std::size_t>(Expression::count));

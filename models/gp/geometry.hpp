@@ -63,12 +63,15 @@ struct ScreenTriangle {
 
 // Why a triangle produced no packet.
 struct SetupCounts {
-  std::uint64_t clipped_away = 0;  // wholly outside the view volume
-  std::uint64_t degenerate = 0;    // zero area after snapping
-  std::uint64_t no_pixels = 0;     // covers no pixel centre
-  std::uint64_t overflow = 0;      // a coefficient did not fit evaluator.coefficient_bits
-  std::uint64_t clip_splits = 0;   // extra triangles made by clipping
-  std::uint64_t culled = 0;        // back-facing, dropped (GeometryParams::cull_back_faces)
+  std::uint64_t clipped_away = 0;   // wholly outside the view volume
+  std::uint64_t degenerate = 0;     // zero area after snapping
+  std::uint64_t no_pixels = 0;      // covers no pixel centre
+  std::uint64_t overflow = 0;       // a coefficient did not fit evaluator.coefficient_bits
+  std::uint64_t clip_splits = 0;    // extra triangles made by clipping
+  std::uint64_t culled = 0;         // back-facing, dropped (GeometryParams::cull_back_faces)
+  std::uint64_t sphere_near = 0;    // a sphere reaching the near plane (models/gp/sphere.hpp)
+  std::uint64_t sphere_behind = 0;  // a sphere wholly behind the eye
+  std::uint64_t sphere_far = 0;     // a sphere reaching the far plane
 };
 
 // The expressions a procedure uses (ProcedureCode::expressions): what the GP computes.

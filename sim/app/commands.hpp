@@ -29,6 +29,7 @@ Command add_sweep_command(CLI::App& app);
 Command add_trace_command(CLI::App& app);
 Command add_highlight_command(CLI::App& app);
 Command add_extremes_command(CLI::App& app);
+Command add_spheres_command(CLI::App& app);
 
 // Shared by the commands.
 

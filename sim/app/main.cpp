@@ -95,6 +95,7 @@ int main(int argc, char** argv) {
       add_trace_command(app),
       add_highlight_command(app),
       add_extremes_command(app),
+      add_spheres_command(app),
   };
 
   try {
