@@ -222,7 +222,8 @@ TEST_CASE("the fuzz corpus and every kept crasher run cleanly through the fuzz t
       {"config", fuzz::config},
       {"asm", fuzz::assembler},
       {"trace", fuzz::trace},
-      {"snapshot", fuzz::snapshot}};
+      {"snapshot", fuzz::snapshot},
+      {"molecule", fuzz::molecule}};
   int inputs = 0;
   for (const auto& [name, run] : targets) {
     for (const char* set : {"corpus", "regressions"}) {

@@ -203,20 +203,29 @@ TEST_CASE("sphere extremes: sub-pixel and larger than the screen, exact coverage
     WARN("sub-pixel spheres cover " << c.covered << " pixel centres of 40 spheres");
   }
   SECTION("a sphere larger than the screen") {
-    const Scene scene = camera_scene({{{0.2f, 0.1f, -3.0f}, 2.9f, glm::vec3(1)}}, 0.05f, 10.0f);
+    // Seen under 60 degrees through a 40-degree field of view: every pixel is inside.
+    const Scene scene = camera_scene({{{0.2f, 0.1f, -20.0f}, 10.0f, glm::vec3(1)}});
     const CoverageCheck c = check_coverage(config, scene);
     CHECK(c.covered == 256u * 256u);
     CHECK(c.wrong == 0);
+    CHECK(c.ambiguous == 0);
+  }
+  SECTION("a sphere so near that its depth bound leaves the depth range: dropped, counted") {
+    const Scene scene = camera_scene({{{0.2f, 0.1f, -3.0f}, 2.9f, glm::vec3(1)}}, 0.05f, 10.0f);
+    const FrameResult r = simulate_frame(config, scene, test::load_program("phong", config), 2);
+    CHECK(r.stats.integer("setup.sphere_near_plane") + r.stats.integer("setup.sphere_far_plane") ==
+          1);
+    CHECK(r.stats.integer("setup.packets") == 0);
   }
 }
 
 TEST_CASE("sphere extremes: coefficients at the edge of evaluator.coefficient_bits", "[spheres]") {
   const Scene scene = make_builtin_scene("spheres");
   SECTION("narrow coefficients: the conic's scale shrinks, coverage still exact") {
-    // 2^(R-3) with R = 30 leaves the outline few bits: pixels within the rounding bound are
-    // counted, every other one is exact.
+    // 30 bits (the least a 16-bit depth buffer allows) leave the conic 2^27: pixels within
+    // the rounding bound are counted, every other one is exact.
     const MachineConfig config =
-        small({"evaluator.coefficient_bits=30", "evaluator.result_bits=30"});
+        small({"gp.depth_bits=16", "evaluator.coefficient_bits=30", "evaluator.result_bits=30"});
     const CoverageCheck c = check_coverage(config, scene);
     CHECK(c.wrong == 0);
     WARN("30-bit coefficients: " << c.ambiguous << " pixel centres within the rounding bound of "

@@ -108,7 +108,7 @@ int run_spheres(const SpheresOptions& o) {
       "scene '{}': {} spheres, {} x {} screen, firmware {} ({} bits of pixel memory); per "
       "sphere, less a frame without the spheres; rate: spheres/s the GPs or the Renderers "
       "could sustain, whichever is less\n\n",
-      scene.name, scene.spheres.size(), config.screen.width, config.screen.height, program.name,
+      scene.name, scene.spheres.size(), config.screen.width, config.screen.height, o.firmware,
       program.bits_used());
   std::cout << "| spheres as | GP clocks | packet words | ring words | Renderer cycles | spheres/s "
                "| coverage "

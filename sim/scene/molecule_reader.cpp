@@ -80,8 +80,11 @@ std::vector<Sphere> read_molecule_file(const std::string& path) {
   } catch (const FileError& e) {
     throw SceneError(e.what());
   }
+  return parse_molecule(text, path, ends_with(path, ".cif") || ends_with(path, ".mmcif"));
+}
+
+std::vector<Sphere> parse_molecule(const std::string& text, const std::string& path, bool cif) {
   gemmi::Structure st;
-  const bool cif = ends_with(path, ".cif") || ends_with(path, ".mmcif");
   try {
     if (cif) {
       st = gemmi::make_structure(gemmi::cif::read_memory(text.data(), text.size(), path.c_str()));

@@ -38,5 +38,7 @@ void append_tessellated_spheres(const std::vector<Sphere>& spheres, int u, int v
 // Throws SceneError (scene_loader.hpp) naming the file (and the line, where gemmi gives one)
 // for an unreadable or malformed file or one with no atoms.
 std::vector<Sphere> read_molecule_file(const std::string& path);
+// The same from a file's text; `path` names it in messages, `cif` chooses mmCIF over PDB.
+std::vector<Sphere> parse_molecule(const std::string& text, const std::string& path, bool cif);
 
 }  // namespace pp5
