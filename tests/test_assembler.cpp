@@ -236,6 +236,9 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
         all_parameters.insert(parameters.begin(), parameters.end());
         if (proc == static_cast<int>(Procedure::triangle)) {
           CHECK(expressions == e.triangle_expressions);
+        } else if (proc == static_cast<int>(Procedure::sphere)) {
+          // A sphere procedure reads only the sphere's expressions (models/gp/sphere.hpp).
+          for (const std::string& x : expressions) CHECK(x.rfind("sphere_", 0) == 0);
         } else {
           CHECK(expressions.empty());
         }

@@ -245,7 +245,7 @@ TEST_CASE("sphere extremes: coefficients at the edge of evaluator.coefficient_bi
   }
 }
 
-TEST_CASE("molecule files: PDB and mmCIF through gemmi; bad files name file and line",
+TEST_CASE("molecule files: PDB and mmCIF through gemmi, bad files name file and line",
           "[spheres][molecule]") {
   const std::string dir = std::string(PP5_SOURCE_DIR) + "/tests/data/molecules/";
   const auto pdb = read_molecule_file(dir + "tripeptide.pdb");
@@ -275,7 +275,7 @@ TEST_CASE("molecule files: PDB and mmCIF through gemmi; bad files name file and 
   fails("missing.pdb", "missing.pdb");
 }
 
-TEST_CASE("scene files hold spheres and molecules; errors name the key", "[spheres]") {
+TEST_CASE("scene files hold spheres and molecules, errors name the key", "[spheres]") {
   const Scene s = parse_scene_json(
       R"({"spheres": [{"center": [0, 0, 0], "radius": 1, "color": [1, 0, 0]},
                       {"molecule": "tripeptide.pdb", "translate": [5, 0, 0], "scale": 0.5}]})",
