@@ -116,10 +116,11 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
     if (k == kTriangleKind) continue;
     const int n = kind.count(scene);
     if (n > 0 && !code.defined) {
-      throw std::runtime_error(fmt::format(
-          "scene '{}' has {} {}s, but program '{}' defines no '{}' procedure (phong draws them)",
-          scene.name, n, kind.name(), program.name,
-          kProcedureNames[static_cast<int>(kind.procedure())]));
+      throw std::runtime_error(
+          fmt::format("scene '{}' has {} {}s, but program '{}' defines no '{}' procedure (phong "
+                      "and threshold draw them)",
+                      scene.name, n, kind.name(), program.name,
+                      kProcedureNames[static_cast<int>(kind.procedure())]));
     }
     if (packet_words(code.expressions) + 1 >
         static_cast<std::uint64_t>(config.renderer.queue_words)) {

@@ -290,3 +290,24 @@ TEST_CASE("scene files hold spheres and molecules, errors name the key", "[spher
     CHECK(std::string(e.what()).find("bad.json: key 'spheres[0].radius'") != std::string::npos);
   }
 }
+
+TEST_CASE("a program must draw what the scene holds, with its kind's expressions", "[spheres]") {
+  const MachineConfig config = small();
+  const Scene scene = make_builtin_scene("spheres");
+  try {
+    simulate_frame(config, scene, test::load_program("gouraud", config), 1);
+    FAIL("no error");
+  } catch (const std::runtime_error& e) {
+    CHECK(std::string(e.what()).find("defines no 'sphere' procedure") != std::string::npos);
+  }
+  const Program wrong =
+      assemble("field z 24\nfield r 8\noutput r r r\nproc triangle\n  qload z, sphere_depth\nend\n",
+               "wrong", assembler_options(config));
+  try {
+    simulate_frame(config, make_builtin_scene("two-triangles"), wrong, 1);
+    FAIL("no error");
+  } catch (const std::runtime_error& e) {
+    CHECK(std::string(e.what()).find("uses expression 'sphere_depth', which the triangle kind "
+                                     "does not supply") != std::string::npos);
+  }
+}
