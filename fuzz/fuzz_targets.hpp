@@ -17,6 +17,7 @@
 #include "models/config/machine_config.hpp"
 #include "sim/scene/mesh_loader.hpp"
 #include "sim/scene/scene_loader.hpp"
+#include "sim/scene/sphere_scenes.hpp"
 #include "sim/trace/snapshot.hpp"
 #include "sim/trace/trace_file.hpp"
 
@@ -39,6 +40,16 @@ inline void mesh(const std::uint8_t* data, std::size_t size) {
   try {
     parse_mesh(text, formats[data[0] % 4], "fuzz", nullptr, fuzz_limits());
   } catch (const MeshError&) {
+  }
+}
+
+// Molecule files through gemmi: the first byte chooses PDB (even) or mmCIF (odd).
+inline void molecule(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return;
+  const std::string text(reinterpret_cast<const char*>(data) + 1, size - 1);
+  try {
+    parse_molecule(text, "fuzz", (data[0] & 1) != 0);
+  } catch (const SceneError&) {
   }
 }
 

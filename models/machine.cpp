@@ -7,6 +7,7 @@
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/expressions.hpp"
 #include "models/gp/graphics_processor.hpp"
+#include "models/gp/primitive_kind.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -85,7 +86,8 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       timing_(timing_params(config)),
       frame_values_(geometry_.frame_values()),
       i860_(i860_params(config)),
-      scheduler_(config.regions(), config.renderer.count, config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic) {
+      scheduler_(config.regions(), config.renderer.count,
+                 config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic) {
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);
@@ -97,6 +99,36 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
         "key 'renderer.queue_words' = {} is too small: one triangle packet of '{}' takes {} "
         "words plus a header word",
         config.renderer.queue_words, program.name, workload_.packet_words));
+  }
+  // Every other kind (the sphere): its procedure may use only what its set-up computes, its
+  // packet must fit a queue, and a scene with such primitives needs the procedure.
+  for (std::size_t k = 0; k < primitive_kinds().size(); ++k) {
+    const PrimitiveKind& kind = *primitive_kinds()[k];
+    const ProcedureCode& code = program.procedure(kind.procedure());
+    for (int e = 0; e < static_cast<int>(Expression::count); ++e) {
+      if (code.expressions.test(e) && !kind.supplies(static_cast<Expression>(e))) {
+        throw std::runtime_error(fmt::format(
+            "program '{}': procedure '{}' uses expression '{}', which the {} kind does not supply",
+            program.name, kProcedureNames[static_cast<int>(kind.procedure())], kExpressions[e].name,
+            kind.name()));
+      }
+    }
+    if (k == kTriangleKind) continue;
+    const int n = kind.count(scene);
+    if (n > 0 && !code.defined) {
+      throw std::runtime_error(
+          fmt::format("scene '{}' has {} {}s, but program '{}' defines no '{}' procedure (phong "
+                      "and threshold draw them)",
+                      scene.name, n, kind.name(), program.name,
+                      kProcedureNames[static_cast<int>(kind.procedure())]));
+    }
+    if (packet_words(code.expressions) + 1 >
+        static_cast<std::uint64_t>(config.renderer.queue_words)) {
+      throw std::runtime_error(fmt::format(
+          "key 'renderer.queue_words' = {} is too small: one {} packet of '{}' takes {} words "
+          "plus a header word",
+          config.renderer.queue_words, kind.name(), program.name, packet_words(code.expressions)));
+    }
   }
   RingParams rp;
   rp.channels = config.ring.channels;

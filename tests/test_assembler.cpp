@@ -243,6 +243,9 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
         all_parameters.insert(parameters.begin(), parameters.end());
         if (proc == static_cast<int>(Procedure::triangle)) {
           CHECK(expressions == e.triangle_expressions);
+        } else if (proc == static_cast<int>(Procedure::sphere)) {
+          // A sphere procedure reads only the sphere's expressions (models/gp/sphere.hpp).
+          for (const std::string& x : expressions) CHECK(x.rfind("sphere_", 0) == 0);
         } else {
           CHECK(expressions.empty());
         }
@@ -330,7 +333,7 @@ TEST_CASE("errors name the file, the line and what was expected", "[assembler]")
   SECTION("expression outside proc triangle") {
     const std::string clear = "proc clear\n  qload z, depth ; HERE\nend\n";
     check_error_here(with_triangle("", clear),
-                     "expression 'depth' is only available in procedure 'triangle'");
+                     "expression 'depth' is only available in procedure 'triangle' or 'sphere'");
     check_error_here(with_triangle("  qload z, bogus ; HERE\n"),
                      "'bogus' is not an expression the GP supplies");
   }

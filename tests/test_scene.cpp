@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sim/scene/scene.hpp"
+#include "sim/scene/sphere_scenes.hpp"
 
 using pp5::make_builtin_scene;
 using pp5::Mesh;
@@ -119,14 +120,18 @@ TEST_CASE("builtin_scene_names lists the scenes", "[scene]") {
   CHECK(pp5::builtin_scene_names() ==
         std::vector<std::string>{"torus", "two-triangles", "sphere", "figure-eight",
                                  "crossing-quads", "receding-pairs", "cyclic-overlap",
-                                 "pierced-quad", "long-thin", "folded-slab"});
+                                 "pierced-quad", "long-thin", "folded-slab", "spheres", "molecule",
+                                 "spheres-and-triangles"});
 }
 
 TEST_CASE("every built-in scene is well formed, lit and framed", "[scene]") {
   for (const std::string& name : pp5::builtin_scene_names()) {
     CAPTURE(name);
-    const Scene scene = make_builtin_scene(name);
+    Scene scene = make_builtin_scene(name);
     CHECK(scene.name == name);
+    // A scene of sphere primitives (sim/scene/sphere_scenes.hpp) is checked through its
+    // spheres tessellated: they must be as well formed and framed as a mesh.
+    pp5::append_tessellated_spheres(scene.spheres, 16, 8, scene.mesh);
     CHECK_FALSE(scene.description.empty());
     check_mesh_invariants(scene);
     for (float aspect : {1.0f, 1.25f, 1.6f}) {

@@ -321,8 +321,10 @@ class Assembler {
       if (i < 0)
         fail("'{}': '{}' is not an expression the GP supplies (pp5sim isa lists them)", mnemonic,
              text);
-      if (current_ != static_cast<int>(Procedure::triangle)) {
-        fail("expression '{}' is only available in procedure 'triangle'", text);
+      // Expressions come with a primitive's packet: only its kind's procedure sees them.
+      if (current_ != static_cast<int>(Procedure::triangle) &&
+          current_ != static_cast<int>(Procedure::sphere)) {
+        fail("expression '{}' is only available in procedure 'triangle' or 'sphere'", text);
       }
       o.kind = Operand::Kind::expression;
       o.index = i;

@@ -15,8 +15,9 @@ namespace pp5 {
 // (multipass algorithms such as depth peeling); with `option passes PARAMETER` N is that
 // frame parameter's value (`layers`), set at run time. Numbered in the order they were added (trace
 // files store the number), not the order they run in.
-enum class Procedure { clear, triangle, pass, shade, light, count };
-inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass", "shade", "light"};
+enum class Procedure { clear, triangle, pass, shade, light, sphere, count };
+inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass",
+                                                  "shade", "light",    "sphere"};
 inline constexpr const char* kProcedureMeaning[] = {
     "once per region, before any primitive (initialise every pixel)",
     "once per triangle binned to the region, with the triangle's expressions",
@@ -24,6 +25,7 @@ inline constexpr const char* kProcedureMeaning[] = {
     "once per region, after all primitives and lights (deferred shading)",
     ("once per region and scene light, after the last pass's triangles and before shade, "
      "with that light's light_*, half_*, diffuse and specular (deferred lighting)"),
+    "once per sphere binned to the region, with the sphere's expressions (sphere_*)",
 };
 static_assert(std::size(kProcedureNames) == static_cast<std::size_t>(Procedure::count));
 static_assert(std::size(kProcedureMeaning) == static_cast<std::size_t>(Procedure::count));
@@ -58,6 +60,14 @@ enum class Expression {
   side0,
   side1,
   side2,
+  sphere_inside,
+  sphere_depth,
+  sphere_nx,
+  sphere_ny,
+  sphere_nz,
+  sphere_red,
+  sphere_green,
+  sphere_blue,
   count
 };
 
@@ -109,6 +119,18 @@ inline constexpr ExpressionInfo kExpressions[] = {
      "usable neighbour (boundary, non-manifold, coplanar), the snapped edge on a clipped piece"},
     {"side1", "K1 (Z - Z1), the neighbour across edge 1"},
     {"side2", "K2 (Z - Z2), the neighbour across edge 2"},
+    {"sphere_inside",
+     "a sphere's outline: the exact screen conic of the cone from the eye tangent to it, >= 0 "
+     "inside (quadratic; models/gp/sphere.hpp)"},
+    {"sphere_depth",
+     "a sphere's depth, as `depth`, quadratic: exact but for the square root of the conic, "
+     "replaced by its minimax line (error bound in models/gp/sphere.hpp)"},
+    {"sphere_nx", "a sphere's eye-space normal x times 127, least-squares quadratic"},
+    {"sphere_ny", "a sphere's normal y times 127, least-squares quadratic"},
+    {"sphere_nz", "a sphere's normal z times 127, least-squares quadratic"},
+    {"sphere_red", "a sphere's unlit material red, 0..255, constant"},
+    {"sphere_green", "a sphere's material green, 0..255, constant"},
+    {"sphere_blue", "a sphere's material blue, 0..255, constant"},
 };
 static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
               static_cast<std::size_t>(Expression::count));

@@ -25,6 +25,14 @@ struct Mesh {
   std::vector<glm::uvec3> triangles;
 };
 
+// A sphere in world space (the `sphere` primitive kind, models/gp/sphere.hpp): radius > 0,
+// `color` RGB in [0,1], opaque.
+struct Sphere {
+  glm::vec3 center;
+  float radius = 1.0f;
+  glm::vec3 color{0.8f};
+};
+
 struct Camera {
   glm::vec3 eye, target, up;
   float fov_y_degrees;
@@ -47,6 +55,7 @@ struct Scene {
   std::string name;
   std::string description;
   Mesh mesh;
+  std::vector<Sphere> spheres;  // drawn after the mesh's triangles (display-list order)
   Camera camera;
   float ambient = 0.15f;      // ambient reflection, in [0,1], once for the whole scene
   std::vector<Light> lights;  // 1..kMaxLights

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "models/gp/accurate_expressions.hpp"
+#include "models/gp/sphere.hpp"
 
 namespace pp5 {
 
@@ -90,6 +91,36 @@ bool opacity(const SetupContext& c, QuadraticCoefficients& out) {
   return c.plane({o(0), o(1), o(2)}, out);
 }
 
+// A sphere's quadratics (models/gp/sphere.hpp): the conic at its scale 2^conic_shift, depth
+// and normals at 2^fraction_bits, all rounded about the anchor pixel. A triangle has no
+// sphere: asked for one of these (a caller setting a triangle up with every procedure's
+// expressions), it gets zero; the Machine lets no triangle procedure use them.
+bool sphere_inside(const SetupContext& c, QuadraticCoefficients& out) {
+  if (c.sphere == nullptr) return (out = {}, true);
+  const ScreenSphere& s = *c.sphere;
+  return sphere_fixed_point(s.conic, std::ldexp(1.0, s.conic_shift), s.x0, s.y0, c.params, out);
+}
+
+bool sphere_depth(const SetupContext& c, QuadraticCoefficients& out) {
+  if (c.sphere == nullptr) return (out = {}, true);
+  const ScreenSphere& s = *c.sphere;
+  return sphere_fixed_point(s.depth, c.f_scale, s.x0, s.y0, c.params, out);
+}
+
+template <int axis>
+bool sphere_normal(const SetupContext& c, QuadraticCoefficients& out) {
+  if (c.sphere == nullptr) return (out = {}, true);
+  const ScreenSphere& s = *c.sphere;
+  return sphere_fixed_point(s.normal[axis], c.f_scale, s.x0, s.y0, c.params, out);
+}
+
+template <int channel>
+bool sphere_colour(const SetupContext& c, QuadraticCoefficients& out) {
+  if (c.sphere == nullptr) return (out = {}, true);
+  out = c.constant(std::clamp(c.sphere->color[channel], 0.0, 1.0) * 255.0);
+  return true;
+}
+
 // i860 operations of one expression's set-up (docs/timing.md):
 // An edge: A = dy, B = -dx on integer positions; C = x0 y1 - x1 y0 (2 integer multiplies in
 // the FP unit, 1 subtract); the top-left rule adjusts C (compare, branch, add).
@@ -103,6 +134,18 @@ constexpr OpCounts kConstantCost{1, 1, 0, 0, 0, 0, 0};
 // A depth slope is a constant, but it is the depth plane's gradient: the same work as a
 // plane's A or B, quantised and clamped, so it costs what an attribute plane costs.
 constexpr OpCounts kSlopeCost = kPlaneCost;
+// A sphere's quadratic about its anchor (the conic, depth or a normal): its six coefficients
+// scaled (6 multiplies) and converted (6), then expanded to the screen's origin in integers
+// (the i860 multiplies integers in its FP unit: 10 multiplies; 10 integer adds), each
+// wrapped to the coefficient width (6 integer masks).
+constexpr OpCounts kSphereQuadraticCost{6, 6 + 10, 0, 0, 10 + 6, 0, 2};
+// Depth also forms its six coefficients from the conic's: H / k (a reciprocal), 1 / sqrt(Qm)
+// (a reciprocal square root), 8 multiplies and 4 adds.
+constexpr OpCounts kSphereDepthCost{6 + 4 + 4, 16 + 8 + 10, 0, 0, 16, 0, 4};
+// A normal component's least-squares fit: its 6 coefficients from the 13 fit points (78
+// multiply-adds), rewritten from the disc's coordinates to pixels (10 multiplies, 4 adds)
+// and about the anchor (6, 6), then as any quadratic.
+constexpr OpCounts kSphereNormalCost{78 + 4 + 6 + 6, 78 + 10 + 6 + 16, 0, 0, 16, 0, 4};
 
 constexpr std::array<ExpressionEntry, static_cast<int>(Expression::count)> kRegistry = {{
     {E::edge0, F::linear, kEdgeCost, false, edge<0>},
@@ -132,6 +175,14 @@ constexpr std::array<ExpressionEntry, static_cast<int>(Expression::count)> kRegi
     {E::side0, F::linear, kSideCost, true, side<0>},
     {E::side1, F::linear, kSideCost, true, side<1>},
     {E::side2, F::linear, kSideCost, true, side<2>},
+    {E::sphere_inside, F::quadratic, kSphereQuadraticCost, false, sphere_inside},
+    {E::sphere_depth, F::quadratic, kSphereDepthCost, false, sphere_depth},
+    {E::sphere_nx, F::quadratic, kSphereNormalCost, false, sphere_normal<0>},
+    {E::sphere_ny, F::quadratic, kSphereNormalCost, false, sphere_normal<1>},
+    {E::sphere_nz, F::quadratic, kSphereNormalCost, false, sphere_normal<2>},
+    {E::sphere_red, F::constant, kConstantCost, false, sphere_colour<0>},
+    {E::sphere_green, F::constant, kConstantCost, false, sphere_colour<1>},
+    {E::sphere_blue, F::constant, kConstantCost, false, sphere_colour<2>},
 }};
 
 constexpr bool in_enum_order() {

@@ -44,6 +44,7 @@ int coefficients(ExpressionForm form);
 // What an expression's set-up may read: the primitive on the screen (here a triangle; a
 // kind with another shape adds its own member), its snapped vertices and the quantities
 // every attribute plane shares, computed once per primitive by GeometryEngine::setup.
+struct ScreenSphere;
 struct SetupContext {
   const GeometryParams& params;
   const Camera& camera;
@@ -57,6 +58,9 @@ struct SetupContext {
   const Mesh* mesh = nullptr;
   // Where an entry counts what it decided (SetupCounts::sides); null when nobody counts.
   SetupCounts* counts = nullptr;
+  // The sphere being set up (the sphere kind, models/gp/sphere.hpp), or null for a triangle:
+  // only the sphere_* entries read it, and only the sphere kind asks for them.
+  const ScreenSphere* sphere = nullptr;
 
   // Vertices snapped to 1/scale pixel (scale = 2^subpixel_bits), half = scale / 2.
   std::array<std::int64_t, 3> xs{};

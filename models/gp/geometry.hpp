@@ -73,6 +73,9 @@ struct SetupCounts {
   // set up, by how they were classified, in SideKind order (plane, boundary, non_manifold,
   // clipped, degenerate, coplanar). All 0 for a program that sends no side0..2.
   std::array<std::uint64_t, 6> sides{};
+  std::uint64_t sphere_near = 0;    // a sphere reaching the near plane (models/gp/sphere.hpp)
+  std::uint64_t sphere_behind = 0;  // a sphere wholly behind the eye
+  std::uint64_t sphere_far = 0;     // a sphere reaching the far plane
 };
 
 // The expressions a procedure uses (ProcedureCode::expressions): what the GP computes.

@@ -120,6 +120,14 @@ void register_setup_statistics(Statistics& stats, std::vector<const GpStats*> gp
                     "Triangles dropped because a coefficient did not fit "
                     "evaluator.coefficient_bits",
                     sum([](const GpStats& g) { return g.setup.overflow; }));
+  stats.add_integer("setup.sphere_near_plane", u::count,
+                    "Spheres dropped because they reach the near plane or hold the eye",
+                    sum([](const GpStats& g) { return g.setup.sphere_near; }));
+  stats.add_integer("setup.sphere_behind_eye", u::count, "Spheres dropped wholly behind the eye",
+                    sum([](const GpStats& g) { return g.setup.sphere_behind; }));
+  stats.add_integer("setup.sphere_far_plane", u::count,
+                    "Spheres dropped because they reach the far plane",
+                    sum([](const GpStats& g) { return g.setup.sphere_far; }));
 }
 
 }  // namespace pp5

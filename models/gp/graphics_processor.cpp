@@ -1,6 +1,7 @@
 #include "models/gp/graphics_processor.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <iterator>
 
 #include "models/gp/primitive_kind.hpp"
@@ -69,7 +70,6 @@ void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
   const MachineConfig& config = machine.config();
   const GeometryEngine& geometry = machine.geometry();
   const DisplayList& display_list = geometry.display_list();
-
   // Per registered kind: this GP's worker, the expressions its procedure uses and the
   // workload the cost model charges (the machine's, with that procedure's expressions).
   struct KindState {
@@ -171,11 +171,32 @@ void GraphicsProcessor::run() {
     done[s] = bins[s % n].empty();
     if (!done[s]) ++remaining;
   }
-  // Every packet is `words` long, so a message carries a header word and as many of the
-  // bin's remaining packets as fit in a queue: its size is known before it is built.
-  const std::size_t per_message = (capacity - 1) / words;  // >= 1, checked by the Machine
-  auto packets_for = [&](int s) { return std::min(per_message, bins[s % n].size() - next[s]); };
-  auto words_for = [&](int s) { return 1 + packets_for(s) * words; };
+  // A message carries a header word and as many of the bin's next packets as fit in a queue
+  // (packets of different kinds differ in size; each fits, checked by the Machine): its size
+  // is known before it is built. Worked out once per message, when the stage's next packet
+  // changes.
+  std::vector<std::size_t> chunk_packets(next.size(), 0);
+  std::vector<std::uint64_t> chunk_words(next.size(), 0);
+  std::vector<std::size_t> chunk_from(next.size(), SIZE_MAX);
+  auto chunk = [&](int s) {
+    if (chunk_from[s] != next[s]) {
+      const auto& bin = bins[s % n];
+      std::uint64_t used = 1;
+      std::size_t i = next[s];
+      for (; i < bin.size() && used + bin[i]->words <= capacity; ++i) used += bin[i]->words;
+      chunk_packets[s] = i - next[s];
+      chunk_words[s] = used;
+      chunk_from[s] = next[s];
+    }
+  };
+  auto packets_for = [&](int s) {
+    chunk(s);
+    return chunk_packets[s];
+  };
+  auto words_for = [&](int s) {
+    chunk(s);
+    return chunk_words[s];
+  };
   // Each Renderer has at most one stage open, so the candidates are those stages, tried in
   // stage order: the lowest open stage this GP still owes something, whose queue has room.
   std::vector<int> open_stages;

@@ -1,5 +1,7 @@
 #include "models/gp/primitive_kind.hpp"
 
+#include "models/gp/sphere.hpp"
+
 namespace pp5 {
 
 namespace {
@@ -35,6 +37,7 @@ class TriangleKind final : public PrimitiveKind {
   int count(const Scene& scene) const override {
     return static_cast<int>(scene.mesh.triangles.size());
   }
+  bool supplies(Expression e) const override { return !is_sphere_expression(e); }
   std::unique_ptr<PrimitiveWorker> start(const GeometryEngine& geometry) const override {
     return std::make_unique<TriangleWorker>(geometry);
   }
@@ -47,7 +50,7 @@ class TriangleKind final : public PrimitiveKind {
 
 const std::vector<const PrimitiveKind*>& primitive_kinds() {
   static const TriangleKind triangle;
-  static const std::vector<const PrimitiveKind*> kinds{&triangle};
+  static const std::vector<const PrimitiveKind*> kinds{&triangle, &sphere_kind()};
   return kinds;
 }
 

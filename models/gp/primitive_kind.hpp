@@ -56,12 +56,18 @@ class PrimitiveKind {
   // The Renderer procedure its packets run; its expressions are what set-up computes.
   virtual Procedure procedure() const = 0;
   virtual int count(const Scene& scene) const = 0;
+  // Whether its set-up can compute expression e: a procedure of the kind may use only these
+  // (the Machine refuses a program that asks for others, naming them).
+  virtual bool supplies(Expression e) const = 0;
   virtual std::unique_ptr<PrimitiveWorker> start(const GeometryEngine& geometry) const = 0;
   virtual OpCounts operations(const GpWorkload& workload, const PrimitiveTally& tally) const = 0;
 };
 
 const std::vector<const PrimitiveKind*>& primitive_kinds();
 inline constexpr int kTriangleKind = 0;
+inline constexpr int kSphereKind = 1;
+// The sphere kind's registry entry (models/gp/sphere_kind.cpp).
+const PrimitiveKind& sphere_kind();
 
 // Every primitive of the scene, kinds in registry order (display_list.hpp).
 DisplayList make_display_list(const Scene& scene);

@@ -3,11 +3,13 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 
 #include "common/parallel_for.hpp"
 #include "models/gp/geometry.hpp"
+#include "models/gp/primitive_kind.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
@@ -24,24 +26,34 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
   const GeometryEngine geometry(geometry_params(config), scene);
   const FrameValues values = geometry.frame_values();
   const RegionStream stream(program, values);
-  const auto& needed = program.procedure(Procedure::triangle).expressions;
 
+  // Every primitive of the display list through its kind, as the GPs do.
+  std::vector<std::unique_ptr<PrimitiveWorker>> kind_workers;
+  std::vector<ExpressionSet> needed;
+  for (const PrimitiveKind* k : primitive_kinds()) {
+    kind_workers.push_back(k->start(geometry));
+    needed.push_back(program.procedure(k->procedure()).expressions);
+  }
   std::vector<std::vector<std::shared_ptr<const Packet>>> bins(config.regions());
   FieldFrame out;
   SetupCounts counts;
-  std::vector<ScreenTriangle> screen;
   std::vector<int> regions;
-  for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
-    screen.clear();
-    geometry.transform(i, screen, counts);
-    for (const ScreenTriangle& t : screen) {
+  const DisplayList& list = geometry.display_list();
+  for (int i = 0; i < list.size(); ++i) {
+    const PrimitiveRef ref = list.at(i);
+    const auto kind = static_cast<std::size_t>(ref.kind);
+    PrimitiveWorker& worker = *kind_workers[kind];
+    const int pieces = worker.transform(ref.index, counts);
+    for (int piece = 0; piece < pieces; ++piece) {
       SetupResult r;
-      if (!geometry.setup(t, needed, r, counts)) continue;
+      if (!worker.setup(piece, needed[kind], r, counts)) continue;
       auto packet = std::make_shared<Packet>();
+      packet->procedure = primitive_kinds()[kind]->procedure();
+      packet->kind = ref.kind;
       packet->primitive = i;
       packet->values = r.values;
       regions.clear();
-      geometry.bin(r, regions);
+      worker.bin(r, regions);
       for (int region : regions) {
         bins[region].push_back(packet);
         ++out.packets;

@@ -1,6 +1,7 @@
 #pragma once
 // The functional half of a frame with one firmware field read back: the GP's set-up
-// (GeometryEngine) feeds every region's triangles, in display-list order, to a RendererBoard
+// (every primitive through its kind, models/gp/primitive_kind.hpp) feeds every region's
+// packets, in display-list order, to a RendererBoard
 // that executes the program's region stream on its pixel array, exactly as execute_pixels
 // (models/renderer/execute_pixels.hpp) does; afterwards the value of a named field (an intersection
 // flag, say) is read from every pixel. The analysis of intersection highlighting compares that

@@ -99,6 +99,7 @@ int main(int argc, char** argv) {
       add_visible_command(app),
       add_fidelity_command(app),
       add_scanconvert_command(app),
+      add_spheres_command(app),
   };
 
   try {

@@ -1,5 +1,6 @@
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
@@ -9,6 +10,7 @@
 
 #include "sim/scene/builtin_folded_slab.hpp"
 #include "sim/scene/scene.hpp"
+#include "sim/scene/sphere_scenes.hpp"
 
 namespace pp5 {
 namespace {
@@ -385,23 +387,30 @@ Scene make_long_thin() {
 }  // namespace
 
 std::vector<std::string> builtin_scene_names() {
-  return {"torus",          "two-triangles",  "sphere",       "figure-eight", "crossing-quads",
-          "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin",    "folded-slab"};
+  std::vector<std::string> names = {
+      "torus",          "two-triangles",  "sphere",       "figure-eight", "crossing-quads",
+      "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin",    "folded-slab"};
+  for (const std::string& n : sphere_scene_names()) names.push_back(n);
+  return names;
 }
 
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "torus") return make_torus(options);
   if (name == "sphere") return make_sphere(options);
   if (name == "figure-eight") return make_figure_eight(options);
+  const auto spheres = sphere_scene_names();
+  const bool sphere_scene = std::find(spheres.begin(), spheres.end(), name) != spheres.end();
   const bool fixed = name == "two-triangles" || name == "crossing-quads" ||
                      name == "receding-pairs" || name == "cyclic-overlap" ||
-                     name == "pierced-quad" || name == "long-thin" || name == "folded-slab";
+                     name == "pierced-quad" || name == "long-thin" || name == "folded-slab" ||
+                     sphere_scene;
   if (fixed && (options.tessellation_u != 0 || options.tessellation_v != 0)) {
     throw std::invalid_argument(fmt::format(
         "--tessellation: scene '{}' has fixed geometry; only torus, sphere and figure-eight "
         "take a tessellation",
         name));
   }
+  if (sphere_scene) return make_sphere_scene(name);
   if (name == "two-triangles") return make_two_triangles();
   if (name == "crossing-quads") return make_crossing_quads();
   if (name == "receding-pairs") return make_receding_pairs();

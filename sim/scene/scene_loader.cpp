@@ -17,6 +17,7 @@
 #include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 #include "models/config/machine_config.hpp"
+#include "sim/scene/sphere_scenes.hpp"
 
 namespace fs = std::filesystem;
 
@@ -224,6 +225,40 @@ Light parse_light(const Node& l, const Camera& camera, bool allow_ambient) {
 
 }  // namespace
 
+// One entry of "spheres": a sphere ("center", "radius", and "color" or an opaque "material")
+// or a molecule file's atoms ("molecule", with "translate", "rotate_degrees" and a uniform
+// "scale", which also scales the radii).
+void append_spheres(const Node& e, const std::map<std::string, Material>& materials,
+                    const std::string& base_dir, std::vector<Sphere>& out) {
+  if (e.has("molecule")) {
+    e.check_keys({"molecule", "translate", "rotate_degrees", "scale"});
+    if (e.has("scale") && !e.at("scale").value.is_number()) {
+      e.at("scale").fail("must be a number (spheres scale uniformly)");
+    }
+    const double k = e.has("scale") ? e.at("scale").number(1e-6, 1e6) : 1.0;
+    const glm::dmat4 t = mesh_transform(e);
+    fs::path file = e.at("molecule").string();
+    if (file.is_relative()) file = fs::path(base_dir) / file;
+    for (Sphere s : read_molecule_file(file.string())) {
+      s.center = glm::vec3(t * glm::dvec4(glm::dvec3(s.center), 1.0));
+      s.radius = static_cast<float>(s.radius * k);
+      out.push_back(s);
+    }
+    return;
+  }
+  e.check_keys({"center", "radius", "color", "material"});
+  if (!e.has("center") || !e.has("radius")) {
+    e.fail("needs 'center' and 'radius' (or 'molecule': a PDB or mmCIF file)");
+  }
+  const Material material = mesh_material(e, materials);
+  if (material.opacity < 1.0f) e.fail("is a transparent material; spheres are opaque");
+  Sphere s;
+  s.center = glm::vec3(e.at("center").vec3());
+  s.radius = static_cast<float>(e.at("radius").number(1e-6, 1e12));
+  s.color = material.color.value_or(glm::vec3(0.8f));
+  out.push_back(s);
+}
+
 Scene parse_scene_json(const std::string& text, const std::string& origin,
                        const std::string& base_dir, const LoadLimits& limits) {
   json doc;
@@ -239,11 +274,14 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     throw SceneError(
         fmt::format("{}: a scene file must be a JSON object (got {})", origin, doc.type_name()));
   }
-  root.check_keys({"name", "description", "meshes", "materials", "camera", "ambient", "light",
-                   "lights", "background", "firmware", "parameters"});
-  if (!root.has("meshes")) throw SceneError(origin + ": missing key 'meshes' (an array of meshes)");
-  const Node meshes = root.at("meshes");
-  if (meshes.array().empty()) meshes.fail("must hold at least one mesh");
+  root.check_keys({"name", "description", "meshes", "spheres", "materials", "camera", "ambient",
+                   "light", "lights", "background", "firmware", "parameters"});
+  if (!root.has("meshes") && !root.has("spheres")) {
+    throw SceneError(origin + ": missing key 'meshes' (an array of meshes) or 'spheres'");
+  }
+  static const json kNone = json::array();
+  const Node meshes = root.has("meshes") ? root.at("meshes") : Node{kNone, "meshes", origin};
+  if (root.has("meshes") && meshes.array().empty()) meshes.fail("must hold at least one mesh");
 
   Scene scene;
   scene.name = root.has("name") ? root.at("name").string() : fs::path(origin).stem().string();
@@ -300,6 +338,14 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     append(scene.mesh, part, mesh_transform(m), m, limits);
   }
 
+  if (root.has("spheres")) {
+    const Node spheres = root.at("spheres");
+    if (spheres.array().empty()) spheres.fail("must hold at least one sphere");
+    for (std::size_t i = 0; i < spheres.value.size(); ++i) {
+      append_spheres(spheres.at(i), materials, base_dir, scene.spheres);
+    }
+  }
+
   if (root.has("camera")) {
     const Node c = root.at("camera");
     if (c.has("view_direction")) {
@@ -310,7 +356,8 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
         c.at("view_direction").fail("must not be zero or parallel to the y axis");
       }
       const double fov = c.has("fov_y_degrees") ? c.at("fov_y_degrees").number(1, 170) : 40.0;
-      scene.camera = frame_mesh(scene.mesh, glm::vec3(dir), static_cast<float>(fov), 1.05f);
+      scene.camera =
+          frame_scene(scene.mesh, scene.spheres, glm::vec3(dir), static_cast<float>(fov));
     } else {
       c.check_keys({"eye", "target", "up", "fov_y_degrees", "near", "far"});
       for (const char* k : {"eye", "target", "near", "far"}) {
@@ -334,7 +381,7 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
       }
     }
   } else {
-    scene.camera = frame_mesh(scene.mesh, glm::vec3(0.3f, 0.4f, 1.0f), 40.0f, 1.05f);
+    scene.camera = frame_scene(scene.mesh, scene.spheres, glm::vec3(0.3f, 0.4f, 1.0f), 40.0f);
   }
 
   if (root.has("light") && root.has("lights")) {
@@ -425,6 +472,19 @@ Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {
         name_or_path));
   }
   if (ext == ".json") return load_scene_file(name_or_path);
+  if (ext == ".pdb" || ext == ".ent" || ext == ".cif" || ext == ".mmcif") {
+    // A molecule file: its atoms as spheres, framed like a mesh file.
+    if (tessellated) throw std::invalid_argument("--tessellation: a molecule file takes none");
+    Scene scene;
+    scene.name = p.stem().string();
+    scene.spheres = read_molecule_file(name_or_path);
+    scene.description =
+        fmt::format("molecule file {} ({} atoms)", name_or_path, scene.spheres.size());
+    scene.camera = frame_scene(scene.mesh, scene.spheres, glm::vec3(0.3f, 0.4f, 1.0f), 40.0f);
+    scene.lights = {default_light(scene.camera)};
+    scene.background = glm::vec3(0.05f, 0.05f, 0.08f);
+    return scene;
+  }
   if (is_mesh_file(name_or_path)) {
     MeshLoadReport report;
     Mesh mesh = load_mesh(name_or_path, &report);

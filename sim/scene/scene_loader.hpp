@@ -4,7 +4,7 @@
 //
 // A scene file:
 //   {
-//     "meshes": [                                  required, at least one
+//     "meshes": [                                  at least one, if given
 //       {"file": "bunny.obj",                      a mesh file, relative to the scene file,
 //        "translate": [0, 0, 0],                   or "builtin": "sphere", or inline
 //        "rotate_degrees": [0, 30, 0],             "vertices": [[x,y,z], ...] and
@@ -13,6 +13,14 @@
 //                                                  {"color": .., "opacity": ..}, or
 //                                                  "color": [r,g,b] (an opaque material);
 //                                                  none: the mesh file's colours or 0.8 grey
+//     ],
+//     "spheres": [                                 sphere primitives (models/gp/sphere.hpp);
+//       {"center": [x,y,z], "radius": 1,           "meshes" or "spheres" or both, each with
+//        "color": [r,g,b]} (or an opaque           at least one entry
+//        "material"),
+//       {"molecule": "crambin.pdb",                a PDB or mmCIF file's atoms (Bondi radii,
+//        "translate": [..], "rotate_degrees": [..],  CPK colours), relative to the scene
+//        "scale": 0.1}                             file; a uniform scale, radii too
 //     ],
 //     "materials": {"glass": {"color": [0.6, 0.8, 1.0],   RGB in 0..1 (absent: as above)
 //                             "opacity": 0.4}},           0..1, default 1 (opaque); reaches

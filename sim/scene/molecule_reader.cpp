@@ -1,0 +1,132 @@
+// Molecule files through gemmi (Debian's gemmi-dev, header-only; mmCIF's parser needs
+// tao-pegtl-dev). gemmi's PDB reader forgives a malformed coordinate (it reads "11.1x4" as
+// 11.1), so the fixed columns of every ATOM/HETATM record are checked here first, naming the
+// line; mmCIF syntax errors come from gemmi's parser with its line number.
+#include <fmt/format.h>
+
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <gemmi/cif.hpp>
+#include <gemmi/mmcif.hpp>
+#include <gemmi/pdb.hpp>
+#include <string>
+#include <string_view>
+
+#include "common/read_file.hpp"
+#include "sim/scene/scene_loader.hpp"
+#include "sim/scene/sphere_scenes.hpp"
+
+namespace pp5 {
+
+namespace {
+
+constexpr std::uint64_t kMaxMoleculeBytes = std::uint64_t{512} << 20;
+constexpr std::size_t kMaxAtoms = 4'000'000;
+
+bool ends_with(const std::string& s, const char* suffix) {
+  const std::string_view v(suffix);
+  if (s.size() < v.size()) return false;
+  std::string tail = s.substr(s.size() - v.size());
+  for (char& c : tail) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return tail == v;
+}
+
+// A PDB coordinate field: optional blanks, then a decimal number filling the rest.
+bool pdb_number(std::string_view field) {
+  while (!field.empty() && field.front() == ' ') field.remove_prefix(1);
+  while (!field.empty() && field.back() == ' ') field.remove_suffix(1);
+  if (field.empty()) return false;
+  const std::string s(field);
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  return end == s.c_str() + s.size() && std::isfinite(v);
+}
+
+void check_pdb_records(const std::string& text, const std::string& path) {
+  std::size_t line = 0, start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::string_view rec(text.data() + start, end - start);
+    if (!rec.empty() && rec.back() == '\r') rec.remove_suffix(1);
+    ++line;
+    if (rec.substr(0, 6) == "ATOM  " || rec.substr(0, 6) == "HETATM") {
+      if (rec.size() < 54) {
+        throw SceneError(
+            fmt::format("{}:{}: {} record of {} columns; x, y and z take columns 31-54", path, line,
+                        std::string(rec.substr(0, 6)), rec.size()));
+      }
+      static const char* kAxes[] = {"x", "y", "z"};
+      for (int k = 0; k < 3; ++k) {
+        const std::string_view f = rec.substr(30 + 8 * static_cast<std::size_t>(k), 8);
+        if (!pdb_number(f)) {
+          throw SceneError(fmt::format("{}:{}: {} coordinate '{}' (columns {}-{}) is not a number",
+                                       path, line, kAxes[k], std::string(f), 31 + 8 * k,
+                                       38 + 8 * k));
+        }
+      }
+    }
+    start = end + 1;
+  }
+}
+
+}  // namespace
+
+std::vector<Sphere> read_molecule_file(const std::string& path) {
+  std::string text;
+  try {
+    text = read_regular_file(path, kMaxMoleculeBytes, "a molecule file (PDB or mmCIF)");
+  } catch (const FileError& e) {
+    throw SceneError(e.what());
+  }
+  return parse_molecule(text, path, ends_with(path, ".cif") || ends_with(path, ".mmcif"));
+}
+
+std::vector<Sphere> parse_molecule(const std::string& text, const std::string& path, bool cif) {
+  gemmi::Structure st;
+  try {
+    if (cif) {
+      st = gemmi::make_structure(gemmi::cif::read_memory(text.data(), text.size(), path.c_str()));
+    } else {
+      check_pdb_records(text, path);
+      st = gemmi::read_pdb_from_memory(text.data(), text.size(), path);
+    }
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    // gemmi's messages name the file and line ("FILE:12:...") for syntax errors.
+    const std::string what = e.what();
+    throw SceneError(what.rfind(path, 0) == 0 ? what : fmt::format("{}: {}", path, what));
+  }
+  std::vector<Sphere> spheres;
+  if (!st.models.empty()) {
+    for (const gemmi::Chain& chain : st.models[0].chains) {
+      for (const gemmi::Residue& residue : chain.residues) {
+        for (const gemmi::Atom& atom : residue.atoms) {
+          const gemmi::Position& p = atom.pos;
+          if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+            throw SceneError(fmt::format("{}: atom {} of residue {} {} has a non-finite position",
+                                         path, atom.name, residue.name, residue.seqid.str()));
+          }
+          if (spheres.size() >= kMaxAtoms) {
+            throw SceneError(fmt::format("{}: more than {} atoms", path, kMaxAtoms));
+          }
+          const ElementStyle style = element_style(atom.element.name());
+          spheres.push_back(
+              {glm::vec3(static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)),
+               style.radius, style.color});
+        }
+      }
+    }
+  }
+  if (spheres.empty()) {
+    throw SceneError(
+        fmt::format("{}: no atoms (expected ATOM/HETATM records or an mmCIF "
+                    "_atom_site table)",
+                    path));
+  }
+  return spheres;
+}
+
+}  // namespace pp5
