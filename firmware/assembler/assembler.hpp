@@ -42,8 +42,8 @@ struct AssemblerOptions {
 };
 
 // How often a procedure runs, relative to the others, for choosing what to spill: `triangle`
-// and `sphere` run once per packet, the others once per region (light once per scene light). The 256 is
-// assumed: a region of the built-in torus at 1280 x 1024 receives on the order of a hundred
+// and `sphere` run once per packet, the others once per region (light once per scene light). The
+// 256 is assumed: a region of the built-in torus at 1280 x 1024 receives on the order of a hundred
 // packets, and any weight well above the number of lights gives the same choices.
 // clear triangle pass shade light sphere
 inline constexpr int kProcedureWeight[] = {1, 256, 1, 1, 1, 256};

@@ -39,7 +39,7 @@ int run_scanconvert(const ScanConvertOptions& o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
   // Everything is read and checked before the first frame runs.
   std::vector<std::string> names = o.scenes;
-  if (names.empty()) names = builtin_scene_names();
+  if (names.empty()) names = builtin_triangle_scene_names();
   std::vector<Scene> scenes;
   for (const std::string& name : names) scenes.push_back(load_scene(name));
   const AssemblerOptions options = assembler_options(config);
@@ -100,7 +100,7 @@ Command add_scanconvert_command(CLI::App& app) {
       "(yellow).");
   cmd->add_option("-s,--scene", o->scenes,
                   "A scene to measure (repeatable): a built-in name, a mesh file or a scene "
-                  "file; default every built-in scene");
+                  "file; default every built-in scene of triangles (not the sphere scenes)");
   cmd->add_option("--standard", o->standard, "The standard program (default phong)");
   cmd->add_option("--accurate", o->accurate, "The accurate program (default accurate)");
   add_config_options(*cmd, o->config_path, o->sets);

@@ -40,7 +40,8 @@ int run_visible(const VisibleOptions& o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
   const Program zbuffer = assemble_file(resolve_firmware("gouraud"), assembler_options(config));
   const Program painter = assemble_file(resolve_firmware("painter"), assembler_options(config));
-  const std::vector<std::string> names = o.scenes.empty() ? builtin_scene_names() : o.scenes;
+  const std::vector<std::string> names =
+      o.scenes.empty() ? builtin_triangle_scene_names() : o.scenes;
   // Every scene loads before any runs, so a bad name fails at once.
   std::vector<Scene> scenes;
   for (const std::string& n : names) scenes.push_back(load_scene(n));
@@ -90,7 +91,7 @@ Command add_visible_command(CLI::App& app) {
       "algorithm (red: differs from the reference).");
   cmd->add_option("-s,--scene", o->scenes,
                   "A scene to compare (repeatable): a built-in name, a mesh file or a scene "
-                  "file; default every built-in scene");
+                  "file; default every built-in scene of triangles (not the sphere scenes)");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/visible)");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")

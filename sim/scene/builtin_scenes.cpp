@@ -394,6 +394,17 @@ std::vector<std::string> builtin_scene_names() {
   return names;
 }
 
+std::vector<std::string> builtin_triangle_scene_names() {
+  std::vector<std::string> names = builtin_scene_names();
+  const std::vector<std::string> spheres = sphere_scene_names();
+  names.erase(std::remove_if(names.begin(), names.end(),
+                             [&](const std::string& n) {
+                               return std::find(spheres.begin(), spheres.end(), n) != spheres.end();
+                             }),
+              names.end());
+  return names;
+}
+
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options) {
   if (name == "torus") return make_torus(options);
   if (name == "sphere") return make_sphere(options);

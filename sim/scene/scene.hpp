@@ -24,6 +24,9 @@ struct SceneOptions {
 // "crossing-quads", "receding-pairs", "cyclic-overlap", "pierced-quad", "long-thin",
 // "folded-slab"}.
 std::vector<std::string> builtin_scene_names();
+// The built-in scenes made of triangles only (no spheres): what the analyses that compare
+// triangle algorithms (visible, scanconvert) run by default.
+std::vector<std::string> builtin_triangle_scene_names();
 
 // Builds a scene deterministically from its arguments alone. Throws std::invalid_argument for an
 // unknown name (the message lists the valid names) or a tessellation outside the scene's range.
