@@ -324,6 +324,9 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
              [program_name] { return program_name; });
   s.add_integer("frame.triangles", u::count, "Triangles in the display list",
                 [triangles] { return triangles; });
+  const auto spheres = static_cast<std::int64_t>(scene.spheres.size());
+  s.add_integer("frame.spheres", u::count, "Spheres in the display list (the sphere kind)",
+                [spheres] { return spheres; });
   s.add_real("frame.simulated_seconds", u::seconds,
              "The frame time: analytic.fill_seconds + analytic.busiest_seconds + "
              "analytic.drain_seconds",
@@ -537,6 +540,9 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
              [program_name] { return program_name; });
   s.add_integer("frame.triangles", u::count, "Triangles in the display list",
                 [triangles] { return triangles; });
+  const auto spheres = static_cast<std::int64_t>(scene.spheres.size());
+  s.add_integer("frame.spheres", u::count, "Spheres in the display list (the sphere kind)",
+                [spheres] { return spheres; });
   fb.register_statistics(s);
   const double array_hz = config.renderer.clock_hz;
   s.add_integer("frame.array_cycles", u::array_cycles,
@@ -691,11 +697,20 @@ std::string bit_budget_table(const Program& program, const TimingParams& timing)
 std::string summary(const FrameResult& r, const Program& program, const TimingParams& timing) {
   const Statistics& s = r.stats;
   std::string out = bit_budget_table(program, timing);
-  out += fmt::format("\nframe: {} triangles, {} packets, simulated {:.3f} ms ({} array cycles)\n",
-                     s.integer("frame.triangles"), s.integer("setup.packets"),
-                     r.frame_seconds * 1e3, s.integer("frame.array_cycles"));
-  out += fmt::format("projected throughput: {:.0f} triangles/s, {:.1f} frames/s\n",
-                     r.triangles_per_second, r.frame_seconds > 0 ? 1.0 / r.frame_seconds : 0.0);
+  // A scene of spheres counts them beside its triangles (a sphere is one primitive, drawn
+  // with the evaluator's quadratic terms, not a tessellation).
+  const std::int64_t spheres = s.integer("frame.spheres");
+  out += fmt::format("\nframe: {} triangles{}, {} packets, simulated {:.3f} ms ({} array cycles)\n",
+                     s.integer("frame.triangles"),
+                     spheres > 0 ? fmt::format(", {} spheres", spheres) : std::string(),
+                     s.integer("setup.packets"), r.frame_seconds * 1e3,
+                     s.integer("frame.array_cycles"));
+  out += fmt::format(
+      "projected throughput: {:.0f} triangles/s{}, {:.1f} frames/s\n", r.triangles_per_second,
+      spheres > 0 && r.frame_seconds > 0
+          ? fmt::format(", {:.0f} spheres/s", static_cast<double>(spheres) / r.frame_seconds)
+          : std::string(),
+      r.frame_seconds > 0 ? 1.0 / r.frame_seconds : 0.0);
   out += fmt::format(
       "pipelined (GPs on the next frame while the Renderers finish this one): {:.3f} ms, {:.0f} "
       "triangles/s\n",
