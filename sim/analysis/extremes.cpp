@@ -11,61 +11,16 @@
 #include "models/gp/geometry.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "sim/analysis/analysis_firmware.hpp"
 #include "sim/simulation.hpp"
 
 namespace pp5 {
 
-const char* const kCoverageFirmware =
-    R"(; Coverage counter: each triangle adds 1 to every pixel whose centre it owns.
-field count  8
-field zero   8
-output count zero zero
-
-proc clear
-  eall
-  mov count, 0
-  mov zero, 0
-end
-
-proc triangle
-  eall
-  qtest.ge edge0
-  qtest.ge edge1
-  qtest.ge edge2
-  add count, 1
-end
-)";
+const std::string kCoverageFirmware =
+    coverage_firmware("Coverage counter: each triangle adds 1 to every pixel whose centre it owns.",
+                      {"edge0", "edge1", "edge2"});
 
 namespace {
-
-// Z-buffered, one constant colour per triangle; with ambient 1 and no diffuse or specular
-// light the colour is the material's.
-const char* const kFlatFirmware = R"(field z      {depth_bits}
-field red     8
-field green   8
-field blue    8
-output red green blue
-
-proc clear
-  eall
-  mov z, {far}
-  mov red, 0
-  mov green, 0
-  mov blue, 0
-end
-
-proc triangle
-  eall
-  qtest.ge edge0
-  qtest.ge edge1
-  qtest.ge edge2
-  qcmp.lt z, depth
-  qload z, depth
-  qload red, flat_red
-  qload green, flat_green
-  qload blue, flat_blue
-end
-)";
 
 constexpr int kScreen = 256;
 
@@ -121,10 +76,10 @@ struct Drawn {
 };
 
 Drawn draw_flat(const MachineConfig& config, const Scene& scene, int threads) {
-  // The z field is as wide as the depth expression, cleared to its far end.
-  const std::string source =
-      fmt::format(fmt::runtime(kFlatFirmware), fmt::arg("depth_bits", config.gp.depth_bits),
-                  fmt::arg("far", (1ull << config.gp.depth_bits) - 1));
+  // Z-buffered, one constant colour per triangle; with ambient 1 and no diffuse or specular
+  // light the colour is the material's. The z field is as wide as the depth expression.
+  const std::string source = zbuffer_colour_firmware("Flat z-buffer (pp5sim extremes)",
+                                                     config.gp.depth_bits, "depth", "flat");
   const Program program = assemble(source, "extremes-flat", assembler_options(config));
   const FrameResult r = simulate_frame(config, scene, program, threads);
   return {r.image, static_cast<std::uint64_t>(r.stats.integer("setup.coefficient_overflow"))};
@@ -334,7 +289,7 @@ bool is_closed(const Mesh& mesh) {
 }
 
 Coverage coverage_counts(const MachineConfig& config, const Scene& scene, int threads) {
-  const Program program = assemble_text(kCoverageFirmware, "coverage", config);
+  const Program program = assemble_text(kCoverageFirmware.c_str(), "coverage", config);
   const FrameResult r = simulate_frame(config, scene, program, threads);
   Coverage c;
   c.width = r.image.width;

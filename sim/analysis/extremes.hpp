@@ -42,7 +42,7 @@ std::string format_extremes(const std::vector<ExtremeCase>& cases);
 // Building blocks, exposed for the tests.
 
 // The firmware that counts, per pixel, the triangles covering its centre (in the red output).
-extern const char* const kCoverageFirmware;
+extern const std::string kCoverageFirmware;
 
 // Per-pixel coverage counts of `scene` (row-major, width * height), executed on the machine.
 struct Coverage {

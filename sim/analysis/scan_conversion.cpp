@@ -11,36 +11,17 @@
 #include "models/gp/expressions.hpp"
 #include "models/gp/geometry.hpp"
 #include "models/machine.hpp"
+#include "sim/analysis/analysis_firmware.hpp"
 #include "sim/analysis/extremes.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/simulation.hpp"
 
 namespace pp5 {
 
-const char* const kAccurateCoverageFirmware =
-    R"(; Coverage counter with accurate.pp5's tests: each triangle adds 1 to every pixel whose
-; centre it owns by the enlarged area and the three side tests.
-field count  8
-field zero   8
-output count zero zero
-
-proc clear
-  eall
-  mov count, 0
-  mov zero, 0
-end
-
-proc triangle
-  eall
-  qtest.ge wide0
-  qtest.ge wide1
-  qtest.ge wide2
-  qtest.ge side0
-  qtest.ge side1
-  qtest.ge side2
-  add count, 1
-end
-)";
+const std::string kAccurateCoverageFirmware = coverage_firmware(
+    "Coverage counter with accurate.pp5's tests: each triangle adds 1 to every pixel whose "
+    "centre it owns by the enlarged area and the three side tests.",
+    {"wide0", "wide1", "wide2", "side0", "side1", "side2"});
 
 namespace {
 
@@ -255,7 +236,7 @@ std::uint64_t triangle_cycles(const Program& program, const MachineConfig& confi
 }
 
 ScanConversionMethod measure(const MachineConfig& config, const Scene& scene,
-                             const Program& program, const char* coverage_firmware,
+                             const Program& program, const std::string& coverage_source,
                              const Reference& ref, double E, bool closed, int threads) {
   ScanConversionMethod m;
   m.program = program.name;
@@ -302,7 +283,7 @@ ScanConversionMethod measure(const MachineConfig& config, const Scene& scene,
 
   if (closed) {
     const Program counter =
-        assemble(coverage_firmware, program.name + "-coverage", assembler_options(config));
+        assemble(coverage_source, program.name + "-coverage", assembler_options(config));
     const FieldFrame coverage = render_field(config, scene, counter, "count", threads);
     m.parity_errors = 0;
     for (std::uint64_t c : coverage.values) m.parity_errors += static_cast<std::int64_t>(c & 1);

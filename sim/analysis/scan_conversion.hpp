@@ -98,6 +98,6 @@ std::string format_scan_conversion(const std::vector<ScanConversionReport>& repo
 
 // The firmware that counts, per pixel, the triangles that own its centre by accurate.pp5's
 // tests (the enlarged area and the three side tests), in the red output.
-extern const char* const kAccurateCoverageFirmware;
+extern const std::string kAccurateCoverageFirmware;
 
 }  // namespace pp5

@@ -259,8 +259,7 @@ std::vector<ValidationRow> validate_against_record(const MachineConfig& base,
     const Program folded = load("epsilon_folded", base);
     rows.push_back({"208 bits per pixel hold Phong rendering", kFuchs, "208 bits", kPixelMemoryBits,
                     "phong.pp5's fields (z, colour, normal, scratch)",
-                    static_cast<double>(needed_bits(phong)), "bits", "predicted",
-                    fit_note(phong)});
+                    static_cast<double>(needed_bits(phong)), "bits", "predicted", fit_note(phong)});
     rows.push_back(
         {"two-pass fixed-width epsilon does not fit beside the PHIGS fields (136 bits more)",
          kBanks, fmt::format("more than {} bits", kPixelMemoryBits), kPixelMemoryBits,
@@ -269,8 +268,8 @@ std::vector<ValidationRow> validate_against_record(const MachineConfig& base,
                      kBanksExtraBits)});
     rows.push_back({"folded epsilon ran on the machine", kBanks,
                     fmt::format("at most {} bits", kPixelMemoryBits), kPixelMemoryBits,
-                    "epsilon_folded.pp5's fields", static_cast<double>(needed_bits(folded)),
-                    "bits", "predicted", fit_note(folded)});
+                    "epsilon_folded.pp5's fields", static_cast<double>(needed_bits(folded)), "bits",
+                    "predicted", fit_note(folded)});
   }
 
   // Pixel-Powers' CSG timing, at its 10 MHz, on this machine's instruction set.

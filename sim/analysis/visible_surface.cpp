@@ -8,69 +8,10 @@
 #include <stdexcept>
 
 #include "models/machine.hpp"
+#include "sim/analysis/analysis_firmware.hpp"
 #include "sim/simulation.hpp"
 
 namespace pp5 {
-
-// The z field is 24 bits wide, as gouraud.pp5's: the depth expression's range at the
-// default gp.depth_bits.
-const char* const kVisibilityZbufferFirmware =
-    R"(; Visibility, z-buffered on screen depth: each pixel keeps the nearest triangle's index.
-field z      24
-field red     8
-field green   8
-field blue    8
-output red green blue
-
-proc clear
-  eall
-  mov z, 0xFFFFFF
-  mov red, 0
-  mov green, 0
-  mov blue, 0
-end
-
-proc triangle
-  eall
-  qtest.ge edge0
-  qtest.ge edge1
-  qtest.ge edge2
-  qcmp.lt z, depth
-  qload z, depth
-  qload red, base_red
-  qload green, base_green
-  qload blue, base_blue
-end
-)";
-
-const char* const kVisibilityEyeDepthFirmware =
-    R"(; Visibility, z-buffered on eye depth interpolated linearly in screen space (the bad one).
-field z      24
-field red     8
-field green   8
-field blue    8
-output red green blue
-
-proc clear
-  eall
-  mov z, 0xFFFFFF
-  mov red, 0
-  mov green, 0
-  mov blue, 0
-end
-
-proc triangle
-  eall
-  qtest.ge edge0
-  qtest.ge edge1
-  qtest.ge edge2
-  qcmp.lt z, eye_depth
-  qload z, eye_depth
-  qload red, base_red
-  qload green, base_green
-  qload blue, base_blue
-end
-)";
 
 const char* const kVisibilityPainterFirmware =
     R"(; Visibility, painter's: no depth; the last triangle drawn over a pixel keeps it.
@@ -180,8 +121,18 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
 
   // The visibility runs.
   const AssemblerOptions options = assembler_options(config);
-  const Program vz = assemble(kVisibilityZbufferFirmware, "visibility-zbuffer", options);
-  const Program ve = assemble(kVisibilityEyeDepthFirmware, "visibility-eye-depth", options);
+  // z as wide as the depth expressions (gp.depth_bits), cleared to the far end.
+  const int bits = config.gp.depth_bits;
+  const Program vz = assemble(
+      zbuffer_colour_firmware(
+          "Visibility, z-buffered on screen depth: each pixel keeps the nearest triangle's index.",
+          bits, "depth", "base"),
+      "visibility-zbuffer", options);
+  const Program ve = assemble(zbuffer_colour_firmware("Visibility, z-buffered on eye depth "
+                                                      "interpolated linearly in screen space "
+                                                      "(the bad one).",
+                                                      bits, "eye_depth", "base"),
+                              "visibility-eye-depth", options);
   const Program vp = assemble(kVisibilityPainterFirmware, "visibility-painter", options);
   const Scene ids = visibility_scene(scene, {});
   const IdImage zid = decode_visibility(simulate_frame(config, ids, vz, threads).image);
