@@ -287,6 +287,48 @@ void check_time_did_not_wrap(Machine& machine) {
   }
 }
 
+// What every frame's statistics name first: the scene, the program and the display list.
+void register_frame_identity(Statistics& s, const Scene& scene, const Program& program) {
+  namespace u = stat_unit;
+  const std::string scene_name = scene.name;
+  const std::string program_name = program.name;
+  const auto triangles = static_cast<std::int64_t>(scene.mesh.triangles.size());
+  const auto spheres = static_cast<std::int64_t>(scene.spheres.size());
+  s.add_text("frame.scene", u::name, "The scene's name", [scene_name] { return scene_name; });
+  s.add_text("frame.firmware", u::name, "The firmware program (the path it was assembled from)",
+             [program_name] { return program_name; });
+  s.add_integer("frame.triangles", u::count, "Triangles in the display list",
+                [triangles] { return triangles; });
+  s.add_integer("frame.spheres", u::count, "Spheres in the display list (the sphere kind)",
+                [spheres] { return spheres; });
+}
+
+struct HostTimes {
+  double host_seconds, timing_seconds, pixel_seconds;
+  int threads;
+};
+
+// The host's side of a frame (never in goldens): registered after renderers_total.*.
+void register_host_statistics(Statistics& s, const HostTimes& t, const char* timing_meaning) {
+  namespace u = stat_unit;
+  s.add_real("host.seconds", u::host_seconds, "Host time of the whole frame (timing + pixels)",
+             [t] { return t.host_seconds; });
+  s.add_real("host.timing_seconds", u::host_seconds, timing_meaning,
+             [t] { return t.timing_seconds; });
+  s.add_real("host.pixel_seconds", u::host_seconds,
+             "Host time executing the firmware on the pixel arrays",
+             [t] { return t.pixel_seconds; });
+  s.add_integer("host.threads", u::count, "Host threads for the pixel arrays (--threads)",
+                [t] { return std::int64_t{t.threads}; });
+  s.add_real(
+      "host.simulated_array_cycles_per_host_second", u::per_second,
+      "renderers_total.busy_cycles per host second (per host second, not simulated)", [&s, t] {
+        return t.host_seconds > 0
+                   ? static_cast<double>(s.integer("renderers_total.busy_cycles")) / t.host_seconds
+                   : 0;
+      });
+}
+
 // fidelity.timing=analytic: the machine is built but its kernel never runs; the analytic
 // model (models/renderer/analytic.hpp) gives every unit's work and the frame time, and the
 // boards execute the regions it assigned. It registers the statistics the summary, sweeps and
@@ -319,14 +361,7 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
   const std::string program_name = program.name;
   const double gp_hz = config.gp.clock_hz;
   const double array_hz = config.renderer.clock_hz;
-  s.add_text("frame.scene", u::name, "The scene's name", [scene_name] { return scene_name; });
-  s.add_text("frame.firmware", u::name, "The firmware program (the path it was assembled from)",
-             [program_name] { return program_name; });
-  s.add_integer("frame.triangles", u::count, "Triangles in the display list",
-                [triangles] { return triangles; });
-  const auto spheres = static_cast<std::int64_t>(scene.spheres.size());
-  s.add_integer("frame.spheres", u::count, "Spheres in the display list (the sphere kind)",
-                [spheres] { return spheres; });
+  register_frame_identity(s, scene, program);
   s.add_real("frame.simulated_seconds", u::seconds,
              "The frame time: analytic.fill_seconds + analytic.busiest_seconds + "
              "analytic.drain_seconds",
@@ -473,21 +508,9 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
   s.add_text("analytic.busiest_unit", u::name, "Which unit is the busiest: GPs, ring or Renderers",
              [a] { return a->busiest_unit; });
   register_program_statistics(s, program);
-  s.add_real("host.seconds", u::host_seconds, "Host time of the whole frame (timing + pixels)",
-             [host_seconds] { return host_seconds; });
-  s.add_real("host.timing_seconds", u::host_seconds,
-             "Host time of the timing model (the analytic model, with the GPs' geometry)",
-             [timing_seconds] { return timing_seconds; });
-  s.add_real("host.pixel_seconds", u::host_seconds,
-             "Host time executing the firmware on the pixel arrays",
-             [pixel_seconds] { return pixel_seconds; });
-  s.add_integer("host.threads", u::count, "Host threads for the pixel arrays (--threads)",
-                [threads] { return std::int64_t{threads}; });
-  s.add_real("host.simulated_array_cycles_per_host_second", u::per_second,
-             "renderers_total.busy_cycles per host second (per host second, not simulated)",
-             [renderer_busy, host_seconds] {
-               return host_seconds > 0 ? static_cast<double>(renderer_busy) / host_seconds : 0;
-             });
+  register_host_statistics(s, {host_seconds, timing_seconds, pixel_seconds, threads},
+                           "Host time of the timing model (the analytic model, with the GPs' "
+                           "geometry)");
   s.freeze();
   result.stats_json = s.to_json();
   machine.reset();
@@ -535,14 +558,7 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
   Statistics& s = result.stats;
   const std::string scene_name = scene.name;
   const std::string program_name = program.name;
-  s.add_text("frame.scene", u::name, "The scene's name", [scene_name] { return scene_name; });
-  s.add_text("frame.firmware", u::name, "The firmware program (the path it was assembled from)",
-             [program_name] { return program_name; });
-  s.add_integer("frame.triangles", u::count, "Triangles in the display list",
-                [triangles] { return triangles; });
-  const auto spheres = static_cast<std::int64_t>(scene.spheres.size());
-  s.add_integer("frame.spheres", u::count, "Spheres in the display list (the sphere kind)",
-                [spheres] { return spheres; });
+  register_frame_identity(s, scene, program);
   fb.register_statistics(s);
   const double array_hz = config.renderer.clock_hz;
   s.add_integer("frame.array_cycles", u::array_cycles,
@@ -608,24 +624,8 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
   register_timing_statistics(s, attribution, config);
   register_program_statistics(s, program);
 
-  s.add_real("host.seconds", u::host_seconds, "Host time of the whole frame (timing + pixels)",
-             [host_seconds] { return host_seconds; });
-  s.add_real("host.timing_seconds", u::host_seconds,
-             "Host time of the timing model (the SystemC run)",
-             [timing_seconds] { return timing_seconds; });
-  s.add_real("host.pixel_seconds", u::host_seconds,
-             "Host time executing the firmware on the pixel arrays",
-             [pixel_seconds] { return pixel_seconds; });
-  s.add_integer("host.threads", u::count, "Host threads for the pixel arrays (--threads)",
-                [threads] { return std::int64_t{threads}; });
-  s.add_real("host.simulated_array_cycles_per_host_second", u::per_second,
-             "renderers_total.busy_cycles per host second (per host second, not simulated)",
-             [&s, host_seconds] {
-               return host_seconds > 0
-                          ? static_cast<double>(s.integer("renderers_total.busy_cycles")) /
-                                host_seconds
-                          : 0;
-             });
+  register_host_statistics(s, {host_seconds, timing_seconds, pixel_seconds, threads},
+                           "Host time of the timing model (the SystemC run)");
   s.freeze();
   result.stats_json = s.to_json();
   machine.reset();
