@@ -271,6 +271,7 @@ TEST_CASE("molecule files: PDB and mmCIF through gemmi, bad files name file and 
   fails("bad_coordinate.pdb", "bad_coordinate.pdb:3: y coordinate");
   fails("short_record.pdb", "short_record.pdb:2:");
   fails("no_atoms.pdb", "no atoms");
+  fails("far_atom.pdb", "coordinates are limited to +-1e+06 angstroms");
   fails("bad_syntax.cif", "bad_syntax.cif");
   fails("missing.pdb", "missing.pdb");
 }

@@ -116,6 +116,16 @@ int run_render(RenderOptions o) {
       "coefficient overflow\n",
       stats.integer("setup.clipped_away"), stats.integer("setup.degenerate"),
       stats.integer("setup.no_pixel_centres"), overflow);
+  // Spheres are dropped whole where their conic cannot be drawn (models/gp/sphere.hpp).
+  const std::int64_t behind = stats.integer("setup.sphere_behind_eye");
+  const std::int64_t near = stats.integer("setup.sphere_near_plane");
+  const std::int64_t far = stats.integer("setup.sphere_far_plane");
+  if (behind + near + far > 0) {
+    std::cout << fmt::format(
+        "spheres dropped: {} behind the eye, {} reaching the near plane, {} reaching the far "
+        "plane\n",
+        behind, near, far);
+  }
   if (overflow > 0) {
     std::cout << fmt::format(
         "warning: {} triangles were not drawn because a coefficient did not fit "

@@ -109,6 +109,16 @@ std::vector<Sphere> parse_molecule(const std::string& text, const std::string& p
             throw SceneError(fmt::format("{}: atom {} of residue {} {} has a non-finite position",
                                          path, atom.name, residue.name, residue.seqid.str()));
           }
+          // PDB's own columns hold at most 9999.999; past a million angstroms a position
+          // would not survive the single-precision scene and the camera that frames it.
+          constexpr double kMaxCoordinate = 1e6;
+          if (std::abs(p.x) > kMaxCoordinate || std::abs(p.y) > kMaxCoordinate ||
+              std::abs(p.z) > kMaxCoordinate) {
+            throw SceneError(fmt::format(
+                "{}: atom {} of residue {} {} lies at ({}, {}, {}); coordinates are limited to "
+                "+-{:g} angstroms",
+                path, atom.name, residue.name, residue.seqid.str(), p.x, p.y, p.z, kMaxCoordinate));
+          }
           if (spheres.size() >= kMaxAtoms) {
             throw SceneError(fmt::format("{}: more than {} atoms", path, kMaxAtoms));
           }
