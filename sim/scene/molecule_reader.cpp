@@ -51,6 +51,15 @@ void check_pdb_records(const std::string& text, const std::string& path) {
     std::string_view rec(text.data() + start, end - start);
     if (!rec.empty() && rec.back() == '\r') rec.remove_suffix(1);
     ++line;
+    // PDB is ASCII text; gemmi 0.5 shifts a record name's bytes as signed chars, which a
+    // byte past 0x7F turns into undefined behaviour (found by fuzzing).
+    for (std::size_t k = 0; k < rec.size(); ++k) {
+      const auto c = static_cast<unsigned char>(rec[k]);
+      if (c > 0x7E || (c < 0x20 && c != '\t')) {
+        throw SceneError(fmt::format("{}:{}: byte 0x{:02X} in column {}; a PDB file is ASCII text",
+                                     path, line, c, k + 1));
+      }
+    }
     if (rec.substr(0, 6) == "ATOM  " || rec.substr(0, 6) == "HETATM") {
       if (rec.size() < 54) {
         throw SceneError(
@@ -90,7 +99,24 @@ std::vector<Sphere> parse_molecule(const std::string& text, const std::string& p
       st = gemmi::make_structure(gemmi::cif::read_memory(text.data(), text.size(), path.c_str()));
     } else {
       check_pdb_records(text, path);
-      st = gemmi::read_pdb_from_memory(text.data(), text.size(), path);
+      // Only the records a space-filling model reads reach gemmi: its 0.5 reader overflows
+      // integers on long numbers in other records (LINK, CONECT, REMARK; found by fuzzing).
+      // Other lines are emptied, so gemmi's line numbers still match the file's.
+      std::string atoms;
+      atoms.reserve(text.size());
+      for (std::size_t start = 0; start < text.size();) {
+        std::size_t end = text.find('\n', start);
+        if (end == std::string::npos) end = text.size();
+        const std::string_view rec(text.data() + start, end - start);
+        const std::string_view name = rec.substr(0, 6);
+        if (name == "ATOM  " || name == "HETATM" || name.substr(0, 5) == "MODEL" ||
+            name.substr(0, 6) == "ENDMDL") {
+          atoms.append(rec);
+        }
+        atoms += '\n';
+        start = end + 1;
+      }
+      st = gemmi::read_pdb_from_memory(atoms.data(), atoms.size(), path);
     }
   } catch (const SceneError&) {
     throw;
