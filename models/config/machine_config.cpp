@@ -157,10 +157,10 @@ const std::vector<Entry>& parameter_table() {
        [](MachineConfig& c) -> Ref { return &c.gp.subpixel_bits; }},
       derived({"gp.edge_significand_bits", "bits", "A", 62, 4, 62,
                "Significant bits the GP keeps of each edge-function coefficient it sends (A, B, C "
-               "of the snapped edges: edge0..2, wide0..2), rounded to nearest like a float's "
-               "significand. Fewer bits move an edge by up to 2^-n times twice the farthest "
-               "pixel's distance from the origin, so centres near it fall on the wrong side "
-               "(Rossignac 9.3.3). At 62 nothing is rounded.",
+               "of the snapped edges: edge0..2, wide0..2, a clipped piece's side0..2), rounded to "
+               "nearest like a float's significand. Fewer bits move an edge by up to 2^-n times "
+               "twice the farthest pixel's distance from the origin, so centres near it fall on "
+               "the wrong side (Rossignac 9.3.3). At 62 nothing is rounded.",
                [](MachineConfig& c) -> Ref { return &c.gp.edge_significand_bits; }},
               "exact: every edge coefficient is an integer below 2^61 (evaluator.coefficient_bits "
               "<= 62), so 62 keeps them all, the model without this key; the i860's single "
