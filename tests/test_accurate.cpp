@@ -18,10 +18,11 @@ using namespace pp5;
 
 namespace {
 
-MachineConfig machine(int subpixel_bits) {
+MachineConfig machine(int subpixel_bits, int edge_significand_bits = 62) {
   MachineConfig config = MachineConfig::defaults();
   config.set({"screen.width=256", "screen.height=256", "gp.count=2", "renderer.count=2",
-              "gp.subpixel_bits=" + std::to_string(subpixel_bits)});
+              "gp.subpixel_bits=" + std::to_string(subpixel_bits),
+              "gp.edge_significand_bits=" + std::to_string(edge_significand_bits)});
   return config;
 }
 
@@ -167,6 +168,66 @@ TEST_CASE(
   CHECK(r.accurate.missing == 0);
 }
 
+TEST_CASE("accurate: coarse edge coefficients make the standard program misclassify (9.3.3)",
+          "[accurate]") {
+  // The vertices at the default sixteenth of a pixel; the edge coefficients kept to 10
+  // significant bits, so the sent edges move by up to E_edge = 2^-10 2 R pixels (R the
+  // farthest pixel from the origin, 362 on 256 x 256), 0.71: far more than the snap's 0.044.
+  const MachineConfig exact = machine(4);
+  const MachineConfig coarse = machine(4, 10);
+  const Scene scene = make_builtin_scene("folded-slab");
+  const ScanConversionReport e = measure(exact, scene);
+  const ScanConversionReport c = measure(coarse, scene);
+  REQUIRE(c.closed);
+  CHECK(e.E_edge == 0.0);
+  CHECK(c.E_edge > 4.0 * c.E_snap);
+  // The standard program draws more centres with the wrong plane, so more hidden surface
+  // shows through and the largest shared-edge error grows.
+  CHECK(c.standard.show_through > e.standard.show_through);
+  CHECK(c.standard.shared_edge_max_error > e.standard.shared_edge_max_error);
+  // Still within the bounds for the configured round-off: 2ME where a centre changes plane,
+  // M (5/4) E + 2 against the exact picture moved by 5E/4 where it changes layer.
+  CHECK(c.standard.bound_ratio <= 1.0);
+  CHECK(c.standard.layer_bound_ratio <= 1.0);
+  // Rounding is symmetric, so a shared edge's two functions stay exact negatives; but the
+  // three rounded lines of the edges around a vertex no longer meet in one point, so the
+  // standard tiling has cracks and overlaps there (odd coverage on a closed mesh), which
+  // exact coefficients do not. Those pixels are in neither bound (parity_errors counts them).
+  CHECK(e.standard.parity_errors == 0);
+  CHECK(c.standard.parity_errors > 0);
+  // Accurate's classification does not use the rounded edges (its enlarged area is moved out
+  // by the rounding's reach): no hidden surface, its own plane everywhere.
+  CHECK(c.accurate.show_through == 0);
+  CHECK(c.accurate.edge_max_error <= kDepthResolution);
+  CHECK(c.accurate.interior_max_error <= kDepthResolution);
+  CHECK(c.accurate.parity_errors == 0);
+  CHECK(c.accurate.missing == 0);
+}
+
+TEST_CASE("accurate: the standard program's worst error is within the bound at each round-off",
+          "[accurate]") {
+  // Three configured round-offs: the snap alone (a quarter pixel), and coarse edge
+  // coefficients on the sixteenth-pixel snap.
+  const auto [subpixel_bits, edge_bits] =
+      GENERATE(std::make_pair(2, 62), std::make_pair(4, 12), std::make_pair(4, 9));
+  INFO("gp.subpixel_bits = " << subpixel_bits << ", gp.edge_significand_bits = " << edge_bits);
+  const MachineConfig config = machine(subpixel_bits, edge_bits);
+  for (const char* name : {"folded-slab", "torus"}) {
+    INFO(name);
+    const ScanConversionReport r = measure(config, make_builtin_scene(name));
+    CHECK(r.E == r.E_snap + r.E_edge);
+    // Centres that change plane: within 2ME, and the error is real (not a vacuous bound).
+    CHECK(r.standard.bound_ratio <= 1.0);
+    CHECK(r.standard.shared_edge_max_error > 10.0 * kDepthResolution);
+    // Centres that change layer: within M (5/4) E + 2 of the exact picture moved by 5E/4,
+    // though their plain error (against the unmoved picture) is the gap between layers.
+    CHECK(r.standard.layer_pixels > 0);
+    CHECK(r.standard.layer_bound_ratio <= 1.0);
+    CHECK(r.standard.edge_max_error > r.standard.layer_max_error);
+    CHECK(r.accurate.edge_max_error <= kDepthResolution);
+  }
+}
+
 TEST_CASE("accurate: a finely tessellated sphere, at the default round-off", "[accurate]") {
   const MachineConfig config = machine(4);
   SceneOptions options;
@@ -199,7 +260,12 @@ TEST_CASE("accurate: boundary and non-manifold edges are classified by their own
   scene.mesh = mesh;
   scene.name = "hinge";
   scene.camera = frame_mesh(scene.mesh, glm::vec3(0.2f, 0.3f, 1.0f), 40.0f);
-  const MachineConfig config = machine(4);
+  // At exact edge coefficients and at coarse ones (10 significant bits move an edge by up to
+  // 0.7 pixel here): the side tests do not use the rounded edges, and the enlarged area is
+  // moved out by the rounding's reach.
+  const int edge_bits = GENERATE(62, 10);
+  INFO("gp.edge_significand_bits = " << edge_bits);
+  const MachineConfig config = machine(4, edge_bits);
   const MeshAdjacency adjacency = build_mesh_adjacency(scene.mesh);
   CHECK(adjacency.non_manifold_edges == 1);
   CHECK(adjacency.boundary_edges == 7);
@@ -248,4 +314,91 @@ TEST_CASE("accurate: the expressions in the registry", "[accurate]") {
   CHECK(packet_words(accurate.procedure(Procedure::triangle).expressions, 2) ==
         packet_words(phong.procedure(Procedure::triangle).expressions, 2) + 3 * 3 * 2);
   CHECK(accurate.bits_used() == phong.bits_used());
+}
+
+TEST_CASE("accurate: edge coefficients kept to n significant bits", "[accurate]") {
+  CHECK(round_significand(0b101101, 62) == 0b101101);
+  CHECK(round_significand(0b101101, 3) == 0b110000);
+  CHECK(round_significand(-0b101101, 3) == -0b110000);
+  CHECK(round_significand(0b101000, 3) == 0b101000);
+  CHECK(round_significand(0b100100, 2) == 0b100000);  // a tie, to even
+  CHECK(round_significand(0b101100, 2) == 0b110000);  // a tie, to even
+  CHECK(round_significand((std::int64_t{1} << 40) + 12345, 20) == std::int64_t{1} << 40);
+  // The key is declared with its range: below 4 or above 62 it is refused, by name.
+  MachineConfig config = MachineConfig::defaults();
+  for (const char* bad : {"gp.edge_significand_bits=3", "gp.edge_significand_bits=63"}) {
+    try {
+      config.set(bad);
+      FAIL("accepted: " << bad);
+    } catch (const ConfigError& e) {
+      CHECK(std::string(e.what()).find("gp.edge_significand_bits") != std::string::npos);
+    }
+  }
+  // The rounding is in the coefficients the GP sends: a coarse setting changes the edge
+  // expressions of most triangles of the sphere, and the two triangles of every edge still get
+  // exactly opposite functions (so a centre is owned by exactly one of them), or on a
+  // silhouette the same one.
+  const Scene scene = make_builtin_scene("sphere");
+  const MeshAdjacency adjacency = build_mesh_adjacency(scene.mesh);
+  ExpressionSet needed;
+  for (Expression e : {Expression::edge0, Expression::edge1, Expression::edge2})
+    needed.set(static_cast<int>(e));
+  auto edges = [&](const MachineConfig& c) {
+    const GeometryEngine geometry(geometry_params(c), scene);
+    std::vector<std::array<QuadraticCoefficients, 3>> out(scene.mesh.triangles.size());
+    std::vector<ScreenTriangle> pieces;
+    SetupCounts counts;
+    for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
+      pieces.clear();
+      geometry.transform(i, pieces, counts);
+      REQUIRE(pieces.size() == 1);
+      SetupResult r;
+      if (!geometry.setup(pieces[0], needed, r, counts)) continue;  // no pixel centre
+      for (int e = 0; e < 3; ++e)
+        out[static_cast<std::size_t>(i)][static_cast<std::size_t>(e)] =
+            r.values.expressions[static_cast<std::size_t>(Expression::edge0) +
+                                 static_cast<std::size_t>(e)];
+    }
+    return out;
+  };
+  const auto exact = edges(machine(4));
+  const auto coarse = edges(machine(4, 8));
+  int changed = 0, opposite = 0;
+  for (int t = 0; t < static_cast<int>(scene.mesh.triangles.size()); ++t) {
+    for (int e = 0; e < 3; ++e) {
+      const QuadraticCoefficients& p =
+          coarse[static_cast<std::size_t>(t)][static_cast<std::size_t>(e)];
+      const QuadraticCoefficients& x =
+          exact[static_cast<std::size_t>(t)][static_cast<std::size_t>(e)];
+      if (p.D != x.D || p.E != x.E || p.F != x.F) ++changed;
+      // Kept to 8 bits; C then less 1 by the top-left rule on some edges.
+      CHECK(round_significand(p.D, 8) == p.D);
+      CHECK(round_significand(p.E, 8) == p.E);
+      CHECK((round_significand(p.F, 8) == p.F || round_significand(p.F + 1, 8) == p.F + 1));
+      if (x.D == 0 && x.E == 0) continue;  // not set up
+      const int n = adjacency.across(t, e);
+      REQUIRE(n >= 0);
+      int f = 0;
+      while (adjacency.across(n, f) != t) ++f;
+      const QuadraticCoefficients& xq =
+          exact[static_cast<std::size_t>(n)][static_cast<std::size_t>(f)];
+      if (xq.D == 0 && xq.E == 0) continue;
+      const QuadraticCoefficients& q =
+          coarse[static_cast<std::size_t>(n)][static_cast<std::size_t>(f)];
+      if (x.D == -xq.D && x.E == -xq.E) {
+        // Opposite sides on the screen: exact negatives, the top-left rule's 1 taken from C of
+        // exactly one of the two; so still after rounding.
+        ++opposite;
+        CHECK(p.D == -q.D);
+        CHECK(p.E == -q.E);
+        CHECK(p.F + q.F == -1);
+      } else {
+        // A silhouette (both faces on one side): the same function, rounded the same.
+        REQUIRE((x.D == xq.D && x.E == xq.E && x.F == xq.F));
+        CHECK((p.D == q.D && p.E == q.E && p.F == q.F));
+      }
+    }
+  }
+  CHECK(changed > 3 * static_cast<int>(scene.mesh.triangles.size()) / 2);
+  CHECK(opposite > 3 * static_cast<int>(scene.mesh.triangles.size()) / 2);
 }

@@ -155,6 +155,16 @@ const std::vector<Entry>& parameter_table() {
        "Vertex positions are snapped to 1/2^n pixel before edge set-up, so that edge "
        "coefficients are exact integers and shared edges own each pixel exactly once.",
        [](MachineConfig& c) -> Ref { return &c.gp.subpixel_bits; }},
+      derived({"gp.edge_significand_bits", "bits", "A", 62, 4, 62,
+               "Significant bits the GP keeps of each edge-function coefficient it sends (A, B, C "
+               "of the snapped edges: edge0..2, wide0..2, a clipped piece's side0..2), rounded to "
+               "nearest like a float's significand. Fewer bits move an edge by up to 2^-n times "
+               "twice the farthest pixel's distance from the origin, so centres near it fall on "
+               "the wrong side (Rossignac 9.3.3). At 62 nothing is rounded.",
+               [](MachineConfig& c) -> Ref { return &c.gp.edge_significand_bits; }},
+              "exact: every edge coefficient is an integer below 2^61 (evaluator.coefficient_bits "
+              "<= 62), so 62 keeps them all, the model without this key; the i860's single "
+              "precision keeps 24"),
       {"gp.depth_bits", "bits", "A", 24, 8, 32,
        "Range of the depth expression: 0 at the near plane to 2^n - 1 at the far plane.",
        [](MachineConfig& c) -> Ref { return &c.gp.depth_bits; }},

@@ -35,6 +35,7 @@ struct MachineConfig {
     int count = 0;
     double clock_hz = 0;
     int subpixel_bits = 0;
+    int edge_significand_bits = 0;
     int depth_bits = 0;
     enum class Code { assembly, compiled };
     Code code = Code::assembly;

@@ -194,6 +194,20 @@ constexpr bool in_enum_order() {
 
 }  // namespace
 
+std::int64_t round_significand(std::int64_t v, int bits) {
+  if (bits >= 62 || v == 0) return v;
+  const std::uint64_t m = v < 0 ? 0 - static_cast<std::uint64_t>(v) : static_cast<std::uint64_t>(v);
+  const int width = 64 - __builtin_clzll(m);
+  if (width <= bits) return v;
+  const int drop = width - bits;
+  const std::uint64_t unit = std::uint64_t{1} << drop;
+  std::uint64_t q = m >> drop;
+  const std::uint64_t r = m & (unit - 1);
+  if (r > unit / 2 || (r == unit / 2 && (q & 1) != 0)) ++q;
+  const auto rounded = static_cast<std::int64_t>(q << drop);
+  return v < 0 ? -rounded : rounded;
+}
+
 const char* expression_form_name(ExpressionForm form) {
   switch (form) {
     case F::constant:
@@ -256,7 +270,7 @@ bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& 
 
 // Edge e runs from vertex e to vertex (e + 1) % 3: A x + B y + C >= 0 inside, on pixel
 // indices, from the snapped vertices, so coefficients are exact integers and two triangles
-// sharing the edge get exactly opposite functions.
+// sharing the edge get exactly opposite functions; then rounded to the GP's edge precision.
 bool SetupContext::edge(int e, std::int64_t outward, bool top_left_rule,
                         QuadraticCoefficients& out) const {
   const int a = e;
@@ -264,9 +278,28 @@ bool SetupContext::edge(int e, std::int64_t outward, bool top_left_rule,
   const std::int64_t sigma = area2 > 0 ? 1 : -1;
   const std::int64_t dx = xs[b] - xs[a];
   const std::int64_t dy = ys[b] - ys[a];
-  const std::int64_t A = -sigma * dy * scale;
-  const std::int64_t B = sigma * dx * scale;
+  std::int64_t A = -sigma * dy * scale;
+  std::int64_t B = sigma * dx * scale;
   std::int64_t C = sigma * (dx * (half - ys[a]) - dy * (half - xs[a])) + outward;
+  // The GP keeps params.edge_significand_bits of each coefficient (round_significand): the
+  // line moves, by at most 2^-n (|A| x + |B| y + |C|) value units at pixel (x, y). Rounding
+  // is symmetric about 0, so the neighbour's function stays exactly the negation. A line
+  // moved outward (an enlarged area, which must hold every centre the unsnapped edge does)
+  // is first moved out by that much more over the whole screen, then rounded.
+  const int n = params.edge_significand_bits;
+  if (n < 62) {
+    if (outward > 0) {
+      const double u = std::ldexp(1.0, -n);
+      double reach = u * (std::fabs(static_cast<double>(A)) * params.screen_width +
+                          std::fabs(static_cast<double>(B)) * params.screen_height);
+      reach += 2.0 * u * (std::fabs(static_cast<double>(C)) + reach) + 2.0;
+      if (!(reach < std::ldexp(1.0, 61))) return false;
+      C += static_cast<std::int64_t>(std::ceil(reach));
+    }
+    A = round_significand(A, n);
+    B = round_significand(B, n);
+    C = round_significand(C, n);
+  }
   // Top-left rule: a pixel centre exactly on the edge belongs to this triangle only if the
   // edge is a left edge (inside lies to its right) or a top edge.
   if (top_left_rule && !(A > 0 || (A == 0 && B > 0))) C -= 1;

@@ -84,7 +84,9 @@ struct SetupContext {
   // Edge e's function (from vertex e to vertex (e + 1) % 3) on the snapped vertices: exact
   // integers, >= 0 inside. `outward` (value units, >= 0) moves the line outward; with
   // top_left_rule a centre exactly on the (unmoved) edge belongs to the triangle only on a
-  // left or top edge. False if a coefficient does not fit.
+  // left or top edge. Each coefficient is then kept to params.edge_significand_bits (a
+  // moved-out line first moved out by the rounding's reach too). False if a coefficient
+  // does not fit.
   bool edge(int e, std::int64_t outward, bool top_left_rule, QuadraticCoefficients& out) const;
   // A constant in fixed point (value * 2^fraction_bits; value is an integer).
   QuadraticCoefficients constant(double value) const;
@@ -117,6 +119,10 @@ inline const ExpressionEntry& expression_entry(Expression e) {
 bool needs_adjacency(const ExpressionSet& set);
 // True if any expression in `set` widens the bounding box (ExpressionEntry::widens).
 bool widens_bounds(const ExpressionSet& set);
+
+// v rounded to `bits` significant bits (to nearest, ties to even, symmetric about 0): what
+// the GP keeps of an edge coefficient (gp.edge_significand_bits); v itself at 62 or more.
+std::int64_t round_significand(std::int64_t v, int bits);
 
 // Ring words of one coefficient: coefficient_bits rounded up to whole ring words.
 int coefficient_words(int coefficient_bits, int word_bits);

@@ -38,8 +38,29 @@ struct Reference {
   // depth gradient of the two faces of any shared edge within 2E.
   std::vector<std::uint8_t> layer_edge;
   std::vector<float> local_m;
+  // For the translated-layer bound, per pixel with layer_edge set and covered (indexed by
+  // layer_index): the exact front depth at each sample point of the disc of radius
+  // kLayerReach E about the centre (infinity where no triangle covers it), and the largest
+  // depth gradient of the triangles within E of the centre.
+  std::vector<int> layer_index;
+  std::vector<double> layer_front;
+  std::vector<float> layer_m;
+  int samples = 0;
   double M = 0;
 };
+
+// Sample offsets (in units of E) of the translated-layer disc: a grid of step 1/4 within
+// kLayerReach, so that every point within E of the centre has a sample within sqrt(2)/8 E.
+std::vector<glm::dvec2> layer_offsets() {
+  std::vector<glm::dvec2> out;
+  for (int j = -5; j <= 5; ++j) {
+    for (int i = -5; i <= 5; ++i) {
+      const glm::dvec2 o(i / 4.0, j / 4.0);
+      if (glm::length(o) <= kLayerReach + 1e-9) out.push_back(o);
+    }
+  }
+  return out;
+}
 
 double distance_to_segment(double px, double py, const glm::dvec2& a, const glm::dvec2& b) {
   const glm::dvec2 d = b - a;
@@ -66,7 +87,7 @@ void near_segment(const glm::dvec2& a, const glm::dvec2& b, double r, int width,
   }
 }
 
-Reference reference(const MachineConfig& config, const Scene& scene) {
+Reference reference(const MachineConfig& config, const Scene& scene, double E) {
   const GeometryEngine geometry(geometry_params(config), scene);
   Reference r;
   r.width = config.screen.width;
@@ -139,7 +160,7 @@ Reference reference(const MachineConfig& config, const Scene& scene) {
   for (std::size_t t = 0; t < scene.mesh.triangles.size(); ++t) {
     for (int k = 0; k < 3; ++k) around[scene.mesh.triangles[t][k]].push_back(static_cast<int>(t));
   }
-  const double reach = 2.0 * std::sqrt(2.0) * std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
+  const double reach = 2.0 * E;
   r.layer_edge.assign(n, 0);
   r.local_m.assign(n, 0.0f);
   auto side = [](const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
@@ -220,7 +241,63 @@ Reference reference(const MachineConfig& config, const Scene& scene) {
     for (int e = 0; e < 3; ++e) {
       d = std::min(d, distance_to_segment(cx, cy, t.v[e].position, t.v[(e + 1) % 3].position));
     }
-    r.near_edge[q] = d <= 1.0 ? 1 : 0;
+    r.near_edge[q] = d <= std::max(1.0, E) ? 1 : 0;
+  }
+  // The translated-layer samples and gradients, over the covered pixels near a layer edge.
+  const std::vector<glm::dvec2> offsets = layer_offsets();
+  r.samples = static_cast<int>(offsets.size());
+  r.layer_index.assign(n, -1);
+  int layers = 0;
+  for (std::size_t q = 0; q < n; ++q) {
+    if (r.layer_edge[q] && owner[q] >= 0) r.layer_index[q] = layers++;
+  }
+  r.layer_front.assign(static_cast<std::size_t>(layers) * offsets.size(), kInfinity);
+  r.layer_m.assign(static_cast<std::size_t>(layers), 0.0f);
+  const double rho = kLayerReach * E;
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const ScreenTriangle& t = pieces[k];
+    const glm::dvec2 p0 = t.v[0].position, p1 = t.v[1].position, p2 = t.v[2].position;
+    const double det = (p1.x - p0.x) * (p2.y - p0.y) - (p2.x - p0.x) * (p1.y - p0.y);
+    if (!(std::fabs(det) > 0)) continue;
+    const double z0 = t.v[0].depth * depth_max, z1 = t.v[1].depth * depth_max,
+                 z2 = t.v[2].depth * depth_max;
+    const double a = ((z1 - z0) * (p2.y - p0.y) - (z2 - z0) * (p1.y - p0.y)) / det;
+    const double b = ((z2 - z0) * (p1.x - p0.x) - (z1 - z0) * (p2.x - p0.x)) / det;
+    const double s = det > 0 ? 1.0 : -1.0;
+    auto inside = [&](double cx, double cy) {
+      return s * ((p1.x - p0.x) * (cy - p0.y) - (p1.y - p0.y) * (cx - p0.x)) >= 0 &&
+             s * ((p2.x - p1.x) * (cy - p1.y) - (p2.y - p1.y) * (cx - p1.x)) >= 0 &&
+             s * ((p0.x - p2.x) * (cy - p2.y) - (p0.y - p2.y) * (cx - p2.x)) >= 0;
+    };
+    const int x_lo =
+        std::max(0, static_cast<int>(std::floor(std::min({p0.x, p1.x, p2.x}) - rho - 1)));
+    const int x_hi =
+        std::min(r.width - 1, static_cast<int>(std::ceil(std::max({p0.x, p1.x, p2.x}) + rho)));
+    const int y_lo =
+        std::max(0, static_cast<int>(std::floor(std::min({p0.y, p1.y, p2.y}) - rho - 1)));
+    const int y_hi =
+        std::min(r.height - 1, static_cast<int>(std::ceil(std::max({p0.y, p1.y, p2.y}) + rho)));
+    for (int y = y_lo; y <= y_hi; ++y) {
+      for (int x = x_lo; x <= x_hi; ++x) {
+        const std::size_t q = static_cast<std::size_t>(y) * r.width + x;
+        const int li = r.layer_index[q];
+        if (li < 0) continue;
+        const double cx = x + 0.5, cy = y + 0.5;
+        double d = inside(cx, cy) ? 0.0 : kInfinity;
+        for (int e = 0; e < 3 && d > 0; ++e)
+          d = std::min(d, distance_to_segment(cx, cy, t.v[e].position, t.v[(e + 1) % 3].position));
+        if (d > rho) continue;
+        if (d <= E)
+          r.layer_m[static_cast<std::size_t>(li)] =
+              std::max(r.layer_m[static_cast<std::size_t>(li)], static_cast<float>(gradient[k]));
+        for (std::size_t o = 0; o < offsets.size(); ++o) {
+          const double sx = cx + offsets[o].x * E, sy = cy + offsets[o].y * E;
+          if (!inside(sx, sy)) continue;
+          double& f = r.layer_front[static_cast<std::size_t>(li) * offsets.size() + o];
+          f = std::min(f, z0 + a * (sx - p0.x) + b * (sy - p0.y));
+        }
+      }
+    }
   }
   return r;
 }
@@ -247,6 +324,21 @@ ScanConversionMethod measure(const MachineConfig& config, const Scene& scene,
         "wide",
         program.name, config.gp.depth_bits));
   }
+  // Parity first: on a closed mesh a centre covered an odd number of times lies in a crack or
+  // an overlap of the program's own tiling (rounded edge lines that no longer meet in one
+  // point at a vertex), where neither bound applies; those pixels are counted there.
+  std::vector<std::uint8_t> odd;
+  if (closed) {
+    const Program counter =
+        assemble(coverage_source, program.name + "-coverage", assembler_options(config));
+    const FieldFrame coverage = render_field(config, scene, counter, "count", threads);
+    m.parity_errors = 0;
+    odd.reserve(coverage.values.size());
+    for (std::uint64_t c : coverage.values) {
+      m.parity_errors += static_cast<std::int64_t>(c & 1);
+      odd.push_back(static_cast<std::uint8_t>(c & 1));
+    }
+  }
   const FieldFrame frame = render_field(config, scene, program, "z", threads);
   m.image = frame.image;
   const std::uint64_t cleared = (std::uint64_t{1} << z_decl->width) - 1;
@@ -265,9 +357,25 @@ ScanConversionMethod measure(const MachineConfig& config, const Scene& scene,
       ++m.edge_pixels;
       sum += error;
       m.edge_max_error = std::max(m.edge_max_error, error);
-      if (!ref.layer_edge[q]) {
+      if (!odd.empty() && odd[q]) {
+        // A crack or an overlap: in parity_errors, in neither bound.
+      } else if (!ref.layer_edge[q]) {
         m.shared_edge_max_error = std::max(m.shared_edge_max_error, error);
         m.bound_ratio = std::max(m.bound_ratio, error / (2.0 * ref.local_m[q] * E));
+      } else {
+        // Against the exact picture moved by at most kLayerReach E: the nearest of its
+        // sampled depths.
+        const auto li = static_cast<std::size_t>(ref.layer_index[q]);
+        double moved = kInfinity;
+        for (int o = 0; o < ref.samples; ++o) {
+          const double f = ref.layer_front[li * static_cast<std::size_t>(ref.samples) +
+                                           static_cast<std::size_t>(o)];
+          if (f != kInfinity) moved = std::min(moved, std::fabs(z - f));
+        }
+        ++m.layer_pixels;
+        m.layer_max_error = std::max(m.layer_max_error, moved);
+        m.layer_bound_ratio = std::max(
+            m.layer_bound_ratio, moved / (ref.layer_m[li] * kLayerReach * E + kDepthResolution));
       }
     } else {
       m.interior_max_error = std::max(m.interior_max_error, error);
@@ -280,14 +388,6 @@ ScanConversionMethod measure(const MachineConfig& config, const Scene& scene,
     }
   }
   m.edge_mean_error = m.edge_pixels > 0 ? sum / static_cast<double>(m.edge_pixels) : 0.0;
-
-  if (closed) {
-    const Program counter =
-        assemble(coverage_source, program.name + "-coverage", assembler_options(config));
-    const FieldFrame coverage = render_field(config, scene, counter, "count", threads);
-    m.parity_errors = 0;
-    for (std::uint64_t c : coverage.values) m.parity_errors += static_cast<std::int64_t>(c & 1);
-  }
 
   m.triangle_cycles = triangle_cycles(program, config);
   m.bits = program.bits_used();
@@ -336,9 +436,26 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
     }
   }
 
-  const Reference ref = reference(config, scene);
+  // E: the snap's share, and the edge coefficients' rounding: at most 2^-n (|A| x + |B| y +
+  // |C|) / |(A, B)| pixels at pixel (x, y), where |A x + B y| / |(A, B)| <= |(x, y)| and
+  // |C| / |(A, B)| <= |(u, w)| of the edge's first vertex: so 2^-n 2 R, R the farthest pixel
+  // or vertex from the origin.
+  report.E_snap = std::sqrt(2.0) * std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
+  if (config.gp.edge_significand_bits < 62) {
+    double R = std::hypot(config.screen.width, config.screen.height);
+    for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
+      pieces.clear();
+      geometry.transform(i, pieces, counts);
+      for (const ScreenTriangle& t : pieces) {
+        for (const ScreenVertex& v : t.v)
+          R = std::max(R, std::hypot(std::fabs(v.position.x) + 1, std::fabs(v.position.y) + 1));
+      }
+    }
+    report.E_edge = std::ldexp(2.0 * R, -config.gp.edge_significand_bits);
+  }
+  report.E = report.E_snap + report.E_edge;
+  const Reference ref = reference(config, scene, report.E);
   report.M = ref.M;
-  report.E = std::sqrt(2.0) * std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
   report.standard =
       measure(config, scene, standard, kCoverageFirmware, ref, report.E, report.closed, threads);
   report.accurate = measure(config, scene, accurate, kAccurateCoverageFirmware, ref, report.E,
@@ -367,18 +484,21 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
 std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports) {
   std::string out =
       "| scene | method | edge px | max error | mean error | shared-edge max | / 2ME | "
-      "interior max | hidden shows | parity errors | cycles/tri | bits | GP clocks/tri | "
+      "layer-edge max | / ME | interior max | hidden shows | parity errors | cycles/tri | bits | "
+      "GP clocks/tri | "
       "words/packet | frame ms |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const ScanConversionReport& r : reports) {
     for (const ScanConversionMethod* m : {&r.standard, &r.accurate}) {
       const bool first = m == &r.standard;
       out += fmt::format(
-          "| {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.3f} | {:.0f} | {} | {} | {} | {} | "
+          "| {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.3f} | {:.0f} | {:.3f} | {:.0f} | {} | {} "
+          "| "
+          "{} | {} | "
           "{:.0f} | {} | {:.2f} |\n",
           first ? r.scene : "", first ? "standard" : "accurate", m->edge_pixels, m->edge_max_error,
-          m->edge_mean_error, m->shared_edge_max_error, m->bound_ratio, m->interior_max_error,
-          m->show_through,
+          m->edge_mean_error, m->shared_edge_max_error, m->bound_ratio, m->layer_max_error,
+          m->layer_bound_ratio, m->interior_max_error, m->show_through,
           m->parity_errors < 0 ? std::string("open") : std::to_string(m->parity_errors),
           m->triangle_cycles, m->bits, m->gp_clocks_per_triangle, m->packet_words,
           m->frame_seconds * 1e3);

@@ -65,18 +65,22 @@ int run_scanconvert(const ScanConvertOptions& o) {
         "edges (a shared one twice) classified by the neighbour's plane: {}; by their own "
         "unsnapped line: {} boundary, {} "
         "non-manifold, {} degenerate neighbour, {} coplanar; by the snapped edge: {} clipped; "
-        "M = {:.0f} depth units/pixel, E = {:.4f} pixel; {} pixels differ\n",
+        "M = {:.0f} depth units/pixel, E = {:.4f} pixel ({:.4f} snap + {:.4f} edge rounding); "
+        "standard: {} layer-edge pixels; {} pixels differ\n",
         r.scene, r.triangles, r.edges, r.boundary_edges, r.non_manifold_edges,
         sides(SideKind::plane), sides(SideKind::boundary), sides(SideKind::non_manifold),
         sides(SideKind::degenerate), sides(SideKind::coplanar), sides(SideKind::clipped), r.M, r.E,
-        r.differing);
+        r.E_snap, r.E_edge, r.standard.layer_pixels, r.differing);
   }
   const std::string table = format_scan_conversion(reports);
   outputs.add((fs::path(o.out_dir) / "scanconvert.md").string(), table + "\n" + notes);
   // The table and every image together, or none of them (sim/output).
   outputs.commit();
-  std::cout << fmt::format("{} x {} screen, vertices snapped to 1/{} pixel\n\n",
-                           config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits)
+  const int n = config.gp.edge_significand_bits;
+  std::cout << fmt::format(
+                   "{} x {} screen, vertices snapped to 1/{} pixel, edge coefficients {}\n\n",
+                   config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits,
+                   n < 62 ? fmt::format("kept to {} significant bits", n) : std::string("exact"))
             << table << "\n"
             << notes
             << fmt::format(
