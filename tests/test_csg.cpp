@@ -1,5 +1,7 @@
 // Parity and depth-interval applications (issue 15): the pass plan that draws one solid per
 // pass, point in solid by parity against a double-precision ray caster.
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <string>
 #include <vector>
@@ -10,6 +12,8 @@
 #include "models/machine.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "sim/analysis/csg.hpp"
+#include "sim/scene/csg_expression.hpp"
+#include "sim/scene/scene_loader.hpp"
 
 using namespace pp5;
 
@@ -145,4 +149,109 @@ TEST_CASE("parity without the depth test is caught by the comparison", "[csg]") 
   const ParityMeasure m = measure_parity(config, make_parity_scene("plane-sphere"), broken, 2);
   CHECK(m.disagree == m.inside);
   CHECK(m.disagree > 0);
+}
+
+namespace {
+
+// A closed axis-aligned box as a scene-file mesh entry, named.
+std::string box_json(const std::string& name, glm::dvec3 lo, glm::dvec3 hi) {
+  std::string v;
+  for (int i = 0; i < 8; ++i) {
+    v += fmt::format("{}[{}, {}, {}]", i ? ", " : "", (i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y,
+                     (i & 4) ? hi.z : lo.z);
+  }
+  return fmt::format(
+      R"({{"name": "{}", "vertices": [{}], "triangles": [[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6],
+      [0, 1, 5], [0, 5, 4], [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]]}})",
+      name, v);
+}
+
+std::string csg_scene(const std::string& csg) {
+  return "{\"meshes\": [" + box_json("cube", {-1, -1, -1}, {1, 1, 1}) + ", " +
+         box_json("bite", {-0.5, -0.5, 0.5}, {0.5, 0.5, 1.5}) + ", " +
+         box_json("far", {3, 3, 3}, {4, 4, 4}) + "], \"csg\": " + csg + "}";
+}
+
+Scene parse_csg_scene(const std::string& csg) {
+  return parse_scene_json(csg_scene(csg), "csg.json", ".");
+}
+
+std::string products(const Scene& s) {
+  std::vector<std::string> names;
+  for (const Solid& solid : s.solids) names.push_back(solid.name);
+  return format_csg(s.csg, names);
+}
+
+}  // namespace
+
+TEST_CASE("CSG expressions normalise to a sum of products", "[csg]") {
+  CHECK(products(parse_csg_scene(R"({"difference": ["cube", {"union": ["bite", "far"]}]})")) ==
+        "cube & !bite & !far");
+  CHECK(products(parse_csg_scene(R"({"intersection": [{"union": ["cube", "bite"]}, "far"]})")) ==
+        "cube & far | bite & far");
+  CHECK(
+      products(parse_csg_scene(R"({"difference": ["cube", {"intersection": ["bite", "far"]}]})")) ==
+      "cube & !bite | cube & !far");
+  CHECK(products(parse_csg_scene(R"({"difference": ["cube", {"difference": ["bite", "far"]}]})")) ==
+        "cube & !bite | cube & far");
+  CHECK(products(parse_csg_scene(R"({"union": ["cube", "cube", "bite"]})")) == "cube | bite");
+  const Scene s = parse_csg_scene(R"("cube")");
+  REQUIRE(s.solids.size() == 3);
+  CHECK(s.solids[1].first == 12);
+  CHECK(s.solids[1].last == 24);
+}
+
+TEST_CASE("bad CSG expressions in scene files are refused naming the file and key", "[csg]") {
+  auto refused = [](const std::string& csg, const std::string& what) {
+    INFO(csg);
+    CHECK_THROWS_WITH(parse_csg_scene(csg), Catch::Contains("csg.json") && Catch::Contains(what));
+  };
+  refused(R"({"unoin": ["cube", "bite"]})",
+          "unknown key 'csg.unoin' (expected one of: union, intersection, difference)");
+  refused(R"({"difference": ["cube", "ball"]})",
+          "key 'csg.difference[1]' names no mesh 'ball' (the named meshes: cube, bite, far)");
+  refused(R"({"union": ["cube"]})", "key 'csg.union' must hold at least two operands (got 1)");
+  refused(R"({"union": ["cube", "bite"], "intersection": ["cube", "far"]})",
+          "key 'csg' must hold exactly one operator (got 2)");
+  refused(R"({"union": ["cube", 3]})", "key 'csg.union[1]' must be a mesh name or an object");
+  refused(R"({"difference": ["cube", "cube"]})", "key 'csg' the expression is empty");
+  refused(R"({"union": "cube"})", "key 'csg.union' must be an array");
+  std::string deep = "\"cube\"";
+  for (int k = 0; k < 40; ++k) deep = "{\"union\": [" + deep + ", \"bite\"]}";
+  refused(deep, "nests deeper than 32 operators");
+  std::string text = csg_scene("\"cube\"");
+  text.replace(text.find("\"bite\""), 6, "\"cube\"");
+  CHECK_THROWS_WITH(
+      parse_scene_json(text, "csg.json", "."),
+      Catch::Contains("csg.json: key 'meshes[1].name' repeats the name 'cube' of mesh 0"));
+}
+
+TEST_CASE("the CSG ray caster finds the visible surface by interval merge", "[csg]") {
+  // Rays off the faces' diagonals (a hit on a shared edge counts for both triangles).
+  const glm::dvec3 down(0, 0, -1);
+  const Scene minus = parse_csg_scene(R"({"difference": ["cube", "bite"]})");
+  // Through the bite: its far face at z = 0.5 is the visible surface of cube - bite.
+  CsgSurface h = csg_first_surface(minus, {0.1, 0.3, 5}, down);
+  CHECK(h.solid == 1);
+  CHECK(h.t == Approx(4.5));
+  // Beside it: the cube's front face.
+  h = csg_first_surface(minus, {0.8, 0.6, 5}, down);
+  CHECK(h.solid == 0);
+  CHECK(h.t == Approx(4.0));
+  const Scene both = parse_csg_scene(R"({"intersection": ["cube", "bite"]})");
+  h = csg_first_surface(both, {0.1, 0.3, 5}, down);
+  CHECK(h.solid == 0);  // the cube's face at z = 1, inside the bite
+  CHECK(h.t == Approx(4.0));
+  CHECK(csg_first_surface(both, {0.8, 0.6, 5}, down).solid == -1);
+  const Scene either = parse_csg_scene(R"({"union": ["cube", "bite"]})");
+  h = csg_first_surface(either, {0.1, 0.3, 5}, down);
+  CHECK(h.solid == 1);  // the bite's front face at z = 1.5
+  CHECK(h.t == Approx(3.5));
+  // From inside the bite (each solid's side at the origin comes from the parity of the hits
+  // ahead): entering the cube at z = 1 is still in the bite; leaving the bite at z = 0.5 is.
+  h = csg_first_surface(minus, {0.1, 0.3, 1.2}, down);
+  CHECK(h.solid == 1);
+  CHECK(h.t == Approx(0.7));
+  // From inside the result, nothing is entered.
+  CHECK(csg_first_surface(minus, {0.1, 0.3, 0}, {0, 0, 1}).solid == -1);
 }

@@ -60,6 +60,16 @@ struct Solid {
   int last = 0;
 };
 
+// A literal of a CSG product: solid `solid`, or its complement.
+struct CsgLiteral {
+  int solid = 0;
+  bool negated = false;
+  bool operator==(const CsgLiteral& o) const { return solid == o.solid && negated == o.negated; }
+};
+// A CSG expression as a sum (union) of products (intersections) of literals, each product
+// with at least one positive literal (sim/scene/csg_expression.hpp normalises to it).
+using CsgProducts = std::vector<std::vector<CsgLiteral>>;
+
 struct Scene {
   std::string name;
   std::string description;
@@ -79,6 +89,8 @@ struct Scene {
   // Closed solids over the mesh's triangles, disjoint ranges in increasing order; empty for
   // most scenes.
   std::vector<Solid> solids;
+  // The scene file's "csg" over its solids, normalised; empty for none.
+  CsgProducts csg;
 
   // The solid triangle t belongs to, -1 for none.
   int solid_of_triangle(int t) const {

@@ -10,6 +10,7 @@
 #include "models/gp/pass_plan.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "sim/analysis/field_render.hpp"
+#include "sim/scene/csg_expression.hpp"
 #include "sim/scene/sphere_scenes.hpp"
 #include "sim/simulation.hpp"
 
@@ -234,6 +235,59 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
   m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
   m.frame_seconds = r.stats.real("frame.simulated_seconds");
   return m;
+}
+
+CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 direction) {
+  struct Hit {
+    double t;
+    int solid, triangle;
+  };
+  std::vector<Hit> hits;
+  std::vector<bool> inside(scene.solids.size(), false);
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    for (int t = scene.solids[s].first; t < scene.solids[s].last; ++t) {
+      const glm::uvec3 tri = scene.mesh.triangles[static_cast<std::size_t>(t)];
+      const glm::dvec3 v0(scene.mesh.vertices[tri.x].position);
+      const glm::dvec3 e1 = glm::dvec3(scene.mesh.vertices[tri.y].position) - v0;
+      const glm::dvec3 e2 = glm::dvec3(scene.mesh.vertices[tri.z].position) - v0;
+      const glm::dvec3 p = glm::cross(direction, e2);
+      const double det = glm::dot(e1, p);
+      if (det == 0) continue;
+      const glm::dvec3 o = origin - v0;
+      const double u = glm::dot(o, p) / det;
+      const glm::dvec3 q = glm::cross(o, e1);
+      const double v = glm::dot(direction, q) / det;
+      if (u < 0 || v < 0 || u + v > 1) continue;
+      const double h = glm::dot(e2, q) / det;
+      if (h <= 0) continue;
+      hits.push_back({h, static_cast<int>(s), t});
+      inside[s] = !inside[s];  // an odd number of hits ahead: the origin is inside
+    }
+  }
+  std::sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) {
+    return a.t != b.t ? a.t < b.t : a.triangle < b.triangle;
+  });
+  bool in = csg_contains(scene.csg, inside);
+  for (const Hit& h : hits) {
+    inside[static_cast<std::size_t>(h.solid)] = !inside[static_cast<std::size_t>(h.solid)];
+    const bool now = csg_contains(scene.csg, inside);
+    if (now && !in) return {h.t, h.solid, h.triangle};
+    in = now;
+  }
+  return {};
+}
+
+std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene) {
+  const Caster caster(config, scene);
+  std::vector<int> out(static_cast<std::size_t>(caster.width) * caster.height, -1);
+  for (int y = 0; y < caster.height; ++y) {
+    for (int x = 0; x < caster.width; ++x) {
+      const Ray r = caster.ray(x + 0.5, y + 0.5);
+      out[static_cast<std::size_t>(y) * caster.width + x] =
+          csg_first_surface(scene, r.origin, r.direction).solid;
+    }
+  }
+  return out;
 }
 
 std::string format_parity(const std::vector<ParityMeasure>& rows) {

@@ -20,6 +20,7 @@
 //    terms. Elsewhere the machine must agree: the tests require it.
 //  - Deterministic; no pixel value of the machine comes from here.
 #include <cstdint>
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
 
@@ -67,5 +68,21 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
                              const Program& program, int threads);
 
 std::string format_parity(const std::vector<ParityMeasure>& rows);
+
+// The CPU ray caster of a CSG expression (Scene::csg over Scene::solids), double precision:
+// along the ray origin + t direction (t > 0), every hit of every solid's triangles in order;
+// each solid's membership starts from the parity of all its hits (the origin's side) and
+// toggles at each; the visible surface is the first hit where the expression's membership
+// turns from outside to inside. t = -1 and solid = -1 when the ray meets none.
+struct CsgSurface {
+  double t = -1;
+  int solid = -1;
+  int triangle = -1;
+};
+CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 direction);
+
+// Per pixel centre, the solid whose surface is visible in the CSG result (-1: background),
+// with the camera's own rays.
+std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene);
 
 }  // namespace pp5
