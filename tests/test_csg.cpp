@@ -255,3 +255,27 @@ TEST_CASE("the CSG ray caster finds the visible surface by interval merge", "[cs
   // From inside the result, nothing is entered.
   CHECK(csg_first_surface(minus, {0.1, 0.3, 0}, {0, 0, 1}).solid == -1);
 }
+
+TEST_CASE("epsilon-regularised parity: a solid thinner than epsilon vanishes", "[csg]") {
+  const MachineConfig config = small_screen();
+  const Program plain = program_named("parity", config);
+  const Program epsilon = program_named("parity_epsilon", config);
+  const Scene slab = make_parity_scene("plane-slab");
+  // Exact parity finds the slab's points (the ray caster too); with epsilon = the default
+  // threshold, 1/512 of the depth range, none is inside: every point the ray caster finds
+  // inside disagrees, and no other.
+  const ParityMeasure exact = measure_parity(config, slab, plain, 2);
+  CHECK(exact.inside > 50);
+  CHECK(exact.disagree == 0);
+  const ParityMeasure thin = measure_parity(config, slab, epsilon, 2);
+  CHECK(thin.inside == exact.inside);
+  CHECK(thin.disagree == thin.inside);
+  // A thick solid stays, eroded by epsilon in depth only near its outline.
+  const ParityMeasure ball = measure_parity(config, make_parity_scene("plane-sphere"), epsilon, 2);
+  CHECK(ball.inside > 1000);
+  CHECK(ball.disagree * 50 < ball.inside);
+  // With epsilon 0 it is exact parity again (a face at exactly z + 0 is not behind).
+  MachineConfig zero = config;
+  zero.set(std::vector<std::string>{"frame.threshold=0"});
+  CHECK(measure_parity(zero, slab, epsilon, 2).disagree == 0);
+}

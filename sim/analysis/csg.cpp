@@ -74,6 +74,27 @@ Scene make_parity_scene(const std::string& name) {
     add_plane(mesh, 0.15f, 0.3f, 0.05f, 2.0f);
     solid("box-a", [&] { add_box(mesh, {-0.4f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.6f}, 20.0f); });
     solid("box-b", [&] { add_box(mesh, {0.5f, 0.1f, 0.1f}, {0.6f, 0.7f, 0.5f}, -15.0f); });
+  } else if (name == "plane-slab") {
+    description = "the plane of plane-boxes through a slab 0.008 thick, 6 degrees off the plane";
+    add_plane(mesh, 0.15f, 0.3f, 0.05f, 2.0f);
+    solid("slab", [&] {
+      const glm::vec3 n = glm::normalize(glm::vec3(-0.15f, 1.0f, -0.3f) + glm::vec3(0.1f, 0, 0));
+      const glm::vec3 u = glm::normalize(glm::cross(n, glm::vec3(0, 0, 1)));
+      const glm::vec3 v = glm::cross(n, u);
+      const glm::vec3 c(0.3f, 0.15f * 0.3f + 0.3f * 0.2f + 0.05f, 0.2f);
+      const auto base = static_cast<unsigned>(mesh.vertices.size());
+      for (int i = 0; i < 8; ++i) {
+        const glm::vec3 p = c + ((i & 1) ? 0.8f : -0.8f) * u + ((i & 2) ? 0.8f : -0.8f) * v +
+                            ((i & 4) ? 0.004f : -0.004f) * n;
+        mesh.vertices.push_back({p, n, glm::vec3(0.8f)});
+      }
+      const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                               {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+      for (const auto& f : faces) {
+        mesh.triangles.emplace_back(base + f[0], base + f[1], base + f[2]);
+        mesh.triangles.emplace_back(base + f[0], base + f[2], base + f[3]);
+      }
+    });
   } else {
     throw std::invalid_argument(fmt::format("no parity scene '{}' (there are: {})", name,
                                             fmt::join(parity_scene_names(), ", ")));

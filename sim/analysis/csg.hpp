@@ -32,6 +32,8 @@
 namespace pp5 {
 
 // Scenes made for the parity applications: a point surface in no solid and closed solids.
+// make_parity_scene also takes "plane-slab" (a solid thinner than epsilon in depth, for
+// epsilon-regularisation), which the default table leaves out.
 std::vector<std::string> parity_scene_names();
 Scene make_parity_scene(const std::string& name);
 
