@@ -54,6 +54,10 @@ void add_plane(Mesh& mesh, float sx, float sz, float c, float e) {
 
 std::vector<std::string> parity_scene_names() { return {"plane-sphere", "plane-boxes"}; }
 
+std::vector<std::string> interference_scene_names() {
+  return {"boxes-overlap", "boxes-apart", "boxes-touching"};
+}
+
 Scene make_parity_scene(const std::string& name) {
   Mesh mesh;
   std::vector<Solid> solids;
@@ -95,6 +99,13 @@ Scene make_parity_scene(const std::string& name) {
         mesh.triangles.emplace_back(base + f[0], base + f[2], base + f[3]);
       }
     });
+  } else if (name == "boxes-overlap" || name == "boxes-apart" || name == "boxes-touching") {
+    // Two boxes side by side along x; the second starts 0.3 inside the first, 0.1 past it, or
+    // 0.0002 past it (closer than the default epsilon along the rays through both).
+    const float gap = name == "boxes-overlap" ? -0.3f : name == "boxes-apart" ? 0.1f : 0.0002f;
+    description = fmt::format("two closed boxes side by side, {} apart along x", gap);
+    solid("left", [&] { add_box(mesh, {-0.6f, 0.0f, 0.0f}, {0.6f, 0.5f, 0.5f}, 0.0f); });
+    solid("right", [&] { add_box(mesh, {0.6f + gap, 0.1f, 0.1f}, {0.6f, 0.5f, 0.5f}, 0.0f); });
   } else {
     throw std::invalid_argument(fmt::format("no parity scene '{}' (there are: {})", name,
                                             fmt::join(parity_scene_names(), ", ")));
@@ -307,6 +318,90 @@ std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene) 
       out[static_cast<std::size_t>(y) * caster.width + x] =
           csg_first_surface(scene, r.origin, r.direction).solid;
     }
+  }
+  return out;
+}
+
+InterferenceMeasure measure_interference(const MachineConfig& config, const Scene& scene,
+                                         const Program& program, int threads, double margin) {
+  if (scene.solids.size() != 2) {
+    throw std::invalid_argument(
+        fmt::format("scene '{}': interference is measured between two solids (it has {})",
+                    scene.name, scene.solids.size()));
+  }
+  InterferenceMeasure m;
+  m.scene = scene.name;
+  m.program = program.name;
+  const FieldFrame flag = render_field(config, scene, program, "flag", threads);
+  const FieldFrame lo = render_field(config, scene, program, "near", threads);
+  const FieldFrame hi = render_field(config, scene, program, "far", threads);
+  m.image = flag.image;
+  Scene both = scene;
+  both.csg = {{CsgLiteral{0, false}, CsgLiteral{1, false}}};
+  const Caster caster(config, both);
+  auto truth_at = [&](double x, double y) {
+    const Ray r = caster.ray(x, y);
+    return csg_first_surface(both, r.origin, r.direction).solid >= 0;
+  };
+  m.difference.width = caster.width;
+  m.difference.height = caster.height;
+  m.difference.rgb.assign(static_cast<std::size_t>(caster.width) * caster.height * 3, 0);
+  const double depth_max = std::ldexp(1.0, config.gp.depth_bits) - 1.0;
+  m.lo = 1.0;
+  m.hi = 0.0;
+  for (int y = 0; y < caster.height; ++y) {
+    for (int x = 0; x < caster.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * caster.width + x;
+      const bool machine = flag.values[i] != 0;
+      if (machine) {
+        ++m.flagged;
+        m.lo = std::min(m.lo, static_cast<double>(lo.values[i]) / depth_max);
+        m.hi = std::max(m.hi, static_cast<double>(hi.values[i]) / depth_max);
+      }
+      const bool truth = truth_at(x + 0.5, y + 0.5);
+      bool differs = false;
+      for (const auto& [dx, dy] : {std::pair{margin, 0.0}, std::pair{-margin, 0.0},
+                                   std::pair{0.0, margin}, std::pair{0.0, -margin}}) {
+        differs = differs || truth_at(x + 0.5 + dx, y + 0.5 + dy) != truth;
+      }
+      std::uint8_t shade = 0;
+      if (differs) {
+        ++m.uncertain;
+        shade = 96;
+      } else {
+        ++m.compared;
+        m.truth += truth;
+        if (machine != truth) {
+          ++m.disagree;
+          shade = 255;
+        }
+      }
+      for (int k = 0; k < 3; ++k) m.difference.rgb[i * 3 + k] = shade;
+    }
+  }
+  if (m.flagged == 0) m.lo = m.hi = 0;
+  m.passes = static_cast<int>(make_pass_plan(program, scene).size());
+  m.bits = program.bits_used();
+  const FrameResult r = simulate_frame(config, scene, program, threads);
+  m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
+  m.frame_seconds = r.stats.real("frame.simulated_seconds");
+  return m;
+}
+
+std::string format_interference(const std::vector<InterferenceMeasure>& rows) {
+  std::string out =
+      "| application | scene | program | pixels compared | interfering (ray caster) | flagged "
+      "(machine) | disagreeing | near an edge (not compared) | overlap depth range | passes | "
+      "bits | Renderer cycles | frame ms | frames/s |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
+  for (const InterferenceMeasure& m : rows) {
+    out += fmt::format(
+        "| interference | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3f} | "
+        "{:.1f} |\n",
+        m.scene, m.program, m.compared, m.truth, m.flagged, m.disagree, m.uncertain,
+        m.flagged ? fmt::format("{:.5f} .. {:.5f}", m.lo, m.hi) : std::string("-"), m.passes,
+        m.bits, m.renderer_cycles, m.frame_seconds * 1e3,
+        m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
   }
   return out;
 }

@@ -71,6 +71,24 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
 
 std::string format_parity(const std::vector<ParityMeasure>& rows);
 
+// Interference of an assembly's first two solids (interference.pp5 under the same pass plan):
+// the machine's flag, lo and hi fields read back; the truth is the ray caster's: a pixel
+// interferes where the intersection of the two solids has a surface on its ray. Pixels
+// where the truth changes within `margin` are not compared.
+std::vector<std::string> interference_scene_names();  // also made by make_parity_scene
+struct InterferenceMeasure {
+  std::string scene, program;
+  std::int64_t compared = 0, truth = 0, flagged = 0, disagree = 0, uncertain = 0;
+  double lo = 0, hi = 0;  // the depth range of the flagged pixels' overlaps, 0 near .. 1 far
+  int passes = 0, bits = 0;
+  std::int64_t renderer_cycles = 0;
+  double frame_seconds = 0;
+  RgbImage image, difference;
+};
+InterferenceMeasure measure_interference(const MachineConfig& config, const Scene& scene,
+                                         const Program& program, int threads, double margin = 0.75);
+std::string format_interference(const std::vector<InterferenceMeasure>& rows);
+
 // The CPU ray caster of a CSG expression (Scene::csg over Scene::solids), double precision:
 // along the ray origin + t direction (t > 0), every hit of every solid's triangles in order;
 // each solid's membership starts from the parity of all its hits (the origin's side) and
