@@ -7,6 +7,7 @@
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/expressions.hpp"
 #include "models/gp/graphics_processor.hpp"
+#include "models/gp/pass_plan.hpp"
 #include "models/gp/primitive_kind.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
@@ -89,6 +90,8 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       i860_(i860_params(config)),
       scheduler_(config.regions(), config.renderer.count,
                  config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic) {
+  check_pass_plan(program);
+  frame_values_.plan = make_pass_plan(program, scene);
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);

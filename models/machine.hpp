@@ -38,6 +38,7 @@
 #include "models/gp/i860.hpp"
 #include "models/renderer/packet.hpp"
 #include "models/renderer/region_scheduler.hpp"
+#include "models/renderer/region_stream.hpp"
 
 namespace pp5 {
 
@@ -80,7 +81,7 @@ class Machine : public sc_core::sc_module {
   // binds frame.parameters when it runs (RegionStream); it never carries them.
   const FrameValues& frame_values() const { return frame_values_; }
   // Times the GPs send each region's triangles this frame (Program::pass_count).
-  int passes() const { return program_.pass_count(frame_values_.frame.parameters); }
+  int passes() const { return RegionStream::pass_count(program_, frame_values_); }
 
   Ring& ring() { return *ring_; }
   FrameBuffer& frame_buffer() { return *frame_buffer_; }

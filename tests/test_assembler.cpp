@@ -332,8 +332,9 @@ TEST_CASE("errors name the file, the line and what was expected", "[assembler]")
   }
   SECTION("expression outside proc triangle") {
     const std::string clear = "proc clear\n  qload z, depth ; HERE\nend\n";
-    check_error_here(with_triangle("", clear),
-                     "expression 'depth' is only available in procedure 'triangle' or 'sphere'");
+    check_error_here(
+        with_triangle("", clear),
+        "expression 'depth' is only available in procedure 'triangle', 'sphere' or 'parity'");
     check_error_here(with_triangle("  qload z, bogus ; HERE\n"),
                      "'bogus' is not an expression the GP supplies");
   }

@@ -323,8 +323,10 @@ class Assembler {
              text);
       // Expressions come with a primitive's packet: only its kind's procedure sees them.
       if (current_ != static_cast<int>(Procedure::triangle) &&
-          current_ != static_cast<int>(Procedure::sphere)) {
-        fail("expression '{}' is only available in procedure 'triangle' or 'sphere'", text);
+          current_ != static_cast<int>(Procedure::sphere) &&
+          current_ != static_cast<int>(Procedure::parity)) {
+        fail("expression '{}' is only available in procedure 'triangle', 'sphere' or 'parity'",
+             text);
       }
       o.kind = Operand::Kind::expression;
       o.index = i;

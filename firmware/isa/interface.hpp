@@ -15,9 +15,9 @@ namespace pp5 {
 // (multipass algorithms such as depth peeling); with `option passes PARAMETER` N is that
 // frame parameter's value (`layers`), set at run time. Numbered in the order they were added (trace
 // files store the number), not the order they run in.
-enum class Procedure { clear, triangle, pass, shade, light, sphere, count };
-inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass",
-                                                  "shade", "light",    "sphere"};
+enum class Procedure { clear, triangle, pass, shade, light, sphere, parity, count };
+inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass",  "shade",
+                                                  "light", "sphere",   "parity"};
 inline constexpr const char* kProcedureMeaning[] = {
     "once per region, before any primitive (initialise every pixel)",
     "once per triangle binned to the region, with the triangle's expressions",
@@ -26,6 +26,8 @@ inline constexpr const char* kProcedureMeaning[] = {
     ("once per region and scene light, after the last pass's triangles and before shade, "
      "with that light's light_*, half_*, diffuse and specular (deferred lighting)"),
     "once per sphere binned to the region, with the sphere's expressions (sphere_*)",
+    ("once per triangle of the solid a classification pass draws (the pass plan: point in "
+     "solid, CSG), with the triangle's expressions; it may use only those `triangle` uses"),
 };
 static_assert(std::size(kProcedureNames) == static_cast<std::size_t>(Procedure::count));
 static_assert(std::size(kProcedureMeaning) == static_cast<std::size_t>(Procedure::count));

@@ -98,11 +98,27 @@ struct PacketValues {
       : expressions(v.expressions), parameters(v.parameters) {}
 };
 
+// One pass of a frame's pass plan (models/renderer/region_stream.hpp): the region-wide
+// procedure that opens it, the group of primitives whose packets it draws, and the procedure
+// those packets run. A primitive's group is the solid it belongs to (Scene::solids), or
+// kNoGroup for one in no solid.
+struct PlannedPass {
+  static constexpr int kAllGroups = -2;  // every packet, whatever its group
+  static constexpr int kNoGroup = -1;    // the packets of primitives in no solid
+  Procedure opening = Procedure::pass;   // clear for the first pass
+  int group = kAllGroups;
+  Procedure packets = Procedure::count;  // Procedure::count: each packet's own procedure
+  bool draws(int packet_group) const { return group == kAllGroups || group == packet_group; }
+};
+
 // The values of a frame's region-wide procedures: `frame` for clear, pass and shade (with the
-// first light's parameters), and lights[k] for the `light` procedure of light k.
+// first light's parameters), and lights[k] for the `light` procedure of light k; and the
+// frame's pass plan: empty for the program's own passes (`option passes`), each drawing every
+// packet with its own procedure.
 struct FrameValues {
   OwnedValues frame;
   std::vector<OwnedValues> lights;
+  std::vector<PlannedPass> plan;
 };
 
 // What an executor acts on: the board's pixel backend, with the packet's values bound to

@@ -51,6 +51,25 @@ struct Light {
 // Lights per scene: the Renderer runs the firmware's `light` procedure once for each.
 inline constexpr int kMaxLights = 8;
 
+// A named closed solid of the scene: triangles [first, last) of the mesh. Point-in-solid and
+// CSG classify against solids (the pass plan, models/gp/pass_plan.hpp); a triangle in no
+// solid is in group -1.
+struct Solid {
+  std::string name;
+  int first = 0;
+  int last = 0;
+};
+
+// A literal of a CSG product: solid `solid`, or its complement.
+struct CsgLiteral {
+  int solid = 0;
+  bool negated = false;
+  bool operator==(const CsgLiteral& o) const { return solid == o.solid && negated == o.negated; }
+};
+// A CSG expression as a sum (union) of products (intersections) of literals, each product
+// with at least one positive literal (sim/scene/csg_expression.hpp normalises to it).
+using CsgProducts = std::vector<std::vector<CsgLiteral>>;
+
 struct Scene {
   std::string name;
   std::string description;
@@ -67,6 +86,19 @@ struct Scene {
   // "parameters"; the configuration's frame.NAME (--param) wins over them. Unknown or computed
   // names and out-of-range values are rejected by the GP, naming the key.
   std::map<std::string, std::int64_t> parameters;
+  // Closed solids over the mesh's triangles, disjoint ranges in increasing order; empty for
+  // most scenes.
+  std::vector<Solid> solids;
+  // The scene file's "csg" over its solids, normalised; empty for none.
+  CsgProducts csg;
+
+  // The solid triangle t belongs to, -1 for none.
+  int solid_of_triangle(int t) const {
+    for (std::size_t s = 0; s < solids.size(); ++s) {
+      if (t >= solids[s].first && t < solids[s].last) return static_cast<int>(s);
+    }
+    return -1;
+  }
 };
 
 // Right-handed view and OpenGL-convention projection (clip z in [-w,w]), as glm::lookAt and

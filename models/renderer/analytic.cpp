@@ -117,6 +117,15 @@ AnalyticTiming analytic_timing(Machine& machine) {
     auto& packets = region_packets[static_cast<std::size_t>(r)];
     std::uint64_t cycles = empty_cycles + copy_cycles;
     for (const auto& p : packets) {
+      if (!machine.frame_values().plan.empty()) {
+        // A pass plan: each pass runs the packet with its procedure, or not at all.
+        for (int pass = 0; pass < passes; ++pass) {
+          const RegionStep step = stream.packet(*p, pass, 0);
+          if (step.code.defined)
+            cycles += busy_cycles(step.code, step.values, config, timing) + load;
+        }
+        continue;
+      }
       auto it = packet_cycles.find(p->procedure);
       if (it == packet_cycles.end()) {
         const RegionStep step = stream.packet(*p, 0, 0);

@@ -17,6 +17,7 @@ struct Packet {
   Procedure procedure = Procedure::triangle;  // the procedure it runs: its kind's
   int kind = 0;        // the primitive kind that set it up: index in primitive_kinds() (models/gp)
   int primitive = -1;  // the display-list index of the primitive it came from
+  int group = -1;      // the solid its primitive belongs to (Scene::solids), -1 for none
   std::uint64_t words = 0;  // ring words: a header, then each expression's coefficients by form
   PacketExpressions values;
 };

@@ -14,6 +14,13 @@
 // clear, pass and shade bind the frame's values; light k binds light k's; a packet binds its
 // own expressions and the frame's parameters.
 //
+// With a pass plan (FrameValues::plan, made by the GP side from the scene: make_pass_plan in
+// models/gp/pass_plan.hpp), the passes are the plan's: pass k opens with plan[k].opening
+// (clear for the first) instead of `pass`, and a packet whose group plan[k] does not draw
+// runs nothing in it (its step runs an undefined procedure: no instruction, no cycle);
+// one it draws runs plan[k].packets, or its own procedure. The GPs still send every packet
+// in every pass (the Renderer discards the others on reading the header).
+//
 // Contract:
 //  - for_each yields every step of a region in the order above; before_pass, packet and
 //    after_passes yield the same steps piecewise, for a caller that learns a region's packets
@@ -50,7 +57,13 @@ class RegionStream {
  public:
   // Both are referred to, not copied: they must outlive the stream and its steps.
   RegionStream(const Program& program, const FrameValues& values)
-      : program_(program), values_(values), passes_(program.pass_count(values.frame.parameters)) {}
+      : program_(program), values_(values), passes_(pass_count(program, values)) {}
+
+  // The frame's passes: the plan's, or the program's count (or its pass parameter's value).
+  static int pass_count(const Program& program, const FrameValues& values) {
+    return values.plan.empty() ? program.pass_count(values.frame.parameters)
+                               : static_cast<int>(values.plan.size());
+  }
 
   // The passes of this frame: the program's count, or its pass parameter's value.
   int passes() const { return passes_; }
@@ -58,14 +71,27 @@ class RegionStream {
   // What runs before pass k's packets: clear before the first, `pass` before the others.
   template <class Visit>
   void before_pass(int pass, Visit&& visit) const {
-    const Procedure p = pass == 0 ? Procedure::clear : Procedure::pass;
+    const Procedure p = !values_.plan.empty() ? values_.plan[static_cast<std::size_t>(pass)].opening
+                        : pass == 0           ? Procedure::clear
+                                              : Procedure::pass;
     visit(RegionStep{p, program_.procedure(p), values_.frame, nullptr, pass, -1, -1});
   }
 
   // One packet of pass k, at `index` among the region's packets.
   RegionStep packet(const Packet& packet, int pass, int index) const {
-    return RegionStep{packet.procedure,
-                      program_.procedure(packet.procedure),
+    Procedure p = packet.procedure;
+    if (!values_.plan.empty()) {
+      const PlannedPass& planned = values_.plan[static_cast<std::size_t>(pass)];
+      if (planned.packets != Procedure::count) p = planned.packets;
+      if (!planned.draws(packet.group)) {
+        return RegionStep{
+            p,       skipped_, PacketValues(packet.values.expressions, values_.frame.parameters),
+            &packet, pass,     index,
+            -1};
+      }
+    }
+    return RegionStep{p,
+                      program_.procedure(p),
                       PacketValues(packet.values.expressions, values_.frame.parameters),
                       &packet,
                       pass,
@@ -119,6 +145,7 @@ class RegionStream {
 
   const Program& program_;
   const FrameValues& values_;
+  const ProcedureCode skipped_{};  // what a packet of a group the pass does not draw runs
   int passes_;
 };
 

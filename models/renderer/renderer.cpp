@@ -255,10 +255,11 @@ void Renderer::run() {
       cursor_ = now;
       const sc_core::sc_time t0 = cursor_;
       for (const auto& packet : m->packets) {
-        load_coefficients(*packet, m->arrival);
-        starts[stage.pass][m->gp].push_back(cycle_now());
         // Its place among the region's packets is known only once all have arrived.
         const RegionStep step = stream.packet(*packet, stage.pass, -1);
+        // A packet the pass plan does not draw in this pass is discarded on its header.
+        if (step.code.defined) load_coefficients(*packet, m->arrival);
+        starts[stage.pass][m->gp].push_back(cycle_now());
         charge(step.code, step.values);
         if (stage.pass == 0) by_gp[m->gp].push_back(packet);
       }

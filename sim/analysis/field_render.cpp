@@ -9,6 +9,7 @@
 
 #include "common/parallel_for.hpp"
 #include "models/gp/geometry.hpp"
+#include "models/gp/pass_plan.hpp"
 #include "models/gp/primitive_kind.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/region_stream.hpp"
@@ -24,7 +25,9 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
         fmt::format("{}: the program has no field '{}' to read back", program.name, field));
   }
   const GeometryEngine geometry(geometry_params(config), scene);
-  const FrameValues values = geometry.frame_values();
+  check_pass_plan(program);
+  FrameValues values = geometry.frame_values();
+  values.plan = make_pass_plan(program, scene);
   const RegionStream stream(program, values);
 
   // Every primitive of the display list through its kind, as the GPs do.
@@ -51,6 +54,7 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
       packet->procedure = primitive_kinds()[kind]->procedure();
       packet->kind = ref.kind;
       packet->primitive = i;
+      packet->group = ref.kind == kTriangleKind ? scene.solid_of_triangle(ref.index) : -1;
       packet->values = r.values;
       regions.clear();
       worker.bin(r, regions);

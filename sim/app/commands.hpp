@@ -33,6 +33,7 @@ Command add_validate_command(CLI::App& app);
 Command add_visible_command(CLI::App& app);
 Command add_fidelity_command(CLI::App& app);
 Command add_scanconvert_command(CLI::App& app);
+Command add_csg_command(CLI::App& app);
 Command add_spheres_command(CLI::App& app);
 
 // Shared by the commands.

@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
       add_fidelity_command(app),
       add_scanconvert_command(app),
       add_spheres_command(app),
+      add_csg_command(app),
   };
 
   try {

@@ -17,6 +17,7 @@
 #include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 #include "models/config/machine_config.hpp"
+#include "sim/scene/csg_expression.hpp"
 #include "sim/scene/sphere_scenes.hpp"
 
 namespace fs = std::filesystem;
@@ -228,6 +229,47 @@ Light parse_light(const Node& l, const Camera& camera, bool allow_ambient) {
 // One entry of "spheres": a sphere ("center", "radius", and "color" or an opaque "material")
 // or a molecule file's atoms ("molecule", with "translate", "rotate_degrees" and a uniform
 // "scale", which also scales the radii).
+// A "csg" expression: a mesh name, or an object with one operator over two or more operands.
+constexpr int kMaxCsgDepth = 32;
+CsgNode parse_csg(const Node& n, const std::map<std::string, int>& solids,
+                  const std::vector<std::string>& names, int depth) {
+  if (depth > kMaxCsgDepth) n.fail(fmt::format("nests deeper than {} operators", kMaxCsgDepth));
+  CsgNode node;
+  if (n.value.is_string()) {
+    const std::string name = n.value.get<std::string>();
+    const auto it = solids.find(name);
+    if (it == solids.end()) {
+      n.fail(fmt::format("names no mesh '{}' (the named meshes: {})", name,
+                         names.empty() ? std::string("none; give a mesh a \"name\"")
+                                       : fmt::format("{}", fmt::join(names, ", "))));
+    }
+    node.solid = it->second;
+    return node;
+  }
+  if (!n.value.is_object()) {
+    n.fail(
+        fmt::format("must be a mesh name or an object with one of union, intersection, "
+                    "difference (got {})",
+                    n.value.type_name()));
+  }
+  n.check_keys({"union", "intersection", "difference"});
+  if (n.value.size() != 1) {
+    n.fail(fmt::format("must hold exactly one operator (got {})", n.value.size()));
+  }
+  const std::string op = n.value.begin().key();
+  node.op = op == "union"          ? CsgNode::Op::union_
+            : op == "intersection" ? CsgNode::Op::intersection
+                                   : CsgNode::Op::difference;
+  const Node operands = n.at(op);
+  if (operands.array().size() < 2) {
+    operands.fail(fmt::format("must hold at least two operands (got {})", operands.value.size()));
+  }
+  for (std::size_t k = 0; k < operands.value.size(); ++k) {
+    node.operands.push_back(parse_csg(operands.at(k), solids, names, depth + 1));
+  }
+  return node;
+}
+
 void append_spheres(const Node& e, const std::map<std::string, Material>& materials,
                     const std::string& base_dir, std::vector<Sphere>& out) {
   if (e.has("molecule")) {
@@ -275,7 +317,7 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
         fmt::format("{}: a scene file must be a JSON object (got {})", origin, doc.type_name()));
   }
   root.check_keys({"name", "description", "meshes", "spheres", "materials", "camera", "ambient",
-                   "light", "lights", "background", "firmware", "parameters"});
+                   "light", "lights", "background", "firmware", "parameters", "csg"});
   if (!root.has("meshes") && !root.has("spheres")) {
     throw SceneError(origin + ": missing key 'meshes' (an array of meshes) or 'spheres'");
   }
@@ -306,10 +348,12 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     for (const auto& item : ms.value.items())
       materials[item.key()] = parse_material(ms.at(item.key()));
   }
+  std::map<std::string, int> solid_index;  // named meshes: their solid
+  std::vector<std::size_t> solid_mesh;     // each solid's mesh index
   for (std::size_t i = 0; i < meshes.value.size(); ++i) {
     const Node m = meshes.at(i);
     m.check_keys({"file", "builtin", "vertices", "triangles", "translate", "rotate_degrees",
-                  "scale", "color", "material"});
+                  "scale", "color", "material", "name"});
     const Material material = mesh_material(m, materials);
     const glm::vec3 color = material.color.value_or(glm::vec3(0.8f));
     const int sources = m.has("file") + m.has("builtin") + m.has("vertices");
@@ -335,7 +379,31 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
       part = inline_mesh(m, limits, color);
     }
     for (Vertex& v : part.vertices) v.opacity = material.opacity;
+    const int first = static_cast<int>(scene.mesh.triangles.size());
     append(scene.mesh, part, mesh_transform(m), m, limits);
+    // A named mesh is a closed solid for point in solid and CSG.
+    if (m.has("name")) {
+      const std::string name = m.at("name").string();
+      if (name.empty()) m.at("name").fail("must not be empty");
+      if (const auto it = solid_index.find(name); it != solid_index.end()) {
+        m.at("name").fail(fmt::format("repeats the name '{}' of mesh {}", name,
+                                      solid_mesh[static_cast<std::size_t>(it->second)]));
+      }
+      solid_index[name] = static_cast<int>(scene.solids.size());
+      solid_mesh.push_back(i);
+      scene.solids.push_back({name, first, static_cast<int>(scene.mesh.triangles.size())});
+    }
+  }
+  if (root.has("csg")) {
+    std::vector<std::string> names;
+    for (const Solid& solid : scene.solids) names.push_back(solid.name);
+    const Node csg = root.at("csg");
+    const CsgNode tree = parse_csg(csg, solid_index, names, 0);
+    try {
+      scene.csg = normalise_csg(tree, names);
+    } catch (const CsgError& e) {
+      csg.fail(e.what());
+    }
   }
 
   if (root.has("spheres")) {

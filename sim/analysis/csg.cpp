@@ -1,0 +1,426 @@
+#include "sim/analysis/csg.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <glm/gtc/matrix_transform.hpp>
+#include <stdexcept>
+
+#include "models/gp/pass_plan.hpp"
+#include "models/renderer/region_stream.hpp"
+#include "sim/analysis/field_render.hpp"
+#include "sim/scene/csg_expression.hpp"
+#include "sim/scene/sphere_scenes.hpp"
+#include "sim/simulation.hpp"
+
+namespace pp5 {
+
+namespace {
+
+void add_quad(Mesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 color) {
+  const auto base = static_cast<unsigned>(mesh.vertices.size());
+  for (const glm::vec3& p : {a, b, c, d}) mesh.vertices.push_back({p, glm::vec3(0, 1, 0), color});
+  mesh.triangles.emplace_back(base, base + 1, base + 2);
+  mesh.triangles.emplace_back(base, base + 2, base + 3);
+}
+
+// A closed box: centre, half extents, turned by `degrees` about y; 12 triangles.
+void add_box(Mesh& mesh, glm::vec3 centre, glm::vec3 half, float degrees) {
+  const glm::mat4 turn = glm::rotate(glm::mat4(1.0f), glm::radians(degrees), glm::vec3(0, 1, 0));
+  auto corner = [&](int i) {
+    const glm::vec3 s((i & 1) ? 1.0f : -1.0f, (i & 2) ? 1.0f : -1.0f, (i & 4) ? 1.0f : -1.0f);
+    return centre + glm::vec3(turn * glm::vec4(s * half, 1.0f));
+  };
+  const auto base = static_cast<unsigned>(mesh.vertices.size());
+  for (int i = 0; i < 8; ++i)
+    mesh.vertices.push_back({corner(i), glm::vec3(0, 1, 0), glm::vec3(0.8f)});
+  // Faces wound outward, corners by bit (x, y, z).
+  const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (const auto& f : faces) {
+    mesh.triangles.emplace_back(base + f[0], base + f[1], base + f[2]);
+    mesh.triangles.emplace_back(base + f[0], base + f[2], base + f[3]);
+  }
+}
+
+// The tilted plane of points: y = sx x + sz z + c over [-e, e]^2, two triangles.
+void add_plane(Mesh& mesh, float sx, float sz, float c, float e) {
+  auto at = [&](float x, float z) { return glm::vec3(x, sx * x + sz * z + c, z); };
+  add_quad(mesh, at(-e, -e), at(-e, e), at(e, e), at(e, -e), glm::vec3(0.75f, 0.75f, 0.8f));
+}
+
+}  // namespace
+
+std::vector<std::string> parity_scene_names() { return {"plane-sphere", "plane-boxes"}; }
+
+std::vector<std::string> interference_scene_names() {
+  return {"boxes-overlap", "boxes-apart", "boxes-touching"};
+}
+
+Scene make_parity_scene(const std::string& name) {
+  Mesh mesh;
+  std::vector<Solid> solids;
+  auto solid = [&](const std::string& n, auto&& add) {
+    const int first = static_cast<int>(mesh.triangles.size());
+    add();
+    solids.push_back({n, first, static_cast<int>(mesh.triangles.size())});
+  };
+  std::string description;
+  if (name == "plane-sphere") {
+    description = "a tilted plane of points through a closed tessellated sphere (24 x 12)";
+    add_plane(mesh, 0.25f, 0.2f, 0.1f, 1.8f);
+    solid("ball", [&] {
+      append_tessellated_spheres({Sphere{glm::vec3(0.0f), 1.0f}}, 24, 12, mesh);
+    });
+  } else if (name == "plane-boxes") {
+    description = "a tilted plane of points through two overlapping closed boxes";
+    add_plane(mesh, 0.15f, 0.3f, 0.05f, 2.0f);
+    solid("box-a", [&] { add_box(mesh, {-0.4f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.6f}, 20.0f); });
+    solid("box-b", [&] { add_box(mesh, {0.5f, 0.1f, 0.1f}, {0.6f, 0.7f, 0.5f}, -15.0f); });
+  } else if (name == "plane-slab") {
+    description = "the plane of plane-boxes through a slab 0.008 thick, 6 degrees off the plane";
+    add_plane(mesh, 0.15f, 0.3f, 0.05f, 2.0f);
+    solid("slab", [&] {
+      const glm::vec3 n = glm::normalize(glm::vec3(-0.15f, 1.0f, -0.3f) + glm::vec3(0.1f, 0, 0));
+      const glm::vec3 u = glm::normalize(glm::cross(n, glm::vec3(0, 0, 1)));
+      const glm::vec3 v = glm::cross(n, u);
+      const glm::vec3 c(0.3f, 0.15f * 0.3f + 0.3f * 0.2f + 0.05f, 0.2f);
+      const auto base = static_cast<unsigned>(mesh.vertices.size());
+      for (int i = 0; i < 8; ++i) {
+        const glm::vec3 p = c + ((i & 1) ? 0.8f : -0.8f) * u + ((i & 2) ? 0.8f : -0.8f) * v +
+                            ((i & 4) ? 0.004f : -0.004f) * n;
+        mesh.vertices.push_back({p, n, glm::vec3(0.8f)});
+      }
+      const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                               {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+      for (const auto& f : faces) {
+        mesh.triangles.emplace_back(base + f[0], base + f[1], base + f[2]);
+        mesh.triangles.emplace_back(base + f[0], base + f[2], base + f[3]);
+      }
+    });
+  } else if (name == "boxes-overlap" || name == "boxes-apart" || name == "boxes-touching") {
+    // Two boxes side by side along x; the second starts 0.3 inside the first, 0.1 past it, or
+    // 0.0002 past it (closer than the default epsilon along the rays through both).
+    const float gap = name == "boxes-overlap" ? -0.3f : name == "boxes-apart" ? 0.1f : 0.0002f;
+    description = fmt::format("two closed boxes side by side, {} apart along x", gap);
+    solid("left", [&] { add_box(mesh, {-0.6f, 0.0f, 0.0f}, {0.6f, 0.5f, 0.5f}, 0.0f); });
+    solid("right", [&] { add_box(mesh, {0.6f + gap, 0.1f, 0.1f}, {0.6f, 0.5f, 0.5f}, 0.0f); });
+  } else {
+    throw std::invalid_argument(fmt::format("no parity scene '{}' (there are: {})", name,
+                                            fmt::join(parity_scene_names(), ", ")));
+  }
+  compute_smooth_normals(mesh);
+  Scene scene;
+  scene.name = name;
+  scene.description = description;
+  scene.mesh = std::move(mesh);
+  scene.camera = frame_mesh(scene.mesh, glm::vec3(0.3f, 1.6f, 1.0f), 40.0f, 0.8f);
+  scene.lights = {default_light(scene.camera)};
+  scene.background = glm::vec3(0.05f, 0.05f, 0.08f);
+  scene.solids = std::move(solids);
+  return scene;
+}
+
+namespace {
+
+struct Ray {
+  glm::dvec3 origin, direction;
+};
+
+struct Caster {
+  const Scene& scene;
+  glm::dmat4 inverse;
+  int width, height;
+  std::vector<int> solid_of;  // per triangle
+
+  Caster(const MachineConfig& config, const Scene& s)
+      : scene(s), width(config.screen.width), height(config.screen.height) {
+    const float aspect = static_cast<float>(width) / static_cast<float>(height);
+    inverse = glm::inverse(glm::dmat4(projection_matrix(s.camera, aspect)) *
+                           glm::dmat4(view_matrix(s.camera)));
+    for (int t = 0; t < static_cast<int>(s.mesh.triangles.size()); ++t)
+      solid_of.push_back(s.solid_of_triangle(t));
+  }
+
+  Ray ray(double x, double y) const {
+    const double nx = x / width * 2.0 - 1.0, ny = 1.0 - y / height * 2.0;
+    glm::dvec4 a = inverse * glm::dvec4(nx, ny, -1.0, 1.0);
+    glm::dvec4 b = inverse * glm::dvec4(nx, ny, 1.0, 1.0);
+    const glm::dvec3 p = glm::dvec3(a) / a.w, q = glm::dvec3(b) / b.w;
+    return {p, q - p};
+  }
+
+  // Moller-Trumbore: the ray parameter of the hit (t > 0), or -1; `edge` is set when the hit
+  // lies within 1e-9 of an edge.
+  double hit(const Ray& r, int t, bool& edge) const {
+    const glm::uvec3 tri = scene.mesh.triangles[static_cast<std::size_t>(t)];
+    const glm::dvec3 v0(scene.mesh.vertices[tri.x].position);
+    const glm::dvec3 v1(scene.mesh.vertices[tri.y].position);
+    const glm::dvec3 v2(scene.mesh.vertices[tri.z].position);
+    const glm::dvec3 e1 = v1 - v0, e2 = v2 - v0;
+    const glm::dvec3 p = glm::cross(r.direction, e2);
+    const double det = glm::dot(e1, p);
+    if (std::abs(det) < 1e-300) return -1;
+    const glm::dvec3 s = r.origin - v0;
+    const double u = glm::dot(s, p) / det;
+    const glm::dvec3 q = glm::cross(s, e1);
+    const double v = glm::dot(r.direction, q) / det;
+    const double w = 1.0 - u - v;
+    if (u < -1e-9 || v < -1e-9 || w < -1e-9) return -1;
+    const double tt = glm::dot(e2, q) / det;
+    if (tt <= 0) return -1;
+    if (u < 1e-9 || v < 1e-9 || w < 1e-9) edge = true;
+    return tt;
+  }
+
+  // -1 no point, else 1 if inside any solid, 0 if not.
+  int classify(double x, double y, bool& edge) const {
+    const Ray r = ray(x, y);
+    double point = -1;
+    const int n = static_cast<int>(scene.mesh.triangles.size());
+    for (int t = 0; t < n; ++t) {
+      if (solid_of[static_cast<std::size_t>(t)] >= 0) continue;
+      bool e = false;
+      const double h = hit(r, t, e);
+      if (h > 0 && (point < 0 || h < point)) point = h;
+    }
+    if (point < 0) return -1;
+    std::vector<int> parity(scene.solids.size(), 0);
+    for (int t = 0; t < n; ++t) {
+      const int s = solid_of[static_cast<std::size_t>(t)];
+      if (s < 0) continue;
+      const double h = hit(r, t, edge);
+      if (h > point) parity[static_cast<std::size_t>(s)] ^= 1;
+    }
+    return std::any_of(parity.begin(), parity.end(), [](int p) { return p != 0; }) ? 1 : 0;
+  }
+};
+
+}  // namespace
+
+ParityReference parity_reference(const MachineConfig& config, const Scene& scene, double margin) {
+  const Caster caster(config, scene);
+  ParityReference ref;
+  ref.width = caster.width;
+  ref.height = caster.height;
+  const auto pixels = static_cast<std::size_t>(ref.width) * static_cast<std::size_t>(ref.height);
+  ref.inside.assign(pixels, -1);
+  ref.uncertain.assign(pixels, 0);
+  for (int y = 0; y < ref.height; ++y) {
+    for (int x = 0; x < ref.width; ++x) {
+      const double cx = x + 0.5, cy = y + 0.5;
+      bool edge = false;
+      const int c = caster.classify(cx, cy, edge);
+      bool differs = false;
+      for (const auto& [dx, dy] : {std::pair{margin, 0.0}, std::pair{-margin, 0.0},
+                                   std::pair{0.0, margin}, std::pair{0.0, -margin}}) {
+        bool e = false;
+        differs = differs || caster.classify(cx + dx, cy + dy, e) != c;
+      }
+      const std::size_t i = static_cast<std::size_t>(y) * ref.width + x;
+      ref.inside[i] = static_cast<std::int8_t>(c);
+      ref.uncertain[i] = (differs || edge) ? 1 : 0;
+    }
+  }
+  return ref;
+}
+
+ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
+                             const Program& program, int threads) {
+  if (!program.procedure(Procedure::parity).defined) {
+    throw std::invalid_argument(
+        fmt::format("{}: point in solid needs a program that defines 'parity'", program.name));
+  }
+  ParityMeasure m;
+  m.scene = scene.name;
+  m.program = program.name;
+  const FieldFrame field = render_field(config, scene, program, "inside", threads);
+  const ParityReference ref = parity_reference(config, scene);
+  m.image = field.image;
+  m.difference.width = ref.width;
+  m.difference.height = ref.height;
+  m.difference.rgb.assign(ref.inside.size() * 3, 0);
+  for (std::size_t i = 0; i < ref.inside.size(); ++i) {
+    std::uint8_t shade = 0;
+    if (ref.uncertain[i]) {
+      ++m.uncertain;
+      shade = 96;
+      m.edge_disagree += (field.values[i] != 0) != (ref.inside[i] == 1);
+    } else {
+      ++m.compared;
+      m.points += ref.inside[i] >= 0;
+      m.inside += ref.inside[i] == 1;
+      const bool machine = field.values[i] != 0;
+      if (machine != (ref.inside[i] == 1)) {
+        ++m.disagree;
+        shade = 255;
+      }
+    }
+    for (int k = 0; k < 3; ++k) m.difference.rgb[i * 3 + k] = shade;
+  }
+  FrameValues values;
+  values.plan = make_pass_plan(program, scene);
+  m.passes = values.plan.empty() ? 1 : static_cast<int>(values.plan.size());
+  m.bits = program.bits_used();
+  const FrameResult r = simulate_frame(config, scene, program, threads);
+  m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
+  m.frame_seconds = r.stats.real("frame.simulated_seconds");
+  return m;
+}
+
+CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 direction) {
+  struct Hit {
+    double t;
+    int solid, triangle;
+  };
+  std::vector<Hit> hits;
+  std::vector<bool> inside(scene.solids.size(), false);
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    for (int t = scene.solids[s].first; t < scene.solids[s].last; ++t) {
+      const glm::uvec3 tri = scene.mesh.triangles[static_cast<std::size_t>(t)];
+      const glm::dvec3 v0(scene.mesh.vertices[tri.x].position);
+      const glm::dvec3 e1 = glm::dvec3(scene.mesh.vertices[tri.y].position) - v0;
+      const glm::dvec3 e2 = glm::dvec3(scene.mesh.vertices[tri.z].position) - v0;
+      const glm::dvec3 p = glm::cross(direction, e2);
+      const double det = glm::dot(e1, p);
+      if (det == 0) continue;
+      const glm::dvec3 o = origin - v0;
+      const double u = glm::dot(o, p) / det;
+      const glm::dvec3 q = glm::cross(o, e1);
+      const double v = glm::dot(direction, q) / det;
+      if (u < 0 || v < 0 || u + v > 1) continue;
+      const double h = glm::dot(e2, q) / det;
+      if (h <= 0) continue;
+      hits.push_back({h, static_cast<int>(s), t});
+      inside[s] = !inside[s];  // an odd number of hits ahead: the origin is inside
+    }
+  }
+  std::sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) {
+    return a.t != b.t ? a.t < b.t : a.triangle < b.triangle;
+  });
+  bool in = csg_contains(scene.csg, inside);
+  for (const Hit& h : hits) {
+    inside[static_cast<std::size_t>(h.solid)] = !inside[static_cast<std::size_t>(h.solid)];
+    const bool now = csg_contains(scene.csg, inside);
+    if (now && !in) return {h.t, h.solid, h.triangle};
+    in = now;
+  }
+  return {};
+}
+
+std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene) {
+  const Caster caster(config, scene);
+  std::vector<int> out(static_cast<std::size_t>(caster.width) * caster.height, -1);
+  for (int y = 0; y < caster.height; ++y) {
+    for (int x = 0; x < caster.width; ++x) {
+      const Ray r = caster.ray(x + 0.5, y + 0.5);
+      out[static_cast<std::size_t>(y) * caster.width + x] =
+          csg_first_surface(scene, r.origin, r.direction).solid;
+    }
+  }
+  return out;
+}
+
+InterferenceMeasure measure_interference(const MachineConfig& config, const Scene& scene,
+                                         const Program& program, int threads, double margin) {
+  if (scene.solids.size() != 2) {
+    throw std::invalid_argument(
+        fmt::format("scene '{}': interference is measured between two solids (it has {})",
+                    scene.name, scene.solids.size()));
+  }
+  InterferenceMeasure m;
+  m.scene = scene.name;
+  m.program = program.name;
+  const FieldFrame flag = render_field(config, scene, program, "flag", threads);
+  const FieldFrame lo = render_field(config, scene, program, "near", threads);
+  const FieldFrame hi = render_field(config, scene, program, "far", threads);
+  m.image = flag.image;
+  Scene both = scene;
+  both.csg = {{CsgLiteral{0, false}, CsgLiteral{1, false}}};
+  const Caster caster(config, both);
+  auto truth_at = [&](double x, double y) {
+    const Ray r = caster.ray(x, y);
+    return csg_first_surface(both, r.origin, r.direction).solid >= 0;
+  };
+  m.difference.width = caster.width;
+  m.difference.height = caster.height;
+  m.difference.rgb.assign(static_cast<std::size_t>(caster.width) * caster.height * 3, 0);
+  const double depth_max = std::ldexp(1.0, config.gp.depth_bits) - 1.0;
+  m.lo = 1.0;
+  m.hi = 0.0;
+  for (int y = 0; y < caster.height; ++y) {
+    for (int x = 0; x < caster.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * caster.width + x;
+      const bool machine = flag.values[i] != 0;
+      if (machine) {
+        ++m.flagged;
+        m.lo = std::min(m.lo, static_cast<double>(lo.values[i]) / depth_max);
+        m.hi = std::max(m.hi, static_cast<double>(hi.values[i]) / depth_max);
+      }
+      const bool truth = truth_at(x + 0.5, y + 0.5);
+      bool differs = false;
+      for (const auto& [dx, dy] : {std::pair{margin, 0.0}, std::pair{-margin, 0.0},
+                                   std::pair{0.0, margin}, std::pair{0.0, -margin}}) {
+        differs = differs || truth_at(x + 0.5 + dx, y + 0.5 + dy) != truth;
+      }
+      std::uint8_t shade = 0;
+      if (differs) {
+        ++m.uncertain;
+        shade = 96;
+      } else {
+        ++m.compared;
+        m.truth += truth;
+        if (machine != truth) {
+          ++m.disagree;
+          shade = 255;
+        }
+      }
+      for (int k = 0; k < 3; ++k) m.difference.rgb[i * 3 + k] = shade;
+    }
+  }
+  if (m.flagged == 0) m.lo = m.hi = 0;
+  m.passes = static_cast<int>(make_pass_plan(program, scene).size());
+  m.bits = program.bits_used();
+  const FrameResult r = simulate_frame(config, scene, program, threads);
+  m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
+  m.frame_seconds = r.stats.real("frame.simulated_seconds");
+  return m;
+}
+
+std::string format_interference(const std::vector<InterferenceMeasure>& rows) {
+  std::string out =
+      "| application | scene | program | pixels compared | interfering (ray caster) | flagged "
+      "(machine) | disagreeing | near an edge (not compared) | overlap depth range | passes | "
+      "bits | Renderer cycles | frame ms | frames/s |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
+  for (const InterferenceMeasure& m : rows) {
+    out += fmt::format(
+        "| interference | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3f} | "
+        "{:.1f} |\n",
+        m.scene, m.program, m.compared, m.truth, m.flagged, m.disagree, m.uncertain,
+        m.flagged ? fmt::format("{:.5f} .. {:.5f}", m.lo, m.hi) : std::string("-"), m.passes,
+        m.bits, m.renderer_cycles, m.frame_seconds * 1e3,
+        m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
+  }
+  return out;
+}
+
+std::string format_parity(const std::vector<ParityMeasure>& rows) {
+  std::string out =
+      "| application | scene | program | pixels compared | with a point | inside | disagreeing "
+      "with the ray caster | near an edge (not compared) | of those, differing from the centre's "
+      "ray | passes | bits | Renderer cycles | frame ms | frames/s |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const ParityMeasure& m : rows) {
+    out += fmt::format(
+        "| point in solid | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | "
+        "{:.3f} | {:.1f} |\n",
+        m.scene, m.program, m.compared, m.points, m.inside, m.disagree, m.uncertain,
+        m.edge_disagree, m.passes, m.bits, m.renderer_cycles, m.frame_seconds * 1e3,
+        m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
+  }
+  return out;
+}
+
+}  // namespace pp5

@@ -1,0 +1,108 @@
+#pragma once
+// Parity and depth-interval applications (issue 15), measured against a CPU ray caster in
+// double precision.
+//
+// Point in solid by parity: the machine runs a program that defines `parity` (parity.pp5,
+// parity_accurate.pp5) under the point-in-solid pass plan (models/gp/pass_plan.hpp); its
+// `inside` field is read back (sim/analysis/field_render.hpp) and compared pixel by pixel
+// with the ray caster.
+//
+// Contract:
+//  - The ray caster casts, per pixel centre (X + 0.5, Y + 0.5), the ray from the eye through
+//    it (the camera's own view and projection, in double) against every scene triangle
+//    (Moller-Trumbore, double). The point is the nearest hit on a triangle in no solid; it is
+//    inside solid s when an odd number of s's triangles are hit behind it. Background: no
+//    point.
+//  - A pixel is uncertain (not compared) when the classification, or whether there is a
+//    point, changes at any of four centres offset by `margin` pixels (an edge of a face, of
+//    the point surface or of the solid's outline passes nearby, or the point lies on the
+//    solid's surface there), or a hit lies within 1e-9 of a triangle's edge in barycentric
+//    terms. Elsewhere the machine must agree: the tests require it.
+//  - Deterministic; no pixel value of the machine comes from here.
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <string>
+#include <vector>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/config/machine_config.hpp"
+#include "sim/image/png_writer.hpp"
+#include "sim/scene/scene.hpp"
+
+namespace pp5 {
+
+// Scenes made for the parity applications: a point surface in no solid and closed solids.
+// make_parity_scene also takes "plane-slab" (a solid thinner than epsilon in depth, for
+// epsilon-regularisation), which the default table leaves out.
+std::vector<std::string> parity_scene_names();
+Scene make_parity_scene(const std::string& name);
+
+struct ParityReference {
+  int width = 0, height = 0;
+  std::vector<std::int8_t> inside;      // per pixel: -1 no point, 0 outside, 1 inside
+  std::vector<std::uint8_t> uncertain;  // per pixel: 1 if not compared
+};
+ParityReference parity_reference(const MachineConfig& config, const Scene& scene,
+                                 double margin = 0.75);
+
+struct ParityMeasure {
+  std::string scene, program;
+  std::int64_t compared = 0;   // certain pixels
+  std::int64_t points = 0;     // certain pixels with a point
+  std::int64_t inside = 0;     // certain pixels the ray caster finds inside
+  std::int64_t disagree = 0;   // certain pixels where the machine's `inside` differs
+  std::int64_t uncertain = 0;  // pixels near an edge, not compared
+  // Of those, where the machine differs from the ray through the centre itself (reported,
+  // not required: a centre on a shared edge is where standard scan conversion miscounts).
+  std::int64_t edge_disagree = 0;
+  int passes = 0;
+  int bits = 0;
+  std::int64_t renderer_cycles = 0;  // the Renderers' busy array cycles, all regions
+  double frame_seconds = 0;
+  RgbImage image;       // the machine's image
+  RgbImage difference;  // white: disagree; grey: uncertain; black: agree
+};
+
+// Renders `scene` with `program` (which must define `parity` and a field `inside`), reads
+// back `inside` and compares it with the ray caster; runs the frame's timing for the passes,
+// cycles and frame time.
+ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
+                             const Program& program, int threads);
+
+std::string format_parity(const std::vector<ParityMeasure>& rows);
+
+// Interference of an assembly's first two solids (interference.pp5 under the same pass plan):
+// the machine's flag, lo and hi fields read back; the truth is the ray caster's: a pixel
+// interferes where the intersection of the two solids has a surface on its ray. Pixels
+// where the truth changes within `margin` are not compared.
+std::vector<std::string> interference_scene_names();  // also made by make_parity_scene
+struct InterferenceMeasure {
+  std::string scene, program;
+  std::int64_t compared = 0, truth = 0, flagged = 0, disagree = 0, uncertain = 0;
+  double lo = 0, hi = 0;  // the depth range of the flagged pixels' overlaps, 0 near .. 1 far
+  int passes = 0, bits = 0;
+  std::int64_t renderer_cycles = 0;
+  double frame_seconds = 0;
+  RgbImage image, difference;
+};
+InterferenceMeasure measure_interference(const MachineConfig& config, const Scene& scene,
+                                         const Program& program, int threads, double margin = 0.75);
+std::string format_interference(const std::vector<InterferenceMeasure>& rows);
+
+// The CPU ray caster of a CSG expression (Scene::csg over Scene::solids), double precision:
+// along the ray origin + t direction (t > 0), every hit of every solid's triangles in order;
+// each solid's membership starts from the parity of all its hits (the origin's side) and
+// toggles at each; the visible surface is the first hit where the expression's membership
+// turns from outside to inside. t = -1 and solid = -1 when the ray meets none.
+struct CsgSurface {
+  double t = -1;
+  int solid = -1;
+  int triangle = -1;
+};
+CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 direction);
+
+// Per pixel centre, the solid whose surface is visible in the CSG result (-1: background),
+// with the camera's own rays.
+std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene);
+
+}  // namespace pp5
