@@ -82,4 +82,11 @@ expect_error "unk.json: key 'parameters.thresh' is not a frame parameter" render
 printf '{"meshes": [{"builtin": "two-triangles"}], "parameters": {"delta": 5000}}' >"$tmp/rng.json"
 expect_error "'frame.delta' = 5000 is out of range" render --scene "$tmp/rng.json" --out "$tmp/bad"
 [ -e "$tmp/bad/frame.png" ] && fail "output after bad input"
+
+# A scene's CSG expression is checked and normalised, but no program draws CSG yet: the run
+# says so instead of passing the meshes' union off as the result.
+"$bin" render --scene "$(dirname "$0")/../fuzz/corpus/scene/csg_spheres.json" "${small[@]}" \
+  --out "$tmp/csg" >"$tmp/csg.log" 2>"$tmp/csg.err" || fail "render failed: $(cat "$tmp/csg.err")"
+grep -q "^warning: scene 'csg_spheres' gives a CSG expression ([0-9]* products\{0,1\} after normalising), but no firmware draws CSG yet" \
+  "$tmp/csg.err" || fail "no CSG warning: $(cat "$tmp/csg.err")"
 echo "scene_cli: ok"

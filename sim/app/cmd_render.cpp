@@ -57,6 +57,14 @@ void warn_about_ignored_scene_parts(const Scene& scene, const Program& program) 
         "shades with the first light only (phong sums them all)\n",
         scene.name, scene.lights.size(), name);
   }
+  // The loader checks and normalises a "csg" expression, but no shipped program draws one
+  // yet (issue 15): say so rather than let the union of the meshes pass for the result.
+  if (!scene.csg.empty()) {
+    std::cerr << fmt::format(
+        "warning: scene '{}' gives a CSG expression ({} product{} after normalising), but no "
+        "firmware draws CSG yet: firmware '{}' draws every mesh as it is\n",
+        scene.name, scene.csg.size(), scene.csg.size() == 1 ? "" : "s", name);
+  }
 }
 
 int run_render(RenderOptions o) {
