@@ -357,6 +357,12 @@ std::string csv_value(const StatValue& v) {
 
 int run_aggregate(const SweepOptions& o) {
   const fs::path dir(o.aggregate_dir);
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw std::runtime_error(fmt::format(
+        "{}: {}, expected the output folder of a 'pp5sim sweep' run (it holds sweep.json)",
+        dir.string(), fs::exists(dir, ec) ? "is not a folder" : "no such folder"));
+  }
   const nlohmann::json sweep = read_json(dir / "sweep.json");
   const auto keys = sweep.at("order").get<std::vector<std::string>>();
   // The runs the grid defines; other folders (from an earlier grid) are not this sweep's.
