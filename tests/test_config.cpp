@@ -224,6 +224,9 @@ TEST_CASE("set applies one key=value override", "[config]") {
   const std::string range = set_error(c, "renderer.count=99");
   CHECK(range.rfind("--set renderer.count=99: ", 0) == 0);
   CHECK(range.find("'renderer.count'") != std::string::npos);
+  // A whole number past 64 bits reaches the table as a float: out of range, not a fraction.
+  CHECK(set_error(c, "renderer.count=99999999999999999999").find("is out of range [1,") !=
+        std::string::npos);
   CHECK(c.to_json() == before.to_json());
 }
 

@@ -535,6 +535,16 @@ void assign(MachineConfig& config, const Entry& p, const nlohmann::json& value,
                                   p.key, p.computed_from));
   }
   const bool is_int = !std::holds_alternative<double*>(ref);
+  // An integer too large for 64 bits arrives from the JSON parser as a float: it is a whole
+  // number out of range, not a fraction (the user wrote 99999999999999999999, not 1.5).
+  if (is_int && value.is_number_float() && !std::holds_alternative<FrameRef>(ref)) {
+    const double d = value.get<double>();
+    if (std::isfinite(d) && d == std::trunc(d) && !(d >= p.min && d <= p.max)) {
+      throw ConfigError(fmt::format("{}: key '{}' = {} is out of range [{}, {}] {}", origin, p.key,
+                                    value.dump(), format_value(p.min, true),
+                                    format_value(p.max, true), p.unit));
+    }
+  }
   if (!value.is_number() || (is_int && !value.is_number_integer())) {
     throw ConfigError(fmt::format("{}: key '{}' must be {} (got {})", origin, p.key,
                                   is_int ? "an integer" : "a number", value.dump()));
