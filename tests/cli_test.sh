@@ -101,6 +101,8 @@ grep -q "1 runs, 1 missing" "$tmp/sw2.log" || fail "aggregate said: $(cat "$tmp/
 "$bin" sweep aggregate "$tmp/sw" -o "$tmp/sw.csv" >/dev/null || fail "aggregate failed"
 [ "$(wc -l < "$tmp/sw.csv")" = 5 ] || fail "sweep.csv: expected a header and 4 rows"
 head -1 "$tmp/sw.csv" | grep -q "^gp.count,renderer.balancing,frame_seconds" || fail "bad CSV header"
+# csg names every scene it can make when one is unknown.
+expect_error "no parity scene 'nope' (there are: plane-sphere, plane-boxes, plane-slab, boxes-overlap" csg -s nope
 # aggregate of a file or a missing folder names it and says what it expected.
 expect_error "sw.csv: is not a folder, expected the output folder of a 'pp5sim sweep' run" sweep aggregate "$tmp/sw.csv"
 expect_error "nowhere: no such folder, expected the output folder" sweep aggregate "$tmp/nowhere"

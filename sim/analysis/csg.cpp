@@ -107,8 +107,12 @@ Scene make_parity_scene(const std::string& name) {
     solid("left", [&] { add_box(mesh, {-0.6f, 0.0f, 0.0f}, {0.6f, 0.5f, 0.5f}, 0.0f); });
     solid("right", [&] { add_box(mesh, {0.6f + gap, 0.1f, 0.1f}, {0.6f, 0.5f, 0.5f}, 0.0f); });
   } else {
-    throw std::invalid_argument(fmt::format("no parity scene '{}' (there are: {})", name,
-                                            fmt::join(parity_scene_names(), ", ")));
+    // Every scene this function makes, not only the defaults of one application.
+    std::vector<std::string> all = parity_scene_names();
+    all.push_back("plane-slab");
+    for (const std::string& n : interference_scene_names()) all.push_back(n);
+    throw std::invalid_argument(
+        fmt::format("no parity scene '{}' (there are: {})", name, fmt::join(all, ", ")));
   }
   compute_smooth_normals(mesh);
   Scene scene;
