@@ -80,6 +80,35 @@ void check_pdb_records(const std::string& text, const std::string& path) {
   }
 }
 
+// gemmi 0.5 reads mmCIF integers (sequence ids, model numbers, serials) with an int that a
+// run of ten or more digits overflows (found by fuzzing: undefined behaviour). No field of a
+// real file needs such a run before a decimal point, so it is refused with its place; digits
+// after a '.' (a coordinate's fraction) may run on.
+void check_cif_digit_runs(const std::string& text, const std::string& path) {
+  constexpr std::size_t kMaxDigits = 9;
+  std::size_t line = 1, column = 0, run = 0;
+  bool fraction = false;
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const char c = text[k];
+    ++column;
+    if (c >= '0' && c <= '9') {
+      if (run == 0) fraction = k > 0 && text[k - 1] == '.';
+      if (++run > kMaxDigits && !fraction) {
+        throw SceneError(fmt::format(
+            "{}:{}: a number with more than {} digits at column {}; no mmCIF field of a "
+            "molecule needs one (it would overflow the reader's integers)",
+            path, line, kMaxDigits, column - run + 1));
+      }
+      continue;
+    }
+    run = 0;
+    if (c == '\n') {
+      ++line;
+      column = 0;
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<Sphere> read_molecule_file(const std::string& path) {
@@ -96,6 +125,7 @@ std::vector<Sphere> parse_molecule(const std::string& text, const std::string& p
   gemmi::Structure st;
   try {
     if (cif) {
+      check_cif_digit_runs(text, path);
       st = gemmi::make_structure(gemmi::cif::read_memory(text.data(), text.size(), path.c_str()));
     } else {
       check_pdb_records(text, path);
