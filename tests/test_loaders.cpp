@@ -151,7 +151,8 @@ TEST_CASE("every bad mesh or scene file gets its own message", "[loaders]") {
   };
   for (const auto& [file, message] : cases) {
     INFO(file);
-    const std::string what = error_of([&] { load_scene(data_path(file)); });
+    const std::string path = data_path(file);  // C++17 lambdas cannot capture a binding
+    const std::string what = error_of([&] { load_scene(path); });
     CHECK_THAT(what, Catch::Contains(message));
   }
   CHECK_THAT(error_of([] { load_scene("nope"); }), Catch::Contains("unknown scene 'nope'"));
