@@ -11,10 +11,12 @@
 
 namespace pp5::test {
 
+// The folder of the built-in firmware programs, with its trailing slash.
+inline const std::string kProgramsDir = PP5_SOURCE_DIR "/firmware/programs/";
+
 // A built-in firmware program, assembled for `config`.
 inline Program load_program(const std::string& name, const MachineConfig& config) {
-  return assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5",
-                       assembler_options(config));
+  return assemble_file(kProgramsDir + name + ".pp5", assembler_options(config));
 }
 
 // A count statistic (an integer that cannot be negative), for comparing with unsigned counts.

@@ -11,12 +11,12 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "support.hpp"
 
 using namespace pp5;
 
 namespace {
 
-const std::string kPrograms = PP5_SOURCE_DIR "/firmware/programs/";
 const std::string kSpillProgram = PP5_SOURCE_DIR "/tests/data/firmware/spill.pp5";
 
 std::string read_text(const std::string& path) {
@@ -194,8 +194,8 @@ TEST_CASE("shipped programs assemble with contiguous layouts", "[assembler]") {
   };
   for (const Expected& e : programs) {
     SECTION(e.file) {
-      const Program p = assemble_file(kPrograms + e.file, AssemblerOptions{});
-      CHECK(p.name == kPrograms + e.file);
+      const Program p = assemble_file(test::kProgramsDir + e.file, AssemblerOptions{});
+      CHECK(p.name == test::kProgramsDir + e.file);
       CHECK(p.memory_bits == 208);
       CHECK_FALSE(p.spill_allowed);
 
@@ -709,7 +709,7 @@ TEST_CASE("spilled fields do not share blocks with explicit transfers", "[assemb
 
 TEST_CASE("the listing shows every field and instruction", "[assembler]") {
   for (const char* file : {"phong.pp5", "flat.pp5"}) {
-    const Program p = assemble_file(kPrograms + file, AssemblerOptions{});
+    const Program p = assemble_file(test::kProgramsDir + file, AssemblerOptions{});
     const std::string text = listing(p, TimingParams{});
     CHECK(text.find(p.name) != std::string::npos);
     for (const FieldDecl& f : p.fields) {

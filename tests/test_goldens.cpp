@@ -27,22 +27,22 @@ using namespace pp5;
 
 namespace {
 
-const char* const kPrograms[] = {"accurate",
-                                 "epsilon",
-                                 "epsilon_folded",
-                                 "epsilon_normal",
-                                 "exactmatch",
-                                 "exactmatch_n",
-                                 "flat",
-                                 "gouraud",
-                                 "painter",
-                                 "phong",
-                                 "threshold",
-                                 "threshold_eyez",
-                                 "threshold_keep",
-                                 "transparent",
-                                 "transparent_exactmatch",
-                                 "transparent_threshold"};
+const char* const kGoldenPrograms[] = {"accurate",
+                                       "epsilon",
+                                       "epsilon_folded",
+                                       "epsilon_normal",
+                                       "exactmatch",
+                                       "exactmatch_n",
+                                       "flat",
+                                       "gouraud",
+                                       "painter",
+                                       "phong",
+                                       "threshold",
+                                       "threshold_eyez",
+                                       "threshold_keep",
+                                       "transparent",
+                                       "transparent_exactmatch",
+                                       "transparent_threshold"};
 
 // FNV-1a, 64 bits, over the image's size and its RGB bytes.
 std::string image_hash(const RgbImage& image) {
@@ -150,7 +150,7 @@ TEST_CASE("golden frames: every built-in scene with every program, 256 x 256", "
   const MachineConfig config = small_machine();
   for (const std::string& scene_name : builtin_scene_names()) {
     const Scene scene = make_builtin_scene(scene_name);
-    for (const char* program : kPrograms) {
+    for (const char* program : kGoldenPrograms) {
       // Scenes of spheres (sim/scene/sphere_scenes.cpp) only with the programs that draw
       // spheres (a `sphere` procedure): the others refuse them.
       if (!scene.spheres.empty() &&

@@ -19,12 +19,11 @@
 #include "models/pixel_array/backends.hpp"
 #include "models/pixel_array/pixel_array.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "support.hpp"
 
 using namespace pp5;
 
 namespace {
-
-const std::string kPrograms = PP5_SOURCE_DIR "/firmware/programs/";
 
 // Field declarations and output line that give `p`'s layout again.
 std::string declarations_of(const Program& p) {
@@ -134,7 +133,7 @@ TEST_CASE("disassembly re-assembles to the same instructions", "[isa]") {
 
   for (const char* file : {"flat.pp5", "gouraud.pp5", "phong.pp5"}) {
     SECTION(file) {
-      const Program original = assemble_file(kPrograms + file, AssemblerOptions{});
+      const Program original = assemble_file(test::kProgramsDir + file, AssemblerOptions{});
       std::string text = declarations_of(original);
       for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
         if (!original.procedures[proc].defined) continue;
@@ -269,7 +268,7 @@ TEST_CASE("cycle costs follow the documented formulas", "[isa]") {
 }
 
 TEST_CASE("the Renderer board charges the table's costs", "[isa]") {
-  const Program p = assemble_file(kPrograms + "phong.pp5", AssemblerOptions{});
+  const Program p = assemble_file(test::kProgramsDir + "phong.pp5", AssemblerOptions{});
   RendererBoardParams params;
   params.array.width = 64;
   params.array.height = 8;
@@ -397,7 +396,7 @@ struct Reference {
   }
 };
 
-PixelBackendParams small_params() {
+PixelBackendParams small_backend_params() {
   PixelBackendParams p;
   p.array.width = 128;
   p.array.height = 6;
@@ -556,7 +555,7 @@ void check_same(const PixelBackend& b, const Reference& r) {
 
 TEST_CASE("every registered backend runs the instruction table as the bit-sliced reference",
           "[isa][backend]") {
-  const PixelBackendParams params = small_params();
+  const PixelBackendParams params = small_backend_params();
   REQUIRE(find_pixel_backend("bit") != nullptr);
   for (const PixelBackendInfo& info : pixel_backends()) {
     for (unsigned seed = 1; seed <= 6; ++seed) {
@@ -618,7 +617,7 @@ TEST_CASE("every registered backend runs the instruction table as the bit-sliced
 }
 
 TEST_CASE("a backend's state can be cloned, compared and taken back", "[isa][backend]") {
-  const PixelBackendParams params = small_params();
+  const PixelBackendParams params = small_backend_params();
   for (const PixelBackendInfo& info : pixel_backends()) {
     INFO("backend " << info.name);
     auto a = make_pixel_backend(info.name, params);
@@ -654,7 +653,7 @@ TEST_CASE("a backend's state can be cloned, compared and taken back", "[isa][bac
 }
 
 TEST_CASE("backends follow the interface's error contract", "[isa][backend]") {
-  const PixelBackendParams params = small_params();
+  const PixelBackendParams params = small_backend_params();
   for (const PixelBackendInfo& info : pixel_backends()) {
     INFO("backend " << info.name);
     auto b = make_pixel_backend(info.name, params);
@@ -677,7 +676,7 @@ TEST_CASE("backends follow the interface's error contract", "[isa][backend]") {
 TEST_CASE("an unknown pixel backend is a clear error", "[isa][backend]") {
   CHECK(find_pixel_backend("bits") == nullptr);
   try {
-    make_pixel_backend("bits", small_params());
+    make_pixel_backend("bits", small_backend_params());
     FAIL("no exception");
   } catch (const std::invalid_argument& e) {
     const std::string what = e.what();

@@ -29,7 +29,7 @@ struct SpheresOptions {
   int threads = default_threads();
 };
 
-struct Row {
+struct SphereRow {
   std::string what;
   double gp_clocks = 0, packet_words = 0, ring_words = 0, renderer_cycles = 0;
   double rate = 0;
@@ -62,7 +62,7 @@ int run_spheres(const SpheresOptions& o) {
 
   auto row = [&](const std::string& what, const Scene& s) {
     const FrameResult r = simulate_frame(config, s, program, o.threads);
-    Row out;
+    SphereRow out;
     out.what = what;
     const Statistics& st = r.stats;
     out.gp_clocks = static_cast<double>(sum(st, "gp", "geometry_clocks") -
@@ -89,7 +89,7 @@ int run_spheres(const SpheresOptions& o) {
     return out;
   };
 
-  std::vector<Row> rows;
+  std::vector<SphereRow> rows;
   rows.push_back(row("quadric", scene));
   for (const std::string& t : o.tessellations) {
     int u = 0, v = 0;
@@ -115,7 +115,7 @@ int run_spheres(const SpheresOptions& o) {
                "errors (extra / missing of covered) | depth error max / mean | normal error max "
                "/ mean | intersection pixels wrong |\n";
   std::cout << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  for (const Row& r : rows) {
+  for (const SphereRow& r : rows) {
     const SphereAccuracy& a = r.accuracy;
     std::cout << fmt::format(
         "| {} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.3g} | {} / {} of {} | {:.0f} / {:.1f} | "
