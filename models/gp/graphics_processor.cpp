@@ -130,9 +130,6 @@ void GraphicsProcessor::run() {
     return;
   }
   const MachineConfig& config = machine_.config();
-  // The message loop below sizes messages by one packet length, the machine workload's (the
-  // triangle procedure's): while the triangle is the only kind, every packet has it.
-  const std::uint64_t words = machine_.gp_workload().packet_words;
   std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
   geometry_pass(machine_, first_, last_, stats_, bins);
   // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.

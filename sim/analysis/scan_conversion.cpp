@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "models/display_list/mesh_adjacency.hpp"
@@ -26,6 +27,33 @@ const std::string kAccurateCoverageFirmware = coverage_firmware(
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// A screen triangle's exact plane in double precision: depth z0 + a (x - p0.x) + b (y - p0.y)
+// in depth units, and its coverage (edge functions oriented by the sign of det).
+struct ExactPlane {
+  glm::dvec2 p0, p1, p2;
+  double det = 0, s = 1, z0 = 0, a = 0, b = 0;
+  static std::optional<ExactPlane> of(const ScreenTriangle& t, double depth_max) {
+    ExactPlane e;
+    e.p0 = t.v[0].position, e.p1 = t.v[1].position, e.p2 = t.v[2].position;
+    const glm::dvec2 p0 = e.p0, p1 = e.p1, p2 = e.p2;
+    e.det = (p1.x - p0.x) * (p2.y - p0.y) - (p2.x - p0.x) * (p1.y - p0.y);
+    if (!(std::fabs(e.det) > 0)) return std::nullopt;
+    const double z0 = t.v[0].depth * depth_max, z1 = t.v[1].depth * depth_max,
+                 z2 = t.v[2].depth * depth_max;
+    e.z0 = z0;
+    e.a = ((z1 - z0) * (p2.y - p0.y) - (z2 - z0) * (p1.y - p0.y)) / e.det;
+    e.b = ((z2 - z0) * (p1.x - p0.x) - (z1 - z0) * (p2.x - p0.x)) / e.det;
+    e.s = e.det > 0 ? 1.0 : -1.0;
+    return e;
+  }
+  double depth(double x, double y) const { return z0 + a * (x - p0.x) + b * (y - p0.y); }
+  bool covers(double cx, double cy) const {
+    return s * ((p1.x - p0.x) * (cy - p0.y) - (p1.y - p0.y) * (cx - p0.x)) >= 0 &&
+           s * ((p2.x - p1.x) * (cy - p1.y) - (p2.y - p1.y) * (cx - p1.x)) >= 0 &&
+           s * ((p0.x - p2.x) * (cy - p2.y) - (p0.y - p2.y) * (cx - p2.x)) >= 0;
+  }
+};
 
 // The exact picture: per pixel the frontmost depth, the first hidden one, and whether the
 // centre is within a pixel of the front triangle's edges.
@@ -114,15 +142,10 @@ Reference reference(const MachineConfig& config, const Scene& scene, double E) {
   }
   std::vector<double> gradient(pieces.size(), 0.0);
   for (std::size_t k = 0; k < pieces.size(); ++k) {
-    const ScreenTriangle& t = pieces[k];
-    const glm::dvec2 p0 = t.v[0].position, p1 = t.v[1].position, p2 = t.v[2].position;
-    const double det = (p1.x - p0.x) * (p2.y - p0.y) - (p2.x - p0.x) * (p1.y - p0.y);
-    if (!(std::fabs(det) > 0)) continue;
-    const double z0 = t.v[0].depth * depth_max, z1 = t.v[1].depth * depth_max,
-                 z2 = t.v[2].depth * depth_max;
-    const double a = ((z1 - z0) * (p2.y - p0.y) - (z2 - z0) * (p1.y - p0.y)) / det;
-    const double b = ((z2 - z0) * (p1.x - p0.x) - (z1 - z0) * (p2.x - p0.x)) / det;
-    gradient[k] = std::hypot(a, b);
+    const std::optional<ExactPlane> plane = ExactPlane::of(pieces[k], depth_max);
+    if (!plane) continue;
+    const glm::dvec2 p0 = plane->p0, p1 = plane->p1, p2 = plane->p2;
+    gradient[k] = std::hypot(plane->a, plane->b);
     r.M = std::max(r.M, gradient[k]);
     const int x_lo = std::max(0, static_cast<int>(std::floor(std::min({p0.x, p1.x, p2.x}))));
     const int x_hi =
@@ -130,16 +153,12 @@ Reference reference(const MachineConfig& config, const Scene& scene, double E) {
     const int y_lo = std::max(0, static_cast<int>(std::floor(std::min({p0.y, p1.y, p2.y}))));
     const int y_hi =
         std::min(r.height - 1, static_cast<int>(std::ceil(std::max({p0.y, p1.y, p2.y}))));
-    const double s = det > 0 ? 1.0 : -1.0;
     for (int y = y_lo; y <= y_hi; ++y) {
       const double cy = y + 0.5;
       for (int x = x_lo; x <= x_hi; ++x) {
         const double cx = x + 0.5;
-        const double e0 = s * ((p1.x - p0.x) * (cy - p0.y) - (p1.y - p0.y) * (cx - p0.x));
-        const double e1 = s * ((p2.x - p1.x) * (cy - p1.y) - (p2.y - p1.y) * (cx - p1.x));
-        const double e2 = s * ((p0.x - p2.x) * (cy - p2.y) - (p0.y - p2.y) * (cx - p2.x));
-        if (e0 < 0 || e1 < 0 || e2 < 0) continue;
-        const double z = z0 + a * (cx - p0.x) + b * (cy - p0.y);
+        if (!plane->covers(cx, cy)) continue;
+        const double z = plane->depth(cx, cy);
         const std::size_t q = static_cast<std::size_t>(y) * r.width + x;
         if (z < r.front[q]) {
           r.hidden[q] = r.front[q];
@@ -256,19 +275,10 @@ Reference reference(const MachineConfig& config, const Scene& scene, double E) {
   const double rho = kLayerReach * E;
   for (std::size_t k = 0; k < pieces.size(); ++k) {
     const ScreenTriangle& t = pieces[k];
-    const glm::dvec2 p0 = t.v[0].position, p1 = t.v[1].position, p2 = t.v[2].position;
-    const double det = (p1.x - p0.x) * (p2.y - p0.y) - (p2.x - p0.x) * (p1.y - p0.y);
-    if (!(std::fabs(det) > 0)) continue;
-    const double z0 = t.v[0].depth * depth_max, z1 = t.v[1].depth * depth_max,
-                 z2 = t.v[2].depth * depth_max;
-    const double a = ((z1 - z0) * (p2.y - p0.y) - (z2 - z0) * (p1.y - p0.y)) / det;
-    const double b = ((z2 - z0) * (p1.x - p0.x) - (z1 - z0) * (p2.x - p0.x)) / det;
-    const double s = det > 0 ? 1.0 : -1.0;
-    auto inside = [&](double cx, double cy) {
-      return s * ((p1.x - p0.x) * (cy - p0.y) - (p1.y - p0.y) * (cx - p0.x)) >= 0 &&
-             s * ((p2.x - p1.x) * (cy - p1.y) - (p2.y - p1.y) * (cx - p1.x)) >= 0 &&
-             s * ((p0.x - p2.x) * (cy - p2.y) - (p0.y - p2.y) * (cx - p2.x)) >= 0;
-    };
+    const std::optional<ExactPlane> plane = ExactPlane::of(t, depth_max);
+    if (!plane) continue;
+    const glm::dvec2 p0 = plane->p0, p1 = plane->p1, p2 = plane->p2;
+    auto inside = [&](double cx, double cy) { return plane->covers(cx, cy); };
     const int x_lo =
         std::max(0, static_cast<int>(std::floor(std::min({p0.x, p1.x, p2.x}) - rho - 1)));
     const int x_hi =
@@ -294,7 +304,7 @@ Reference reference(const MachineConfig& config, const Scene& scene, double E) {
           const double sx = cx + offsets[o].x * E, sy = cy + offsets[o].y * E;
           if (!inside(sx, sy)) continue;
           double& f = r.layer_front[static_cast<std::size_t>(li) * offsets.size() + o];
-          f = std::min(f, z0 + a * (sx - p0.x) + b * (sy - p0.y));
+          f = std::min(f, plane->depth(sx, sy));
         }
       }
     }
