@@ -396,14 +396,30 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
   // The first surface at a screen point: its solid and depth in the GP's units.
   struct Seen {
     int solid;
+    int triangle;
     double depth;
   };
   auto seen_at = [&](double x, double y) {
     const Ray r = caster.ray(x, y);
     const CsgSurface s = csg_first_surface(scene, r.origin, r.direction);
-    if (s.solid < 0) return Seen{-1, 0.0};
+    if (s.solid < 0) return Seen{-1, -1, 0.0};
     const glm::dvec4 c = to_clip * glm::dvec4(r.origin + s.t * r.direction, 1.0);
-    return Seen{s.solid, (c.z / c.w * 0.5 + 0.5) * depth_max};
+    return Seen{s.solid, s.triangle, (c.z / c.w * 0.5 + 0.5) * depth_max};
+  };
+  // Whether the surface seen at `b` continues the one seen at `a`: the same solid, and the
+  // same triangle or one touching it (a vertex in common). Otherwise an outline passes
+  // between them: of a solid, of the seam of two, or of one part of a solid over another.
+  auto continues = [&](const Seen& a, const Seen& b) {
+    if (a.solid != b.solid) return false;
+    if (a.solid < 0 || a.triangle == b.triangle) return true;
+    const glm::uvec3 s = scene.mesh.triangles[static_cast<std::size_t>(a.triangle)];
+    const glm::uvec3 t = scene.mesh.triangles[static_cast<std::size_t>(b.triangle)];
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        if (scene.mesh.vertices[s[i]].position == scene.mesh.vertices[t[j]].position) return true;
+      }
+    }
+    return false;
   };
   const double half_step = std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
   m.difference.width = caster.width;
@@ -426,8 +442,8 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
       const std::size_t i = static_cast<std::size_t>(y) * caster.width + x;
       const auto& [centre, right, left, down, up] = seen[i];
       std::uint8_t shade = 0;
-      if (right.solid != centre.solid || left.solid != centre.solid || down.solid != centre.solid ||
-          up.solid != centre.solid) {
+      if (!continues(centre, right) || !continues(centre, left) || !continues(centre, down) ||
+          !continues(centre, up)) {
         ++m.uncertain;
         shade = 96;
       } else {

@@ -111,8 +111,10 @@ std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene);
 // GP's depth units (screen z, 0 near .. 2^gp.depth_bits - 1 far).
 //
 // Contract:
-//  - A pixel is uncertain (not compared) when the visible solid changes at any of four
-//    centres offset by `margin` pixels (an outline or the seam of two solids nearby).
+//  - A pixel is uncertain (not compared) when, at any of four centres offset by `margin`
+//    pixels, the visible solid changes or its face is one with no vertex in common with the
+//    centre's (an outline nearby: of the result, of the seam of two solids, or of one part of
+//    a solid over another).
 //  - Elsewhere it disagrees when one side shows a surface and the other not, or the machine's
 //    depth differs from the ray caster's by more than the tolerance: 2 units (the floor of
 //    the interpolated depth and the rounding of its coefficients) plus what the surface's
