@@ -28,11 +28,12 @@ enum class Procedure {
   keep_inside,
   keep_outside,
   merge,
+  next_layer,
   count
 };
 inline constexpr const char* kProcedureNames[] = {
-    "clear",  "triangle", "pass",      "shade",       "light",        "sphere",
-    "parity", "surface",  "candidate", "keep_inside", "keep_outside", "merge"};
+    "clear",   "triangle",  "pass",        "shade",        "light", "sphere",    "parity",
+    "surface", "candidate", "keep_inside", "keep_outside", "merge", "next_layer"};
 inline constexpr const char* kProcedureMeaning[] = {
     "once per region, before any primitive (initialise every pixel)",
     "once per triangle binned to the region, with the triangle's expressions",
@@ -53,6 +54,9 @@ inline constexpr const char* kProcedureMeaning[] = {
      "where the parity is even (outside), clear the parity"),
     ("once per region after a CSG literal's classification: a kept candidate nearer than the "
      "result replaces it"),
+    ("once per region before each CSG surface pass after a literal's first (programs that "
+     "peel: `layers` rounds per literal of a product of two or more): the candidate's depth "
+     "becomes the layer the next one must lie behind, and the candidate is reset"),
 };
 static_assert(std::size(kProcedureNames) == static_cast<std::size_t>(Procedure::count));
 static_assert(std::size(kProcedureMeaning) == static_cast<std::size_t>(Procedure::count));

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 
 namespace pp5 {
@@ -17,7 +19,10 @@ bool has_unsolid_primitives(const Scene& scene) {
   return in_solids < static_cast<int>(scene.mesh.triangles.size());
 }
 
-void csg_plan(const Scene& scene, std::vector<PlannedPass>& plan, std::vector<Procedure>& closing) {
+// `layers`: the rounds (surface and classification passes) of each literal of a product of
+// two or more literals; 1 for a program that does not peel.
+void csg_plan(const Scene& scene, int layers, std::vector<PlannedPass>& plan,
+              std::vector<Procedure>& closing) {
   // What the next pass must open with: the folds and merge still owed.
   std::vector<Procedure> owed;
   if (has_unsolid_primitives(scene)) {
@@ -26,17 +31,21 @@ void csg_plan(const Scene& scene, std::vector<PlannedPass>& plan, std::vector<Pr
     owed.push_back(Procedure::clear);
   }
   for (const std::vector<CsgLiteral>& product : scene.csg) {
+    // A literal alone is its own result: its nearest surface is the visible one.
+    const int rounds = product.size() > 1 ? layers : 1;
     for (const CsgLiteral& literal : product) {
-      owed.push_back(Procedure::candidate);
-      plan.push_back({owed, literal.solid, Procedure::surface,
-                      literal.negated ? PlannedPass::Faces::back : PlannedPass::Faces::front});
-      owed.clear();
-      for (const CsgLiteral& other : product) {
-        if (&other == &literal) continue;
-        plan.push_back({owed, other.solid, Procedure::parity, PlannedPass::Faces::all});
-        owed = {other.negated ? Procedure::keep_outside : Procedure::keep_inside};
+      for (int layer = 0; layer < rounds; ++layer) {
+        owed.push_back(layer == 0 ? Procedure::candidate : Procedure::next_layer);
+        plan.push_back({owed, literal.solid, Procedure::surface,
+                        literal.negated ? PlannedPass::Faces::back : PlannedPass::Faces::front});
+        owed.clear();
+        for (const CsgLiteral& other : product) {
+          if (&other == &literal) continue;
+          plan.push_back({owed, other.solid, Procedure::parity, PlannedPass::Faces::all});
+          owed = {other.negated ? Procedure::keep_outside : Procedure::keep_inside};
+        }
+        owed.push_back(Procedure::merge);
       }
-      owed.push_back(Procedure::merge);
     }
   }
   closing = owed;
@@ -55,7 +64,12 @@ void set_pass_plan(const Program& program, const Scene& scene, FrameValues& valu
   plan.clear();
   values.closing.clear();
   if (program.procedure(Procedure::surface).defined) {
-    if (!scene.csg.empty()) csg_plan(scene, plan, values.closing);
+    int layers = 1;
+    if (program.procedure(Procedure::next_layer).defined) {
+      layers = static_cast<int>(std::max<std::int64_t>(
+          1, values.frame.parameters[static_cast<std::size_t>(Parameter::layers)]));
+    }
+    if (!scene.csg.empty()) csg_plan(scene, layers, plan, values.closing);
     return;
   }
   if (!program.procedure(Procedure::parity).defined) return;

@@ -21,7 +21,11 @@
 //    each classification is folded, before the next pass or after the last, by `keep_inside`
 //    (M positive) or `keep_outside` (M complemented), and each literal's candidate by
 //    `merge`, after the last fold. The last literal's folds and merge are the closing
-//    procedures. On a scene without a CSG expression such a program gets no plan.
+//    procedures. A program that also defines `next_layer` peels: in a product of two or more
+//    literals each literal's surface and classification passes repeat `layers` times (the
+//    frame parameter, from the FrameValues; 1 if they hold none), the repeats opened by
+//    `next_layer` instead of `candidate`, so that its k-th nearest surface is a candidate in
+//    round k. On a scene without a CSG expression such a program gets no plan.
 //  - Any other program gets no plan: its own `option passes`, every packet, its own procedure
 //    (every existing program and golden).
 //  - `parity` and `surface` may use only expressions `triangle` uses (the packet is the
@@ -34,10 +38,11 @@
 
 namespace pp5 {
 
-// The plan's passes.
+// The plan's passes (with no frame parameters: one layer).
 std::vector<PlannedPass> make_pass_plan(const Program& program, const Scene& scene);
 
-// The plan's passes and its closing procedures, into `values`.
+// The plan's passes and its closing procedures, into `values` (whose frame parameters give
+// `layers`).
 void set_pass_plan(const Program& program, const Scene& scene, FrameValues& values);
 
 // Throws std::runtime_error if the program's plan procedures need what its packets lack.

@@ -10,6 +10,7 @@
 
 #include "common/parallel_for.hpp"
 #include "models/gp/pass_plan.hpp"
+#include "models/machine.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/scene/csg_expression.hpp"
@@ -483,7 +484,10 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
     m.median_depth_error = errors[errors.size() / 2];
     m.max_depth_error = errors.back();
   }
-  m.passes = static_cast<int>(make_pass_plan(program, scene).size());
+  // The plan with the frame's parameters (`layers`, for a program that peels).
+  FrameValues values = GeometryEngine(geometry_params(config), scene).frame_values();
+  set_pass_plan(program, scene, values);
+  m.passes = static_cast<int>(values.plan.size());
   m.bits = program.bits_used();
   const FrameResult r = simulate_frame(config, scene, program, threads);
   m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");

@@ -25,7 +25,7 @@ struct CsgOptions {
   std::vector<std::string> assemblies;
   std::vector<std::string> interference = {"interference", "interference_accurate"};
   std::vector<std::string> csg_scenes;
-  std::vector<std::string> csg_programs = {"csg"};
+  std::vector<std::string> csg_programs = {"csg", "csg_layers"};
   std::string application = "all";
   std::string config_path;
   std::vector<std::string> sets;
@@ -142,7 +142,7 @@ Command add_csg_command(CLI::App& app) {
                   "A CSG scene to render (repeatable): box-minus-ball, ball-and-ball, "
                   "box-or-ball, box-minus-two, pair-minus-bar; default all five");
   cmd->add_option("--csg-program", o->csg_programs,
-                  "A program defining 'surface' (repeatable; default csg)");
+                  "A program defining 'surface' (repeatable; default csg and csg_layers)");
   cmd->add_option("--application", o->application,
                   "parity, interference, csg (rendering) or all (default all)")
       ->check(CLI::IsMember({"parity", "interference", "csg", "all"}));
