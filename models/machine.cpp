@@ -91,7 +91,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       scheduler_(config.regions(), config.renderer.count,
                  config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic) {
   check_pass_plan(program);
-  frame_values_.plan = make_pass_plan(program, scene);
+  set_pass_plan(program, scene, frame_values_);
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);

@@ -103,6 +103,12 @@ grep -q "1 runs, 1 missing" "$tmp/sw2.log" || fail "aggregate said: $(cat "$tmp/
 head -1 "$tmp/sw.csv" | grep -q "^gp.count,renderer.balancing,frame_seconds" || fail "bad CSV header"
 # csg names every scene it can make when one is unknown.
 expect_error "no parity scene 'nope' (there are: plane-sphere, plane-boxes, plane-slab, boxes-overlap" csg -s nope
+# CSG rendering needs a program with the CSG procedures and a scene with an expression.
+expect_error "phong: CSG rendering needs a program that defines 'surface'" csg --application csg \
+  --csg-scene box-or-ball --csg-program phong --set screen.width=64 --set screen.height=64 \
+  --out "$tmp/csg-phong"
+expect_error "scene 'plane-sphere' has no CSG expression to render" csg --application csg \
+  --csg-scene plane-sphere --set screen.width=64 --set screen.height=64 --out "$tmp/csg-none"
 # aggregate of a file or a missing folder names it and says what it expected.
 expect_error "sw.csv: is not a folder, expected the output folder of a 'pp5sim sweep' run" sweep aggregate "$tmp/sw.csv"
 expect_error "nowhere: no such folder, expected the output folder" sweep aggregate "$tmp/nowhere"
@@ -168,7 +174,7 @@ grep -q "firmware .*/phong.pp5" "$tmp/cwd.log" || fail "not the built-in phong"
 (cd "$tmp/cwd" && "$abs_bin" render --scene two-triangles --firmware ./phong --out "$tmp/cwd/bad" >"$tmp/cwd2.log" 2>&1) \
   && fail "./phong (not firmware) was accepted"
 grep -q "phong:1" "$tmp/cwd2.log" || fail "./phong was not read as a file: $(cat "$tmp/cwd2.log")"
-expect_error "no built-in program of that name (built-in: accurate epsilon" render --firmware nope --out "$tmp/f"
+expect_error "no built-in program of that name (built-in: accurate csg csg_layers epsilon" render --firmware nope --out "$tmp/f"
 
 # scripts/check-includes on a tree of its own: an upward include fails with FILE:LINE, the
 # same tree without it passes, and a cycle inside a layer is reported.

@@ -83,10 +83,16 @@ printf '{"meshes": [{"builtin": "two-triangles"}], "parameters": {"delta": 5000}
 expect_error "'frame.delta' = 5000 is out of range" render --scene "$tmp/rng.json" --out "$tmp/bad"
 [ -e "$tmp/bad/frame.png" ] && fail "output after bad input"
 
-# A scene's CSG expression is checked and normalised, but no program draws CSG yet: the run
-# says so instead of passing the meshes' union off as the result.
+# A scene's CSG expression is checked and normalised; a program without the CSG procedures
+# says it draws the meshes as they are instead of passing their union off as the result.
 "$bin" render --scene "$(dirname "$0")/../fuzz/corpus/scene/csg_spheres.json" "${small[@]}" \
   --out "$tmp/csg" >"$tmp/csg.log" 2>"$tmp/csg.err" || fail "render failed: $(cat "$tmp/csg.err")"
-grep -q "^warning: scene 'csg_spheres' gives a CSG expression ([0-9]* products\{0,1\} after normalising), but no firmware draws CSG yet" \
+grep -q "^warning: scene 'csg_spheres' gives a CSG expression ([0-9]* products\{0,1\} after normalising), but firmware 'phong' does not draw CSG" \
   "$tmp/csg.err" || fail "no CSG warning: $(cat "$tmp/csg.err")"
+# csg.pp5 draws it (the expression's solids, and the sphere in no solid), without the warning.
+"$bin" render --scene "$(dirname "$0")/../fuzz/corpus/scene/csg_spheres.json" "${small[@]}" \
+  --firmware csg --out "$tmp/csg2" >"$tmp/csg2.log" 2>"$tmp/csg2.err" ||
+  fail "render --firmware csg failed: $(cat "$tmp/csg2.err")"
+grep -q "CSG" "$tmp/csg2.err" && fail "CSG warning with csg.pp5: $(cat "$tmp/csg2.err")"
+[ -s "$tmp/csg2/frame.png" ] || fail "no frame.png from csg.pp5"
 echo "scene_cli: ok"

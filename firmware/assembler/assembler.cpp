@@ -324,9 +324,12 @@ class Assembler {
       // Expressions come with a primitive's packet: only its kind's procedure sees them.
       if (current_ != static_cast<int>(Procedure::triangle) &&
           current_ != static_cast<int>(Procedure::sphere) &&
-          current_ != static_cast<int>(Procedure::parity)) {
-        fail("expression '{}' is only available in procedure 'triangle', 'sphere' or 'parity'",
-             text);
+          current_ != static_cast<int>(Procedure::parity) &&
+          current_ != static_cast<int>(Procedure::surface)) {
+        fail(
+            "expression '{}' is only available in procedure 'triangle', 'sphere', 'parity' or "
+            "'surface'",
+            text);
       }
       o.kind = Operand::Kind::expression;
       o.index = i;

@@ -45,8 +45,9 @@ struct AssemblerOptions {
 // and `sphere` run once per packet, the others once per region (light once per scene light). The
 // 256 is assumed: a region of the built-in torus at 1280 x 1024 receives on the order of a hundred
 // packets, and any weight well above the number of lights gives the same choices.
-// clear triangle pass shade light sphere parity
-inline constexpr int kProcedureWeight[] = {1, 256, 1, 1, 1, 256, 256};
+// clear triangle pass shade light sphere parity surface candidate keep_inside keep_outside merge
+// next_layer
+inline constexpr int kProcedureWeight[] = {1, 256, 1, 1, 1, 256, 256, 256, 1, 1, 1, 1, 1};
 static_assert(std::size(kProcedureWeight) == static_cast<std::size_t>(Procedure::count));
 
 struct FieldDecl {

@@ -15,9 +15,25 @@ namespace pp5 {
 // (multipass algorithms such as depth peeling); with `option passes PARAMETER` N is that
 // frame parameter's value (`layers`), set at run time. Numbered in the order they were added (trace
 // files store the number), not the order they run in.
-enum class Procedure { clear, triangle, pass, shade, light, sphere, parity, count };
-inline constexpr const char* kProcedureNames[] = {"clear", "triangle", "pass",  "shade",
-                                                  "light", "sphere",   "parity"};
+enum class Procedure {
+  clear,
+  triangle,
+  pass,
+  shade,
+  light,
+  sphere,
+  parity,
+  surface,
+  candidate,
+  keep_inside,
+  keep_outside,
+  merge,
+  next_layer,
+  count
+};
+inline constexpr const char* kProcedureNames[] = {
+    "clear",   "triangle",  "pass",        "shade",        "light", "sphere",    "parity",
+    "surface", "candidate", "keep_inside", "keep_outside", "merge", "next_layer"};
 inline constexpr const char* kProcedureMeaning[] = {
     "once per region, before any primitive (initialise every pixel)",
     "once per triangle binned to the region, with the triangle's expressions",
@@ -28,6 +44,19 @@ inline constexpr const char* kProcedureMeaning[] = {
     "once per sphere binned to the region, with the sphere's expressions (sphere_*)",
     ("once per triangle of the solid a classification pass draws (the pass plan: point in "
      "solid, CSG), with the triangle's expressions; it may use only those `triangle` uses"),
+    ("once per triangle of the CSG literal a surface pass draws (its front faces, or its back "
+     "faces for a complemented solid), with the triangle's expressions; it may use only those "
+     "`triangle` uses (CSG pass plan)"),
+    "once per region before each CSG surface pass (reset the candidate surface)",
+    ("once per region after the parity pass of a positive CSG literal: keep the candidate "
+     "where the parity is odd (inside), clear the parity"),
+    ("once per region after the parity pass of a complemented CSG literal: keep the candidate "
+     "where the parity is even (outside), clear the parity"),
+    ("once per region after a CSG literal's classification: a kept candidate nearer than the "
+     "result replaces it"),
+    ("once per region before each CSG surface pass after a literal's first (programs that "
+     "peel: `layers` rounds per literal of a product of two or more): the candidate's depth "
+     "becomes the layer the next one must lie behind, and the candidate is reset"),
 };
 static_assert(std::size(kProcedureNames) == static_cast<std::size_t>(Procedure::count));
 static_assert(std::size(kProcedureMeaning) == static_cast<std::size_t>(Procedure::count));

@@ -99,26 +99,34 @@ struct PacketValues {
 };
 
 // One pass of a frame's pass plan (models/renderer/region_stream.hpp): the region-wide
-// procedure that opens it, the group of primitives whose packets it draws, and the procedure
-// those packets run. A primitive's group is the solid it belongs to (Scene::solids), or
-// kNoGroup for one in no solid.
+// procedures that open it, in order, the group of primitives whose packets it draws, which of
+// their faces, and the procedure those packets run. A primitive's group is the solid it
+// belongs to (Scene::solids), or kNoGroup for one in no solid; a packet's facing is the GP's
+// (Packet::back: the triangle turns its back to the eye).
 struct PlannedPass {
   static constexpr int kAllGroups = -2;  // every packet, whatever its group
   static constexpr int kNoGroup = -1;    // the packets of primitives in no solid
-  Procedure opening = Procedure::pass;   // clear for the first pass
+  enum class Faces { all, front, back };
+  std::vector<Procedure> opening{Procedure::pass};  // starts with clear in the first pass
   int group = kAllGroups;
   Procedure packets = Procedure::count;  // Procedure::count: each packet's own procedure
-  bool draws(int packet_group) const { return group == kAllGroups || group == packet_group; }
+  Faces faces = Faces::all;
+  bool draws(int packet_group, bool packet_back) const {
+    return (group == kAllGroups || group == packet_group) &&
+           (faces == Faces::all || (faces == Faces::back) == packet_back);
+  }
 };
 
 // The values of a frame's region-wide procedures: `frame` for clear, pass and shade (with the
 // first light's parameters), and lights[k] for the `light` procedure of light k; and the
 // frame's pass plan: empty for the program's own passes (`option passes`), each drawing every
-// packet with its own procedure.
+// packet with its own procedure; with a plan, `closing` lists the region-wide procedures run
+// after its last pass, before `light` and `shade`.
 struct FrameValues {
   OwnedValues frame;
   std::vector<OwnedValues> lights;
   std::vector<PlannedPass> plan;
+  std::vector<Procedure> closing;
 };
 
 // What an executor acts on: the board's pixel backend, with the packet's values bound to

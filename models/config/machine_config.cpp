@@ -471,7 +471,9 @@ const std::vector<Entry>& parameter_table() {
                "frame.delta, gp.depth_bits and the scene's camera (derived)"),
       settable(Parameter::layers, "passes", 4, 1, 64,
                "Layers the multipass programs peel (transparent*): their pass count, as they "
-               "say `option passes layers`; each pass resends the region's triangles."),
+               "say `option passes layers`; each pass resends the region's triangles. A CSG "
+               "program that peels (defines `next_layer`, csg_layers) peels this many layers "
+               "of each literal of a product of two or more."),
   };
   return table;
 }

@@ -106,7 +106,8 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
   glm::dvec3 face = glm::cross(eye[1] - eye[0], eye[2] - eye[0]);
   const double face_length = glm::length(face);
   face = face_length > 0 ? face / face_length : glm::dvec3(0, 0, 1);
-  if (glm::dot(face, -eye[0]) < 0) {
+  const bool back = glm::dot(face, -eye[0]) < 0;
+  if (back) {
     if (params_.cull_back_faces) {
       ++counts.culled;
       return;
@@ -157,13 +158,14 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
     s.normal = n > 0 ? poly[i].normal / n : face;
   }
   for (std::size_t i = 1; i + 1 < screen.size(); ++i) {
-    out.push_back({{screen[0], screen[i], screen[i + 1]}, flat, index});
+    out.push_back({{screen[0], screen[i], screen[i + 1]}, flat, index, back});
   }
 }
 
 bool GeometryEngine::setup(const ScreenTriangle& t, const ExpressionSet& needed, SetupResult& out,
                            SetupCounts& counts) const {
   const int s = params_.subpixel_bits;
+  out.back = t.back;
   SetupContext c{params_, scene_.camera, t};
   c.scale = std::int64_t{1} << s;
   c.half = c.scale / 2;

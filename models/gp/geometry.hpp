@@ -65,6 +65,7 @@ struct ScreenTriangle {
   std::array<ScreenVertex, 3> v;
   glm::dvec3 flat_color;  // lit with the face normal
   int source = 0;         // index of the scene triangle
+  bool back = false;      // the scene triangle faces away from the eye (its normals were turned)
 };
 
 // Why a triangle produced no packet.
@@ -90,6 +91,7 @@ using ExpressionSet = std::bitset<static_cast<int>(Expression::count)>;
 struct SetupResult {
   PacketExpressions values;
   int x_min = 0, x_max = -1, y_min = 0, y_max = -1;  // pixel-centre bounding box, inclusive
+  bool back = false;  // a triangle facing away from the eye (ScreenTriangle::back)
 };
 
 class GeometryEngine {

@@ -106,6 +106,7 @@ void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
       packet->primitive = i;
       packet->group =
           ref.kind == kTriangleKind ? geometry.scene().solid_of_triangle(ref.index) : -1;
+      packet->back = result.back;
       packet->words = k.workload.packet_words;
       packet->values = result.values;
       regions.clear();

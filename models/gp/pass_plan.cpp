@@ -2,30 +2,96 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 
 namespace pp5 {
 
-std::vector<PlannedPass> make_pass_plan(const Program& program, const Scene& scene) {
-  std::vector<PlannedPass> plan;
-  if (!program.procedure(Procedure::parity).defined) return plan;
-  plan.push_back({Procedure::clear, PlannedPass::kNoGroup, Procedure::count});
-  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
-    plan.push_back({Procedure::pass, static_cast<int>(s), Procedure::parity});
+namespace {
+
+// Whether the scene has primitives in no solid (the points of point in solid, the plain
+// geometry beside a CSG expression).
+bool has_unsolid_primitives(const Scene& scene) {
+  if (!scene.spheres.empty()) return true;
+  int in_solids = 0;
+  for (const Solid& s : scene.solids) in_solids += s.last - s.first;
+  return in_solids < static_cast<int>(scene.mesh.triangles.size());
+}
+
+// `layers`: the rounds (surface and classification passes) of each literal of a product of
+// two or more literals; 1 for a program that does not peel.
+void csg_plan(const Scene& scene, int layers, std::vector<PlannedPass>& plan,
+              std::vector<Procedure>& closing) {
+  // What the next pass must open with: the folds and merge still owed.
+  std::vector<Procedure> owed;
+  if (has_unsolid_primitives(scene)) {
+    plan.push_back({{Procedure::clear}, PlannedPass::kNoGroup, Procedure::count});
+  } else {
+    owed.push_back(Procedure::clear);
   }
-  return plan;
+  for (const std::vector<CsgLiteral>& product : scene.csg) {
+    // A literal alone is its own result: its nearest surface is the visible one.
+    const int rounds = product.size() > 1 ? layers : 1;
+    for (const CsgLiteral& literal : product) {
+      for (int layer = 0; layer < rounds; ++layer) {
+        owed.push_back(layer == 0 ? Procedure::candidate : Procedure::next_layer);
+        plan.push_back({owed, literal.solid, Procedure::surface,
+                        literal.negated ? PlannedPass::Faces::back : PlannedPass::Faces::front});
+        owed.clear();
+        for (const CsgLiteral& other : product) {
+          if (&other == &literal) continue;
+          plan.push_back({owed, other.solid, Procedure::parity, PlannedPass::Faces::all});
+          owed = {other.negated ? Procedure::keep_outside : Procedure::keep_inside};
+        }
+        owed.push_back(Procedure::merge);
+      }
+    }
+  }
+  closing = owed;
+}
+
+}  // namespace
+
+std::vector<PlannedPass> make_pass_plan(const Program& program, const Scene& scene) {
+  FrameValues values;
+  set_pass_plan(program, scene, values);
+  return values.plan;
+}
+
+void set_pass_plan(const Program& program, const Scene& scene, FrameValues& values) {
+  std::vector<PlannedPass>& plan = values.plan;
+  plan.clear();
+  values.closing.clear();
+  if (program.procedure(Procedure::surface).defined) {
+    int layers = 1;
+    if (program.procedure(Procedure::next_layer).defined) {
+      layers = static_cast<int>(std::max<std::int64_t>(
+          1, values.frame.parameters[static_cast<std::size_t>(Parameter::layers)]));
+    }
+    if (!scene.csg.empty()) csg_plan(scene, layers, plan, values.closing);
+    return;
+  }
+  if (!program.procedure(Procedure::parity).defined) return;
+  plan.push_back({{Procedure::clear}, PlannedPass::kNoGroup, Procedure::count});
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    plan.push_back({{Procedure::pass}, static_cast<int>(s), Procedure::parity});
+  }
 }
 
 void check_pass_plan(const Program& program) {
-  const ProcedureCode& parity = program.procedure(Procedure::parity);
-  if (!parity.defined) return;
-  const auto extra = parity.expressions & ~program.procedure(Procedure::triangle).expressions;
-  for (int e = 0; e < static_cast<int>(Expression::count); ++e) {
-    if (extra.test(static_cast<std::size_t>(e))) {
-      throw std::runtime_error(
-          fmt::format("program '{}': procedure 'parity' uses expression '{}', which procedure "
-                      "'triangle' does not (a parity pass runs the triangle's packets)",
-                      program.name, kExpressions[e].name));
+  for (const Procedure p : {Procedure::parity, Procedure::surface}) {
+    const ProcedureCode& code = program.procedure(p);
+    if (!code.defined) continue;
+    const auto extra = code.expressions & ~program.procedure(Procedure::triangle).expressions;
+    for (int e = 0; e < static_cast<int>(Expression::count); ++e) {
+      if (extra.test(static_cast<std::size_t>(e))) {
+        throw std::runtime_error(fmt::format(
+            "program '{}': procedure '{}' uses expression '{}', which procedure 'triangle' "
+            "does not (a {} pass runs the triangle's packets)",
+            program.name, kProcedureNames[static_cast<int>(p)], kExpressions[e].name,
+            p == Procedure::parity ? "parity" : "surface"));
+      }
     }
   }
 }

@@ -1,6 +1,7 @@
 #pragma once
-// The GP side's pass plan (FrameValues::plan, walked by models/renderer/region_stream.hpp):
-// which passes a frame makes, the group of primitives each draws and the procedure its
+// The GP side's pass plan (FrameValues::plan and FrameValues::closing, walked by
+// models/renderer/region_stream.hpp): which passes a frame makes, the procedures that open
+// each, the group of primitives each draws, which of their faces, and the procedure its
 // packets run, derived from the program and the scene.
 //
 // Contract:
@@ -9,10 +10,26 @@
 //    z-buffer); then one pass per solid of the scene, opened by `pass`, in which only that
 //    solid's triangles run `parity`. `pass` runs before each solid's pass, so a program folds
 //    the previous solid's parity there and the last one in `shade`.
+//  - A program that defines `surface`, on a scene with a CSG expression (Scene::csg, a sum of
+//    products), gets the CSG plan (Goldfeather, Molnar, Turk and Fuchs): if the scene has
+//    primitives in no solid, pass 0 (clear) draws them with their own procedures; then for
+//    each product, for each literal L of it:
+//      a surface pass: L's solid's front faces (back faces for a complemented literal) run
+//      `surface`, opened by `candidate` (and by clear if it is the frame's first pass);
+//      for each other literal M of the product, a classification pass: M's solid's faces,
+//      all of them, run `parity`;
+//    each classification is folded, before the next pass or after the last, by `keep_inside`
+//    (M positive) or `keep_outside` (M complemented), and each literal's candidate by
+//    `merge`, after the last fold. The last literal's folds and merge are the closing
+//    procedures. A program that also defines `next_layer` peels: in a product of two or more
+//    literals each literal's surface and classification passes repeat `layers` times (the
+//    frame parameter, from the FrameValues; 1 if they hold none), the repeats opened by
+//    `next_layer` instead of `candidate`, so that its k-th nearest surface is a candidate in
+//    round k. On a scene without a CSG expression such a program gets no plan.
 //  - Any other program gets no plan: its own `option passes`, every packet, its own procedure
 //    (every existing program and golden).
-//  - `parity` may use only expressions `triangle` uses (the packet is the triangle's):
-//    check_pass_plan refuses a program that does otherwise, naming them.
+//  - `parity` and `surface` may use only expressions `triangle` uses (the packet is the
+//    triangle's): check_pass_plan refuses a program that does otherwise, naming them.
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
@@ -21,7 +38,12 @@
 
 namespace pp5 {
 
+// The plan's passes (with no frame parameters: one layer).
 std::vector<PlannedPass> make_pass_plan(const Program& program, const Scene& scene);
+
+// The plan's passes and its closing procedures, into `values` (whose frame parameters give
+// `layers`).
+void set_pass_plan(const Program& program, const Scene& scene, FrameValues& values);
 
 // Throws std::runtime_error if the program's plan procedures need what its packets lack.
 void check_pass_plan(const Program& program);

@@ -15,11 +15,13 @@
 // own expressions and the frame's parameters.
 //
 // With a pass plan (FrameValues::plan, made by the GP side from the scene: make_pass_plan in
-// models/gp/pass_plan.hpp), the passes are the plan's: pass k opens with plan[k].opening
-// (clear for the first) instead of `pass`, and a packet whose group plan[k] does not draw
-// runs nothing in it (its step runs an undefined procedure: no instruction, no cycle);
-// one it draws runs plan[k].packets, or its own procedure. The GPs still send every packet
-// in every pass (the Renderer discards the others on reading the header).
+// models/gp/pass_plan.hpp), the passes are the plan's: pass k opens with the procedures of
+// plan[k].opening, in order (the first starts with clear), instead of `pass`, and a packet
+// whose group or facing plan[k] does not draw runs nothing in it (its step runs an undefined
+// procedure: no instruction, no cycle); one it draws runs plan[k].packets, or its own
+// procedure. After the last pass, FrameValues::closing's procedures run, then `light` and
+// shade. The GPs still send every packet in every pass (the Renderer discards the others on
+// reading the header).
 //
 // Contract:
 //  - for_each yields every step of a region in the order above; before_pass, packet and
@@ -68,13 +70,18 @@ class RegionStream {
   // The passes of this frame: the program's count, or its pass parameter's value.
   int passes() const { return passes_; }
 
-  // What runs before pass k's packets: clear before the first, `pass` before the others.
+  // What runs before pass k's packets: clear before the first, `pass` before the others; or
+  // the plan's opening procedures.
   template <class Visit>
   void before_pass(int pass, Visit&& visit) const {
-    const Procedure p = !values_.plan.empty() ? values_.plan[static_cast<std::size_t>(pass)].opening
-                        : pass == 0           ? Procedure::clear
-                                              : Procedure::pass;
-    visit(RegionStep{p, program_.procedure(p), values_.frame, nullptr, pass, -1, -1});
+    auto region_wide = [&](Procedure p) {
+      visit(RegionStep{p, program_.procedure(p), values_.frame, nullptr, pass, -1, -1});
+    };
+    if (values_.plan.empty()) {
+      region_wide(pass == 0 ? Procedure::clear : Procedure::pass);
+      return;
+    }
+    for (Procedure p : values_.plan[static_cast<std::size_t>(pass)].opening) region_wide(p);
   }
 
   // One packet of pass k, at `index` among the region's packets.
@@ -83,7 +90,7 @@ class RegionStream {
     if (!values_.plan.empty()) {
       const PlannedPass& planned = values_.plan[static_cast<std::size_t>(pass)];
       if (planned.packets != Procedure::count) p = planned.packets;
-      if (!planned.draws(packet.group)) {
+      if (!planned.draws(packet.group, packet.back)) {
         return RegionStep{
             p,       skipped_, PacketValues(packet.values.expressions, values_.frame.parameters),
             &packet, pass,     index,
@@ -99,10 +106,14 @@ class RegionStream {
                       -1};
   }
 
-  // What runs after the last pass: each light's `light` procedure, then shade.
+  // What runs after the last pass: the plan's closing procedures, each light's `light`
+  // procedure, then shade.
   template <class Visit>
   void after_passes(Visit&& visit) const {
     const int last = passes_ - 1;
+    for (Procedure p : values_.closing) {
+      visit(RegionStep{p, program_.procedure(p), values_.frame, nullptr, last, -1, -1});
+    }
     const ProcedureCode& light = program_.procedure(Procedure::light);
     if (light.defined) {
       for (std::size_t k = 0; k < values_.lights.size(); ++k) {

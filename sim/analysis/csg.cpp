@@ -3,11 +3,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 #include <stdexcept>
 
+#include "common/parallel_for.hpp"
 #include "models/gp/pass_plan.hpp"
+#include "models/machine.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/scene/csg_expression.hpp"
@@ -26,15 +29,15 @@ void add_quad(Mesh& mesh, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, gl
 }
 
 // A closed box: centre, half extents, turned by `degrees` about y; 12 triangles.
-void add_box(Mesh& mesh, glm::vec3 centre, glm::vec3 half, float degrees) {
+void add_box(Mesh& mesh, glm::vec3 centre, glm::vec3 half, float degrees,
+             glm::vec3 color = glm::vec3(0.8f)) {
   const glm::mat4 turn = glm::rotate(glm::mat4(1.0f), glm::radians(degrees), glm::vec3(0, 1, 0));
   auto corner = [&](int i) {
     const glm::vec3 s((i & 1) ? 1.0f : -1.0f, (i & 2) ? 1.0f : -1.0f, (i & 4) ? 1.0f : -1.0f);
     return centre + glm::vec3(turn * glm::vec4(s * half, 1.0f));
   };
   const auto base = static_cast<unsigned>(mesh.vertices.size());
-  for (int i = 0; i < 8; ++i)
-    mesh.vertices.push_back({corner(i), glm::vec3(0, 1, 0), glm::vec3(0.8f)});
+  for (int i = 0; i < 8; ++i) mesh.vertices.push_back({corner(i), glm::vec3(0, 1, 0), color});
   // Faces wound outward, corners by bit (x, y, z).
   const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
                            {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
@@ -58,6 +61,10 @@ std::vector<std::string> interference_scene_names() {
   return {"boxes-overlap", "boxes-apart", "boxes-touching"};
 }
 
+std::vector<std::string> csg_scene_names() {
+  return {"box-minus-ball", "ball-and-ball", "box-or-ball", "box-minus-two", "pair-minus-bar"};
+}
+
 Scene make_parity_scene(const std::string& name) {
   Mesh mesh;
   std::vector<Solid> solids;
@@ -67,7 +74,43 @@ Scene make_parity_scene(const std::string& name) {
     solids.push_back({n, first, static_cast<int>(mesh.triangles.size())});
   };
   std::string description;
-  if (name == "plane-sphere") {
+  CsgProducts csg;
+  const glm::vec3 sand(0.85f, 0.7f, 0.45f), teal(0.3f, 0.65f, 0.7f), rose(0.8f, 0.4f, 0.45f);
+  auto ball = [&](const std::string& n, glm::vec3 centre, float radius, glm::vec3 color) {
+    solid(n, [&] { append_tessellated_spheres({Sphere{centre, radius, color}}, 24, 12, mesh); });
+  };
+  const CsgLiteral a{0, false}, b{1, false}, not_b{1, true}, not_c{2, true};
+  if (name == "box-minus-ball") {
+    description = "a box minus a ball that bites its top corner (a & !b)";
+    solid("box", [&] { add_box(mesh, {0.0f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.7f}, 20.0f, sand); });
+    ball("ball", {0.45f, 0.55f, 0.4f}, 0.6f, teal);
+    csg = {{a, not_b}};
+  } else if (name == "ball-and-ball") {
+    description = "the lens where two balls overlap (a & b)";
+    ball("left", {-0.35f, 0.0f, 0.0f}, 0.8f, sand);
+    ball("right", {0.35f, 0.1f, 0.1f}, 0.7f, teal);
+    csg = {{a, b}};
+  } else if (name == "box-or-ball") {
+    description = "a box and a ball through it (a | b)";
+    solid("box", [&] { add_box(mesh, {-0.2f, 0.0f, 0.0f}, {0.7f, 0.4f, 0.6f}, 20.0f, sand); });
+    ball("ball", {0.5f, 0.2f, 0.2f}, 0.55f, teal);
+    csg = {{a}, {b}};
+  } else if (name == "box-minus-two") {
+    description = "a box minus a ball and a bar through it (a & !b & !c)";
+    solid("box", [&] { add_box(mesh, {0.0f, 0.0f, 0.0f}, {0.8f, 0.5f, 0.7f}, 20.0f, sand); });
+    ball("ball", {-0.4f, 0.5f, 0.3f}, 0.5f, teal);
+    solid("bar", [&] { add_box(mesh, {0.35f, 0.1f, 0.0f}, {0.2f, 0.9f, 0.25f}, 35.0f, rose); });
+    csg = {{a, not_b, not_c}};
+  } else if (name == "pair-minus-bar") {
+    description =
+        "two slabs, one solid (not convex), minus a bar through the upper one only (a & !b)";
+    solid("slabs", [&] {
+      add_box(mesh, {0.0f, 0.45f, 0.0f}, {0.8f, 0.15f, 0.7f}, 0.0f, sand);
+      add_box(mesh, {0.0f, -0.45f, 0.0f}, {0.8f, 0.15f, 0.7f}, 0.0f, sand);
+    });
+    solid("bar", [&] { add_box(mesh, {0.1f, 0.5f, 0.1f}, {0.3f, 0.35f, 0.3f}, 10.0f, rose); });
+    csg = {{a, not_b}};
+  } else if (name == "plane-sphere") {
     description = "a tilted plane of points through a closed tessellated sphere (24 x 12)";
     add_plane(mesh, 0.25f, 0.2f, 0.1f, 1.8f);
     solid("ball", [&] {
@@ -111,6 +154,7 @@ Scene make_parity_scene(const std::string& name) {
     std::vector<std::string> all = parity_scene_names();
     all.push_back("plane-slab");
     for (const std::string& n : interference_scene_names()) all.push_back(n);
+    for (const std::string& n : csg_scene_names()) all.push_back(n);
     throw std::invalid_argument(
         fmt::format("no parity scene '{}' (there are: {})", name, fmt::join(all, ", ")));
   }
@@ -123,6 +167,7 @@ Scene make_parity_scene(const std::string& name) {
   scene.lights = {default_light(scene.camera)};
   scene.background = glm::vec3(0.05f, 0.05f, 0.08f);
   scene.solids = std::move(solids);
+  scene.csg = std::move(csg);
   return scene;
 }
 
@@ -263,9 +308,8 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
     }
     for (int k = 0; k < 3; ++k) m.difference.rgb[i * 3 + k] = shade;
   }
-  FrameValues values;
-  values.plan = make_pass_plan(program, scene);
-  m.passes = values.plan.empty() ? 1 : static_cast<int>(values.plan.size());
+  const std::size_t passes = make_pass_plan(program, scene).size();
+  m.passes = passes == 0 ? 1 : static_cast<int>(passes);
   m.bits = program.bits_used();
   const FrameResult r = simulate_frame(config, scene, program, threads);
   m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
@@ -322,6 +366,155 @@ std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene) 
       out[static_cast<std::size_t>(y) * caster.width + x] =
           csg_first_surface(scene, r.origin, r.direction).solid;
     }
+  }
+  return out;
+}
+
+CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Program& program,
+                       int threads, double margin) {
+  if (!program.procedure(Procedure::surface).defined) {
+    throw std::invalid_argument(
+        fmt::format("{}: CSG rendering needs a program that defines 'surface'", program.name));
+  }
+  if (scene.csg.empty()) {
+    throw std::invalid_argument(
+        fmt::format("scene '{}' has no CSG expression to render", scene.name));
+  }
+  CsgMeasure m;
+  m.scene = scene.name;
+  m.program = program.name;
+  std::vector<std::string> names;
+  for (const Solid& s : scene.solids) names.push_back(s.name);
+  m.expression = format_csg(scene.csg, names);
+  const FieldFrame field = render_field(config, scene, program, "z", threads);
+  m.image = field.image;
+  const Caster caster(config, scene);
+  const float aspect = static_cast<float>(caster.width) / static_cast<float>(caster.height);
+  const glm::dmat4 to_clip =
+      glm::dmat4(projection_matrix(scene.camera, aspect)) * glm::dmat4(view_matrix(scene.camera));
+  const double depth_max = std::ldexp(1.0, config.gp.depth_bits) - 1.0;
+  const std::int64_t background = (std::int64_t{1} << config.gp.depth_bits) - 1;
+  // The first surface at a screen point: its solid and depth in the GP's units.
+  struct Seen {
+    int solid;
+    int triangle;
+    double depth;
+  };
+  auto seen_at = [&](double x, double y) {
+    const Ray r = caster.ray(x, y);
+    const CsgSurface s = csg_first_surface(scene, r.origin, r.direction);
+    if (s.solid < 0) return Seen{-1, -1, 0.0};
+    const glm::dvec4 c = to_clip * glm::dvec4(r.origin + s.t * r.direction, 1.0);
+    return Seen{s.solid, s.triangle, (c.z / c.w * 0.5 + 0.5) * depth_max};
+  };
+  // Whether the surface seen at `b` continues the one seen at `a`: the same solid, and the
+  // same triangle or one touching it (a vertex in common). Otherwise an outline passes
+  // between them: of a solid, of the seam of two, or of one part of a solid over another.
+  auto continues = [&](const Seen& a, const Seen& b) {
+    if (a.solid != b.solid) return false;
+    if (a.solid < 0 || a.triangle == b.triangle) return true;
+    const glm::uvec3 s = scene.mesh.triangles[static_cast<std::size_t>(a.triangle)];
+    const glm::uvec3 t = scene.mesh.triangles[static_cast<std::size_t>(b.triangle)];
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        if (scene.mesh.vertices[s[i]].position == scene.mesh.vertices[t[j]].position) return true;
+      }
+    }
+    return false;
+  };
+  const double half_step = std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
+  m.difference.width = caster.width;
+  m.difference.height = caster.height;
+  m.difference.rgb.assign(static_cast<std::size_t>(caster.width) * caster.height * 3, 0);
+  // The ray caster's answers, rows spread over the host threads: the centre's, then the four
+  // offset centres' (right, left, down, up).
+  std::vector<std::array<Seen, 5>> seen(static_cast<std::size_t>(caster.width) * caster.height);
+  parallel_for(caster.height, threads, [&](int y) {
+    for (int x = 0; x < caster.width; ++x) {
+      const double cx = x + 0.5, cy = y + 0.5;
+      seen[static_cast<std::size_t>(y) * caster.width + x] = {
+          seen_at(cx, cy), seen_at(cx + margin, cy), seen_at(cx - margin, cy),
+          seen_at(cx, cy + margin), seen_at(cx, cy - margin)};
+    }
+  });
+  std::vector<double> errors;  // depth errors of the agreeing covered pixels
+  for (int y = 0; y < caster.height; ++y) {
+    for (int x = 0; x < caster.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * caster.width + x;
+      const auto& [centre, right, left, down, up] = seen[i];
+      std::uint8_t shade = 0;
+      if (!continues(centre, right) || !continues(centre, left) || !continues(centre, down) ||
+          !continues(centre, up)) {
+        ++m.uncertain;
+        shade = 96;
+      } else {
+        ++m.compared;
+        const std::int64_t z = static_cast<std::int64_t>(field.values[i]);
+        const bool machine = z != background;
+        const bool truth = centre.solid >= 0;
+        m.surface += truth;
+        bool differs = machine != truth;
+        if (differs) {
+          ++m.coverage;
+        } else if (truth) {
+          // The steeper side in each direction: across a crease (two faces of one solid)
+          // the pixel may be either face's.
+          const double d = centre.depth;
+          const double slope = (std::max(std::abs(right.depth - d), std::abs(d - left.depth)) +
+                                std::max(std::abs(down.depth - d), std::abs(d - up.depth))) /
+                               margin;
+          const double tolerance = 2.0 + slope * half_step;
+          const double error = std::abs(static_cast<double>(z) - centre.depth);
+          if (error > tolerance) {
+            differs = true;
+          } else {
+            errors.push_back(error);
+          }
+        }
+        if (differs) {
+          ++m.disagree;
+          shade = 255;
+        }
+      }
+      for (int k = 0; k < 3; ++k) m.difference.rgb[i * 3 + k] = shade;
+    }
+  }
+  if (!errors.empty()) {
+    std::sort(errors.begin(), errors.end());
+    m.median_depth_error = errors[errors.size() / 2];
+    m.max_depth_error = errors.back();
+  }
+  // The plan with the frame's parameters (`layers`, for a program that peels).
+  FrameValues values = GeometryEngine(geometry_params(config), scene).frame_values();
+  set_pass_plan(program, scene, values);
+  m.passes = static_cast<int>(values.plan.size());
+  m.bits = program.bits_used();
+  const FrameResult r = simulate_frame(config, scene, program, threads);
+  m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
+  m.frame_seconds = r.stats.real("frame.simulated_seconds");
+  return m;
+}
+
+std::string format_csg_render(const std::vector<CsgMeasure>& rows) {
+  std::string out =
+      "| application | scene | expression | program | pixels compared | with a surface (ray "
+      "caster) | disagreeing | of those, coverage | near an outline (not compared) | depth error "
+      "where agreeing, median / largest (depth units) | passes | bits | Renderer cycles | frame ms "
+      "| frames/s |\n"
+      "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const CsgMeasure& m : rows) {
+    std::string expression;  // a table cell: its unions' bars escaped
+    for (char c : m.expression) {
+      if (c == '|') expression += '\\';
+      expression += c;
+    }
+    out += fmt::format(
+        "| CSG rendering | {} | `{}` | {} | {} | {} | {} | {} | {} | {:.1f} / {:.0f} | {} | {} | "
+        "{} "
+        "| {:.3f} | {:.1f} |\n",
+        m.scene, expression, m.program, m.compared, m.surface, m.disagree, m.coverage, m.uncertain,
+        m.median_depth_error, m.max_depth_error, m.passes, m.bits, m.renderer_cycles,
+        m.frame_seconds * 1e3, m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
   }
   return out;
 }

@@ -105,4 +105,42 @@ CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 d
 // with the camera's own rays.
 std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene);
 
+// CSG rendering (csg.pp5 under the CSG pass plan, models/gp/pass_plan.hpp): the machine's
+// result depth `z` (0xFFFFFF: background) read back and compared per pixel with the ray
+// caster's first surface of the same expression on the same meshes, its depth taken to the
+// GP's depth units (screen z, 0 near .. 2^gp.depth_bits - 1 far).
+//
+// Contract:
+//  - A pixel is uncertain (not compared) when, at any of four centres offset by `margin`
+//    pixels, the visible solid changes or its face is one with no vertex in common with the
+//    centre's (an outline nearby: of the result, of the seam of two solids, or of one part of
+//    a solid over another).
+//  - Elsewhere it disagrees when one side shows a surface and the other not, or the machine's
+//    depth differs from the ray caster's by more than the tolerance: 2 units (the floor of
+//    the interpolated depth and the rounding of its coefficients) plus what the surface's
+//    depth changes over half a sub-pixel step in x and in y (the GP snaps vertices to
+//    1/2^gp.subpixel_bits of a pixel, moving the plane by up to that), the slope taken from
+//    the ray caster's depths at the offset centres, the steeper side in each direction (at a
+//    crease the pixel may belong to either face).
+//  - Exact only for convex solids: a non-convex literal's nearest surface may be discarded
+//    where a farther one is visible (the scene "pair-minus-bar" shows it).
+std::vector<std::string> csg_scene_names();  // also made by make_parity_scene
+struct CsgMeasure {
+  std::string scene, program, expression;
+  std::int64_t compared = 0;      // certain pixels
+  std::int64_t surface = 0;       // certain pixels where the ray caster finds a surface
+  std::int64_t disagree = 0;      // certain pixels where coverage or depth differs
+  std::int64_t coverage = 0;      // of those, where one shows a surface and the other not
+  std::int64_t uncertain = 0;     // pixels near an outline, not compared
+  double median_depth_error = 0;  // depth units, over agreeing covered pixels
+  double max_depth_error = 0;
+  int passes = 0, bits = 0;
+  std::int64_t renderer_cycles = 0;
+  double frame_seconds = 0;
+  RgbImage image, difference;  // difference: white disagree, grey uncertain
+};
+CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Program& program,
+                       int threads, double margin = 0.75);
+std::string format_csg_render(const std::vector<CsgMeasure>& rows);
+
 }  // namespace pp5

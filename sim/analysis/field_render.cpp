@@ -27,7 +27,7 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
   const GeometryEngine geometry(geometry_params(config), scene);
   check_pass_plan(program);
   FrameValues values = geometry.frame_values();
-  values.plan = make_pass_plan(program, scene);
+  set_pass_plan(program, scene, values);
   const RegionStream stream(program, values);
 
   // Every primitive of the display list through its kind, as the GPs do.
@@ -55,6 +55,7 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
       packet->kind = ref.kind;
       packet->primitive = i;
       packet->group = ref.kind == kTriangleKind ? scene.solid_of_triangle(ref.index) : -1;
+      packet->back = r.back;
       packet->values = r.values;
       regions.clear();
       worker.bin(r, regions);

@@ -1,5 +1,6 @@
 // pp5sim csg: the parity and depth-interval applications of issue 15 against a CPU ray
-// caster (sim/analysis/csg.hpp). Today: point in solid by parity, standard and accurate.
+// caster (sim/analysis/csg.hpp): point in solid by parity, standard and accurate;
+// interference; CSG rendering.
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -23,6 +24,8 @@ struct CsgOptions {
   std::vector<std::string> programs = {"parity", "parity_accurate"};
   std::vector<std::string> assemblies;
   std::vector<std::string> interference = {"interference", "interference_accurate"};
+  std::vector<std::string> csg_scenes;
+  std::vector<std::string> csg_programs = {"csg", "csg_layers"};
   std::string application = "all";
   std::string config_path;
   std::vector<std::string> sets;
@@ -42,8 +45,19 @@ int run_csg(const CsgOptions& o) {
     programs.back().name = name;
   }
   prepare_output_folder(o.out_dir, "--out");
-  const bool parity = o.application != "interference";
-  const bool assembly = o.application != "parity";
+  const bool parity = o.application == "parity" || o.application == "all";
+  const bool assembly = o.application == "interference" || o.application == "all";
+  const bool rendering = o.application == "csg" || o.application == "all";
+  std::vector<Scene> csg_scenes;
+  if (rendering) {
+    for (const std::string& name : o.csg_scenes.empty() ? csg_scene_names() : o.csg_scenes)
+      csg_scenes.push_back(make_parity_scene(name));
+  }
+  std::vector<Program> csg_programs;
+  for (const std::string& name : rendering ? o.csg_programs : std::vector<std::string>{}) {
+    csg_programs.push_back(assemble_file(resolve_firmware(name), assembler_options(config)));
+    csg_programs.back().name = name;
+  }
   std::vector<std::string> assembly_names = o.assemblies;
   if (assembly_names.empty()) assembly_names = interference_scene_names();
   std::vector<Scene> assemblies;
@@ -57,6 +71,7 @@ int run_csg(const CsgOptions& o) {
   }
   std::vector<ParityMeasure> rows;
   std::vector<InterferenceMeasure> interfering;
+  std::vector<CsgMeasure> rendered;
   OutputSet outputs;
   auto images = [&](const std::string& scene, const std::string& program, const RgbImage& image,
                     const RgbImage& difference) {
@@ -76,9 +91,16 @@ int run_csg(const CsgOptions& o) {
       images(scene.name, program.name, interfering.back().image, interfering.back().difference);
     }
   }
+  for (const Scene& scene : csg_scenes) {
+    for (const Program& program : csg_programs) {
+      rendered.push_back(measure_csg(config, scene, program, o.threads));
+      images(scene.name, program.name, rendered.back().image, rendered.back().difference);
+    }
+  }
   std::string tables;
   if (parity) tables += format_parity(rows) + "\n";
   if (assembly) tables += format_interference(interfering) + "\n";
+  if (rendering) tables += format_csg_render(rendered) + "\n";
   outputs.add((fs::path(o.out_dir) / "csg.md").string(), tables);
   outputs.commit();
   std::cout << fmt::format(
@@ -100,7 +122,9 @@ Command add_csg_command(CLI::App& app) {
       "Parity applications on the machine (issue 15) against a double-precision ray caster: "
       "point in solid by parity, with standard and accurate scan conversion, on scenes made "
       "for it (a plane of points through closed solids), and interference of two solids by "
-      "depth intervals (with the depth range of the overlap). Prints the agreement tables (pixels "
+      "depth intervals (with the depth range of the overlap), and CSG rendering (Goldfeather's "
+      "multipass algorithm, csg.pp5) of expressions over closed solids, against the first "
+      "surface of the same expression (coverage and depth). Prints the agreement tables (pixels "
       "disagreeing, passes, bits, cycles, frame time) and writes each image and an image of "
       "the differing pixels (white; grey: near an edge, not compared).");
   cmd->add_option("-s,--scene", o->scenes,
@@ -114,8 +138,14 @@ Command add_csg_command(CLI::App& app) {
   cmd->add_option("--interference", o->interference,
                   "An interference program (repeatable; default interference and "
                   "interference_accurate)");
-  cmd->add_option("--application", o->application, "parity, interference or all (default all)")
-      ->check(CLI::IsMember({"parity", "interference", "all"}));
+  cmd->add_option("--csg-scene", o->csg_scenes,
+                  "A CSG scene to render (repeatable): box-minus-ball, ball-and-ball, "
+                  "box-or-ball, box-minus-two, pair-minus-bar; default all five");
+  cmd->add_option("--csg-program", o->csg_programs,
+                  "A program defining 'surface' (repeatable; default csg and csg_layers)");
+  cmd->add_option("--application", o->application,
+                  "parity, interference, csg (rendering) or all (default all)")
+      ->check(CLI::IsMember({"parity", "interference", "csg", "all"}));
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/csg)");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")

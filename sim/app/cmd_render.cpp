@@ -57,12 +57,14 @@ void warn_about_ignored_scene_parts(const Scene& scene, const Program& program) 
         "shades with the first light only (phong sums them all)\n",
         scene.name, scene.lights.size(), name);
   }
-  // The loader checks and normalises a "csg" expression, but no shipped program draws one
-  // yet (issue 15): say so rather than let the union of the meshes pass for the result.
-  if (!scene.csg.empty()) {
+  // A "csg" expression is drawn by a program with the CSG pass plan's procedures (its
+  // `surface`, models/gp/pass_plan.hpp); any other draws every mesh as it is: say so rather
+  // than let the union of the meshes pass for the result.
+  if (!scene.csg.empty() && !program.procedure(Procedure::surface).defined) {
     std::cerr << fmt::format(
-        "warning: scene '{}' gives a CSG expression ({} product{} after normalising), but no "
-        "firmware draws CSG yet: firmware '{}' draws every mesh as it is\n",
+        "warning: scene '{}' gives a CSG expression ({} product{} after normalising), but "
+        "firmware '{}' does not draw CSG (it has no 'surface' procedure): it draws every mesh "
+        "as it is (use --firmware csg)\n",
         scene.name, scene.csg.size(), scene.csg.size() == 1 ? "" : "s", name);
   }
 }
