@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <limits>
 #include <stdexcept>
 
 #include "common/parallel_for.hpp"
@@ -317,32 +318,92 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
   return m;
 }
 
-CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 direction) {
+namespace {
+
+// The solids' triangles binned by the screen tiles their projected bounding box (grown by a
+// pixel for round-off, and by `reach` for rays cast off the pixel centres) touches, each bin
+// in increasing triangle order. A ray through a screen point meets only triangles whose
+// projection contains that point, so its bin holds every triangle it can hit. A triangle with
+// a corner at or behind the eye's plane goes to every bin.
+class ScreenBins {
+ public:
+  ScreenBins(const Scene& scene, const glm::dmat4& to_clip, int width, int height, double reach)
+      : tiles_x_((width + kTile - 1) / kTile), tiles_y_((height + kTile - 1) / kTile) {
+    bins_.resize(static_cast<std::size_t>(tiles_x_) * tiles_y_);
+    for (const Solid& solid : scene.solids) {
+      for (int t = solid.first; t < solid.last; ++t) {
+        const glm::uvec3 tri = scene.mesh.triangles[static_cast<std::size_t>(t)];
+        double lo_x = kHuge, lo_y = kHuge, hi_x = -kHuge, hi_y = -kHuge;
+        bool behind = false;
+        for (int k = 0; k < 3; ++k) {
+          const glm::dvec4 c =
+              to_clip * glm::dvec4(glm::dvec3(scene.mesh.vertices[tri[k]].position), 1.0);
+          if (!(c.w > 1e-9)) {
+            behind = true;
+            break;
+          }
+          const double x = (c.x / c.w + 1.0) * 0.5 * width, y = (1.0 - c.y / c.w) * 0.5 * height;
+          lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x);
+          lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
+        }
+        const double grow = reach + 1.0;
+        int x0 = 0, x1 = tiles_x_ - 1, y0 = 0, y1 = tiles_y_ - 1;
+        if (!behind) {
+          if (hi_x < -grow || hi_y < -grow || lo_x > width + grow || lo_y > height + grow) continue;
+          x0 = std::clamp(static_cast<int>(std::floor((lo_x - grow) / kTile)), 0, tiles_x_ - 1);
+          x1 = std::clamp(static_cast<int>(std::floor((hi_x + grow) / kTile)), 0, tiles_x_ - 1);
+          y0 = std::clamp(static_cast<int>(std::floor((lo_y - grow) / kTile)), 0, tiles_y_ - 1);
+          y1 = std::clamp(static_cast<int>(std::floor((hi_y + grow) / kTile)), 0, tiles_y_ - 1);
+        }
+        for (int ty = y0; ty <= y1; ++ty) {
+          for (int tx = x0; tx <= x1; ++tx)
+            bins_[static_cast<std::size_t>(ty) * tiles_x_ + tx].push_back(t);
+        }
+      }
+    }
+  }
+  // The triangles a ray through screen point (x, y) may meet.
+  const std::vector<int>& at(double x, double y) const {
+    const int tx = std::clamp(static_cast<int>(std::floor(x / kTile)), 0, tiles_x_ - 1);
+    const int ty = std::clamp(static_cast<int>(std::floor(y / kTile)), 0, tiles_y_ - 1);
+    return bins_[static_cast<std::size_t>(ty) * tiles_x_ + tx];
+  }
+
+ private:
+  static constexpr int kTile = 16;
+  static constexpr double kHuge = std::numeric_limits<double>::max();
+  int tiles_x_, tiles_y_;
+  std::vector<std::vector<int>> bins_;
+};
+
+// csg_first_surface over the given triangles of the solids (every one the ray may meet).
+CsgSurface first_surface(const Scene& scene, const std::vector<int>& solid_of,
+                         const std::vector<int>& triangles, glm::dvec3 origin,
+                         glm::dvec3 direction) {
   struct Hit {
     double t;
     int solid, triangle;
   };
   std::vector<Hit> hits;
   std::vector<bool> inside(scene.solids.size(), false);
-  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
-    for (int t = scene.solids[s].first; t < scene.solids[s].last; ++t) {
-      const glm::uvec3 tri = scene.mesh.triangles[static_cast<std::size_t>(t)];
-      const glm::dvec3 v0(scene.mesh.vertices[tri.x].position);
-      const glm::dvec3 e1 = glm::dvec3(scene.mesh.vertices[tri.y].position) - v0;
-      const glm::dvec3 e2 = glm::dvec3(scene.mesh.vertices[tri.z].position) - v0;
-      const glm::dvec3 p = glm::cross(direction, e2);
-      const double det = glm::dot(e1, p);
-      if (det == 0) continue;
-      const glm::dvec3 o = origin - v0;
-      const double u = glm::dot(o, p) / det;
-      const glm::dvec3 q = glm::cross(o, e1);
-      const double v = glm::dot(direction, q) / det;
-      if (u < 0 || v < 0 || u + v > 1) continue;
-      const double h = glm::dot(e2, q) / det;
-      if (h <= 0) continue;
-      hits.push_back({h, static_cast<int>(s), t});
-      inside[s] = !inside[s];  // an odd number of hits ahead: the origin is inside
-    }
+  for (const int t : triangles) {
+    const int s = solid_of[static_cast<std::size_t>(t)];
+    const glm::uvec3 tri = scene.mesh.triangles[static_cast<std::size_t>(t)];
+    const glm::dvec3 v0(scene.mesh.vertices[tri.x].position);
+    const glm::dvec3 e1 = glm::dvec3(scene.mesh.vertices[tri.y].position) - v0;
+    const glm::dvec3 e2 = glm::dvec3(scene.mesh.vertices[tri.z].position) - v0;
+    const glm::dvec3 p = glm::cross(direction, e2);
+    const double det = glm::dot(e1, p);
+    if (det == 0) continue;
+    const glm::dvec3 o = origin - v0;
+    const double u = glm::dot(o, p) / det;
+    const glm::dvec3 q = glm::cross(o, e1);
+    const double v = glm::dot(direction, q) / det;
+    if (u < 0 || v < 0 || u + v > 1) continue;
+    const double h = glm::dot(e2, q) / det;
+    if (h <= 0) continue;
+    hits.push_back({h, s, t});
+    inside[static_cast<std::size_t>(s)] = !inside[static_cast<std::size_t>(s)];  // odd: inside
   }
   std::sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) {
     return a.t != b.t ? a.t < b.t : a.triangle < b.triangle;
@@ -357,14 +418,38 @@ CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 d
   return {};
 }
 
+std::vector<int> solid_of_triangles(const Scene& scene) {
+  std::vector<int> out(scene.mesh.triangles.size(), -1);
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    for (int t = scene.solids[s].first; t < scene.solids[s].last; ++t)
+      out[static_cast<std::size_t>(t)] = static_cast<int>(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 direction) {
+  std::vector<int> all;
+  for (const Solid& solid : scene.solids) {
+    for (int t = solid.first; t < solid.last; ++t) all.push_back(t);
+  }
+  return first_surface(scene, solid_of_triangles(scene), all, origin, direction);
+}
+
 std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene) {
   const Caster caster(config, scene);
+  const float aspect = static_cast<float>(caster.width) / static_cast<float>(caster.height);
+  const glm::dmat4 to_clip =
+      glm::dmat4(projection_matrix(scene.camera, aspect)) * glm::dmat4(view_matrix(scene.camera));
+  const ScreenBins bins(scene, to_clip, caster.width, caster.height, 0.0);
+  const std::vector<int> solid_of = solid_of_triangles(scene);
   std::vector<int> out(static_cast<std::size_t>(caster.width) * caster.height, -1);
   for (int y = 0; y < caster.height; ++y) {
     for (int x = 0; x < caster.width; ++x) {
       const Ray r = caster.ray(x + 0.5, y + 0.5);
       out[static_cast<std::size_t>(y) * caster.width + x] =
-          csg_first_surface(scene, r.origin, r.direction).solid;
+          first_surface(scene, solid_of, bins.at(x + 0.5, y + 0.5), r.origin, r.direction).solid;
     }
   }
   return out;
@@ -400,9 +485,11 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
     int triangle;
     double depth;
   };
+  const ScreenBins bins(scene, to_clip, caster.width, caster.height, margin);
+  const std::vector<int> solid_of = solid_of_triangles(scene);
   auto seen_at = [&](double x, double y) {
     const Ray r = caster.ray(x, y);
-    const CsgSurface s = csg_first_surface(scene, r.origin, r.direction);
+    const CsgSurface s = first_surface(scene, solid_of, bins.at(x, y), r.origin, r.direction);
     if (s.solid < 0) return Seen{-1, -1, 0.0};
     const glm::dvec4 c = to_clip * glm::dvec4(r.origin + s.t * r.direction, 1.0);
     return Seen{s.solid, s.triangle, (c.z / c.w * 0.5 + 0.5) * depth_max};
