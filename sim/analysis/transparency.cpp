@@ -195,15 +195,17 @@ TransparencyMeasure measure_transparency(const MachineConfig& config, const Scen
 
 std::string format_transparency(const std::vector<TransparencyMeasure>& rows) {
   std::string out = fmt::format(
-      "| scene | program | layers (passes) | pixels compared | with a surface | with more "
+      "| application | scene | program | layers (passes) | pixels compared | with a surface | with "
+      "more "
       "layers than passes (most) | differing by more than {:g} of 255 | largest error | "
       "largest error where layers <= passes | near an outline (not compared) | bits | Renderer "
       "cycles | frame ms | frames/s |\n"
-      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
       kTransparencyTolerance);
   for (const TransparencyMeasure& m : rows) {
     out += fmt::format(
-        "| {} | {} | {} | {} | {} | {} ({}) | {} | {:.1f} | {:.1f} | {} | {} | {} | {:.3f} | "
+        "| transparency | {} | {} | {} | {} | {} | {} ({}) | {} | {:.1f} | {:.1f} | {} | {} | {} | "
+        "{:.3f} | "
         "{:.1f} |\n",
         m.scene, m.program, m.layers, m.compared, m.covered, m.too_many, m.most, m.differ,
         m.max_error, m.max_error_within, m.uncertain, m.bits, m.renderer_cycles,

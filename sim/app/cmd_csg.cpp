@@ -146,8 +146,9 @@ int run_csg(const CsgOptions& o) {
   outputs.add((fs::path(o.out_dir) / "csg.md").string(), tables);
   outputs.commit();
   std::cout << fmt::format(
-                   "{} x {} screen; pixels compared with a double-precision ray caster "
-                   "at the pixel centre, those within 0.75 pixel of a change left out\n\n",
+                   "{} x {} screen; pixels compared with a double-precision reference at "
+                   "the pixel centre (a ray caster; for transparency every layer composited), "
+                   "those within 0.75 pixel of a change left out\n\n",
                    config.screen.width, config.screen.height)
             << tables
             << fmt::format("wrote {0}/csg.md and {0}/SCENE-PROGRAM{{,-difference}}.png\n",
