@@ -13,6 +13,7 @@
 #include "models/renderer/region_stream.hpp"
 #include "sim/analysis/csg.hpp"
 #include "sim/analysis/field_render.hpp"
+#include "sim/analysis/transparency.hpp"
 #include "sim/scene/csg_expression.hpp"
 #include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
@@ -494,4 +495,44 @@ TEST_CASE("a CSG frame is the same image however the plan is walked", "[csg]") {
     CHECK(frame.image.rgb == field.image.rgb);
     CHECK(frame.stats.integer("renderers_total.busy_cycles") > 0);
   }
+}
+
+TEST_CASE("transparency front to back and back to front agree with every layer composited",
+          "[csg][transparency]") {
+  // An opaque torus in a glass sphere: up to six layers a pixel.
+  const Scene scene = load_scene(std::string(PP5_SOURCE_DIR) + "/examples/scenes/glass.json");
+  MachineConfig config = small_screen();
+  config.set(std::vector<std::string>{"frame.layers=8"});
+  for (const char* name : {"transparent", "transparent_interval"}) {
+    INFO(name);
+    const TransparencyMeasure m =
+        measure_transparency(config, scene, program_named(name, config), 2);
+    CHECK(m.layers == 8);
+    CHECK(m.compared > 256 * 256 * 9 / 10);
+    CHECK(m.covered > 256 * 256 / 3);
+    CHECK(m.most >= 5);
+    CHECK(m.too_many == 0);
+    CHECK(m.differ == 0);
+    CHECK(m.max_error <= kTransparencyTolerance);
+  }
+}
+
+TEST_CASE("back to front with too few layers drops the front ones", "[csg][transparency]") {
+  const Scene scene = load_scene(std::string(PP5_SOURCE_DIR) + "/examples/scenes/glass.json");
+  MachineConfig config = small_screen();
+  config.set(std::vector<std::string>{"frame.layers=4"});
+  const TransparencyMeasure front =
+      measure_transparency(config, scene, program_named("transparent", config), 2);
+  const TransparencyMeasure back =
+      measure_transparency(config, scene, program_named("transparent_interval", config), 2);
+  // Where the glass and the torus give more than four layers, the front ones are the glass
+  // and the opaque torus: front to back loses only what the torus hides; back to front loses
+  // the torus's near side and shows its far inside.
+  REQUIRE(front.too_many > 500);
+  CHECK(front.differ == 0);
+  CHECK(back.too_many == front.too_many);
+  CHECK(back.differ > back.too_many * 9 / 10);
+  CHECK(back.differ <= back.too_many);  // nowhere else
+  CHECK(back.max_error_within <= kTransparencyTolerance);
+  CHECK(back.max_error > 50);
 }

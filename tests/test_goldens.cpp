@@ -42,6 +42,7 @@ const char* const kGoldenPrograms[] = {"accurate",
                                        "threshold_keep",
                                        "transparent",
                                        "transparent_exactmatch",
+                                       "transparent_interval",
                                        "transparent_threshold"};
 
 // FNV-1a, 64 bits, over the image's size and its RGB bytes.

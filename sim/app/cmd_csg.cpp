@@ -1,8 +1,10 @@
 // pp5sim csg: the parity and depth-interval applications of issue 15 against a CPU ray
 // caster (sim/analysis/csg.hpp): point in solid by parity, standard and accurate;
-// interference; CSG rendering.
+// interference; CSG rendering; and transparency, front to back and back to front, against
+// every layer composited in double (sim/analysis/transparency.hpp).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -10,8 +12,10 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
 #include "sim/analysis/csg.hpp"
+#include "sim/analysis/transparency.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/output/output_set.hpp"
+#include "sim/scene/scene_loader.hpp"
 
 namespace pp5 {
 
@@ -26,6 +30,10 @@ struct CsgOptions {
   std::vector<std::string> interference = {"interference", "interference_accurate"};
   std::vector<std::string> csg_scenes;
   std::vector<std::string> csg_programs = {"csg", "csg_layers"};
+  std::vector<std::string> transparency_scenes;
+  std::vector<std::string> transparency_programs = {"transparent", "transparent_interval"};
+  std::vector<int> layers = {2, 4, 8};
+  double opacity = 0.5;
   std::string application = "all";
   std::string config_path;
   std::vector<std::string> sets;
@@ -48,6 +56,27 @@ int run_csg(const CsgOptions& o) {
   const bool parity = o.application == "parity" || o.application == "all";
   const bool assembly = o.application == "interference" || o.application == "all";
   const bool rendering = o.application == "csg" || o.application == "all";
+  const bool transparency = o.application == "transparency" || o.application == "all";
+  // Transparency: a scene whose every surface is opaque (a built-in one) gets --opacity.
+  std::vector<Scene> see_through;
+  for (const std::string& name : transparency ? o.transparency_scenes.empty()
+                                                    ? std::vector<std::string>{"torus"}
+                                                    : o.transparency_scenes
+                                              : std::vector<std::string>{}) {
+    see_through.push_back(load_scene(name));
+    Mesh& mesh = see_through.back().mesh;
+    if (std::all_of(mesh.vertices.begin(), mesh.vertices.end(),
+                    [](const Vertex& v) { return v.opacity >= 1.0f; })) {
+      for (Vertex& v : mesh.vertices) v.opacity = static_cast<float>(o.opacity);
+    }
+  }
+  std::vector<Program> see_through_programs;
+  for (const std::string& name :
+       transparency ? o.transparency_programs : std::vector<std::string>{}) {
+    see_through_programs.push_back(
+        assemble_file(resolve_firmware(name), assembler_options(config)));
+    see_through_programs.back().name = name;
+  }
   std::vector<Scene> csg_scenes;
   if (rendering) {
     for (const std::string& name : o.csg_scenes.empty() ? csg_scene_names() : o.csg_scenes)
@@ -72,6 +101,7 @@ int run_csg(const CsgOptions& o) {
   std::vector<ParityMeasure> rows;
   std::vector<InterferenceMeasure> interfering;
   std::vector<CsgMeasure> rendered;
+  std::vector<TransparencyMeasure> composited;
   OutputSet outputs;
   auto images = [&](const std::string& scene, const std::string& program, const RgbImage& image,
                     const RgbImage& difference) {
@@ -97,15 +127,28 @@ int run_csg(const CsgOptions& o) {
       images(scene.name, program.name, rendered.back().image, rendered.back().difference);
     }
   }
+  for (const Scene& scene : see_through) {
+    for (int layers : o.layers) {
+      MachineConfig c = config;
+      c.set({fmt::format("frame.layers={}", layers)});
+      for (const Program& program : see_through_programs) {
+        composited.push_back(measure_transparency(c, scene, program, o.threads));
+        images(fmt::format("{}-layers{}", scene.name, layers), program.name,
+               composited.back().image, composited.back().difference);
+      }
+    }
+  }
   std::string tables;
   if (parity) tables += format_parity(rows) + "\n";
   if (assembly) tables += format_interference(interfering) + "\n";
   if (rendering) tables += format_csg_render(rendered) + "\n";
+  if (transparency) tables += format_transparency(composited) + "\n";
   outputs.add((fs::path(o.out_dir) / "csg.md").string(), tables);
   outputs.commit();
   std::cout << fmt::format(
-                   "{} x {} screen; pixels compared with a double-precision ray caster "
-                   "at the pixel centre, those within 0.75 pixel of a change left out\n\n",
+                   "{} x {} screen; pixels compared with a double-precision reference at "
+                   "the pixel centre (a ray caster; for transparency every layer composited), "
+                   "those within 0.75 pixel of a change left out\n\n",
                    config.screen.width, config.screen.height)
             << tables
             << fmt::format("wrote {0}/csg.md and {0}/SCENE-PROGRAM{{,-difference}}.png\n",
@@ -124,7 +167,9 @@ Command add_csg_command(CLI::App& app) {
       "for it (a plane of points through closed solids), and interference of two solids by "
       "depth intervals (with the depth range of the overlap), and CSG rendering (Goldfeather's "
       "multipass algorithm, csg.pp5) of expressions over closed solids, against the first "
-      "surface of the same expression (coverage and depth). Prints the agreement tables (pixels "
+      "surface of the same expression (coverage and depth), and transparency front to back "
+      "(transparent.pp5) and back to front (transparent_interval.pp5, a depth-interval buffer) "
+      "against every layer composited in double precision. Prints the agreement tables (pixels "
       "disagreeing, passes, bits, cycles, frame time) and writes each image and an image of "
       "the differing pixels (white; grey: near an edge, not compared).");
   cmd->add_option("-s,--scene", o->scenes,
@@ -143,9 +188,23 @@ Command add_csg_command(CLI::App& app) {
                   "box-or-ball, box-minus-two, pair-minus-bar; default all five");
   cmd->add_option("--csg-program", o->csg_programs,
                   "A program defining 'surface' (repeatable; default csg and csg_layers)");
+  cmd->add_option("--transparency-scene", o->transparency_scenes,
+                  "A scene for transparency (repeatable): a built-in name, a mesh file or a scene "
+                  "file; default torus");
+  cmd->add_option("--transparency-program", o->transparency_programs,
+                  "A transparency program (repeatable; default transparent and "
+                  "transparent_interval)");
+  cmd->add_option("--layers", o->layers,
+                  "The transparency runs' layer counts (frame parameter `layers`, repeatable; "
+                  "default 2, 4 and 8)")
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--opacity", o->opacity,
+                  "The opacity given to a transparency scene whose every surface is opaque (a "
+                  "built-in one; default 0.5)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--application", o->application,
-                  "parity, interference, csg (rendering) or all (default all)")
-      ->check(CLI::IsMember({"parity", "interference", "csg", "all"}));
+                  "parity, interference, csg (rendering), transparency or all (default all)")
+      ->check(CLI::IsMember({"parity", "interference", "csg", "transparency", "all"}));
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/csg)");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
