@@ -536,3 +536,43 @@ TEST_CASE("back to front with too few layers drops the front ones", "[csg][trans
   CHECK(back.max_error_within <= kTransparencyTolerance);
   CHECK(back.max_error > 50);
 }
+
+TEST_CASE("a cross-section is capped exactly where the ray caster sees the cut", "[csg][section]") {
+  const MachineConfig config = small_screen();
+  for (const std::string& name : section_scene_names()) {
+    for (const char* program : {"section", "section_accurate"}) {
+      INFO(name << " with " << program);
+      const Scene scene = make_parity_scene(name);
+      const SectionMeasure m = measure_section(config, scene, program_named(program, config), 2);
+      // Most of the screen is compared; the cap, and the solid behind the plane, both show.
+      CHECK(m.surface.compared > 256 * 256 * 8 / 10);
+      CHECK(m.cap > 256 * 256 / 40);
+      CHECK(m.surface.surface > m.cap + 256 * 256 / 100);
+      CHECK(m.cap_disagree == 0);
+      CHECK(m.surface.disagree == 0);
+      CHECK(m.surface.passes == 2);
+      // Unsnapped planes: the shown depth is the exact one to the integer depth (floor) and
+      // the GP's single-precision plane.
+      if (std::string(program) == "section_accurate") CHECK(m.surface.max_depth_error < 1.5);
+    }
+  }
+}
+
+TEST_CASE("a cross-section without the parity is caught by the comparison", "[csg][section]") {
+  // No parity toggles: nothing is inside, the cap is missing and the solid's far inside shows.
+  const MachineConfig config = small_screen();
+  std::string source =
+      read_regular_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/section.pp5", 1 << 20,
+                        "a firmware program");
+  const std::string toggle = "  xor par, 1\n";
+  REQUIRE(source.find(toggle) != std::string::npos);
+  source.replace(source.find(toggle), toggle.size(), "");
+  const Program broken = assemble(source, "section-without-parity", assembler_options(config));
+  for (const std::string& name : section_scene_names()) {
+    INFO(name);
+    const SectionMeasure m = measure_section(config, make_parity_scene(name), broken, 2);
+    CHECK(m.cap > 0);
+    CHECK(m.cap_disagree == m.cap);
+    CHECK(m.surface.disagree >= m.cap);
+  }
+}

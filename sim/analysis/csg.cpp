@@ -54,6 +54,30 @@ void add_plane(Mesh& mesh, float sx, float sz, float c, float e) {
   add_quad(mesh, at(-e, -e), at(-e, e), at(e, e), at(e, -e), glm::vec3(0.75f, 0.75f, 0.8f));
 }
 
+// A closed ring torus about the y axis turned by `degrees` about x: radii R and r, 48 x 16
+// quads.
+void add_torus(Mesh& mesh, float big, float small, float degrees, glm::vec3 color) {
+  const glm::mat4 turn = glm::rotate(glm::mat4(1.0f), glm::radians(degrees), glm::vec3(1, 0, 0));
+  const int nu = 48, nv = 16;
+  const auto base = static_cast<unsigned>(mesh.vertices.size());
+  for (int i = 0; i < nu; ++i) {
+    const float u = 6.2831853f * static_cast<float>(i) / nu;
+    for (int j = 0; j < nv; ++j) {
+      const float v = 6.2831853f * static_cast<float>(j) / nv;
+      const glm::vec3 p((big + small * std::cos(v)) * std::cos(u), small * std::sin(v),
+                        (big + small * std::cos(v)) * std::sin(u));
+      mesh.vertices.push_back({glm::vec3(turn * glm::vec4(p, 1.0f)), glm::vec3(0, 1, 0), color});
+    }
+  }
+  auto at = [&](int i, int j) { return base + static_cast<unsigned>((i % nu) * nv + j % nv); };
+  for (int i = 0; i < nu; ++i) {
+    for (int j = 0; j < nv; ++j) {
+      mesh.triangles.emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      mesh.triangles.emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<std::string> parity_scene_names() { return {"plane-sphere", "plane-boxes"}; }
@@ -61,6 +85,8 @@ std::vector<std::string> parity_scene_names() { return {"plane-sphere", "plane-b
 std::vector<std::string> interference_scene_names() {
   return {"boxes-overlap", "boxes-apart", "boxes-touching"};
 }
+
+std::vector<std::string> section_scene_names() { return {"section-sphere", "section-torus"}; }
 
 std::vector<std::string> csg_scene_names() {
   return {"box-minus-ball", "ball-and-ball", "box-or-ball", "box-minus-two", "pair-minus-bar"};
@@ -111,6 +137,17 @@ Scene make_parity_scene(const std::string& name) {
     });
     solid("bar", [&] { add_box(mesh, {0.1f, 0.5f, 0.1f}, {0.3f, 0.35f, 0.3f}, 10.0f, rose); });
     csg = {{a, not_b}};
+  } else if (name == "section-sphere" || name == "section-torus") {
+    // A plane tilted across the solid, 1.9 each way: wider than the solid's outline.
+    description = name == "section-sphere"
+                      ? "a closed tessellated sphere (24 x 12) cut by a tilted plane"
+                      : "a closed ring torus (48 x 16, not convex) cut by a tilted plane";
+    add_plane(mesh, 0.3f, -0.25f, 0.15f, 1.9f);
+    if (name == "section-sphere") {
+      ball("ball", glm::vec3(0.0f), 1.0f, sand);
+    } else {
+      solid("torus", [&] { add_torus(mesh, 0.75f, 0.3f, 30.0f, sand); });
+    }
   } else if (name == "plane-sphere") {
     description = "a tilted plane of points through a closed tessellated sphere (24 x 12)";
     add_plane(mesh, 0.25f, 0.2f, 0.1f, 1.8f);
@@ -156,6 +193,7 @@ Scene make_parity_scene(const std::string& name) {
     all.push_back("plane-slab");
     for (const std::string& n : interference_scene_names()) all.push_back(n);
     for (const std::string& n : csg_scene_names()) all.push_back(n);
+    for (const std::string& n : section_scene_names()) all.push_back(n);
     throw std::invalid_argument(
         fmt::format("no parity scene '{}' (there are: {})", name, fmt::join(all, ", ")));
   }
@@ -455,28 +493,26 @@ std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene) 
   return out;
 }
 
-CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Program& program,
-                       int threads, double margin) {
-  if (!program.procedure(Procedure::surface).defined) {
-    throw std::invalid_argument(
-        fmt::format("{}: CSG rendering needs a program that defines 'surface'", program.name));
-  }
-  if (scene.csg.empty()) {
-    throw std::invalid_argument(
-        fmt::format("scene '{}' has no CSG expression to render", scene.name));
-  }
+namespace {
+
+// The machine's `z` rendered from `drawn` against the ray caster's first surface of `truth`'s
+// expression (the same camera); `truth_solid`, if given, gets per pixel the visible solid of
+// the truth at the centre (-1 none), or -2 where the pixel is not compared.
+CsgMeasure compare_first_surface(const MachineConfig& config, const Scene& drawn,
+                                 const Scene& truth, const Program& program, int threads,
+                                 double margin, std::vector<int>* truth_solid) {
   CsgMeasure m;
-  m.scene = scene.name;
+  m.scene = drawn.name;
   m.program = program.name;
   std::vector<std::string> names;
-  for (const Solid& s : scene.solids) names.push_back(s.name);
-  m.expression = format_csg(scene.csg, names);
-  const FieldFrame field = render_field(config, scene, program, "z", threads);
+  for (const Solid& s : truth.solids) names.push_back(s.name);
+  m.expression = format_csg(truth.csg, names);
+  const FieldFrame field = render_field(config, drawn, program, "z", threads);
   m.image = field.image;
-  const Caster caster(config, scene);
+  const Caster caster(config, truth);
   const float aspect = static_cast<float>(caster.width) / static_cast<float>(caster.height);
   const glm::dmat4 to_clip =
-      glm::dmat4(projection_matrix(scene.camera, aspect)) * glm::dmat4(view_matrix(scene.camera));
+      glm::dmat4(projection_matrix(truth.camera, aspect)) * glm::dmat4(view_matrix(truth.camera));
   const double depth_max = std::ldexp(1.0, config.gp.depth_bits) - 1.0;
   const std::int64_t background = (std::int64_t{1} << config.gp.depth_bits) - 1;
   // The first surface at a screen point: its solid and depth in the GP's units.
@@ -485,11 +521,11 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
     int triangle;
     double depth;
   };
-  const ScreenBins bins(scene, to_clip, caster.width, caster.height, margin);
-  const std::vector<int> solid_of = solid_of_triangles(scene);
+  const ScreenBins bins(truth, to_clip, caster.width, caster.height, margin);
+  const std::vector<int> solid_of = solid_of_triangles(truth);
   auto seen_at = [&](double x, double y) {
     const Ray r = caster.ray(x, y);
-    const CsgSurface s = first_surface(scene, solid_of, bins.at(x, y), r.origin, r.direction);
+    const CsgSurface s = first_surface(truth, solid_of, bins.at(x, y), r.origin, r.direction);
     if (s.solid < 0) return Seen{-1, -1, 0.0};
     const glm::dvec4 c = to_clip * glm::dvec4(r.origin + s.t * r.direction, 1.0);
     return Seen{s.solid, s.triangle, (c.z / c.w * 0.5 + 0.5) * depth_max};
@@ -500,11 +536,11 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
   auto continues = [&](const Seen& a, const Seen& b) {
     if (a.solid != b.solid) return false;
     if (a.solid < 0 || a.triangle == b.triangle) return true;
-    const glm::uvec3 s = scene.mesh.triangles[static_cast<std::size_t>(a.triangle)];
-    const glm::uvec3 t = scene.mesh.triangles[static_cast<std::size_t>(b.triangle)];
+    const glm::uvec3 s = truth.mesh.triangles[static_cast<std::size_t>(a.triangle)];
+    const glm::uvec3 t = truth.mesh.triangles[static_cast<std::size_t>(b.triangle)];
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) {
-        if (scene.mesh.vertices[s[i]].position == scene.mesh.vertices[t[j]].position) return true;
+        if (truth.mesh.vertices[s[i]].position == truth.mesh.vertices[t[j]].position) return true;
       }
     }
     return false;
@@ -534,8 +570,10 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
           !continues(centre, up)) {
         ++m.uncertain;
         shade = 96;
+        if (truth_solid) (*truth_solid)[i] = -2;
       } else {
         ++m.compared;
+        if (truth_solid) (*truth_solid)[i] = centre.solid;
         const std::int64_t z = static_cast<std::int64_t>(field.values[i]);
         const bool machine = z != background;
         const bool truth = centre.solid >= 0;
@@ -572,14 +610,128 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
     m.max_depth_error = errors.back();
   }
   // The plan with the frame's parameters (`layers`, for a program that peels).
-  FrameValues values = GeometryEngine(geometry_params(config), scene).frame_values();
-  set_pass_plan(program, scene, values);
+  FrameValues values = GeometryEngine(geometry_params(config), drawn).frame_values();
+  set_pass_plan(program, drawn, values);
   m.passes = static_cast<int>(values.plan.size());
   m.bits = program.bits_used();
-  const FrameResult r = simulate_frame(config, scene, program, threads);
+  const FrameResult r = simulate_frame(config, drawn, program, threads);
   m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
   m.frame_seconds = r.stats.real("frame.simulated_seconds");
   return m;
+}
+
+}  // namespace
+
+CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Program& program,
+                       int threads, double margin) {
+  if (!program.procedure(Procedure::surface).defined) {
+    throw std::invalid_argument(
+        fmt::format("{}: CSG rendering needs a program that defines 'surface'", program.name));
+  }
+  if (scene.csg.empty()) {
+    throw std::invalid_argument(
+        fmt::format("scene '{}' has no CSG expression to render", scene.name));
+  }
+  return compare_first_surface(config, scene, scene, program, threads, margin, nullptr);
+}
+
+Scene section_truth(const Scene& drawn) {
+  // The cutting plane: the triangles in no solid, a quad (add_quad: corners a, b, c, d).
+  std::vector<unsigned> corners;
+  for (int t = 0; t < static_cast<int>(drawn.mesh.triangles.size()); ++t) {
+    if (drawn.solid_of_triangle(t) >= 0) continue;
+    const glm::uvec3 tri = drawn.mesh.triangles[static_cast<std::size_t>(t)];
+    for (int k = 0; k < 3; ++k) corners.push_back(tri[k]);
+  }
+  std::sort(corners.begin(), corners.end());
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  if (corners.size() != 4 || drawn.solids.size() != 1) {
+    throw std::invalid_argument(fmt::format(
+        "scene '{}': a cross-section needs one quad in no solid (the plane) and one solid",
+        drawn.name));
+  }
+  std::array<glm::vec3, 4> top;
+  for (int k = 0; k < 4; ++k) top[k] = drawn.mesh.vertices[corners[k]].position;
+  // Away from the eye, by more than the scene is deep.
+  glm::vec3 away = glm::normalize(glm::cross(top[1] - top[0], top[2] - top[0]));
+  if (glm::dot(away, top[0] - drawn.camera.eye) < 0) away = -away;
+  const float depth = 4.0f * bounding_sphere(drawn.mesh).radius;
+  Scene truth = drawn;
+  truth.mesh = Mesh{};
+  Mesh& mesh = truth.mesh;
+  const Solid& cut = drawn.solids[0];
+  std::vector<int> index(drawn.mesh.vertices.size(), -1);
+  for (int t = cut.first; t < cut.last; ++t) {
+    glm::uvec3 tri = drawn.mesh.triangles[static_cast<std::size_t>(t)];
+    for (int k = 0; k < 3; ++k) {
+      int& i = index[tri[k]];
+      if (i < 0) {
+        i = static_cast<int>(mesh.vertices.size());
+        mesh.vertices.push_back(drawn.mesh.vertices[tri[k]]);
+      }
+      tri[k] = static_cast<unsigned>(i);
+    }
+    mesh.triangles.push_back(tri);
+  }
+  truth.solids = {{cut.name, 0, static_cast<int>(mesh.triangles.size())}};
+  // The half-space behind the plane: the quad swept away from the eye, a closed hexahedron.
+  const int first = static_cast<int>(mesh.triangles.size());
+  const auto base = static_cast<unsigned>(mesh.vertices.size());
+  for (int k = 0; k < 8; ++k) {
+    mesh.vertices.push_back({top[k % 4] + (k < 4 ? 0.0f : depth) * away, away, glm::vec3(0.5f)});
+  }
+  const int faces[6][4] = {{0, 1, 2, 3}, {4, 7, 6, 5}, {0, 4, 5, 1},
+                           {1, 5, 6, 2}, {2, 6, 7, 3}, {3, 7, 4, 0}};
+  for (const auto& f : faces) {
+    mesh.triangles.emplace_back(base + f[0], base + f[1], base + f[2]);
+    mesh.triangles.emplace_back(base + f[0], base + f[2], base + f[3]);
+  }
+  truth.solids.push_back({"behind-plane", first, static_cast<int>(mesh.triangles.size())});
+  truth.csg = {{CsgLiteral{0, false}, CsgLiteral{1, false}}};
+  return truth;
+}
+
+SectionMeasure measure_section(const MachineConfig& config, const Scene& scene,
+                               const Program& program, int threads, double margin) {
+  if (!program.procedure(Procedure::parity).defined) {
+    throw std::invalid_argument(
+        fmt::format("{}: a cross-section needs a program that defines 'parity'", program.name));
+  }
+  const Scene truth = section_truth(scene);
+  std::vector<int> solid(static_cast<std::size_t>(config.screen.width) * config.screen.height, -2);
+  SectionMeasure m;
+  m.surface = compare_first_surface(config, scene, truth, program, threads, margin, &solid);
+  const FieldFrame inside = render_field(config, scene, program, "inside", threads);
+  for (std::size_t i = 0; i < solid.size(); ++i) {
+    if (solid[i] == -2) continue;
+    const bool cap = solid[i] == 1;  // the plane's face of the half-space is what shows
+    m.cap += cap;
+    if ((inside.values[i] != 0) != cap) {
+      ++m.cap_disagree;
+      for (int k = 0; k < 3; ++k)
+        m.surface.difference.rgb[i * 3 + static_cast<std::size_t>(k)] = 255;
+    }
+  }
+  return m;
+}
+
+std::string format_section(const std::vector<SectionMeasure>& rows) {
+  std::string out =
+      "| application | scene | program | pixels compared | with a surface (ray caster) | cap "
+      "(ray caster) | cap disagreeing | surface disagreeing | of those, coverage | near an "
+      "outline (not compared) | depth error where agreeing, median / largest (depth units) | "
+      "passes | bits | Renderer cycles | frame ms | frames/s |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const SectionMeasure& s : rows) {
+    const CsgMeasure& m = s.surface;
+    out += fmt::format(
+        "| cross-section | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} / {:.0f} | {} | "
+        "{} | {} | {:.3f} | {:.1f} |\n",
+        m.scene, m.program, m.compared, m.surface, s.cap, s.cap_disagree, m.disagree, m.coverage,
+        m.uncertain, m.median_depth_error, m.max_depth_error, m.passes, m.bits, m.renderer_cycles,
+        m.frame_seconds * 1e3, m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
+  }
+  return out;
 }
 
 std::string format_csg_render(const std::vector<CsgMeasure>& rows) {

@@ -143,4 +143,21 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
                        int threads, double margin = 0.75);
 std::string format_csg_render(const std::vector<CsgMeasure>& rows);
 
+// Cross-sections with capping (section.pp5 under the point-in-solid pass plan): a scene of
+// one quad in no solid (the cutting plane) and one closed solid. The truth is the ray
+// caster's first surface of the solid intersected with the half-space behind the plane (the
+// quad swept away from the eye: section_truth), compared as measure_csg compares (coverage
+// and depth of the machine's `z`), and the cap: the machine's `inside` against where the
+// truth shows the plane's face.
+std::vector<std::string> section_scene_names();  // made by make_parity_scene
+Scene section_truth(const Scene& drawn);
+struct SectionMeasure {
+  CsgMeasure surface;
+  std::int64_t cap = 0;           // compared pixels where the ray caster shows the cap
+  std::int64_t cap_disagree = 0;  // compared pixels where the machine's `inside` differs
+};
+SectionMeasure measure_section(const MachineConfig& config, const Scene& scene,
+                               const Program& program, int threads, double margin = 0.75);
+std::string format_section(const std::vector<SectionMeasure>& rows);
+
 }  // namespace pp5

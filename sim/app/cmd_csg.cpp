@@ -34,6 +34,8 @@ struct CsgOptions {
   std::vector<std::string> transparency_programs = {"transparent", "transparent_interval"};
   std::vector<int> layers = {2, 4, 8};
   double opacity = 0.5;
+  std::vector<std::string> section_scenes;
+  std::vector<std::string> section_programs = {"section", "section_accurate"};
   std::string application = "all";
   std::string config_path;
   std::vector<std::string> sets;
@@ -70,6 +72,18 @@ int run_csg(const CsgOptions& o) {
       for (Vertex& v : mesh.vertices) v.opacity = static_cast<float>(o.opacity);
     }
   }
+  const bool sections = o.application == "section" || o.application == "all";
+  std::vector<Scene> cut;
+  for (const std::string& name :
+       sections ? o.section_scenes.empty() ? section_scene_names() : o.section_scenes
+                : std::vector<std::string>{}) {
+    cut.push_back(make_parity_scene(name));
+  }
+  std::vector<Program> section_programs;
+  for (const std::string& name : sections ? o.section_programs : std::vector<std::string>{}) {
+    section_programs.push_back(assemble_file(resolve_firmware(name), assembler_options(config)));
+    section_programs.back().name = name;
+  }
   std::vector<Program> see_through_programs;
   for (const std::string& name :
        transparency ? o.transparency_programs : std::vector<std::string>{}) {
@@ -102,6 +116,7 @@ int run_csg(const CsgOptions& o) {
   std::vector<InterferenceMeasure> interfering;
   std::vector<CsgMeasure> rendered;
   std::vector<TransparencyMeasure> composited;
+  std::vector<SectionMeasure> capped;
   OutputSet outputs;
   auto images = [&](const std::string& scene, const std::string& program, const RgbImage& image,
                     const RgbImage& difference) {
@@ -138,11 +153,19 @@ int run_csg(const CsgOptions& o) {
       }
     }
   }
+  for (const Scene& scene : cut) {
+    for (const Program& program : section_programs) {
+      capped.push_back(measure_section(config, scene, program, o.threads));
+      images(scene.name, program.name, capped.back().surface.image,
+             capped.back().surface.difference);
+    }
+  }
   std::string tables;
   if (parity) tables += format_parity(rows) + "\n";
   if (assembly) tables += format_interference(interfering) + "\n";
   if (rendering) tables += format_csg_render(rendered) + "\n";
   if (transparency) tables += format_transparency(composited) + "\n";
+  if (sections) tables += format_section(capped) + "\n";
   outputs.add((fs::path(o.out_dir) / "csg.md").string(), tables);
   outputs.commit();
   std::cout << fmt::format(
@@ -169,7 +192,9 @@ Command add_csg_command(CLI::App& app) {
       "multipass algorithm, csg.pp5) of expressions over closed solids, against the first "
       "surface of the same expression (coverage and depth), and transparency front to back "
       "(transparent.pp5) and back to front (transparent_interval.pp5, a depth-interval buffer) "
-      "against every layer composited in double precision. Prints the agreement tables (pixels "
+      "against every layer composited in double precision, and cross-sections capped by parity "
+      "(section.pp5) against the ray caster's solid intersected with the half-space behind "
+      "the plane. Prints the agreement tables (pixels "
       "disagreeing, passes, bits, cycles, frame time) and writes each image and an image of "
       "the differing pixels (white; grey: near an edge, not compared).");
   cmd->add_option("-s,--scene", o->scenes,
@@ -202,9 +227,16 @@ Command add_csg_command(CLI::App& app) {
                   "The opacity given to a transparency scene whose every surface is opaque (a "
                   "built-in one; default 0.5)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--section-scene", o->section_scenes,
+                  "A cross-section scene (repeatable): section-sphere, section-torus; default "
+                  "both");
+  cmd->add_option("--section-program", o->section_programs,
+                  "A cross-section program defining 'parity' (repeatable; default section and "
+                  "section_accurate)");
   cmd->add_option("--application", o->application,
-                  "parity, interference, csg (rendering), transparency or all (default all)")
-      ->check(CLI::IsMember({"parity", "interference", "csg", "transparency", "all"}));
+                  "parity, interference, csg (rendering), transparency, section or all (default "
+                  "all)")
+      ->check(CLI::IsMember({"parity", "interference", "csg", "transparency", "section", "all"}));
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/csg)");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
