@@ -325,10 +325,12 @@ class Assembler {
       if (current_ != static_cast<int>(Procedure::triangle) &&
           current_ != static_cast<int>(Procedure::sphere) &&
           current_ != static_cast<int>(Procedure::parity) &&
-          current_ != static_cast<int>(Procedure::surface)) {
+          current_ != static_cast<int>(Procedure::surface) &&
+          current_ != static_cast<int>(Procedure::sphere_surface) &&
+          current_ != static_cast<int>(Procedure::sphere_parity)) {
         fail(
-            "expression '{}' is only available in procedure 'triangle', 'sphere', 'parity' or "
-            "'surface'",
+            "expression '{}' is only available in procedure 'triangle', 'sphere', 'parity', "
+            "'surface', 'sphere_surface' or 'sphere_parity'",
             text);
       }
       o.kind = Operand::Kind::expression;

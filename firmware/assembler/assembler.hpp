@@ -46,8 +46,8 @@ struct AssemblerOptions {
 // 256 is assumed: a region of the built-in torus at 1280 x 1024 receives on the order of a hundred
 // packets, and any weight well above the number of lights gives the same choices.
 // clear triangle pass shade light sphere parity surface candidate keep_inside keep_outside merge
-// next_layer
-inline constexpr int kProcedureWeight[] = {1, 256, 1, 1, 1, 256, 256, 256, 1, 1, 1, 1, 1};
+// next_layer sphere_surface sphere_parity
+inline constexpr int kProcedureWeight[] = {1, 256, 1, 1, 1, 256, 256, 256, 1, 1, 1, 1, 1, 256, 256};
 static_assert(std::size(kProcedureWeight) == static_cast<std::size_t>(Procedure::count));
 
 struct FieldDecl {

@@ -29,11 +29,14 @@ enum class Procedure {
   keep_outside,
   merge,
   next_layer,
+  sphere_surface,
+  sphere_parity,
   count
 };
 inline constexpr const char* kProcedureNames[] = {
-    "clear",   "triangle",  "pass",        "shade",        "light", "sphere",    "parity",
-    "surface", "candidate", "keep_inside", "keep_outside", "merge", "next_layer"};
+    "clear",        "triangle", "pass",       "shade",          "light",
+    "sphere",       "parity",   "surface",    "candidate",      "keep_inside",
+    "keep_outside", "merge",    "next_layer", "sphere_surface", "sphere_parity"};
 inline constexpr const char* kProcedureMeaning[] = {
     "once per region, before any primitive (initialise every pixel)",
     "once per triangle binned to the region, with the triangle's expressions",
@@ -57,7 +60,20 @@ inline constexpr const char* kProcedureMeaning[] = {
     ("once per region before each CSG surface pass after a literal's first (programs that "
      "peel: `layers` rounds per literal of a product of two or more): the candidate's depth "
      "becomes the layer the next one must lie behind, and the candidate is reset"),
+    ("`surface` for a sphere of the CSG literal (its near hemisphere, or its far one for a "
+     "complemented solid), with the sphere's expressions; it may use only those `sphere` uses"),
+    ("`parity` for a sphere of the classifying solid (each of its two hemispheres), with the "
+     "sphere's expressions; it may use only those `sphere` uses"),
 };
+
+// The procedure a packet runs in a planned pass whose packets run `planned` (parity or
+// surface): a triangle's packet runs `planned` itself, a sphere's its sphere counterpart.
+constexpr Procedure planned_procedure(Procedure planned, Procedure own) {
+  if (own != Procedure::sphere) return planned;
+  if (planned == Procedure::surface) return Procedure::sphere_surface;
+  if (planned == Procedure::parity) return Procedure::sphere_parity;
+  return planned;
+}
 static_assert(std::size(kProcedureNames) == static_cast<std::size_t>(Procedure::count));
 static_assert(std::size(kProcedureMeaning) == static_cast<std::size_t>(Procedure::count));
 

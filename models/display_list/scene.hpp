@@ -51,13 +51,17 @@ struct Light {
 // Lights per scene: the Renderer runs the firmware's `light` procedure once for each.
 inline constexpr int kMaxLights = 8;
 
-// A named closed solid of the scene: triangles [first, last) of the mesh. Point-in-solid and
-// CSG classify against solids (the pass plan, models/gp/pass_plan.hpp); a triangle in no
-// solid is in group -1.
+// A named closed solid of the scene: triangles [first, last) of the mesh and spheres
+// [first_sphere, last_sphere) of Scene::spheres (a quadric solid; the GP sends such a sphere
+// as two packets, its near hemisphere as a front face and its far one as a back face). Point
+// in solid and CSG classify against solids (the pass plan, models/gp/pass_plan.hpp); a
+// primitive in no solid is in group -1.
 struct Solid {
   std::string name;
   int first = 0;
   int last = 0;
+  int first_sphere = 0;
+  int last_sphere = 0;
 };
 
 // A literal of a CSG product: solid `solid`, or its complement.
@@ -86,8 +90,8 @@ struct Scene {
   // "parameters"; the configuration's frame.NAME (--param) wins over them. Unknown or computed
   // names and out-of-range values are rejected by the GP, naming the key.
   std::map<std::string, std::int64_t> parameters;
-  // Closed solids over the mesh's triangles, disjoint ranges in increasing order; empty for
-  // most scenes.
+  // Closed solids over the mesh's triangles (and spheres), disjoint ranges in increasing
+  // order; empty for most scenes.
   std::vector<Solid> solids;
   // The scene file's "csg" over its solids, normalised; empty for none.
   CsgProducts csg;
@@ -96,6 +100,13 @@ struct Scene {
   int solid_of_triangle(int t) const {
     for (std::size_t s = 0; s < solids.size(); ++s) {
       if (t >= solids[s].first && t < solids[s].last) return static_cast<int>(s);
+    }
+    return -1;
+  }
+  // The solid sphere i belongs to, -1 for none.
+  int solid_of_sphere(int i) const {
+    for (std::size_t s = 0; s < solids.size(); ++s) {
+      if (i >= solids[s].first_sphere && i < solids[s].last_sphere) return static_cast<int>(s);
     }
     return -1;
   }

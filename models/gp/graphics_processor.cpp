@@ -104,8 +104,7 @@ void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
       packet->procedure = k.kind->procedure();
       packet->kind = ref.kind;
       packet->primitive = i;
-      packet->group =
-          ref.kind == kTriangleKind ? geometry.scene().solid_of_triangle(ref.index) : -1;
+      packet->group = k.kind->solid(geometry.scene(), ref.index);
       packet->back = result.back;
       packet->words = k.workload.packet_words;
       packet->values = result.values;

@@ -13,10 +13,26 @@ namespace {
 // Whether the scene has primitives in no solid (the points of point in solid, the plain
 // geometry beside a CSG expression).
 bool has_unsolid_primitives(const Scene& scene) {
-  if (!scene.spheres.empty()) return true;
-  int in_solids = 0;
-  for (const Solid& s : scene.solids) in_solids += s.last - s.first;
-  return in_solids < static_cast<int>(scene.mesh.triangles.size());
+  int in_solids = 0, spheres_in_solids = 0;
+  for (const Solid& s : scene.solids) {
+    in_solids += s.last - s.first;
+    spheres_in_solids += s.last_sphere - s.first_sphere;
+  }
+  return in_solids < static_cast<int>(scene.mesh.triangles.size()) ||
+         spheres_in_solids < static_cast<int>(scene.spheres.size());
+}
+
+// A solid with spheres needs the sphere counterpart of the procedure its passes run.
+void check_sphere_solids(const Program& program, const Scene& scene, Procedure planned) {
+  const Procedure counterpart = planned_procedure(planned, Procedure::sphere);
+  if (program.procedure(counterpart).defined) return;
+  for (const Solid& s : scene.solids) {
+    if (s.last_sphere > s.first_sphere) {
+      throw std::runtime_error(fmt::format(
+          "program '{}' does not define '{}', which the spheres of solid '{}' of scene '{}' run",
+          program.name, kProcedureNames[static_cast<int>(counterpart)], s.name, scene.name));
+    }
+  }
 }
 
 // `layers`: the rounds (surface and classification passes) of each literal of a product of
@@ -69,10 +85,15 @@ void set_pass_plan(const Program& program, const Scene& scene, FrameValues& valu
       layers = static_cast<int>(std::max<std::int64_t>(
           1, values.frame.parameters[static_cast<std::size_t>(Parameter::layers)]));
     }
-    if (!scene.csg.empty()) csg_plan(scene, layers, plan, values.closing);
+    if (!scene.csg.empty()) {
+      check_sphere_solids(program, scene, Procedure::surface);
+      check_sphere_solids(program, scene, Procedure::parity);
+      csg_plan(scene, layers, plan, values.closing);
+    }
     return;
   }
   if (!program.procedure(Procedure::parity).defined) return;
+  check_sphere_solids(program, scene, Procedure::parity);
   plan.push_back({{Procedure::clear}, PlannedPass::kNoGroup, Procedure::count});
   for (std::size_t s = 0; s < scene.solids.size(); ++s) {
     plan.push_back({{Procedure::pass}, static_cast<int>(s), Procedure::parity});
@@ -80,17 +101,21 @@ void set_pass_plan(const Program& program, const Scene& scene, FrameValues& valu
 }
 
 void check_pass_plan(const Program& program) {
-  for (const Procedure p : {Procedure::parity, Procedure::surface}) {
-    const ProcedureCode& code = program.procedure(p);
-    if (!code.defined) continue;
-    const auto extra = code.expressions & ~program.procedure(Procedure::triangle).expressions;
-    for (int e = 0; e < static_cast<int>(Expression::count); ++e) {
-      if (extra.test(static_cast<std::size_t>(e))) {
-        throw std::runtime_error(fmt::format(
-            "program '{}': procedure '{}' uses expression '{}', which procedure 'triangle' "
-            "does not (a {} pass runs the triangle's packets)",
-            program.name, kProcedureNames[static_cast<int>(p)], kExpressions[e].name,
-            p == Procedure::parity ? "parity" : "surface"));
+  for (const Procedure own : {Procedure::triangle, Procedure::sphere}) {
+    for (const Procedure planned : {Procedure::parity, Procedure::surface}) {
+      const Procedure p = planned_procedure(planned, own);
+      const ProcedureCode& code = program.procedure(p);
+      if (!code.defined) continue;
+      const auto extra = code.expressions & ~program.procedure(own).expressions;
+      for (int e = 0; e < static_cast<int>(Expression::count); ++e) {
+        if (extra.test(static_cast<std::size_t>(e))) {
+          throw std::runtime_error(fmt::format(
+              "program '{}': procedure '{}' uses expression '{}', which procedure '{}' does "
+              "not (a {} pass runs the {}'s packets)",
+              program.name, kProcedureNames[static_cast<int>(p)], kExpressions[e].name,
+              kProcedureNames[static_cast<int>(own)], kProcedureNames[static_cast<int>(planned)],
+              kProcedureNames[static_cast<int>(own)]));
+        }
       }
     }
   }

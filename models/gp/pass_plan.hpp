@@ -30,6 +30,11 @@
 //    (every existing program and golden).
 //  - `parity` and `surface` may use only expressions `triangle` uses (the packet is the
 //    triangle's): check_pass_plan refuses a program that does otherwise, naming them.
+//  - A quadric sphere of a solid is two packets (near hemisphere: front face; far: back
+//    face) and runs planned_procedure's counterpart, sphere_surface or sphere_parity, which
+//    may use only expressions `sphere` uses; set_pass_plan throws std::runtime_error, naming
+//    the procedure and the solid, if the scene's solids have spheres and the program lacks
+//    the counterpart of a procedure its plan runs.
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"

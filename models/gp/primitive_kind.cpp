@@ -37,6 +37,7 @@ class TriangleKind final : public PrimitiveKind {
   int count(const Scene& scene) const override {
     return static_cast<int>(scene.mesh.triangles.size());
   }
+  int solid(const Scene& scene, int index) const override { return scene.solid_of_triangle(index); }
   bool supplies(Expression e) const override { return !is_sphere_expression(e); }
   std::unique_ptr<PrimitiveWorker> start(const GeometryEngine& geometry) const override {
     return std::make_unique<TriangleWorker>(geometry);

@@ -56,6 +56,9 @@ class PrimitiveKind {
   // The Renderer procedure its packets run; its expressions are what set-up computes.
   virtual Procedure procedure() const = 0;
   virtual int count(const Scene& scene) const = 0;
+  // The solid (Scene::solids) primitive `index` of the kind belongs to, -1 for none: the
+  // group of its packets, which a pass plan selects by.
+  virtual int solid(const Scene& scene, int index) const = 0;
   // Whether its set-up can compute expression e: a procedure of the kind may use only these
   // (the Machine refuses a program that asks for others, naming them).
   virtual bool supplies(Expression e) const = 0;

@@ -150,7 +150,7 @@ SphereProjector::SphereProjector(const GeometryParams& params, const Camera& cam
 }
 
 bool SphereProjector::project(const Sphere& sphere, int index, ScreenSphere& out,
-                              SetupCounts& counts) const {
+                              SetupCounts& counts, bool far) const {
   const glm::dvec3 c = glm::dvec3(view_ * glm::dvec4(glm::dvec3(sphere.center), 1.0));
   const double r = sphere.radius;
   const double tc = -c.z;  // view-axis distance of the centre
@@ -171,6 +171,7 @@ bool SphereProjector::project(const Sphere& sphere, int index, ScreenSphere& out
     return false;
   }
   out.source = index;
+  out.far = far;
   out.centre = c;
   out.radius = r;
   out.color = glm::dvec3(sphere.color);
@@ -241,16 +242,18 @@ bool SphereProjector::project(const Sphere& sphere, int index, ScreenSphere& out
   std::frexp(largest, &exponent);  // largest < 2^exponent
   out.conic_shift = params_.result_bits - 3 - exponent;
 
-  // Depth: G - (H / k)(d.c + Q / sqrt(Qm) + sqrt(Qm) / 8).
+  // Depth: G - (H / k)(d.c + Q / sqrt(Qm) + sqrt(Qm) / 8); the far hemisphere's has the
+  // square root's line subtracted (1/t = (d.c - sqrt(Q)) / k), with the same error bound.
   const double s = std::sqrt(out.q_max);
   const double hk = h_ / k;
+  const double root = far ? -1.0 : 1.0;
   CentredQuadratic& z = out.depth;
-  z.a = -hk * q.a / s;
-  z.b = -hk * q.b / s;
-  z.c = -hk * q.c / s;
-  z.d = -hk * (lx + q.d / s);
-  z.e = -hk * (ly + q.e / s);
-  z.f = g_ - hk * (l0 + q.f / s + s / 8.0);
+  z.a = -hk * root * q.a / s;
+  z.b = -hk * root * q.b / s;
+  z.c = -hk * root * q.c / s;
+  z.d = -hk * (lx + root * q.d / s);
+  z.e = -hk * (ly + root * q.e / s);
+  z.f = g_ - hk * (l0 + root * (q.f / s + s / 8.0));
   out.depth_approximation_bound = hk * s / 8.0;
   const double ex = std::max(std::fabs(out.x_min - static_cast<double>(out.x0)),
                              std::fabs(out.x_max - static_cast<double>(out.x0)));
@@ -286,8 +289,10 @@ bool SphereProjector::project(const Sphere& sphere, int index, ScreenSphere& out
     const glm::dvec3 d = ray(static_cast<double>(out.x0) + dx, static_cast<double>(out.y0) + dy);
     const double dc = glm::dot(d, c);
     const double disc = std::max(0.0, dc * dc - k * glm::dot(d, d));
-    const double t = k / (dc + std::sqrt(disc));
-    values[i] = normal_scale * (t * d - c) / r;
+    // The far hit's normal is turned to the eye: the wall of the cavity a complemented
+    // sphere leaves. k / (dc - sqrt) as (dc + sqrt) / |d|^2, which does not cancel.
+    const double t = far ? (dc + std::sqrt(disc)) / glm::dot(d, d) : k / (dc + std::sqrt(disc));
+    values[i] = normal_scale * (far ? c - t * d : t * d - c) / r;
   }
   for (int axis = 0; axis < 3; ++axis) {
     std::array<double, 6> g{};
@@ -366,6 +371,9 @@ OpCounts sphere_operations(const GpWorkload& w, int setups, int regions) {
   // the eye, near and far planes (4 compares, 4 branches).
   c += OpCounts{9 + 4, 9, 0, 0, 0, 4, 1};
   if (setups == 0) return c;
+  // A sphere of a solid has two set-ups (its near and far hemispheres) sharing the projection
+  // (everything up to the depth range checks); each has its own normal fit, expressions and
+  // packet.
   OpCounts s;
   // k = |c|^2 - r^2 (4, 3); the anchor: project the centre (reciprocal, 2 multiplies, 2 adds,
   // 2 conversions); d0, l0 and |d0|^2 (4 + 3 + 3 multiplies, 2 + 2 + 2 adds); the conic about
@@ -380,6 +388,8 @@ OpCounts sphere_operations(const GpWorkload& w, int setups, int regions) {
   // Depth range checks: two depths at t = tc -+ r (2 reciprocals, 2 multiplies, 2 adds,
   // 2 compares, 2 branches).
   s += OpCounts{4, 2, 0, 0, 0, 2, 0} + kReciprocal * 2;
+  c += s;
+  s = OpCounts{};
   if (any_normal(w)) {
     // The Cholesky factor of the ellipse (3 multiplies, 1 add, 2 reciprocal square roots),
     // then per fit point: its pixel position (4, 3), the ray (2, 2), d.c and |d|^2 (6, 4), the

@@ -76,6 +76,7 @@ struct CentredQuadratic {
 
 struct ScreenSphere {
   int source = 0;          // index in Scene::spheres
+  bool far = false;        // the far hemisphere (depth and normal of the far hit)
   glm::dvec3 centre{0.0};  // eye space
   double radius = 1;
   glm::dvec3 color{0.0};
@@ -102,7 +103,10 @@ class SphereProjector {
  public:
   SphereProjector(const GeometryParams& params, const Camera& camera);
   // Project world-space sphere `index` of `spheres`; false (and counted) if it is dropped.
-  bool project(const Sphere& sphere, int index, ScreenSphere& out, SetupCounts& counts) const;
+  // With `far`, its far hemisphere: the depth of the far hit and the normal there turned to
+  // the eye (a sphere of a solid, seen from inside by a complemented CSG literal).
+  bool project(const Sphere& sphere, int index, ScreenSphere& out, SetupCounts& counts,
+               bool far = false) const;
   // The ray through pixel index (x, y) (fractions allowed), eye space, d.z = -1.
   glm::dvec3 ray(double x, double y) const { return {ax_ * x + bx_, ay_ * y + by_, -1.0}; }
   // Depth units at view-axis distance t (as GeometryEngine maps a triangle's vertices).

@@ -89,7 +89,7 @@ class RegionStream {
     Procedure p = packet.procedure;
     if (!values_.plan.empty()) {
       const PlannedPass& planned = values_.plan[static_cast<std::size_t>(pass)];
-      if (planned.packets != Procedure::count) p = planned.packets;
+      if (planned.packets != Procedure::count) p = planned_procedure(planned.packets, p);
       if (!planned.draws(packet.group, packet.back)) {
         return RegionStep{
             p,       skipped_, PacketValues(packet.values.expressions, values_.frame.parameters),

@@ -11,6 +11,7 @@
 
 #include "common/parallel_for.hpp"
 #include "models/gp/pass_plan.hpp"
+#include "models/gp/sphere.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "sim/analysis/field_render.hpp"
@@ -92,6 +93,8 @@ std::vector<std::string> csg_scene_names() {
   return {"box-minus-ball", "ball-and-ball", "box-or-ball", "box-minus-two", "pair-minus-bar"};
 }
 
+std::vector<std::string> csg_quadric_scene_names() { return {"box-minus-quadric", "quadric-lens"}; }
+
 Scene make_parity_scene(const std::string& name) {
   Mesh mesh;
   std::vector<Solid> solids;
@@ -105,6 +108,14 @@ Scene make_parity_scene(const std::string& name) {
   const glm::vec3 sand(0.85f, 0.7f, 0.45f), teal(0.3f, 0.65f, 0.7f), rose(0.8f, 0.4f, 0.45f);
   auto ball = [&](const std::string& n, glm::vec3 centre, float radius, glm::vec3 color) {
     solid(n, [&] { append_tessellated_spheres({Sphere{centre, radius, color}}, 24, 12, mesh); });
+  };
+  // A solid that is one quadric sphere, drawn by the quadratic evaluator.
+  std::vector<Sphere> spheres;
+  auto quadric = [&](const std::string& n, glm::vec3 centre, float radius, glm::vec3 color) {
+    const int t = static_cast<int>(mesh.triangles.size());
+    const int i = static_cast<int>(spheres.size());
+    spheres.push_back(Sphere{centre, radius, color});
+    solids.push_back({n, t, t, i, i + 1});
   };
   const CsgLiteral a{0, false}, b{1, false}, not_b{1, true}, not_c{2, true};
   if (name == "box-minus-ball") {
@@ -128,6 +139,16 @@ Scene make_parity_scene(const std::string& name) {
     ball("ball", {-0.4f, 0.5f, 0.3f}, 0.5f, teal);
     solid("bar", [&] { add_box(mesh, {0.35f, 0.1f, 0.0f}, {0.2f, 0.9f, 0.25f}, 35.0f, rose); });
     csg = {{a, not_b, not_c}};
+  } else if (name == "box-minus-quadric") {
+    description = "box-minus-ball with a quadric sphere for the ball (a & !b)";
+    solid("box", [&] { add_box(mesh, {0.0f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.7f}, 20.0f, sand); });
+    quadric("ball", {0.45f, 0.55f, 0.4f}, 0.6f, teal);
+    csg = {{a, not_b}};
+  } else if (name == "quadric-lens") {
+    description = "ball-and-ball with quadric spheres (a & b)";
+    quadric("left", {-0.35f, 0.0f, 0.0f}, 0.8f, sand);
+    quadric("right", {0.35f, 0.1f, 0.1f}, 0.7f, teal);
+    csg = {{a, b}};
   } else if (name == "pair-minus-bar") {
     description =
         "two slabs, one solid (not convex), minus a bar through the upper one only (a & !b)";
@@ -193,6 +214,7 @@ Scene make_parity_scene(const std::string& name) {
     all.push_back("plane-slab");
     for (const std::string& n : interference_scene_names()) all.push_back(n);
     for (const std::string& n : csg_scene_names()) all.push_back(n);
+    for (const std::string& n : csg_quadric_scene_names()) all.push_back(n);
     for (const std::string& n : section_scene_names()) all.push_back(n);
     throw std::invalid_argument(
         fmt::format("no parity scene '{}' (there are: {})", name, fmt::join(all, ", ")));
@@ -201,8 +223,12 @@ Scene make_parity_scene(const std::string& name) {
   Scene scene;
   scene.name = name;
   scene.description = description;
+  // Framed with the quadric spheres as tessellated stand-ins.
+  Mesh framed = mesh;
+  append_tessellated_spheres(spheres, 24, 12, framed);
+  scene.camera = frame_mesh(framed, glm::vec3(0.3f, 1.6f, 1.0f), 40.0f, 0.8f);
   scene.mesh = std::move(mesh);
-  scene.camera = frame_mesh(scene.mesh, glm::vec3(0.3f, 1.6f, 1.0f), 40.0f, 0.8f);
+  scene.spheres = std::move(spheres);
   scene.lights = {default_light(scene.camera)};
   scene.background = glm::vec3(0.05f, 0.05f, 0.08f);
   scene.solids = std::move(solids);
@@ -443,6 +469,23 @@ CsgSurface first_surface(const Scene& scene, const std::vector<int>& solid_of,
     hits.push_back({h, s, t});
     inside[static_cast<std::size_t>(s)] = !inside[static_cast<std::size_t>(s)];  // odd: inside
   }
+  // The quadric spheres of solids, met exactly: each crossing of the surface is a hit, as a
+  // face's is ("triangle" -1 - i for sphere i).
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    for (int i = scene.solids[s].first_sphere; i < scene.solids[s].last_sphere; ++i) {
+      const Sphere& sphere = scene.spheres[static_cast<std::size_t>(i)];
+      const glm::dvec3 o = origin - glm::dvec3(sphere.center);
+      const double a = glm::dot(direction, direction), b = glm::dot(o, direction);
+      const double disc = b * b - a * (glm::dot(o, o) - double{sphere.radius} * sphere.radius);
+      if (!(disc > 0)) continue;  // missed, or grazing: no crossing
+      const double root = std::sqrt(disc);
+      for (const double h : {(-b - root) / a, (-b + root) / a}) {
+        if (h <= 0) continue;
+        hits.push_back({h, static_cast<int>(s), -1 - i});
+        inside[s] = !inside[s];
+      }
+    }
+  }
   std::sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) {
     return a.t != b.t ? a.t < b.t : a.triangle < b.triangle;
   });
@@ -521,6 +564,16 @@ CsgMeasure compare_first_surface(const MachineConfig& config, const Scene& drawn
     int triangle;
     double depth;
   };
+  // The depth bound of each quadric sphere (ScreenSphere::depth_bound; both hemispheres').
+  std::vector<double> sphere_bound(truth.spheres.size(), 0.0);
+  const SphereProjector projector(geometry_params(config), truth.camera);
+  for (std::size_t i = 0; i < truth.spheres.size(); ++i) {
+    ScreenSphere screen;
+    SetupCounts counts;
+    if (projector.project(truth.spheres[i], static_cast<int>(i), screen, counts)) {
+      sphere_bound[i] = screen.depth_bound;
+    }
+  }
   const ScreenBins bins(truth, to_clip, caster.width, caster.height, margin);
   const std::vector<int> solid_of = solid_of_triangles(truth);
   auto seen_at = [&](double x, double y) {
@@ -536,6 +589,7 @@ CsgMeasure compare_first_surface(const MachineConfig& config, const Scene& drawn
   auto continues = [&](const Seen& a, const Seen& b) {
     if (a.solid != b.solid) return false;
     if (a.solid < 0 || a.triangle == b.triangle) return true;
+    if (a.triangle < 0 || b.triangle < 0) return false;  // a sphere and a face
     const glm::uvec3 s = truth.mesh.triangles[static_cast<std::size_t>(a.triangle)];
     const glm::uvec3 t = truth.mesh.triangles[static_cast<std::size_t>(b.triangle)];
     for (int i = 0; i < 3; ++i) {
@@ -588,7 +642,11 @@ CsgMeasure compare_first_surface(const MachineConfig& config, const Scene& drawn
           const double slope = (std::max(std::abs(right.depth - d), std::abs(d - left.depth)) +
                                 std::max(std::abs(down.depth - d), std::abs(d - up.depth))) /
                                margin;
-          const double tolerance = 2.0 + slope * half_step;
+          // A quadric sphere's depth is the GP's approximation, within its stated bound.
+          const double tolerance =
+              2.0 + slope * half_step +
+              (centre.triangle < 0 ? sphere_bound[static_cast<std::size_t>(-1 - centre.triangle)]
+                                   : 0.0);
           const double error = std::abs(static_cast<double>(z) - centre.depth);
           if (error > tolerance) {
             differs = true;

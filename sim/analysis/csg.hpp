@@ -125,6 +125,9 @@ std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene);
 //  - Exact only for convex solids: a non-convex literal's nearest surface may be discarded
 //    where a farther one is visible (the scene "pair-minus-bar" shows it).
 std::vector<std::string> csg_scene_names();  // also made by make_parity_scene
+// CSG scenes whose solids include quadric spheres (Solid::first_sphere..last_sphere), drawn by
+// programs that define sphere_surface and sphere_parity.
+std::vector<std::string> csg_quadric_scene_names();
 struct CsgMeasure {
   std::string scene, program, expression;
   std::int64_t compared = 0;      // certain pixels

@@ -54,7 +54,7 @@ FieldFrame render_field(const MachineConfig& config, const Scene& scene, const P
       packet->procedure = primitive_kinds()[kind]->procedure();
       packet->kind = ref.kind;
       packet->primitive = i;
-      packet->group = ref.kind == kTriangleKind ? scene.solid_of_triangle(ref.index) : -1;
+      packet->group = primitive_kinds()[kind]->solid(scene, ref.index);
       packet->back = r.back;
       packet->values = r.values;
       regions.clear();
