@@ -174,7 +174,7 @@ grep -q "firmware .*/phong.pp5" "$tmp/cwd.log" || fail "not the built-in phong"
 (cd "$tmp/cwd" && "$abs_bin" render --scene two-triangles --firmware ./phong --out "$tmp/cwd/bad" >"$tmp/cwd2.log" 2>&1) \
   && fail "./phong (not firmware) was accepted"
 grep -q "phong:1" "$tmp/cwd2.log" || fail "./phong was not read as a file: $(cat "$tmp/cwd2.log")"
-expect_error "no built-in program of that name (built-in: accurate csg csg_layers epsilon" render --firmware nope --out "$tmp/f"
+expect_error "no built-in program of that name (built-in: accurate csg csg_accurate csg_layers epsilon" render --firmware nope --out "$tmp/f"
 
 # scripts/check-includes on a tree of its own: an upward include fails with FILE:LINE, the
 # same tree without it passes, and a cycle inside a layer is reported.

@@ -334,8 +334,8 @@ TEST_CASE("errors name the file, the line and what was expected", "[assembler]")
     const std::string clear = "proc clear\n  qload z, depth ; HERE\nend\n";
     check_error_here(
         with_triangle("", clear),
-        "expression 'depth' is only available in procedure 'triangle', 'sphere', 'parity' or "
-        "'surface'");
+        "expression 'depth' is only available in procedure 'triangle', 'sphere', 'parity', "
+        "'surface', 'sphere_surface' or 'sphere_parity'");
     check_error_here(with_triangle("  qload z, bogus ; HERE\n"),
                      "'bogus' is not an expression the GP supplies");
   }

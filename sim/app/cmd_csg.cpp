@@ -29,7 +29,7 @@ struct CsgOptions {
   std::vector<std::string> assemblies;
   std::vector<std::string> interference = {"interference", "interference_accurate"};
   std::vector<std::string> csg_scenes;
-  std::vector<std::string> csg_programs = {"csg", "csg_layers"};
+  std::vector<std::string> csg_programs = {"csg", "csg_accurate", "csg_layers"};
   std::vector<std::string> transparency_scenes;
   std::vector<std::string> transparency_programs = {"transparent", "transparent_interval"};
   std::vector<int> layers = {2, 4, 8};
@@ -222,8 +222,9 @@ Command add_csg_command(CLI::App& app) {
                   "box-or-ball, box-minus-two, pair-minus-bar, and box-minus-quadric and "
                   "quadric-lens (quadric spheres as solids: only programs with sphere_surface "
                   "draw them); default all seven");
-  cmd->add_option("--csg-program", o->csg_programs,
-                  "A program defining 'surface' (repeatable; default csg and csg_layers)");
+  cmd->add_option(
+      "--csg-program", o->csg_programs,
+      "A program defining 'surface' (repeatable; default csg, csg_accurate and csg_layers)");
   cmd->add_option("--transparency-scene", o->transparency_scenes,
                   "A scene for transparency (repeatable): a built-in name, a mesh file or a scene "
                   "file; default torus");
