@@ -55,6 +55,20 @@ proc pass
 end
 )";
 
+// The procedures a region runs, in order, each packet's with its primitive's number
+// ("triangle0"); steps with no code (packets a pass does not draw) left out.
+std::vector<std::string> procedures_run(const RegionStream& stream,
+                                        const std::vector<Packet>& packets) {
+  std::vector<std::string> ran;
+  stream.for_each(packets, [&](const RegionStep& step) {
+    if (!step.code.defined) return;
+    std::string s = kProcedureNames[static_cast<int>(step.procedure)];
+    if (step.packet) s += std::to_string(step.packet->primitive);
+    ran.push_back(s);
+  });
+  return ran;
+}
+
 }  // namespace
 
 TEST_CASE("a pass plan draws each solid in its own pass with the plan's procedure", "[csg]") {
@@ -76,13 +90,7 @@ TEST_CASE("a pass plan draws each solid in its own pass with the plan's procedur
   }
   const RegionStream stream(program, values);
   CHECK(stream.passes() == 3);
-  std::vector<std::string> ran;
-  stream.for_each(packets, [&](const RegionStep& step) {
-    if (!step.code.defined) return;
-    std::string s = kProcedureNames[static_cast<int>(step.procedure)];
-    if (step.packet) s += std::to_string(step.packet->primitive);
-    ran.push_back(s);
-  });
+  const std::vector<std::string> ran = procedures_run(stream, packets);
   const std::vector<std::string> expected = {"clear",   "triangle0", "triangle1", "pass",
                                              "parity2", "parity3",   "pass",      "parity4"};
   CHECK(ran == expected);
@@ -336,13 +344,7 @@ TEST_CASE("the CSG pass plan: a surface pass per literal, a parity pass per othe
     p.back = i == 1 || i == 3;
   }
   const RegionStream stream(program, values);
-  std::vector<std::string> ran;
-  stream.for_each(packets, [&](const RegionStep& step) {
-    if (!step.code.defined) return;
-    std::string s = kProcedureNames[static_cast<int>(step.procedure)];
-    if (step.packet) s += std::to_string(step.packet->primitive);
-    ran.push_back(s);
-  });
+  const std::vector<std::string> ran = procedures_run(stream, packets);
   const std::vector<std::string> expected = {
       "clear",        "triangle0", "candidate",                // the primitive in no solid
       "surface2",                                              // a's front faces

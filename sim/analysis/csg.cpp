@@ -376,9 +376,7 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
   const std::size_t passes = make_pass_plan(program, scene).size();
   m.passes = passes == 0 ? 1 : static_cast<int>(passes);
   m.bits = program.bits_used();
-  const FrameResult r = simulate_frame(config, scene, program, threads);
-  m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
-  m.frame_seconds = r.stats.real("frame.simulated_seconds");
+  m.cost = frame_cost(config, scene, program, threads);
   return m;
 }
 
@@ -672,9 +670,7 @@ CsgMeasure compare_first_surface(const MachineConfig& config, const Scene& drawn
   set_pass_plan(program, drawn, values);
   m.passes = static_cast<int>(values.plan.size());
   m.bits = program.bits_used();
-  const FrameResult r = simulate_frame(config, drawn, program, threads);
-  m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
-  m.frame_seconds = r.stats.real("frame.simulated_seconds");
+  m.cost = frame_cost(config, drawn, program, threads);
   return m;
 }
 
@@ -784,10 +780,9 @@ std::string format_section(const std::vector<SectionMeasure>& rows) {
     const CsgMeasure& m = s.surface;
     out += fmt::format(
         "| cross-section | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} / {:.0f} | {} | "
-        "{} | {} | {:.3f} | {:.1f} |\n",
+        "{} | {} |\n",
         m.scene, m.program, m.compared, m.surface, s.cap, s.cap_disagree, m.disagree, m.coverage,
-        m.uncertain, m.median_depth_error, m.max_depth_error, m.passes, m.bits, m.renderer_cycles,
-        m.frame_seconds * 1e3, m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
+        m.uncertain, m.median_depth_error, m.max_depth_error, m.passes, m.bits, m.cost.cells());
   }
   return out;
 }
@@ -807,11 +802,9 @@ std::string format_csg_render(const std::vector<CsgMeasure>& rows) {
     }
     out += fmt::format(
         "| CSG rendering | {} | `{}` | {} | {} | {} | {} | {} | {} | {:.1f} / {:.0f} | {} | {} | "
-        "{} "
-        "| {:.3f} | {:.1f} |\n",
+        "{} |\n",
         m.scene, expression, m.program, m.compared, m.surface, m.disagree, m.coverage, m.uncertain,
-        m.median_depth_error, m.max_depth_error, m.passes, m.bits, m.renderer_cycles,
-        m.frame_seconds * 1e3, m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
+        m.median_depth_error, m.max_depth_error, m.passes, m.bits, m.cost.cells());
   }
   return out;
 }
@@ -876,9 +869,7 @@ InterferenceMeasure measure_interference(const MachineConfig& config, const Scen
   if (m.flagged == 0) m.lo = m.hi = 0;
   m.passes = static_cast<int>(make_pass_plan(program, scene).size());
   m.bits = program.bits_used();
-  const FrameResult r = simulate_frame(config, scene, program, threads);
-  m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
-  m.frame_seconds = r.stats.real("frame.simulated_seconds");
+  m.cost = frame_cost(config, scene, program, threads);
   return m;
 }
 
@@ -889,13 +880,10 @@ std::string format_interference(const std::vector<InterferenceMeasure>& rows) {
       "bits | Renderer cycles | frame ms | frames/s |\n"
       "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
   for (const InterferenceMeasure& m : rows) {
-    out += fmt::format(
-        "| interference | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3f} | "
-        "{:.1f} |\n",
-        m.scene, m.program, m.compared, m.truth, m.flagged, m.disagree, m.uncertain,
-        m.flagged ? fmt::format("{:.5f} .. {:.5f}", m.lo, m.hi) : std::string("-"), m.passes,
-        m.bits, m.renderer_cycles, m.frame_seconds * 1e3,
-        m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
+    out += fmt::format("| interference | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                       m.scene, m.program, m.compared, m.truth, m.flagged, m.disagree, m.uncertain,
+                       m.flagged ? fmt::format("{:.5f} .. {:.5f}", m.lo, m.hi) : std::string("-"),
+                       m.passes, m.bits, m.cost.cells());
   }
   return out;
 }
@@ -907,12 +895,10 @@ std::string format_parity(const std::vector<ParityMeasure>& rows) {
       "ray | passes | bits | Renderer cycles | frame ms | frames/s |\n"
       "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const ParityMeasure& m : rows) {
-    out += fmt::format(
-        "| point in solid | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | "
-        "{:.3f} | {:.1f} |\n",
-        m.scene, m.program, m.compared, m.points, m.inside, m.disagree, m.uncertain,
-        m.edge_disagree, m.passes, m.bits, m.renderer_cycles, m.frame_seconds * 1e3,
-        m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
+    out +=
+        fmt::format("| point in solid | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                    m.scene, m.program, m.compared, m.points, m.inside, m.disagree, m.uncertain,
+                    m.edge_disagree, m.passes, m.bits, m.cost.cells());
   }
   return out;
 }

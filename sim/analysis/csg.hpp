@@ -26,6 +26,7 @@
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
+#include "sim/analysis/frame_cost.hpp"
 #include "sim/image/png_writer.hpp"
 #include "sim/scene/scene.hpp"
 
@@ -57,8 +58,7 @@ struct ParityMeasure {
   std::int64_t edge_disagree = 0;
   int passes = 0;
   int bits = 0;
-  std::int64_t renderer_cycles = 0;  // the Renderers' busy array cycles, all regions
-  double frame_seconds = 0;
+  FrameCost cost;
   RgbImage image;       // the machine's image
   RgbImage difference;  // white: disagree; grey: uncertain; black: agree
 };
@@ -81,8 +81,7 @@ struct InterferenceMeasure {
   std::int64_t compared = 0, truth = 0, flagged = 0, disagree = 0, uncertain = 0;
   double lo = 0, hi = 0;  // the depth range of the flagged pixels' overlaps, 0 near .. 1 far
   int passes = 0, bits = 0;
-  std::int64_t renderer_cycles = 0;
-  double frame_seconds = 0;
+  FrameCost cost;
   RgbImage image, difference;
 };
 InterferenceMeasure measure_interference(const MachineConfig& config, const Scene& scene,
@@ -138,8 +137,7 @@ struct CsgMeasure {
   double median_depth_error = 0;  // depth units, over agreeing covered pixels
   double max_depth_error = 0;
   int passes = 0, bits = 0;
-  std::int64_t renderer_cycles = 0;
-  double frame_seconds = 0;
+  FrameCost cost;
   RgbImage image, difference;  // difference: white disagree, grey uncertain
 };
 CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Program& program,

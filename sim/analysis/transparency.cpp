@@ -158,10 +158,7 @@ TransparencyMeasure measure_transparency(const MachineConfig& config, const Scen
   const FrameValues values = GeometryEngine(geometry_params(config), scene).frame_values();
   m.layers = program.pass_count(values.frame.parameters);
   m.bits = program.bits_used();
-  const FrameResult r = simulate_frame(config, scene, program, threads);
-  m.renderer_cycles = r.stats.integer("renderers_total.busy_cycles");
-  m.frame_seconds = r.stats.real("frame.simulated_seconds");
-  m.image = r.image;
+  m.cost = frame_cost(config, scene, program, threads, &m.image);
   const TransparencyReference ref = transparency_reference(config, scene);
   m.difference.width = ref.width;
   m.difference.height = ref.height;
@@ -179,7 +176,7 @@ TransparencyMeasure measure_transparency(const MachineConfig& config, const Scen
       double error = 0;
       for (std::size_t c = 0; c < 3; ++c) {
         error = std::max(
-            error, std::abs(static_cast<double>(r.image.rgb[k * 3 + c]) - ref.rgb[k * 3 + c]));
+            error, std::abs(static_cast<double>(m.image.rgb[k * 3 + c]) - ref.rgb[k * 3 + c]));
       }
       m.max_error = std::max(m.max_error, error);
       if (ref.layers[k] <= m.layers) m.max_error_within = std::max(m.max_error_within, error);
@@ -204,12 +201,10 @@ std::string format_transparency(const std::vector<TransparencyMeasure>& rows) {
       kTransparencyTolerance);
   for (const TransparencyMeasure& m : rows) {
     out += fmt::format(
-        "| transparency | {} | {} | {} | {} | {} | {} ({}) | {} | {:.1f} | {:.1f} | {} | {} | {} | "
-        "{:.3f} | "
-        "{:.1f} |\n",
+        "| transparency | {} | {} | {} | {} | {} | {} ({}) | {} | {:.1f} | {:.1f} | {} | {} | {} "
+        "|\n",
         m.scene, m.program, m.layers, m.compared, m.covered, m.too_many, m.most, m.differ,
-        m.max_error, m.max_error_within, m.uncertain, m.bits, m.renderer_cycles,
-        m.frame_seconds * 1e3, m.frame_seconds > 0 ? 1.0 / m.frame_seconds : 0.0);
+        m.max_error, m.max_error_within, m.uncertain, m.bits, m.cost.cells());
   }
   return out;
 }

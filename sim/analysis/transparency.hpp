@@ -25,6 +25,7 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
 #include "models/frame_buffer/image.hpp"
+#include "sim/analysis/frame_cost.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {
@@ -54,8 +55,7 @@ struct TransparencyMeasure {
   double max_error = 0;         // levels, over the certain pixels
   double max_error_within = 0;  // levels, over the certain pixels with at most `layers` layers
   int bits = 0;
-  std::int64_t renderer_cycles = 0;
-  double frame_seconds = 0;
+  FrameCost cost;
   RgbImage image, difference;  // difference: white differs, grey uncertain
 };
 // Renders `scene` with `program` (a transparency program: `option passes layers`, or any
