@@ -109,6 +109,15 @@ expect_error "phong: CSG rendering needs a program that defines 'surface'" csg -
   --out "$tmp/csg-phong"
 expect_error "scene 'plane-sphere' has no CSG expression to render" csg --application csg \
   --csg-scene plane-sphere --set screen.width=64 --set screen.height=64 --out "$tmp/csg-none"
+# A failed run leaves no output folder, not even an empty one (nor the parents it made).
+[ ! -e "$tmp/csg-none" ] || fail "a failed csg run left $tmp/csg-none"
+expect_error "program 'csg_layers' does not define 'sphere_surface', which the spheres of solid 'left'" \
+  csg --application csg --csg-scene quadric-lens --csg-program csg_layers --set screen.width=64 \
+  --set screen.height=64 --out "$tmp/deep/er/csg-layers"
+[ ! -e "$tmp/deep" ] || fail "a failed csg run left $tmp/deep"
+mkdir "$tmp/kept"
+expect_error "no parity scene 'nope'" csg --application csg --csg-scene nope --out "$tmp/kept"
+[ -d "$tmp/kept" ] || fail "a failed run removed a folder it did not make"
 # aggregate of a file or a missing folder names it and says what it expected.
 expect_error "sw.csv: is not a folder, expected the output folder of a 'pp5sim sweep' run" sweep aggregate "$tmp/sw.csv"
 expect_error "nowhere: no such folder, expected the output folder" sweep aggregate "$tmp/nowhere"

@@ -54,7 +54,6 @@ int run_csg(const CsgOptions& o) {
     programs.push_back(assemble_file(resolve_firmware(name), assembler_options(config)));
     programs.back().name = name;
   }
-  prepare_output_folder(o.out_dir, "--out");
   const bool parity = o.application == "parity" || o.application == "all";
   const bool assembly = o.application == "interference" || o.application == "all";
   const bool rendering = o.application == "csg" || o.application == "all";
@@ -119,6 +118,8 @@ int run_csg(const CsgOptions& o) {
   std::vector<CsgMeasure> rendered;
   std::vector<TransparencyMeasure> composited;
   std::vector<SectionMeasure> capped;
+  // Every input is read: only now the output folder (a bad scene or program leaves none).
+  prepare_output_folder(o.out_dir, "--out");
   OutputSet outputs;
   auto images = [&](const std::string& scene, const std::string& program, const RgbImage& image,
                     const RgbImage& difference) {

@@ -123,11 +123,13 @@ int main(int argc, char** argv) {
     }
     return render.run();  // no subcommand: render with the defaults
   } catch (const std::bad_alloc&) {
+    remove_created_folders();
     std::cerr << "pp5sim: error: out of memory: the run needs more memory than the host could "
                  "give; make the scene, the screen, renderer.backing_store_bits or the sweep "
                  "smaller\n";
     return 1;
   } catch (const std::exception& e) {
+    remove_created_folders();  // a failed run leaves no empty output folder
     // SystemC reports an exception thrown inside a simulation process as its own error
     // (E549, "uncaught exception"), naming the original: bad_alloc is still out of memory.
     if (std::string(e.what()).find("bad_alloc") != std::string::npos) {

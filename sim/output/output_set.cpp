@@ -165,6 +165,16 @@ std::string default_output_folder(const std::string& name) {
   return (fs::path("out") / (plain ? name : "scene")).string();
 }
 
+namespace {
+
+// The folders prepare_output_folder made, outermost first.
+std::vector<fs::path>& created_folders() {
+  static std::vector<fs::path> folders;
+  return folders;
+}
+
+}  // namespace
+
 bool prepare_output_folder(const std::string& dir, const std::string& option) {
   std::error_code ec;
   const fs::file_status st = fs::status(dir, ec);
@@ -172,9 +182,16 @@ bool prepare_output_folder(const std::string& dir, const std::string& option) {
     throw OutputError(option + " " + dir + ": is a file, expected an output folder");
   }
   if (!fs::exists(st)) {
+    std::vector<fs::path> missing;
+    for (fs::path p = fs::path(dir).lexically_normal(); !p.empty() && !fs::exists(p, ec);
+         p = p.parent_path()) {
+      missing.push_back(p);
+      if (p == p.parent_path()) break;
+    }
     fs::create_directories(dir, ec);
     if (ec)
       throw OutputError(option + " " + dir + ": cannot create the folder (" + ec.message() + ")");
+    created_folders().insert(created_folders().end(), missing.rbegin(), missing.rend());
     return false;
   }
   return fs::exists(fs::path(dir) / "frame.png", ec) ||
@@ -191,6 +208,15 @@ void install_signal_cleanup() {
     action.sa_flags = SA_RESETHAND;
     ::sigaction(signal, &action, nullptr);
   }
+}
+
+void remove_created_folders() {
+  std::vector<fs::path>& folders = created_folders();
+  for (auto it = folders.rbegin(); it != folders.rend(); ++it) {
+    std::error_code ec;
+    if (fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);  // never one that holds a file
+  }
+  folders.clear();
 }
 
 }  // namespace pp5

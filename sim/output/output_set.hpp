@@ -46,6 +46,10 @@ std::string default_output_folder(const std::string& name);
 // outputs (frame.png or stats.json), which this run will replace.
 bool prepare_output_folder(const std::string& dir, const std::string& option);
 
+// After a failed run: removes the folders prepare_output_folder created, innermost first,
+// each only if it is still empty, so a run that writes nothing leaves no folder behind.
+void remove_created_folders();
+
 // Writes one file through OutputSet.
 void write_file_atomically(const std::string& path, const std::string& text);
 
