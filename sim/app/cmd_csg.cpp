@@ -195,18 +195,17 @@ Command add_csg_command(CLI::App& app) {
   auto o = std::make_shared<CsgOptions>();
   auto* cmd = app.add_subcommand(
       "csg",
-      "Parity applications on the machine (issue 15) against a double-precision ray caster: "
-      "point in solid by parity, with standard and accurate scan conversion, on scenes made "
-      "for it (a plane of points through closed solids), and interference of two solids by "
-      "depth intervals (with the depth range of the overlap), and CSG rendering (Goldfeather's "
-      "multipass algorithm, csg.pp5) of expressions over closed solids, against the first "
-      "surface of the same expression (coverage and depth), and transparency front to back "
-      "(transparent.pp5) and back to front (transparent_interval.pp5, a depth-interval buffer) "
-      "against every layer composited in double precision, and cross-sections capped by parity "
-      "(section.pp5) against the ray caster's solid intersected with the half-space behind "
-      "the plane. Prints the agreement tables (pixels "
-      "disagreeing, passes, bits, cycles, frame time) and writes each image and an image of "
-      "the differing pixels (white; grey: near an edge, not compared).");
+      "The parity and depth-interval applications (Rossignac 9.2) on the machine, each "
+      "against a double-precision ground truth (--application, all by default): parity, point "
+      "in solid (parity, parity_accurate); interference of two solids by depth intervals "
+      "(interference, interference_accurate); csg, CSG rendering by Goldfeather's multipass "
+      "algorithm over meshes and quadric spheres (csg, csg_accurate, csg_layers); "
+      "transparency, front to back and back to front with a depth-interval buffer "
+      "(transparent, transparent_interval) against every layer composited; section, a solid "
+      "cut by a plane and capped by parity (section, section_accurate). The ray caster sees "
+      "the same solids and expression. Prints the agreement tables (pixels disagreeing, "
+      "passes, bits, Renderer cycles, frame time) and writes each image and an image of the "
+      "differing pixels (white; grey: near an edge, not compared).");
   cmd->add_option("-s,--scene", o->scenes,
                   "A parity scene (repeatable): plane-sphere, "
                   "plane-boxes; default both");
