@@ -118,15 +118,26 @@ Scene make_parity_scene(const std::string& name) {
     solids.push_back({n, t, t, i, i + 1});
   };
   const CsgLiteral a{0, false}, b{1, false}, not_b{1, true}, not_c{2, true};
-  if (name == "box-minus-ball") {
-    description = "a box minus a ball that bites its top corner (a & !b)";
+  // The two quadric scenes are box-minus-ball and ball-and-ball with quadric spheres.
+  const bool quadrics = name == "box-minus-quadric" || name == "quadric-lens";
+  auto round = [&](const std::string& n, glm::vec3 centre, float radius, glm::vec3 color) {
+    if (quadrics) {
+      quadric(n, centre, radius, color);
+    } else {
+      ball(n, centre, radius, color);
+    }
+  };
+  if (name == "box-minus-ball" || name == "box-minus-quadric") {
+    description = quadrics ? "box-minus-ball with a quadric sphere for the ball (a & !b)"
+                           : "a box minus a ball that bites its top corner (a & !b)";
     solid("box", [&] { add_box(mesh, {0.0f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.7f}, 20.0f, sand); });
-    ball("ball", {0.45f, 0.55f, 0.4f}, 0.6f, teal);
+    round("ball", {0.45f, 0.55f, 0.4f}, 0.6f, teal);
     csg = {{a, not_b}};
-  } else if (name == "ball-and-ball") {
-    description = "the lens where two balls overlap (a & b)";
-    ball("left", {-0.35f, 0.0f, 0.0f}, 0.8f, sand);
-    ball("right", {0.35f, 0.1f, 0.1f}, 0.7f, teal);
+  } else if (name == "ball-and-ball" || name == "quadric-lens") {
+    description = quadrics ? "ball-and-ball with quadric spheres (a & b)"
+                           : "the lens where two balls overlap (a & b)";
+    round("left", {-0.35f, 0.0f, 0.0f}, 0.8f, sand);
+    round("right", {0.35f, 0.1f, 0.1f}, 0.7f, teal);
     csg = {{a, b}};
   } else if (name == "box-or-ball") {
     description = "a box and a ball through it (a | b)";
@@ -139,16 +150,6 @@ Scene make_parity_scene(const std::string& name) {
     ball("ball", {-0.4f, 0.5f, 0.3f}, 0.5f, teal);
     solid("bar", [&] { add_box(mesh, {0.35f, 0.1f, 0.0f}, {0.2f, 0.9f, 0.25f}, 35.0f, rose); });
     csg = {{a, not_b, not_c}};
-  } else if (name == "box-minus-quadric") {
-    description = "box-minus-ball with a quadric sphere for the ball (a & !b)";
-    solid("box", [&] { add_box(mesh, {0.0f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.7f}, 20.0f, sand); });
-    quadric("ball", {0.45f, 0.55f, 0.4f}, 0.6f, teal);
-    csg = {{a, not_b}};
-  } else if (name == "quadric-lens") {
-    description = "ball-and-ball with quadric spheres (a & b)";
-    quadric("left", {-0.35f, 0.0f, 0.0f}, 0.8f, sand);
-    quadric("right", {0.35f, 0.1f, 0.1f}, 0.7f, teal);
-    csg = {{a, b}};
   } else if (name == "pair-minus-bar") {
     description =
         "two slabs, one solid (not convex), minus a bar through the upper one only (a & !b)";
