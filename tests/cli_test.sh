@@ -115,6 +115,9 @@ expect_error "program 'csg_layers' does not define 'sphere_surface', which the s
   csg --application csg --csg-scene quadric-lens --csg-program csg_layers --set screen.width=64 \
   --set screen.height=64 --out "$tmp/deep/er/csg-layers"
 [ ! -e "$tmp/deep" ] || fail "a failed csg run left $tmp/deep"
+expect_error "csg: a cross-section program leaves the shown depth in a field 'z' and the cap in a field 'inside'" \
+  csg --application section --section-program csg --set screen.width=64 --set screen.height=64 \
+  --out "$tmp/section-csg"
 mkdir "$tmp/kept"
 expect_error "no parity scene 'nope'" csg --application csg --csg-scene nope --out "$tmp/kept"
 [ -d "$tmp/kept" ] || fail "a failed run removed a folder it did not make"

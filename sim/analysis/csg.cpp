@@ -752,6 +752,12 @@ SectionMeasure measure_section(const MachineConfig& config, const Scene& scene,
     throw std::invalid_argument(
         fmt::format("{}: a cross-section needs a program that defines 'parity'", program.name));
   }
+  if (!program.find_field("inside") || !program.find_field("z")) {
+    throw std::invalid_argument(fmt::format(
+        "{}: a cross-section program leaves the shown depth in a field 'z' and the cap in a "
+        "field 'inside' (as section.pp5 does), which pp5sim csg reads back",
+        program.name));
+  }
   const Scene truth = section_truth(scene);
   std::vector<int> solid(static_cast<std::size_t>(config.screen.width) * config.screen.height, -2);
   SectionMeasure m;
