@@ -75,13 +75,17 @@ int report_parse_error(const CLI::App& app, const CLI::ParseError& e, int argc, 
 
 }  // namespace
 
+namespace pp5 {
+extern const char* const kVersion;  // "0.10 (git describe)": version.cpp, made at build time
+}  // namespace pp5
+
 int main(int argc, char** argv) {
   using namespace pp5;
   CLI::App app{
       "pp5sim: a cycle-approximate simulator of the Pixel-Planes 5 graphics machine.\n"
       "With no subcommand it renders the built-in torus with the Phong firmware."};
   app.require_subcommand(0, 1);
-  app.set_version_flag("--version", std::string("pp5sim ") + PP5_VERSION);
+  app.set_version_flag("--version", std::string("pp5sim ") + kVersion);
 
   const Command render = add_render_command(app);
   const std::vector<Command> commands = {
