@@ -105,6 +105,8 @@ class RendererBoard {
   ArrayCycles cycles_executed() const { return cycles_; }
 
  private:
+  // Keeps the array's state in `slot` (see the members below).
+  void keep_state(std::shared_ptr<PixelBackend>& slot) const;
   // Empty regions. Their stream is the same every time (clear, the passes' procedures, the
   // lights, shade, all with the frame's values, whose expressions are zero, so the region's origin
   // does not matter): its result depends only on the array's state before it. So the first empty
@@ -122,8 +124,10 @@ class RendererBoard {
   RendererBoardParams params_;
   std::unique_ptr<PixelBackend> array_;
   mutable bool lazy_ = false;  // array_'s true state is *empty_after_shade_
-  std::shared_ptr<const PixelBackend> empty_after_clear_;
-  std::shared_ptr<const PixelBackend> empty_after_shade_;
+  // Shared with the boards share_empty_region gave them to; a board rewrites one in place
+  // only while it alone holds it (keep_state).
+  std::shared_ptr<PixelBackend> empty_after_clear_;
+  std::shared_ptr<PixelBackend> empty_after_shade_;
   std::shared_ptr<const std::vector<std::uint8_t>> empty_rgb_;
   std::optional<bool> clear_restores_;  // clear(after shade) == after clear
   std::uint64_t empty_reused_ = 0;
