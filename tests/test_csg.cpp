@@ -125,6 +125,19 @@ Program program_named(const std::string& name, const MachineConfig& config) {
   return p;
 }
 
+// Shipped program `name` with the text `find` (which it must hold) replaced by `replace`,
+// assembled as `label`: a deliberately broken or bad variant for a test.
+Program program_edited(const std::string& name, const std::string& find, const std::string& replace,
+                       const std::string& label, const MachineConfig& config) {
+  std::string source =
+      read_regular_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/" + name + ".pp5",
+                        1 << 20, "a firmware program");
+  const std::size_t at = source.find(find);
+  REQUIRE(at != std::string::npos);
+  source.replace(at, find.size(), replace);
+  return assemble(source, label, assembler_options(config));
+}
+
 }  // namespace
 
 TEST_CASE("point in solid by parity agrees with the ray caster away from edges", "[csg]") {
@@ -151,12 +164,8 @@ TEST_CASE("point in solid by parity agrees with the ray caster away from edges",
 TEST_CASE("parity without the depth test is caught by the comparison", "[csg]") {
   // Every face of a closed solid toggles: the parity is always even, nothing is inside.
   const MachineConfig config = small_screen();
-  std::string source = read_regular_file(
-      std::string(PP5_SOURCE_DIR) + "/firmware/programs/parity.pp5", 1 << 20, "a firmware program");
-  const std::string test = "  qcmp.gt z, depth\n  xor par, 1";
-  REQUIRE(source.find(test) != std::string::npos);
-  source.replace(source.find(test), test.size(), "  xor par, 1");
-  const Program broken = assemble(source, "parity-without-depth", assembler_options(config));
+  const Program broken = program_edited("parity", "  qcmp.gt z, depth\n  xor par, 1",
+                                        "  xor par, 1", "parity-without-depth", config);
   const ParityMeasure m = measure_parity(config, make_parity_scene("plane-sphere"), broken, 2);
   CHECK(m.disagree == m.inside);
   CHECK(m.disagree > 0);
@@ -373,12 +382,9 @@ TEST_CASE("the CSG pass plan: a surface pass per literal, a parity pass per othe
 
 TEST_CASE("surface may use only what the triangle's packets carry", "[csg]") {
   const MachineConfig config = MachineConfig::defaults();
-  std::string source = read_regular_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/csg.pp5",
-                                         1 << 20, "a firmware program");
-  const std::string load = "  qload cnz, nz\n";
-  REQUIRE(source.find(load) != std::string::npos);
-  source.replace(source.find(load), load.size(), load + "  qload cz, eye_depth\n");
-  const Program program = assemble(source, "bad-surface", assembler_options(config));
+  const Program program =
+      program_edited("csg", "  qload cnz, nz\n", "  qload cnz, nz\n  qload cz, eye_depth\n",
+                     "bad-surface", config);
   CHECK_THROWS_WITH(
       check_pass_plan(program),
       Catch::Contains("'surface' uses expression 'eye_depth'") && Catch::Contains("bad-surface"));
@@ -529,12 +535,8 @@ TEST_CASE("CSG with quadric spheres as solids agrees with the ray caster to the 
   }
   // Without sphere_parity the spheres classify nothing: the box keeps the bite, the lens
   // shows each whole ball.
-  std::string source = read_regular_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/csg.pp5",
-                                         1 << 20, "a firmware program");
-  const std::string toggle = "  qcmp.gt cz, sphere_depth\n  xor par, 1\n";
-  REQUIRE(source.find(toggle) != std::string::npos);
-  source.replace(source.find(toggle), toggle.size(), "");
-  const Program broken = assemble(source, "csg-no-sphere-parity", assembler_options(config));
+  const Program broken = program_edited("csg", "  qcmp.gt cz, sphere_depth\n  xor par, 1\n", "",
+                                        "csg-no-sphere-parity", config);
   for (const std::string& name : csg_quadric_scene_names()) {
     INFO(name);
     CHECK(measure_csg(config, make_parity_scene(name), broken, 2).disagree > 2000);
@@ -637,13 +639,8 @@ TEST_CASE("a cross-section is capped exactly where the ray caster sees the cut",
 TEST_CASE("a cross-section without the parity is caught by the comparison", "[csg][section]") {
   // No parity toggles: nothing is inside, the cap is missing and the solid's far inside shows.
   const MachineConfig config = small_screen();
-  std::string source =
-      read_regular_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/section.pp5", 1 << 20,
-                        "a firmware program");
-  const std::string toggle = "  xor par, 1\n";
-  REQUIRE(source.find(toggle) != std::string::npos);
-  source.replace(source.find(toggle), toggle.size(), "");
-  const Program broken = assemble(source, "section-without-parity", assembler_options(config));
+  const Program broken =
+      program_edited("section", "  xor par, 1\n", "", "section-without-parity", config);
   for (const std::string& name : section_scene_names()) {
     INFO(name);
     const SectionMeasure m = measure_section(config, make_parity_scene(name), broken, 2);

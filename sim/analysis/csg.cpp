@@ -243,19 +243,31 @@ struct Ray {
   glm::dvec3 origin, direction;
 };
 
+// The solid of each triangle of the mesh (-1: none).
+std::vector<int> solid_of_triangles(const Scene& scene) {
+  std::vector<int> out(scene.mesh.triangles.size(), -1);
+  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
+    for (int t = scene.solids[s].first; t < scene.solids[s].last; ++t)
+      out[static_cast<std::size_t>(t)] = static_cast<int>(s);
+  }
+  return out;
+}
+
 struct Caster {
   const Scene& scene;
+  glm::dmat4 to_clip;  // world to clip space, the GP's camera
   glm::dmat4 inverse;
   int width, height;
   std::vector<int> solid_of;  // per triangle
 
   Caster(const MachineConfig& config, const Scene& s)
-      : scene(s), width(config.screen.width), height(config.screen.height) {
+      : scene(s),
+        width(config.screen.width),
+        height(config.screen.height),
+        solid_of(solid_of_triangles(s)) {
     const float aspect = static_cast<float>(width) / static_cast<float>(height);
-    inverse = glm::inverse(glm::dmat4(projection_matrix(s.camera, aspect)) *
-                           glm::dmat4(view_matrix(s.camera)));
-    for (int t = 0; t < static_cast<int>(s.mesh.triangles.size()); ++t)
-      solid_of.push_back(s.solid_of_triangle(t));
+    to_clip = glm::dmat4(projection_matrix(s.camera, aspect)) * glm::dmat4(view_matrix(s.camera));
+    inverse = glm::inverse(to_clip);
   }
 
   Ray ray(double x, double y) const {
@@ -384,13 +396,12 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
 namespace {
 
 // The solids' triangles binned by the screen tiles their projected bounding box (grown by a
-// pixel for round-off, and by `reach` for rays cast off the pixel centres) touches, each bin
-// in increasing triangle order. A ray through a screen point meets only triangles whose
-// projection contains that point, so its bin holds every triangle it can hit. A triangle with
-// a corner at or behind the eye's plane goes to every bin.
+// pixel for round-off) touches, each bin in increasing triangle order. A ray through a screen point
+// meets only triangles whose projection contains that point, so its bin holds every triangle it can
+// hit. A triangle with a corner at or behind the eye's plane goes to every bin.
 class ScreenBins {
  public:
-  ScreenBins(const Scene& scene, const glm::dmat4& to_clip, int width, int height, double reach)
+  ScreenBins(const Scene& scene, const glm::dmat4& to_clip, int width, int height)
       : tiles_x_((width + kTile - 1) / kTile), tiles_y_((height + kTile - 1) / kTile) {
     bins_.resize(static_cast<std::size_t>(tiles_x_) * tiles_y_);
     for (const Solid& solid : scene.solids) {
@@ -409,7 +420,7 @@ class ScreenBins {
           lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x);
           lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
         }
-        const double grow = reach + 1.0;
+        const double grow = 1.0;
         int x0 = 0, x1 = tiles_x_ - 1, y0 = 0, y1 = tiles_y_ - 1;
         if (!behind) {
           if (hi_x < -grow || hi_y < -grow || lo_x > width + grow || lo_y > height + grow) continue;
@@ -498,15 +509,6 @@ CsgSurface first_surface(const Scene& scene, const std::vector<int>& solid_of,
   return {};
 }
 
-std::vector<int> solid_of_triangles(const Scene& scene) {
-  std::vector<int> out(scene.mesh.triangles.size(), -1);
-  for (std::size_t s = 0; s < scene.solids.size(); ++s) {
-    for (int t = scene.solids[s].first; t < scene.solids[s].last; ++t)
-      out[static_cast<std::size_t>(t)] = static_cast<int>(s);
-  }
-  return out;
-}
-
 }  // namespace
 
 CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 direction) {
@@ -519,17 +521,14 @@ CsgSurface csg_first_surface(const Scene& scene, glm::dvec3 origin, glm::dvec3 d
 
 std::vector<int> csg_reference(const MachineConfig& config, const Scene& scene) {
   const Caster caster(config, scene);
-  const float aspect = static_cast<float>(caster.width) / static_cast<float>(caster.height);
-  const glm::dmat4 to_clip =
-      glm::dmat4(projection_matrix(scene.camera, aspect)) * glm::dmat4(view_matrix(scene.camera));
-  const ScreenBins bins(scene, to_clip, caster.width, caster.height, 0.0);
-  const std::vector<int> solid_of = solid_of_triangles(scene);
+  const ScreenBins bins(scene, caster.to_clip, caster.width, caster.height);
   std::vector<int> out(static_cast<std::size_t>(caster.width) * caster.height, -1);
   for (int y = 0; y < caster.height; ++y) {
     for (int x = 0; x < caster.width; ++x) {
       const Ray r = caster.ray(x + 0.5, y + 0.5);
       out[static_cast<std::size_t>(y) * caster.width + x] =
-          first_surface(scene, solid_of, bins.at(x + 0.5, y + 0.5), r.origin, r.direction).solid;
+          first_surface(scene, caster.solid_of, bins.at(x + 0.5, y + 0.5), r.origin, r.direction)
+              .solid;
     }
   }
   return out;
@@ -552,9 +551,7 @@ CsgMeasure compare_first_surface(const MachineConfig& config, const Scene& drawn
   const FieldFrame field = render_field(config, drawn, program, "z", threads);
   m.image = field.image;
   const Caster caster(config, truth);
-  const float aspect = static_cast<float>(caster.width) / static_cast<float>(caster.height);
-  const glm::dmat4 to_clip =
-      glm::dmat4(projection_matrix(truth.camera, aspect)) * glm::dmat4(view_matrix(truth.camera));
+  const glm::dmat4& to_clip = caster.to_clip;
   const double depth_max = std::ldexp(1.0, config.gp.depth_bits) - 1.0;
   const std::int64_t background = (std::int64_t{1} << config.gp.depth_bits) - 1;
   // The first surface at a screen point: its solid and depth in the GP's units.
@@ -573,11 +570,11 @@ CsgMeasure compare_first_surface(const MachineConfig& config, const Scene& drawn
       sphere_bound[i] = screen.depth_bound;
     }
   }
-  const ScreenBins bins(truth, to_clip, caster.width, caster.height, margin);
-  const std::vector<int> solid_of = solid_of_triangles(truth);
+  const ScreenBins bins(truth, to_clip, caster.width, caster.height);
   auto seen_at = [&](double x, double y) {
     const Ray r = caster.ray(x, y);
-    const CsgSurface s = first_surface(truth, solid_of, bins.at(x, y), r.origin, r.direction);
+    const CsgSurface s =
+        first_surface(truth, caster.solid_of, bins.at(x, y), r.origin, r.direction);
     if (s.solid < 0) return Seen{-1, -1, 0.0};
     const glm::dvec4 c = to_clip * glm::dvec4(r.origin + s.t * r.direction, 1.0);
     return Seen{s.solid, s.triangle, (c.z / c.w * 0.5 + 0.5) * depth_max};
