@@ -18,8 +18,9 @@ struct Packet {
   int kind = 0;        // the primitive kind that set it up: index in primitive_kinds() (models/gp)
   int primitive = -1;  // the display-list index of the primitive it came from
   int group = -1;      // the solid its primitive belongs to (Scene::solids), -1 for none
-  bool back = false;   // a triangle facing away from the eye (a header bit: the pass plan's
-                       // front- and back-face passes, PlannedPass::faces)
+  bool back = false;   // a triangle facing away from the eye, or a solid sphere's far
+                       // hemisphere (a header bit: the pass plan's front- and back-face
+                       // passes, PlannedPass::faces)
   std::uint64_t words = 0;  // ring words: a header, then each expression's coefficients by form
   PacketExpressions values;
 };

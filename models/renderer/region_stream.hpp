@@ -18,7 +18,8 @@
 // models/gp/pass_plan.hpp), the passes are the plan's: pass k opens with the procedures of
 // plan[k].opening, in order (the first starts with clear), instead of `pass`, and a packet
 // whose group or facing plan[k] does not draw runs nothing in it (its step runs an undefined
-// procedure: no instruction, no cycle); one it draws runs plan[k].packets, or its own
+// procedure: no instruction, no cycle); one it draws runs plan[k].packets (a sphere's packet
+// its sphere counterpart, planned_procedure in firmware/isa/interface.hpp), or its own
 // procedure. After the last pass, FrameValues::closing's procedures run, then `light` and
 // shade. The GPs still send every packet in every pass (the Renderer discards the others on
 // reading the header).
