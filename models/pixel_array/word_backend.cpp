@@ -92,11 +92,15 @@ WordBackend::WordBackend(const PixelBackendParams& params)
   stack_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth) * n, 0);
   spans_ = {Range{0, pixels_}};
   stack_spans_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
-  s0_.assign(n, 0);
-  s1_.assign(n, 0);
-  s2_.assign(n, 0);
-  row_a_.assign(static_cast<std::size_t>(geometry_.width), 0);
-  row_b_.assign(static_cast<std::size_t>(geometry_.width), 0);
+}
+
+void WordBackend::allocate_scratch() const {
+  const auto n = static_cast<std::size_t>(pixels_);
+  scratch_.s0.assign(n, 0);
+  scratch_.s1.assign(n, 0);
+  scratch_.s2.assign(n, 0);
+  scratch_.row_a.assign(static_cast<std::size_t>(geometry_.width), 0);
+  scratch_.row_b.assign(static_cast<std::size_t>(geometry_.width), 0);
 }
 
 void WordBackend::check_field(const Field& f, const char* what) const {
@@ -165,8 +169,8 @@ void WordBackend::store(u64* lanes, const Field& f, Range r, const u64* in, bool
 // only for a cross term, one multiply.
 void WordBackend::prepare_columns(const QuadraticCoefficients& c) const {
   const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), D = static_cast<u64>(c.D);
-  u64* ta = row_a_.data();
-  u64* tb = row_b_.data();
+  u64* ta = scratch().row_a.data();
+  u64* tb = scratch().row_b.data();
   for (int x = 0; x < geometry_.width; ++x) {
     const u64 X = static_cast<u64>(static_cast<i64>(x0_) + x);
     ta[x] = A * X * X + D * X;
@@ -178,8 +182,8 @@ void WordBackend::evaluate(const QuadraticCoefficients& c, Range r, u64* out) co
   if (r.begin >= r.end) return;
   const int width = geometry_.width;
   const u64 C = static_cast<u64>(c.C), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
-  const u64* ta = row_a_.data();
-  const u64* tb = row_b_.data();
+  const u64* ta = scratch().row_a.data();
+  const u64* tb = scratch().row_b.data();
   const int R = evaluator_.result_bits;
   const int s = 64 - R;
   for (int y = r.begin / width; y * width < r.end; ++y) {
@@ -230,8 +234,10 @@ void WordBackend::push_enable() {
     throw std::overflow_error("enable stack overflow: depth " +
                               std::to_string(geometry_.enable_stack_depth));
   }
-  std::copy(enable_.begin(), enable_.end(),
-            stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * pixels_);
+  // E outside spans_ is 0 whatever its bytes hold: only the spans are copied.
+  std::uint8_t* level = &stack_[static_cast<std::size_t>(stack_top_) * pixels_];
+  for (const Range& r : spans_)
+    std::copy(enable_.begin() + r.begin, enable_.begin() + r.end, level + r.begin);
   stack_spans_[static_cast<std::size_t>(stack_top_)] = spans_;
   ++stack_top_;
 }
@@ -239,9 +245,10 @@ void WordBackend::push_enable() {
 void WordBackend::pop_enable() {
   if (stack_top_ == 0) throw std::underflow_error("enable stack underflow");
   --stack_top_;
-  const auto saved = stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * pixels_;
-  std::copy(saved, saved + pixels_, enable_.begin());
+  const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_) * pixels_];
   spans_ = stack_spans_[static_cast<std::size_t>(stack_top_)];
+  for (const Range& r : spans_)
+    std::copy(saved + r.begin, saved + r.end, enable_.begin() + r.begin);
 }
 
 void WordBackend::else_enable() {
@@ -249,17 +256,33 @@ void WordBackend::else_enable() {
   const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_ - 1) * pixels_];
   std::uint8_t* e = enable_.data();
   const std::vector<Range>& keep = stack_spans_[static_cast<std::size_t>(stack_top_ - 1)];
-  // E <- saved & ~E, once over the union of both span lists: outside it both are 0. The
-  // result lies within the saved level's spans.
-  std::vector<Range> all;
-  std::merge(spans_.begin(), spans_.end(), keep.begin(), keep.end(), std::back_inserter(all),
-             [](const Range& x, const Range& y) { return x.begin < y.begin; });
-  int done = 0;  // pixels below this are updated
-  for (const Range& r : all) {
-    for (int p = std::max(r.begin, done); p < r.end; ++p) e[p] = saved[p] & (e[p] ^ 1);
-    done = std::max(done, r.end);
+  // E <- saved & ~E over the saved level's spans (outside them the result is 0): where E's
+  // own spans cover a pixel, saved & ~E; elsewhere E is 0 and the result is saved.
+  auto cur = spans_.begin();
+  for (const Range& r : keep) {
+    int p = r.begin;
+    while (p < r.end) {
+      while (cur != spans_.end() && cur->end <= p) ++cur;
+      if (cur == spans_.end() || cur->begin >= r.end) {
+        std::copy(saved + p, saved + r.end, e + p);
+        break;
+      }
+      if (cur->begin > p) {
+        std::copy(saved + p, saved + cur->begin, e + p);
+        p = cur->begin;
+      }
+      const int q = std::min(r.end, cur->end);
+      for (; p < q; ++p) e[p] = saved[p] & (e[p] ^ 1);
+    }
   }
   spans_ = keep;
+}
+
+bool WordBackend::enabled(int pixel) const {
+  // The span holding the pixel, if any: the first that ends after it.
+  const auto it = std::upper_bound(spans_.begin(), spans_.end(), pixel,
+                                   [](int p, const Range& r) { return p < r.end; });
+  return it != spans_.end() && it->begin <= pixel && enable_[static_cast<std::size_t>(pixel)] != 0;
 }
 
 int WordBackend::count_enabled() const {
@@ -286,27 +309,40 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
       if (v < lo || v > hi) return false;
     }
   }
-  std::uint8_t* e = enable_.data();
   std::vector<Range> kept;
   kept.reserve(spans_.size() + static_cast<std::size_t>(last - first + 1));
   // Row y's columns where the condition holds: up to two intervals [a0, a1), [b0, b1).
   int row_y = -1, a0 = 0, a1 = 0, b0 = 0, b1 = 0;
+  // In an increasing coordinate u (u = x when D >= 0, u = width - 1 - x otherwise) the value
+  // is g(u) = g0 + s u with s >= 0: "< 0" holds for u < lt, "<= 0" for u < le. With
+  // n = -g0 = s q + m (floor division, 0 <= m < s), lt = q + (m != 0) and le = q + 1. From
+  // row y to y + 1, n falls by E = s qe + me: q and m follow by a subtraction and a borrow,
+  // with no division per row (one per span of rows not following the last).
+  const i128 sl = c.D >= 0 ? i128(c.D) : -i128(c.D);
+  i128 q = 0, m = 0, qe = 0, me = 0;
+  auto floor_div = [](i128 n, i128 d, i128& quo, i128& rem) {
+    quo = n / d;
+    rem = n % d;
+    if (rem < 0) rem += d, --quo;
+  };
+  if (sl != 0) floor_div(i128(c.E), sl, qe, me);
   auto row_intervals = [&](int y) {
-    const i128 f0 = i128(c.E) * (y0_ + y) + c.F + i128(c.D) * x0_;  // column 0
-    // In an increasing coordinate u (u = x when D >= 0, u = width - 1 - x otherwise) the
-    // value is g(u) = g0 + s u with s >= 0: "< 0" holds for u < lt, "<= 0" for u < le.
-    const i128 sl = c.D >= 0 ? i128(c.D) : -i128(c.D);
-    const i128 g0 = c.D >= 0 ? f0 : f0 + i128(c.D) * (width - 1);
     int lt, le;
     if (sl == 0) {
+      const i128 g0 = i128(c.E) * (y0_ + y) + c.F;
       lt = g0 < 0 ? width : 0;
       le = g0 <= 0 ? width : 0;
     } else {
-      // lt = ceil(-g0 / sl), le = floor(-g0 / sl) + 1, clamped to [0, width].
-      const i128 n = -g0;
-      i128 q = n / sl;
-      if (n % sl != 0 && n < 0) --q;  // floor
-      const i128 ceil = (n % sl != 0) ? q + 1 : q;
+      if (y == row_y + 1 && row_y >= 0) {
+        q -= qe;
+        m -= me;
+        if (m < 0) m += sl, --q;
+      } else {
+        const i128 f0 = i128(c.E) * (y0_ + y) + c.F + i128(c.D) * x0_;  // column 0
+        const i128 g0 = c.D >= 0 ? f0 : f0 + i128(c.D) * (width - 1);
+        floor_div(-g0, sl, q, m);
+      }
+      const i128 ceil = m != 0 ? q + 1 : q;
       lt = static_cast<int>(std::max<i128>(0, std::min<i128>(width, ceil)));
       le = static_cast<int>(std::max<i128>(0, std::min<i128>(width, q + 1)));
     }
@@ -339,28 +375,17 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
     }
     row_y = y;
   };
-  // Within a segment [from, to) of row y (pixel indices): clear E outside the row's
-  // intervals and keep what is inside.
-  auto apply = [&](int start, int from, int to, int i0, int i1) {
-    const int k0 = std::max(from, start + i0), k1 = std::min(to, start + i1);
-    if (k1 > k0) kept.push_back({k0, k1});
-  };
+  // Within a segment [from, to) of row y: what lies inside the row's intervals stays a span,
+  // the rest leaves the spans (and so is 0, whatever E's bytes there hold).
   for (const Range& sp : spans_) {
     for (int y = sp.begin / width; y * width < sp.end; ++y) {
       if (y != row_y) row_intervals(y);
       const int start = y * width;
       const int from = std::max(sp.begin, start), to = std::min(sp.end, start + width);
-      // Clear [from, to) minus [a0, a1) and [b0, b1) (both relative to start).
-      int at = from;
       for (const auto& [i0, i1] : {std::pair<int, int>{a0, a1}, std::pair<int, int>{b0, b1}}) {
-        if (i1 <= i0) continue;
         const int k0 = std::max(from, start + i0), k1 = std::min(to, start + i1);
-        if (k1 <= k0) continue;
-        if (k0 > at) std::memset(e + at, 0, static_cast<std::size_t>(k0 - at));
-        at = std::max(at, k1);
-        apply(start, from, to, i0, i1);
+        if (k1 > k0) kept.push_back({k0, k1});
       }
-      if (to > at) std::memset(e + at, 0, static_cast<std::size_t>(to - at));
     }
   }
   spans_ = std::move(kept);
@@ -370,7 +395,7 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
 void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
   if (qtest_linear(expr, cond)) return;
   prepare_columns(expr);
-  u64* v = s0_.data();
+  u64* v = scratch().s0.data();
   for (const Range& r : spans_) {
     evaluate(expr, r, v);
     and_compare(
@@ -382,8 +407,8 @@ void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
   check_field(dst, "assign");
   prepare_columns(expr);
   for (const Range& r : spans_) {
-    expression_field(expr, dst, r, s0_.data());
-    store(memory_.data(), dst, r, s0_.data(), true);
+    expression_field(expr, dst, r, scratch().s0.data());
+    store(memory_.data(), dst, r, scratch().s0.data(), true);
   }
 }
 
@@ -392,9 +417,9 @@ void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Co
   prepare_columns(expr);
   const bool wide = !field.is_signed && field.width == 64;
   for (const Range& r : spans_) {
-    expression_field(expr, field, r, s0_.data());
-    load(memory_.data(), field, r, s1_.data(), true);
-    compare_values(s0_.data(), wide, s1_.data(), wide, cond, r);
+    expression_field(expr, field, r, scratch().s0.data());
+    load(memory_.data(), field, r, scratch().s1.data(), true);
+    compare_values(scratch().s0.data(), wide, scratch().s1.data(), wide, cond, r);
   }
 }
 
@@ -423,20 +448,21 @@ void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
 }
 
 void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {
-  load(memory_.data(), a, r, s0_.data(), true);
+  load(memory_.data(), a, r, scratch().s0.data(), true);
   const bool a_wide = !a.is_signed && a.width == 64;
   if (b.is_field) {
-    load(memory_.data(), b.field, r, s1_.data(), true);
-    compare_values(s0_.data(), a_wide, s1_.data(), !b.field.is_signed && b.field.width == 64, cond,
-                   r);
+    load(memory_.data(), b.field, r, scratch().s1.data(), true);
+    compare_values(scratch().s0.data(), a_wide, scratch().s1.data(),
+                   !b.field.is_signed && b.field.width == 64, cond, r);
   } else if (!a_wide) {
     const i64 k = b.constant;
     and_compare(
-        enable_.data(), s0_.data(), [k](int) { return k; }, cond, r.begin, r.end);
+        enable_.data(), scratch().s0.data(), [k](int) { return k; }, cond, r.begin, r.end);
     enable_changed();
   } else {
-    std::fill(s1_.begin() + r.begin, s1_.begin() + r.end, static_cast<u64>(b.constant));
-    compare_values(s0_.data(), true, s1_.data(), false, cond, r);
+    std::fill(scratch().s1.begin() + r.begin, scratch().s1.begin() + r.end,
+              static_cast<u64>(b.constant));
+    compare_values(scratch().s0.data(), true, scratch().s1.data(), false, cond, r);
   }
 }
 
@@ -458,11 +484,11 @@ void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
 }
 
 void WordBackend::alu_range(const Field& dst, const Source& src, Alu op, Range r) {
-  u64* a = s0_.data();
-  u64* out = s2_.data();
+  u64* a = scratch().s0.data();
+  u64* out = scratch().s2.data();
   if (op != Alu::mov) load(memory_.data(), dst, r, a, false);
   if (src.is_field) {
-    u64* b = s1_.data();
+    u64* b = scratch().s1.data();
     load(memory_.data(), src.field, r, b, true);
     switch (op) {
       case Alu::mov:
@@ -565,7 +591,7 @@ void WordBackend::logic(const Field& dst, const Source& src, Logic op) {
 
 void WordBackend::invert(const Field& dst) {
   check_field(dst, "not");
-  u64* a = s0_.data();
+  u64* a = scratch().s0.data();
   for (const Range& r : spans_) {
     load(memory_.data(), dst, r, a, false);
     for (int p = r.begin; p < r.end; ++p) a[p] = ~a[p];
@@ -586,8 +612,8 @@ void WordBackend::multiply(const Field& dst, const Field& a, const Field& b) {
   if (overlaps(dst, a) || overlaps(dst, b)) {
     throw std::invalid_argument("mul: destination overlaps a source");
   }
-  u64* x = s0_.data();
-  u64* y = s1_.data();
+  u64* x = scratch().s0.data();
+  u64* y = scratch().s1.data();
   for (const Range& r : spans_) {
     load(memory_.data(), a, r, x, true);
     load(memory_.data(), b, r, y, true);
@@ -600,8 +626,8 @@ void WordBackend::multiply_accumulate(const Field& dst, const Field& a, i64 k) {
   check_field(a, "operand");
   check_field(dst, "mac");
   if (overlaps(dst, a)) throw std::invalid_argument("mac: destination overlaps a source");
-  u64* x = s0_.data();
-  u64* d = s1_.data();
+  u64* x = scratch().s0.data();
+  u64* d = scratch().s1.data();
   const u64 m = static_cast<u64>(k);
   for (const Range& r : spans_) {
     load(memory_.data(), a, r, x, true);
@@ -626,8 +652,8 @@ void WordBackend::store_to_backing(const Field& field, int block) {
     throw std::out_of_range("backing store: block " + std::to_string(block) + " out of range");
   }
   const Range all{0, pixels_};
-  load(memory_.data(), field, all, s0_.data(), false);
-  store(backing(), Field{first, field.width, false}, all, s0_.data(), false);
+  load(memory_.data(), field, all, scratch().s0.data(), false);
+  store(backing(), Field{first, field.width, false}, all, scratch().s0.data(), false);
 }
 
 void WordBackend::load_from_backing(const Field& field, int block) {
@@ -637,8 +663,8 @@ void WordBackend::load_from_backing(const Field& field, int block) {
     throw std::out_of_range("backing store: block " + std::to_string(block) + " out of range");
   }
   const Range all{0, pixels_};
-  load(backing(), Field{first, field.width, false}, all, s0_.data(), false);
-  store(memory_.data(), field, all, s0_.data(), false);
+  load(backing(), Field{first, field.width, false}, all, scratch().s0.data(), false);
+  store(memory_.data(), field, all, scratch().s0.data(), false);
 }
 
 u64 WordBackend::read(int pixel, const Field& field) const {
@@ -693,10 +719,23 @@ std::unique_ptr<PixelBackend> WordBackend::clone() const {
 bool WordBackend::same_state(const PixelBackend& other) const {
   const auto* o = dynamic_cast<const WordBackend*>(&other);
   if (o == nullptr || o->geometry_ != geometry_) return false;
-  if (stack_top_ != o->stack_top_ || memory_ != o->memory_ || enable_ != o->enable_) return false;
-  // Stack levels above the top are never read before a push overwrites them.
-  const auto used = static_cast<std::ptrdiff_t>(stack_top_) * pixels_;
-  if (!std::equal(stack_.begin(), stack_.begin() + used, o->stack_.begin())) return false;
+  if (stack_top_ != o->stack_top_ || memory_ != o->memory_) return false;
+  // E and each saved level compared as values: 0 outside their spans, whatever the bytes
+  // there hold. Stack levels above the top are never read before a push overwrites them.
+  std::vector<std::uint8_t> a, b;
+  auto value = [this](const std::uint8_t* bytes, const std::vector<Range>& spans,
+                      std::vector<std::uint8_t>& out) {
+    out.assign(static_cast<std::size_t>(pixels_), 0);
+    for (const Range& r : spans) std::copy(bytes + r.begin, bytes + r.end, out.begin() + r.begin);
+  };
+  for (int level = -1; level < stack_top_; ++level) {
+    const auto at = static_cast<std::size_t>(std::max(level, 0)) * pixels_;
+    const auto k = static_cast<std::size_t>(std::max(level, 0));
+    value(level < 0 ? enable_.data() : &stack_[at], level < 0 ? spans_ : stack_spans_[k], a);
+    value(level < 0 ? o->enable_.data() : &o->stack_[at],
+          level < 0 ? o->spans_ : o->stack_spans_[k], b);
+    if (a != b) return false;
+  }
   // A backing store never allocated is all 0.
   auto zero = [](const std::vector<u64>& v) {
     return std::all_of(v.begin(), v.end(), [](u64 x) { return x == 0; });

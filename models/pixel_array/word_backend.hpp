@@ -8,11 +8,13 @@
 // Layout: pixel memory is ceil(memory_bits / 64) lanes of 64 bits per pixel, lane-major
 // (lane k of every pixel in one contiguous array of pixels()). A field [lo, lo + width) lies
 // in lane lo / 64 at bit lo % 64, or straddles two lanes; it is read with a shift and a mask
-// and written with a masked merge under E. E is one byte per pixel (0 or 1), the Enable stack
-// a copy of E per level, the backing store lanes like pixel memory (allocated on first use).
-// Every operation runs only over spans of pixels outside which E is 0 (after a triangle's
-// edge tests, its own columns of each of its rows), which is exact (E = 0 is never written)
-// and makes its cost the pixels a primitive's bounding rows and edges leave.
+// and written with a masked merge under E. E is a list of spans (disjoint pixel ranges)
+// outside which it is 0, and inside them one byte per pixel (0 or 1); the Enable stack holds
+// both per level, the backing store lanes like pixel memory (allocated on first use). Every
+// operation runs only over the spans (after a triangle's edge tests, its own columns of each
+// of its rows), which is exact (E = 0 is never written) and makes its cost the pixels a
+// primitive's bounding rows and edges leave; an edge test only narrows the spans, and
+// saving or restoring E copies only them. E's bytes outside the spans are never read.
 //
 // Contract: implements PixelBackend (firmware/isa/backend.hpp), including its one bit-serial
 // corner: an ALU source field that overlaps its destination from below (src.lo < dst.lo)
@@ -59,7 +61,7 @@ class WordBackend final : public PixelBackend {
   std::uint64_t read(int pixel, const Field& field) const override;
   void read_field(const Field& field, std::uint64_t* out) const override;
   void read_memory_planes(std::vector<std::uint64_t>& planes) const override;
-  bool enabled(int pixel) const override { return enable_[static_cast<std::size_t>(pixel)] != 0; }
+  bool enabled(int pixel) const override;
   int count_enabled() const override;
   int enable_depth() const override { return stack_top_; }
   void write(int pixel, const Field& field, std::uint64_t value) override;
@@ -125,9 +127,22 @@ class WordBackend final : public PixelBackend {
   // saved level of the stack.
   std::vector<Range> spans_;
   std::vector<std::vector<Range>> stack_spans_;
-  // Scratch of pixels_ values each: operands, results, the evaluator's row tables.
-  mutable std::vector<std::uint64_t> s0_, s1_, s2_;
-  mutable std::vector<std::uint64_t> row_a_, row_b_;  // width entries each
+  // Scratch of pixels_ values each: operands, results, the evaluator's row tables (width
+  // entries each). Not state: a copy (clone, copy_state_from) starts without it, and it is
+  // allocated when the copy first executes, so a kept state costs only its state.
+  struct Scratch {
+    std::vector<std::uint64_t> s0, s1, s2, row_a, row_b;
+    Scratch() = default;
+    Scratch(const Scratch&) {}
+    Scratch& operator=(const Scratch&) { return *this; }
+  };
+  // The scratch, allocated on first use.
+  Scratch& scratch() const {
+    if (scratch_.s0.empty()) allocate_scratch();
+    return scratch_;
+  }
+  void allocate_scratch() const;
+  mutable Scratch scratch_;
 };
 
 }  // namespace pp5

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 
+#include "common/parallel_for.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
@@ -100,12 +101,17 @@ int run_render(RenderOptions o) {
   OutputSet outputs;
   // With fidelity.pixels=none no pixel executed: there is no image to write; regions.png
   // needs the event model's per-region cycles (fidelity.timing=event).
-  if (pixels) outputs.add((dir / "frame.png").string(), encode_png(result.image));
   const bool heat_map = !result.regions.empty();
-  if (heat_map) {
-    outputs.add((dir / "regions.png").string(),
-                encode_png(region_heat_map(result.image, result.regions)));
-  }
+  // The two images are independent: encoded at once on the run's host threads.
+  std::string frame_png, regions_png;
+  parallel_for(2, o.threads, [&](int image) {
+    if (image == 0 && pixels) frame_png = encode_png(result.image);
+    if (image == 1 && heat_map) {
+      regions_png = encode_png(region_heat_map(result.image, result.regions));
+    }
+  });
+  if (pixels) outputs.add((dir / "frame.png").string(), std::move(frame_png));
+  if (heat_map) outputs.add((dir / "regions.png").string(), std::move(regions_png));
   outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
   outputs.add((dir / "stats.json").string(), result.stats_json.dump(2) + "\n");
   if (!o.timeline.empty()) outputs.add(o.timeline, timeline.dump() + "\n");
