@@ -3,6 +3,7 @@
 // and the Renderer board charging exactly those costs. The table executes through the
 // PixelBackend interface: every registered backend gives, for random instruction streams,
 // the state that direct bit-sliced PixelArray / ExpressionEvaluator operations give.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <filesystem>
@@ -120,6 +121,35 @@ TEST_CASE("the instruction table is complete, ordered and unambiguous", "[isa]")
   Compare unused;
   CHECK_FALSE(parse_condition("lte", unused));
   CHECK_FALSE(parse_condition("", unused));
+}
+
+TEST_CASE("a packet carries only the expressions written to it, read like a whole table", "[isa]") {
+  std::mt19937_64 rng(7);
+  ExpressionValues table{};
+  CarriedExpressions carried;
+  // Written in a scrambled order, some twice: each lands in its own slot.
+  std::vector<std::size_t> order;
+  for (std::size_t e = 0; e < table.size(); e += 3) order.push_back(e);
+  std::shuffle(order.begin(), order.end(), rng);
+  order.push_back(order.front());
+  for (const std::size_t e : order) {
+    const auto v = static_cast<std::int64_t>(rng() >> 8);
+    table[e] = QuadraticCoefficients{v, v + 1, v + 2, v + 3, v + 4, v + 5};
+    carried[e] = table[e];
+  }
+  CHECK(carried.size() == (table.size() + 2) / 3);
+  const CarriedExpressions& read = carried;
+  const ExpressionView view(carried), whole(table);
+  for (std::size_t e = 0; e < table.size(); ++e) {
+    INFO("expression " << e);
+    CHECK(read.carries(e) == (e % 3 == 0));
+    CHECK(read[e] == table[e]);  // absent: all zero, as in the table
+    CHECK(view[e] == table[e]);
+    CHECK(whole[e] == table[e]);
+  }
+  CHECK(static_cast<std::size_t>(view.end() - view.begin()) == carried.size());
+  CHECK(static_cast<std::size_t>(whole.end() - whole.begin()) == table.size());
+  CHECK(CarriedExpressions(table).size() == table.size());
 }
 
 TEST_CASE("disassembly re-assembles to the same instructions", "[isa]") {

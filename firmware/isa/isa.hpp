@@ -72,10 +72,75 @@ struct TimingParams {
 using ExpressionValues = std::array<QuadraticCoefficients, static_cast<int>(Expression::count)>;
 using ParameterValues = std::array<std::int64_t, static_cast<int>(Parameter::count)>;
 
+// Coefficients held for some of the expressions, in expression order: only those that are
+// carried take room (a packet holds the expressions its procedure uses, as the GP sends
+// them, not a slot for every expression there is). Indexed like ExpressionValues: an
+// expression not carried reads as all-zero coefficients, and writing one carries it.
+class CarriedExpressions {
+ public:
+  CarriedExpressions() = default;
+  // Carries every expression (a whole table, as tests and region-wide procedures hold it).
+  explicit CarriedExpressions(const ExpressionValues& all)
+      : carried_(kAll), values_(all.begin(), all.end()) {}
+  CarriedExpressions& operator=(const ExpressionValues& all) {
+    return *this = CarriedExpressions(all);
+  }
+
+  const QuadraticCoefficients& operator[](std::size_t e) const {
+    return carries(e) ? values_[slot(e)] : kNone;
+  }
+  QuadraticCoefficients& operator[](std::size_t e) {
+    if (!carries(e)) {
+      values_.insert(values_.begin() + static_cast<std::ptrdiff_t>(slot(e)),
+                     QuadraticCoefficients{});
+      carried_ |= std::uint64_t{1} << e;
+    }
+    return values_[slot(e)];
+  }
+  bool carries(std::size_t e) const { return ((carried_ >> e) & 1) != 0; }
+  std::uint64_t carried() const { return carried_; }  // bit e: expression e
+  const QuadraticCoefficients* data() const { return values_.data(); }
+  std::size_t size() const { return values_.size(); }
+  void reserve(std::size_t n) { values_.reserve(n); }
+
+  static constexpr std::uint64_t kAll = (std::uint64_t{1} << ExpressionValues{}.size()) - 1;
+  static_assert(ExpressionValues{}.size() < 64, "one bit per expression");
+
+ private:
+  // Where e is, or would go, in values_: the number of carried expressions below it.
+  std::size_t slot(std::size_t e) const {
+    return static_cast<std::size_t>(__builtin_popcountll(carried_ & ((std::uint64_t{1} << e) - 1)));
+  }
+  static inline const QuadraticCoefficients kNone{};
+  std::uint64_t carried_ = 0;
+  std::vector<QuadraticCoefficients> values_;
+};
+
 // What a packet carries: the coefficients of its expressions. The frame's parameters are not
 // in it: they are bound when the packet runs (PacketValues).
 struct PacketExpressions {
-  ExpressionValues expressions{};
+  CarriedExpressions expressions;
+};
+
+// A read-only view of expression coefficients: a whole table or the carried ones.
+class ExpressionView {
+ public:
+  ExpressionView(const ExpressionValues& all)  // NOLINT(google-explicit-constructor): a view
+      : data_(all.data()), carried_(CarriedExpressions::kAll) {}
+  ExpressionView(const CarriedExpressions& c)  // NOLINT(google-explicit-constructor): a view
+      : data_(c.data()), carried_(c.carried()) {}
+  const QuadraticCoefficients& operator[](std::size_t e) const {
+    if (((carried_ >> e) & 1) == 0) return kNone;
+    return data_[__builtin_popcountll(carried_ & ((std::uint64_t{1} << e) - 1))];
+  }
+  // The carried coefficients, in expression order.
+  const QuadraticCoefficients* begin() const { return data_; }
+  const QuadraticCoefficients* end() const { return data_ + __builtin_popcountll(carried_); }
+
+ private:
+  static inline const QuadraticCoefficients kNone{};
+  const QuadraticCoefficients* data_;
+  std::uint64_t carried_;
 };
 
 // Expressions and parameters held together: the values of a region-wide procedure, or of a
@@ -90,10 +155,9 @@ struct OwnedValues {
 // Contract: a view, valid while what it refers to lives; never store one beyond the call it
 // was made for. Converts implicitly from OwnedValues.
 struct PacketValues {
-  const ExpressionValues& expressions;
+  ExpressionView expressions;
   const ParameterValues& parameters;
-  PacketValues(const ExpressionValues& e, const ParameterValues& p)
-      : expressions(e), parameters(p) {}
+  PacketValues(ExpressionView e, const ParameterValues& p) : expressions(e), parameters(p) {}
   PacketValues(const OwnedValues& v)  // NOLINT(google-explicit-constructor): a view of it
       : expressions(v.expressions), parameters(v.parameters) {}
 };

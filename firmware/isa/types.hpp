@@ -47,6 +47,12 @@ struct QuadraticCoefficients {
     q.F = c;
     return q;
   }
+  friend bool operator==(const QuadraticCoefficients& a, const QuadraticCoefficients& b) {
+    return a.A == b.A && a.B == b.B && a.C == b.C && a.D == b.D && a.E == b.E && a.F == b.F;
+  }
+  friend bool operator!=(const QuadraticCoefficients& a, const QuadraticCoefficients& b) {
+    return !(a == b);
+  }
 };
 
 // The expression evaluator's arithmetic: coefficients are signed coefficient_bits wide, and

@@ -227,6 +227,7 @@ bool GeometryEngine::setup(const ScreenTriangle& t, const ExpressionSet& needed,
   c.counts = &counts;
 
   // Only what the program uses, each from its registry entry, in enum order.
+  out.values.expressions.reserve(needed.count());
   for (const ExpressionEntry& e : expression_registry()) {
     const int k = static_cast<int>(e.id);
     if (!needed.test(k)) continue;

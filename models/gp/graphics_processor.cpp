@@ -107,9 +107,9 @@ void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
       packet->group = k.kind->solid(geometry.scene(), ref.index);
       packet->back = result.back;
       packet->words = k.workload.packet_words;
-      packet->values = result.values;
       regions.clear();
       k.worker->bin(result, regions);
+      packet->values = std::move(result.values);
       for (int r : regions) {
         bins[r].push_back(packet);
         ++stats.packets;
