@@ -4,12 +4,15 @@
 #include <png.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "sim/output/output_set.hpp"
 
@@ -71,17 +74,29 @@ class PngWriteGuard {
 }  // namespace
 
 std::string encode_png(const RgbImage& image, const std::string& what) {
-  constexpr const char* kWhat = "cannot write PNG";
-  if (image.width <= 0 || image.height <= 0) {
-    fail(kWhat, what, fmt::format("invalid size {}x{}", image.width, image.height));
-  }
   // Computed in size_t, where the product of two positive ints cannot overflow.
-  const auto expected =
-      static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 3u;
-  if (image.rgb.size() != expected) {
-    fail(kWhat, what,
+  const auto expected = static_cast<std::size_t>(std::max(image.width, 0)) *
+                        static_cast<std::size_t>(std::max(image.height, 0)) * 3u;
+  if (image.width > 0 && image.height > 0 && image.rgb.size() != expected) {
+    fail("cannot write PNG", what,
          fmt::format("pixel buffer holds {} bytes, a {}x{} RGB image needs {}", image.rgb.size(),
                      image.width, image.height, expected));
+  }
+  const std::size_t stride = static_cast<std::size_t>(std::max(image.width, 0)) * 3u;
+  return encode_png(
+      image.width, image.height,
+      [&](int y, std::uint8_t* row) {
+        std::memcpy(row, image.rgb.data() + stride * static_cast<std::size_t>(y), stride);
+      },
+      what);
+}
+
+std::string encode_png(int width, int height,
+                       const std::function<void(int y, std::uint8_t* row)>& rows,
+                       const std::string& what) {
+  constexpr const char* kWhat = "cannot write PNG";
+  if (width <= 0 || height <= 0) {
+    fail(kWhat, what, fmt::format("invalid size {}x{}", width, height));
   }
   // The full libpng API rather than png_image_write_to_memory, for its compression settings:
   // run-length matches only (Z_RLE) at zlib's fastest level after the Up filter: a rendered
@@ -94,19 +109,21 @@ std::string encode_png(const RgbImage& image, const std::string& what) {
   png_infop info = png_create_info_struct(png);
   PngWriteGuard guard(png, info);
   if (info == nullptr) fail(kWhat, what, "libpng could not start");
+  // One row's buffer, outside the setjmp scope (no object with a destructor is created
+  // between setjmp and a longjmp back to it).
+  std::vector<std::uint8_t> row(static_cast<std::size_t>(width) * 3u);
   if (setjmp(png_jmpbuf(png)) != 0) fail(kWhat, what, state.message);
   png_set_write_fn(png, &state, on_png_write, nullptr);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(image.width),
-               static_cast<png_uint_32>(image.height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 8,
+               PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, kCompressionLevel);
   png_set_compression_strategy(png, Z_RLE);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
   png_write_info(png, info);
-  const std::size_t stride = static_cast<std::size_t>(image.width) * 3u;
-  for (int y = 0; y < image.height; ++y) {
-    png_write_row(png,
-                  const_cast<png_bytep>(image.rgb.data() + stride * static_cast<std::size_t>(y)));
+  for (int y = 0; y < height; ++y) {
+    rows(y, row.data());
+    png_write_row(png, row.data());
   }
   png_write_end(png, nullptr);
   return std::move(state.bytes);

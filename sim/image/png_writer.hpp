@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <string>
 
 #include "models/frame_buffer/image.hpp"
@@ -9,6 +11,12 @@ namespace pp5 {
 // `image` as the bytes of an 8-bit RGB PNG file; std::runtime_error naming `what` on a bad
 // image or a libpng error.
 std::string encode_png(const RgbImage& image, const std::string& what = "image");
+
+// The same for an image made a row at a time: rows(y, out) writes row y's width * 3 bytes
+// (RGB) to out, for y = 0 .. height - 1 in order. Nothing holds the whole image.
+std::string encode_png(int width, int height,
+                       const std::function<void(int y, std::uint8_t* row)>& rows,
+                       const std::string& what = "image");
 
 // Writes `image` as an 8-bit RGB PNG. The data go to `path + ".tmp"` first, which is then renamed
 // onto `path`, so a reader never sees a half-written file. On any failure (bad image dimensions,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstring>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -74,7 +75,8 @@ void heat_colour(double t, std::uint8_t rgb[3]) {
   }
 }
 
-RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& regions) {
+RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions)
+    : frame_(frame) {
   if (frame.width <= 0 || frame.height <= 0 ||
       frame.rgb.size() != static_cast<std::size_t>(frame.width) * frame.height * 3) {
     throw std::invalid_argument("regions.png: the frame's pixel buffer does not match its size");
@@ -90,75 +92,88 @@ RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& r
     peak = std::max(peak, r.busy_cycles);
     per_renderer[r.renderer] += r.busy_cycles;
   }
-  int busiest = -1;
   std::uint64_t busiest_cycles = 0;
   for (const auto& [renderer, cycles] : per_renderer) {
-    if (busiest < 0 || cycles > busiest_cycles) busiest = renderer, busiest_cycles = cycles;
+    if (busiest_ < 0 || cycles > busiest_cycles) busiest_ = renderer, busiest_cycles = cycles;
   }
-
-  RgbImage out;
-  out.width = frame.width;
-  out.height = frame.height + kLegendHeight;
-  out.rgb.assign(static_cast<std::size_t>(out.width) * out.height * 3, 0);
-  // The frame in grey, and each region 60% its heat colour over 40% that grey, so that the
-  // scene stays recognisable under the tint (per region a table from grey to tinted colour).
-  const std::size_t pixels = static_cast<std::size_t>(frame.width) * frame.height;
-  std::vector<std::uint8_t> grey(pixels);
-  const std::uint8_t* src = frame.rgb.data();
-  std::uint8_t* dst = out.rgb.data();
-  for (std::size_t p = 0; p < pixels; ++p) {
-    grey[p] = static_cast<std::uint8_t>(
-        (77 * src[3 * p] + 150 * src[3 * p + 1] + 29 * src[3 * p + 2]) >> 8);
-  }
-  for (std::size_t p = 0; p < pixels; ++p) dst[3 * p] = dst[3 * p + 1] = dst[3 * p + 2] = grey[p];
-  std::array<std::array<std::uint8_t, 3>, 256> tinted;
+  // Each region 60% its heat colour over 40% the frame's grey, so that the scene stays
+  // recognisable under the tint: per region a table from grey to tinted colour.
   for (const RegionLoad& r : regions) {
+    Tint t{r, {}};
     std::uint8_t heat[3];
     heat_colour(peak ? static_cast<double>(r.busy_cycles) / static_cast<double>(peak) : 0, heat);
     for (int g = 0; g < 256; ++g) {
       for (int k = 0; k < 3; ++k)
-        tinted[g][k] = static_cast<std::uint8_t>((3 * heat[k] + 2 * g) / 5);
+        t.table[g][k] = static_cast<std::uint8_t>((3 * heat[k] + 2 * g) / 5);
     }
-    for (int y = r.y0; y < r.y0 + r.height; ++y) {
-      const std::size_t row = static_cast<std::size_t>(y) * out.width;
-      for (int x = r.x0; x < r.x0 + r.width; ++x) {
-        const auto& t = tinted[grey[row + x]];
-        std::uint8_t* q = dst + (row + x) * 3;
-        q[0] = t[0];
-        q[1] = t[1];
-        q[2] = t[2];
-      }
-    }
-  }
-  // The busiest Renderer's regions: a white frame 2 pixels wide just inside each, lined with
-  // black, so that it shows on the palest colours too.
-  const std::uint8_t white[3] = {255, 255, 255};
-  const std::uint8_t black[3] = {0, 0, 0};
-  for (const RegionLoad& r : regions) {
-    if (r.renderer != busiest) continue;
-    for (int y = r.y0; y < r.y0 + r.height; ++y) {
-      const int dy = std::min(y - r.y0, r.y0 + r.height - 1 - y);
-      for (int x = r.x0; x < r.x0 + r.width; ++x) {
-        const int d = std::min({dy, x - r.x0, r.x0 + r.width - 1 - x});
-        if (d < 2) {
-          put(out, x, y, white);
-        } else if (d == 2) {
-          put(out, x, y, black);
-        }
-      }
-    }
+    tints_.push_back(t);
   }
   // The legend: "0", the colour bar, the peak's cycles.
-  const int top = frame.height + (kLegendHeight - 5 * kDigitScale) / 2;
+  legend_.width = frame.width;
+  legend_.height = kLegendHeight;
+  legend_.rgb.assign(static_cast<std::size_t>(legend_.width) * legend_.height * 3, 0);
+  const std::uint8_t white[3] = {255, 255, 255};
+  const int top = (kLegendHeight - 5 * kDigitScale) / 2;
   const std::string peak_text = std::to_string(peak);
-  int x = 4 + draw_number(out, 4, top, "0", white) + 6;
-  const int bar_end = out.width - 4 - number_width(peak_text) - 6;
+  const int x = 4 + draw_number(legend_, 4, top, "0", white) + 6;
+  const int bar_end = legend_.width - 4 - number_width(peak_text) - 6;
   for (int bx = x; bx < bar_end; ++bx) {
     std::uint8_t c[3];
     heat_colour(static_cast<double>(bx - x) / std::max(1, bar_end - 1 - x), c);
-    for (int y = frame.height + 4; y < out.height - 4; ++y) put(out, bx, y, c);
+    for (int y = 4; y < kLegendHeight - 4; ++y) put(legend_, bx, y, c);
   }
-  if (bar_end > x) draw_number(out, bar_end + 6, top, peak_text, white);
+  if (bar_end > x) draw_number(legend_, bar_end + 6, top, peak_text, white);
+}
+
+void RegionHeatMap::row(int y, std::uint8_t* out) const {
+  const int width = frame_.width;
+  if (y >= frame_.height) {
+    const std::size_t stride = static_cast<std::size_t>(width) * 3;
+    std::memcpy(out, legend_.rgb.data() + static_cast<std::size_t>(y - frame_.height) * stride,
+                stride);
+    return;
+  }
+  // The frame in grey, then the tint of each region on this row (in order), then the
+  // busiest Renderer's outlines.
+  const std::uint8_t* src = frame_.rgb.data() + static_cast<std::size_t>(y) * width * 3;
+  auto grey = [src](int x) {
+    return static_cast<std::uint8_t>(
+        (77 * src[3 * x] + 150 * src[3 * x + 1] + 29 * src[3 * x + 2]) >> 8);
+  };
+  for (int x = 0; x < width; ++x) out[3 * x] = out[3 * x + 1] = out[3 * x + 2] = grey(x);
+  for (const Tint& t : tints_) {
+    const RegionLoad& r = t.load;
+    if (y < r.y0 || y >= r.y0 + r.height) continue;
+    for (int x = r.x0; x < r.x0 + r.width; ++x) {
+      const auto& c = t.table[grey(x)];
+      out[3 * x] = c[0];
+      out[3 * x + 1] = c[1];
+      out[3 * x + 2] = c[2];
+    }
+  }
+  // A white frame 2 pixels wide just inside each of the busiest Renderer's regions, lined
+  // with black, so that it shows on the palest colours too.
+  for (const Tint& t : tints_) {
+    const RegionLoad& r = t.load;
+    if (r.renderer != busiest_ || y < r.y0 || y >= r.y0 + r.height) continue;
+    const int dy = std::min(y - r.y0, r.y0 + r.height - 1 - y);
+    for (int x = r.x0; x < r.x0 + r.width; ++x) {
+      const int d = std::min({dy, x - r.x0, r.x0 + r.width - 1 - x});
+      if (d > 2) continue;
+      const std::uint8_t v = d < 2 ? 255 : 0;
+      out[3 * x] = out[3 * x + 1] = out[3 * x + 2] = v;
+    }
+  }
+}
+
+RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& regions) {
+  const RegionHeatMap map(frame, regions);
+  RgbImage out;
+  out.width = map.width();
+  out.height = map.height();
+  out.rgb.resize(static_cast<std::size_t>(out.width) * out.height * 3);
+  for (int y = 0; y < out.height; ++y)
+    map.row(y, out.rgb.data() + static_cast<std::size_t>(y) * out.width * 3);
   return out;
 }
 

@@ -12,6 +12,7 @@
 //  - It reads only its arguments: the same frame and loads give the same bytes.
 //  - Throws std::invalid_argument when a region lies outside the frame or the frame's pixel
 //    buffer does not match its size.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -33,5 +34,27 @@ constexpr int kLegendHeight = 24;
 void heat_colour(double t, std::uint8_t rgb[3]);
 
 RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& regions);
+
+// The same image a row at a time, for encode_png's row form: nothing holds the whole image
+// (a 1280 x 1024 frame's map is 4 MB). Keeps a reference to `frame`, which must outlive it;
+// throws as region_heat_map() does.
+class RegionHeatMap {
+ public:
+  RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions);
+  int width() const { return frame_.width; }
+  int height() const { return frame_.height + kLegendHeight; }
+  // Row y's width() * 3 bytes (RGB) into out.
+  void row(int y, std::uint8_t* out) const;
+
+ private:
+  struct Tint {
+    RegionLoad load;
+    std::array<std::array<std::uint8_t, 3>, 256> table;  // grey to tinted colour
+  };
+  const RgbImage& frame_;
+  std::vector<Tint> tints_;  // in the order of the loads
+  int busiest_ = -1;         // the busiest Renderer
+  RgbImage legend_;          // the kLegendHeight rows below the frame
+};
 
 }  // namespace pp5
