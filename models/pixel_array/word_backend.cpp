@@ -89,7 +89,6 @@ WordBackend::WordBackend(const PixelBackendParams& params)
   const auto n = static_cast<std::size_t>(pixels_);
   memory_.assign(static_cast<std::size_t>(lanes_) * n, 0);
   enable_.assign(n, 1);
-  stack_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth) * n, 0);
   spans_ = {Range{0, pixels_}};
   stack_spans_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
 }
@@ -235,6 +234,10 @@ void WordBackend::push_enable() {
                               std::to_string(geometry_.enable_stack_depth));
   }
   // E outside spans_ is 0 whatever its bytes hold: only the spans are copied.
+  // Levels are allocated as the stack first reaches them (most programs use one or two of
+  // the eight), so that a clone or kept state copies only those.
+  const auto end = static_cast<std::size_t>(stack_top_ + 1) * pixels_;
+  if (stack_.size() < end) stack_.resize(end);
   std::uint8_t* level = &stack_[static_cast<std::size_t>(stack_top_) * pixels_];
   for (const Range& r : spans_)
     std::copy(enable_.begin() + r.begin, enable_.begin() + r.end, level + r.begin);

@@ -119,7 +119,7 @@ class WordBackend final : public PixelBackend {
   int y0_ = 0;
   std::vector<std::uint64_t> memory_;  // lanes_ x pixels_
   std::vector<std::uint8_t> enable_;   // pixels_
-  std::vector<std::uint8_t> stack_;    // enable_stack_depth x pixels_
+  std::vector<std::uint8_t> stack_;    // pixels_ per level the stack has reached
   int stack_top_ = 0;
   std::vector<std::uint64_t> backing_;  // backing lanes x pixels_, allocated on first use
   // Disjoint pixel ranges, in order, outside which E is 0 (a superset of E's set pixels, one
