@@ -202,23 +202,60 @@ void WordBackend::evaluate(const QuadraticCoefficients& c, Range r, u64* out) co
   }
 }
 
+namespace {
+
+// One row of expression_field: the evaluator's value (column terms, the cross term when
+// kCross, the row term), wrapped to result_bits (s = 64 - result_bits), shifted down by the
+// fraction bits and cut to the field (sign-extended from its width when kSigned, sw = 64 -
+// width, else masked): one pass over the pixels.
+template <bool kSigned, bool kCross>
+void field_row(u64* o, const u64* ta, const u64* tb, u64 Y, u64 row, int from, int to, int s,
+               int shift, int sw, u64 mask) {
+  for (int x = from; x < to; ++x) {
+    u64 v = ta[x] + row;
+    if constexpr (kCross) v += Y * tb[x];
+    v = static_cast<u64>(static_cast<i64>(v << s) >> s);
+    v = static_cast<u64>(static_cast<i64>(v) >> shift);
+    if constexpr (kSigned) {
+      v = static_cast<u64>(static_cast<i64>(v << sw) >> sw);
+    } else {
+      v &= mask;
+    }
+    o[x] = v;
+  }
+}
+
+}  // namespace
+
 void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
                                    u64* out) const {
-  evaluate(c, r, out);
-  // Bits at and above 64 of the sign-extended value copy its sign, as the evaluator's planes
-  // above result_bits do.
+  if (r.begin >= r.end) return;
+  // evaluate()'s value, then bits [fraction_bits, fraction_bits + width) of it: bits at and
+  // above 64 of the sign-extended value copy its sign, as the evaluator's planes above
+  // result_bits do. Fused into one pass per row.
+  const int width = geometry_.width;
+  const u64 C = static_cast<u64>(c.C), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  const u64* ta = scratch().row_a.data();
+  const u64* tb = scratch().row_b.data();
+  const int s = 64 - evaluator_.result_bits;
   const int shift = std::min(fraction_bits_, 63);
   const int w = as.width;
-  if (as.is_signed && w < 64) {
-    const int s = 64 - w;
-    for (int p = r.begin; p < r.end; ++p) {
-      const u64 v = static_cast<u64>(static_cast<i64>(out[p]) >> shift);
-      out[p] = static_cast<u64>(static_cast<i64>(v << s) >> s);
-    }
-  } else {
-    const u64 mask = low_mask(w);
-    for (int p = r.begin; p < r.end; ++p) {
-      out[p] = static_cast<u64>(static_cast<i64>(out[p]) >> shift) & mask;
+  const bool sign = as.is_signed && w < 64;
+  const int sw = sign ? 64 - w : 0;
+  const u64 mask = low_mask(w);
+  const bool cross = c.B != 0;
+  for (int y = r.begin / width; y * width < r.end; ++y) {
+    const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
+    const u64 row = C * Y * Y + E * Y + F;
+    const int from = std::max(r.begin - y * width, 0);
+    const int to = std::min(r.end - y * width, width);
+    u64* o = out + static_cast<std::size_t>(y) * width;
+    if (sign) {
+      (cross ? field_row<true, true> : field_row<true, false>)(o, ta, tb, Y, row, from, to, s,
+                                                               shift, sw, mask);
+    } else {
+      (cross ? field_row<false, true> : field_row<false, false>)(o, ta, tb, Y, row, from, to, s,
+                                                                 shift, sw, mask);
     }
   }
 }
