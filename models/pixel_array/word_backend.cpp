@@ -208,8 +208,8 @@ namespace {
 // kCross, the row term), wrapped to result_bits (s = 64 - result_bits), shifted down by the
 // fraction bits and cut to the field (sign-extended from its width when kSigned, sw = 64 -
 // width, else masked): one pass over the pixels.
-template <bool kSigned, bool kCross>
-void field_row(u64* o, const u64* ta, const u64* tb, u64 Y, u64 row, int from, int to, int s,
+template <bool kSigned, bool kCross, class Sink>
+void field_row(Sink sink, const u64* ta, const u64* tb, u64 Y, u64 row, int from, int to, int s,
                int shift, int sw, u64 mask) {
   for (int x = from; x < to; ++x) {
     u64 v = ta[x] + row;
@@ -221,14 +221,15 @@ void field_row(u64* o, const u64* ta, const u64* tb, u64 Y, u64 row, int from, i
     } else {
       v &= mask;
     }
-    o[x] = v;
+    sink(x, v);
   }
 }
 
 }  // namespace
 
-void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
-                                   u64* out) const {
+template <class RowSink>
+void WordBackend::for_each_field_value(const QuadraticCoefficients& c, const Field& as, Range r,
+                                       RowSink row_sink) const {
   if (r.begin >= r.end) return;
   // evaluate()'s value, then bits [fraction_bits, fraction_bits + width) of it: bits at and
   // above 64 of the sign-extended value copy its sign, as the evaluator's planes above
@@ -249,15 +250,26 @@ void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& 
     const u64 row = C * Y * Y + E * Y + F;
     const int from = std::max(r.begin - y * width, 0);
     const int to = std::min(r.end - y * width, width);
-    u64* o = out + static_cast<std::size_t>(y) * width;
+    const auto sink = row_sink(static_cast<std::size_t>(y) * width);
     if (sign) {
-      (cross ? field_row<true, true> : field_row<true, false>)(o, ta, tb, Y, row, from, to, s,
-                                                               shift, sw, mask);
+      if (cross) {
+        field_row<true, true>(sink, ta, tb, Y, row, from, to, s, shift, sw, mask);
+      } else {
+        field_row<true, false>(sink, ta, tb, Y, row, from, to, s, shift, sw, mask);
+      }
+    } else if (cross) {
+      field_row<false, true>(sink, ta, tb, Y, row, from, to, s, shift, sw, mask);
     } else {
-      (cross ? field_row<false, true> : field_row<false, false>)(o, ta, tb, Y, row, from, to, s,
-                                                                 shift, sw, mask);
+      field_row<false, false>(sink, ta, tb, Y, row, from, to, s, shift, sw, mask);
     }
   }
+}
+
+void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
+                                   u64* out) const {
+  for_each_field_value(c, as, r, [out](std::size_t row_start) {
+    return [o = out + row_start](int x, u64 v) { o[x] = v; };
+  });
 }
 
 void WordBackend::enable_all() {
@@ -446,9 +458,25 @@ void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
 void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
   check_field(dst, "assign");
   prepare_columns(expr);
+  const int off = dst.lo % 64;
+  if (off + dst.width > 64) {  // the field straddles two lanes
+    for (const Range& r : spans_) {
+      expression_field(expr, dst, r, scratch().s0.data());
+      store(memory_.data(), dst, r, scratch().s0.data(), true);
+    }
+    return;
+  }
+  // The value merged into its lane under E as it is computed (store() fused in).
+  u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
+  const std::uint8_t* e = enable_.data();
+  const u64 bits = low_mask(dst.width) << off;
   for (const Range& r : spans_) {
-    expression_field(expr, dst, r, scratch().s0.data());
-    store(memory_.data(), dst, r, scratch().s0.data(), true);
+    for_each_field_value(expr, dst, r, [&](std::size_t row_start) {
+      return [m = lane + row_start, en = e + row_start, bits, off](int x, u64 v) {
+        const u64 k = bits & (u64{0} - en[x]);
+        m[x] = (m[x] & ~k) | ((v << off) & k);
+      };
+    });
   }
 }
 

@@ -96,6 +96,11 @@ class WordBackend final : public PixelBackend {
   // The expression's value at every pixel of r, wrapped to result_bits and sign-extended
   // (after prepare_columns(c)).
   void evaluate(const QuadraticCoefficients& c, Range r, std::uint64_t* out) const;
+  // For each row of r: row_sink(index of the row's first pixel) gives a sink(x, value) that
+  // takes the field value (below) of each pixel x of the row in r.
+  template <class RowSink>
+  void for_each_field_value(const QuadraticCoefficients& c, const Field& as, Range r,
+                            RowSink row_sink) const;
   // qload and qcmp's operand: bits [fraction_bits, fraction_bits + width) of the value.
   void expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
                         std::uint64_t* out) const;
