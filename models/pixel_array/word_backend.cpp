@@ -361,8 +361,8 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
       if (v < lo || v > hi) return false;
     }
   }
-  std::vector<Range> kept;
-  kept.reserve(spans_.size() + static_cast<std::size_t>(last - first + 1));
+  std::vector<Range>& kept = spare_spans_;  // becomes spans_; the old spans become the spare
+  kept.clear();
   // Row y's columns where the condition holds: up to two intervals [a0, a1), [b0, b1).
   int row_y = -1, a0 = 0, a1 = 0, b0 = 0, b1 = 0;
   // In an increasing coordinate u (u = x when D >= 0, u = width - 1 - x otherwise) the value
@@ -440,7 +440,7 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
       }
     }
   }
-  spans_ = std::move(kept);
+  spans_.swap(kept);
   return true;
 }
 

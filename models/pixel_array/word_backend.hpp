@@ -131,6 +131,7 @@ class WordBackend final : public PixelBackend {
   // range per row after a linear qtest): every operation walks only these. The same for each
   // saved level of the stack.
   std::vector<Range> spans_;
+  std::vector<Range> spare_spans_;  // qtest's new spans are built here, then swapped in
   std::vector<std::vector<Range>> stack_spans_;
   // Scratch of pixels_ values each: operands, results, the evaluator's row tables (width
   // entries each). Not state: a copy (clone, copy_state_from) starts without it, and it is
