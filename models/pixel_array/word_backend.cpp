@@ -448,11 +448,27 @@ void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
   if (qtest_linear(expr, cond)) return;
   prepare_columns(expr);
   u64* v = scratch().s0.data();
+  const std::uint8_t* e = enable_.data();
+  const int width = geometry_.width;
+  // As for a linear test, the spans narrow to what the test leaves: on each row of a span,
+  // from its first pixel with E = 1 to its last (a sphere's disc, not the region, for every
+  // instruction after it).
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
   for (const Range& r : spans_) {
     evaluate(expr, r, v);
     and_compare(
         enable_.data(), v, [](int) { return i64{0}; }, cond, r.begin, r.end);
+    for (int start = r.begin; start < r.end;) {
+      const int end = std::min(r.end, (start / width + 1) * width);  // this row's part
+      int a = start, b = end;
+      while (a < b && e[a] == 0) ++a;
+      while (b > a && e[b - 1] == 0) --b;
+      if (b > a) kept.push_back({a, b});
+      start = end;
+    }
   }
+  spans_.swap(kept);
 }
 
 void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
