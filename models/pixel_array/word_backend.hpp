@@ -123,13 +123,14 @@ class WordBackend final : public PixelBackend {
   int x0_ = 0;
   int y0_ = 0;
   std::vector<std::uint64_t> memory_;  // lanes_ x pixels_
-  std::vector<std::uint8_t> enable_;   // pixels_
+  std::vector<std::uint8_t> enable_;   // pixels_, valid inside spans_
   std::vector<std::uint8_t> stack_;    // pixels_ per level the stack has reached
   int stack_top_ = 0;
   std::vector<std::uint64_t> backing_;  // backing lanes x pixels_, allocated on first use
-  // Disjoint pixel ranges, in order, outside which E is 0 (a superset of E's set pixels, one
-  // range per row after a linear qtest): every operation walks only these. The same for each
-  // saved level of the stack.
+  // Disjoint pixel ranges, in order, outside which E is 0 (a superset of E's set pixels, at
+  // most two ranges per row after a linear qtest, one from the first to the last enabled
+  // pixel after a quadratic one): every operation walks only these. The same for each saved
+  // level of the stack.
   std::vector<Range> spans_;
   std::vector<Range> spare_spans_;  // qtest's new spans are built here, then swapped in
   std::vector<std::vector<Range>> stack_spans_;
