@@ -7,7 +7,8 @@
 #     word; below 1 means the simulator drew the frame faster than the machine did.
 #   - event / analytic host time at fidelity.pixels=none on the torus (the target is >= 100).
 #   - a 1,000-point sweep of the torus (gp.count 1..40 x renderer.count 1..25) at
-#     --fidelity timing and --fidelity analytic, split in two halves run at once (2 cores).
+#     --fidelity timing and --fidelity analytic, split in two halves run at once (2 cores);
+#   - first, the process's start-up and exit alone (pp5sim --version): the floor under all.
 # Usage: bench/bench_fidelity.sh [build/pp5sim] [runs, default 3: each figure is the fastest]
 set -euo pipefail
 bin="${1:-build/pp5sim}"
@@ -34,6 +35,9 @@ simulated() {  # the frame time a render wrote, in seconds
 }
 
 echo "pp5sim fidelity benchmark: $("$bin" --version), $(nproc) cores, fastest of $runs runs"
+# The floor under every figure below: starting the process (loading its libraries) and
+# leaving it, with nothing simulated.
+printf 'process start-up and exit (pp5sim --version): %.3f s\n' "$(fastest "$bin" --version)"
 echo
 printf '%-34s %-6s %10s %12s %12s\n' configuration level "host s" "simulated s" "host/sim"
 for config in "banks:threshold:compiled" "full-speed:phong:assembly"; do
