@@ -72,6 +72,12 @@ struct TimingParams {
 using ExpressionValues = std::array<QuadraticCoefficients, static_cast<int>(Expression::count)>;
 using ParameterValues = std::array<std::int64_t, static_cast<int>(Parameter::count)>;
 
+// Where expression e is, or would go, among the carried ones (bit k of `carried`: expression k
+// is carried): the number of carried expressions below it.
+inline std::size_t carried_slot(std::uint64_t carried, std::size_t e) {
+  return static_cast<std::size_t>(__builtin_popcountll(carried & ((std::uint64_t{1} << e) - 1)));
+}
+
 // Coefficients held for some of the expressions, in expression order: only those that are
 // carried take room (a packet holds the expressions its procedure uses, as the GP sends
 // them, not a slot for every expression there is). Indexed like ExpressionValues: an
@@ -86,16 +92,14 @@ class CarriedExpressions {
     return *this = CarriedExpressions(all);
   }
 
-  const QuadraticCoefficients& operator[](std::size_t e) const {
-    return carries(e) ? values_[slot(e)] : kNone;
-  }
+  const QuadraticCoefficients& operator[](std::size_t e) const;  // read as ExpressionView does
   QuadraticCoefficients& operator[](std::size_t e) {
+    const auto at = carried_slot(carried_, e);
     if (!carries(e)) {
-      values_.insert(values_.begin() + static_cast<std::ptrdiff_t>(slot(e)),
-                     QuadraticCoefficients{});
+      values_.insert(values_.begin() + static_cast<std::ptrdiff_t>(at), QuadraticCoefficients{});
       carried_ |= std::uint64_t{1} << e;
     }
-    return values_[slot(e)];
+    return values_[at];
   }
   bool carries(std::size_t e) const { return ((carried_ >> e) & 1) != 0; }
   std::uint64_t carried() const { return carried_; }  // bit e: expression e
@@ -107,11 +111,6 @@ class CarriedExpressions {
   static_assert(ExpressionValues{}.size() < 64, "one bit per expression");
 
  private:
-  // Where e is, or would go, in values_: the number of carried expressions below it.
-  std::size_t slot(std::size_t e) const {
-    return static_cast<std::size_t>(__builtin_popcountll(carried_ & ((std::uint64_t{1} << e) - 1)));
-  }
-  static inline const QuadraticCoefficients kNone{};
   std::uint64_t carried_ = 0;
   std::vector<QuadraticCoefficients> values_;
 };
@@ -131,7 +130,7 @@ class ExpressionView {
       : data_(c.data()), carried_(c.carried()) {}
   const QuadraticCoefficients& operator[](std::size_t e) const {
     if (((carried_ >> e) & 1) == 0) return kNone;
-    return data_[__builtin_popcountll(carried_ & ((std::uint64_t{1} << e) - 1))];
+    return data_[carried_slot(carried_, e)];
   }
   // The carried coefficients, in expression order.
   const QuadraticCoefficients* begin() const { return data_; }
@@ -142,6 +141,10 @@ class ExpressionView {
   const QuadraticCoefficients* data_;
   std::uint64_t carried_;
 };
+
+inline const QuadraticCoefficients& CarriedExpressions::operator[](std::size_t e) const {
+  return ExpressionView(*this)[e];
+}
 
 // Expressions and parameters held together: the values of a region-wide procedure, or of a
 // test that builds its own.

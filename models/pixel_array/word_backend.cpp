@@ -177,36 +177,11 @@ void WordBackend::prepare_columns(const QuadraticCoefficients& c) const {
   }
 }
 
-void WordBackend::evaluate(const QuadraticCoefficients& c, Range r, u64* out) const {
-  if (r.begin >= r.end) return;
-  const int width = geometry_.width;
-  const u64 C = static_cast<u64>(c.C), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
-  const u64* ta = scratch().row_a.data();
-  const u64* tb = scratch().row_b.data();
-  const int R = evaluator_.result_bits;
-  const int s = 64 - R;
-  for (int y = r.begin / width; y * width < r.end; ++y) {
-    const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
-    const u64 row = C * Y * Y + E * Y + F;
-    const int from = std::max(r.begin - y * width, 0);
-    const int to = std::min(r.end - y * width, width);
-    u64* o = out + static_cast<std::size_t>(y) * width;
-    if (c.B == 0) {
-      for (int x = from; x < to; ++x) o[x] = ta[x] + row;
-    } else {
-      for (int x = from; x < to; ++x) o[x] = ta[x] + Y * tb[x] + row;
-    }
-    if (s > 0) {
-      for (int x = from; x < to; ++x) o[x] = static_cast<u64>(static_cast<i64>(o[x] << s) >> s);
-    }
-  }
-}
-
 namespace {
 
-// One row of expression_field: the evaluator's value (column terms, the cross term when
-// kCross, the row term), wrapped to result_bits (s = 64 - result_bits), shifted down by the
-// fraction bits and cut to the field (sign-extended from its width when kSigned, sw = 64 -
+// One row of for_each_value: the evaluator's value (column terms, the cross term when
+// kCross, the row term), wrapped to result_bits (s = 64 - result_bits), shifted down by
+// `shift` and cut to the field (sign-extended from its width when kSigned, sw = 64 -
 // width, else masked): one pass over the pixels.
 template <bool kSigned, bool kCross, class Sink>
 void field_row(Sink sink, const u64* ta, const u64* tb, u64 Y, u64 row, int from, int to, int s,
@@ -228,18 +203,18 @@ void field_row(Sink sink, const u64* ta, const u64* tb, u64 Y, u64 row, int from
 }  // namespace
 
 template <class RowSink>
-void WordBackend::for_each_field_value(const QuadraticCoefficients& c, const Field& as, Range r,
-                                       RowSink row_sink) const {
+void WordBackend::for_each_value(const QuadraticCoefficients& c, Range r, int shift,
+                                 const Field& as, RowSink row_sink) const {
   if (r.begin >= r.end) return;
-  // evaluate()'s value, then bits [fraction_bits, fraction_bits + width) of it: bits at and
-  // above 64 of the sign-extended value copy its sign, as the evaluator's planes above
-  // result_bits do. Fused into one pass per row.
+  // Per row, the row term C Y^2 + E Y + F; per pixel the column terms, and only for a cross
+  // term one multiply (exact modulo 2^64, hence modulo 2^result_bits); the value wrapped to
+  // result_bits and sign-extended, shifted down by `shift` (bits at and above 64 copy the
+  // sign, as the evaluator's planes above result_bits do) and cut to the field: one pass.
   const int width = geometry_.width;
   const u64 C = static_cast<u64>(c.C), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
   const u64* ta = scratch().row_a.data();
   const u64* tb = scratch().row_b.data();
   const int s = 64 - evaluator_.result_bits;
-  const int shift = std::min(fraction_bits_, 63);
   const int w = as.width;
   const bool sign = as.is_signed && w < 64;
   const int sw = sign ? 64 - w : 0;
@@ -265,9 +240,15 @@ void WordBackend::for_each_field_value(const QuadraticCoefficients& c, const Fie
   }
 }
 
+void WordBackend::evaluate(const QuadraticCoefficients& c, Range r, u64* out) const {
+  for_each_value(c, r, 0, Field{0, 64, false}, [out](std::size_t row_start) {
+    return [o = out + row_start](int x, u64 v) { o[x] = v; };
+  });
+}
+
 void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
                                    u64* out) const {
-  for_each_field_value(c, as, r, [out](std::size_t row_start) {
+  for_each_value(c, r, std::min(fraction_bits_, 63), as, [out](std::size_t row_start) {
     return [o = out + row_start](int x, u64 v) { o[x] = v; };
   });
 }
@@ -487,7 +468,7 @@ void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
   const std::uint8_t* e = enable_.data();
   const u64 bits = low_mask(dst.width) << off;
   for (const Range& r : spans_) {
-    for_each_field_value(expr, dst, r, [&](std::size_t row_start) {
+    for_each_value(expr, r, std::min(fraction_bits_, 63), dst, [&](std::size_t row_start) {
       return [m = lane + row_start, en = e + row_start, bits, off](int x, u64 v) {
         const u64 k = bits & (u64{0} - en[x]);
         m[x] = (m[x] & ~k) | ((v << off) & k);

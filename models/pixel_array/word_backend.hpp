@@ -97,10 +97,11 @@ class WordBackend final : public PixelBackend {
   // (after prepare_columns(c)).
   void evaluate(const QuadraticCoefficients& c, Range r, std::uint64_t* out) const;
   // For each row of r: row_sink(index of the row's first pixel) gives a sink(x, value) that
-  // takes the field value (below) of each pixel x of the row in r.
+  // takes, for each pixel x of the row in r, the expression's value (as evaluate) shifted
+  // down by `shift` and cut to the field `as` (sign-extended when it is signed).
   template <class RowSink>
-  void for_each_field_value(const QuadraticCoefficients& c, const Field& as, Range r,
-                            RowSink row_sink) const;
+  void for_each_value(const QuadraticCoefficients& c, Range r, int shift, const Field& as,
+                      RowSink row_sink) const;
   // qload and qcmp's operand: bits [fraction_bits, fraction_bits + width) of the value.
   void expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
                         std::uint64_t* out) const;
