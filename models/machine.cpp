@@ -9,6 +9,7 @@
 #include "models/gp/graphics_processor.hpp"
 #include "models/gp/pass_plan.hpp"
 #include "models/gp/primitive_kind.hpp"
+#include "models/gp/setup_memo.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -164,6 +165,22 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
 }
 
 Machine::~Machine() = default;
+
+void Machine::use_setup_memo(SetupMemo& memo) {
+  if (&memo.scene() != &scene_) {
+    throw std::invalid_argument(
+        fmt::format("a set-up memo of scene '{}' given to a machine of scene '{}'",
+                    memo.scene().name, scene_.name));
+  }
+  SetupMemo::Key key;
+  key.params = geometry_.params();
+  for (const PrimitiveKind* k : primitive_kinds()) {
+    key.expressions.push_back(program_.procedure(k->procedure()).expressions);
+    key.words.push_back(packet_words(key.expressions.back()));
+  }
+  memo.bind(key, geometry_.display_list().size());
+  setup_memo_ = &memo;
+}
 
 std::uint64_t Machine::bin_map_words() const {
   const auto bits = static_cast<std::uint64_t>(config_.regions());

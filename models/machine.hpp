@@ -46,6 +46,7 @@ class GraphicsProcessor;
 class Renderer;
 class Ring;
 class FrameBuffer;
+class SetupMemo;
 
 // One slice of activity for the timeline (Chrome trace-event format, see simulation.cpp).
 enum class Unit { gp, ring, renderer, frame_buffer };
@@ -121,6 +122,12 @@ class Machine : public sc_core::sc_module {
   const std::vector<TimelineSlice>& slices() const { return slices_; }
   // Ring words of a packet carrying `expressions`, each by its form (models/gp/expressions.hpp).
   std::uint64_t packet_words(const ExpressionSet& expressions) const;
+
+  // Keep the GPs' set-up in `memo` for later frames of the same scene, or replay it from
+  // there if an earlier frame's key matches (models/gp/setup_memo.hpp); before the frame
+  // runs. The memo must outlive the frame. Throws if it was made for another scene.
+  void use_setup_memo(SetupMemo& memo);
+  SetupMemo* setup_memo() const { return setup_memo_; }
   std::uint64_t region_words() const;
 
  private:
@@ -143,6 +150,7 @@ class Machine : public sc_core::sc_module {
   int busy_gps_ = 0;
   bool timeline_on_ = false;
   std::vector<TimelineSlice> slices_;
+  SetupMemo* setup_memo_ = nullptr;
 };
 
 }  // namespace pp5

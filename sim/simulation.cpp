@@ -334,11 +334,12 @@ void register_host_statistics(Statistics& s, const HostTimes& t, const char* tim
 // boards execute the regions it assigned. It registers the statistics the summary, sweeps and
 // `pp5sim fidelity` read, under the event model's names, and its own terms as analytic.*.
 FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, const Program& program,
-                           int threads) {
+                           int threads, SetupMemo* memo) {
   const auto t0 = std::chrono::steady_clock::now();
   check_memory(config, scene, program, threads);
   fresh_kernel();
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
+  if (memo != nullptr) machine->use_setup_memo(*memo);
   auto a = std::make_shared<const AnalyticTiming>(analytic_timing(*machine));
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
@@ -520,11 +521,12 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
 // simulate_frame, or with `pixels` false project_frame: the timing model alone.
 FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                       int threads, const std::function<BoardObserver*(int renderer)>& observe,
-                      nlohmann::json* timeline, bool pixels) {
+                      nlohmann::json* timeline, bool pixels, SetupMemo* memo) {
   const auto t0 = std::chrono::steady_clock::now();
   check_memory(config, scene, program, threads);
   fresh_kernel();
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
+  if (memo != nullptr) machine->use_setup_memo(*memo);
   machine->record_timeline(timeline != nullptr);
   run_kernel();
   check_time_did_not_wrap(*machine);
@@ -636,28 +638,29 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
 
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                            int threads, const std::function<BoardObserver*(int renderer)>& observe,
-                           nlohmann::json* timeline) {
+                           nlohmann::json* timeline, SetupMemo* memo) {
   if (config.fidelity.timing == MachineConfig::Fidelity::Timing::analytic) {
     if (observe || timeline) {
       throw std::invalid_argument(
           "traces, snapshots and timelines need fidelity.timing=event (the analytic model runs "
           "no events and records no start cycles)");
     }
-    return analytic_frame(config, scene, program, threads);
+    return analytic_frame(config, scene, program, threads, memo);
   }
   if (observe && config.fidelity.pixels == MachineConfig::Fidelity::Pixels::none) {
     throw std::invalid_argument("an observer of the boards needs fidelity.pixels=bit or word");
   }
-  return run_frame(config, scene, program, threads, observe, timeline, true);
+  return run_frame(config, scene, program, threads, observe, timeline, true, memo);
 }
 
-FrameResult project_frame(const MachineConfig& config, const Scene& scene, const Program& program) {
+FrameResult project_frame(const MachineConfig& config, const Scene& scene, const Program& program,
+                          SetupMemo* memo) {
   if (config.fidelity.timing == MachineConfig::Fidelity::Timing::analytic) {
     MachineConfig timing_only = config;
     timing_only.fidelity.pixels = MachineConfig::Fidelity::Pixels::none;
-    return analytic_frame(timing_only, scene, program, 1);
+    return analytic_frame(timing_only, scene, program, 1, memo);
   }
-  return run_frame(config, scene, program, 1, {}, nullptr, false);
+  return run_frame(config, scene, program, 1, {}, nullptr, false, memo);
 }
 
 std::vector<StatisticInfo> describe_statistics(const std::string& program_path) {

@@ -17,6 +17,7 @@
 namespace pp5 {
 
 class BoardObserver;
+class SetupMemo;
 
 struct FrameResult {
   RgbImage image;
@@ -31,19 +32,24 @@ struct FrameResult {
   std::vector<RegionLoad> regions;
 };
 
+// `memo`, if given, keeps the GPs' set-up of `scene` for the next frame of another
+// configuration, or replays it from an earlier one (models/gp/setup_memo.hpp): the same
+// results, without transforming and setting up every primitive again. host.timing_seconds
+// then leaves out the set-up it replayed.
 // `observe`, if given, attaches an observer to Renderer k's board (tracing, snapshots).
 // With `timeline`, the run also records every unit's activity and stores it there as a
 // Chrome trace-event document (ui.perfetto.dev and chrome://tracing open it).
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                            int threads,
                            const std::function<BoardObserver*(int renderer)>& observe = {},
-                           nlohmann::json* timeline = nullptr);
+                           nlohmann::json* timeline = nullptr, SetupMemo* memo = nullptr);
 
 // The timing model alone, for projections over many configurations (pp5sim validate): the
 // frame time and the statistics of simulate_frame, without executing the firmware on the
 // pixel arrays, which no instruction's cost depends on. The image is not drawn, and what
 // only execution counts (host.pixel_seconds) is 0.
-FrameResult project_frame(const MachineConfig& config, const Scene& scene, const Program& program);
+FrameResult project_frame(const MachineConfig& config, const Scene& scene, const Program& program,
+                          SetupMemo* memo = nullptr);
 
 // What every statistic of a run is (its name pattern, kind, unit and description), in
 // registration order: the statistics a frame of the smallest machine registers, which are

@@ -57,6 +57,38 @@ std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b)
 
 }  // namespace
 
+// Both below name every field; these fail when one is added, until it joins them.
+static_assert(
+    sizeof(GeometryParams) ==
+        10 * sizeof(int) + sizeof(bool) + 7 /* padding */ +
+            sizeof(std::array<std::optional<std::int64_t>, static_cast<int>(Parameter::count)>),
+    "a new GeometryParams field must join operator==");
+static_assert(sizeof(SetupCounts) == 15 * sizeof(std::uint64_t),
+              "a new SetupCounts field must join operator+=");
+
+bool operator==(const GeometryParams& a, const GeometryParams& b) {
+  return a.screen_width == b.screen_width && a.screen_height == b.screen_height &&
+         a.region_width == b.region_width && a.region_height == b.region_height &&
+         a.subpixel_bits == b.subpixel_bits && a.edge_significand_bits == b.edge_significand_bits &&
+         a.depth_bits == b.depth_bits && a.fraction_bits == b.fraction_bits &&
+         a.coefficient_bits == b.coefficient_bits && a.result_bits == b.result_bits &&
+         a.cull_back_faces == b.cull_back_faces && a.frame == b.frame;
+}
+
+SetupCounts& operator+=(SetupCounts& a, const SetupCounts& b) {
+  a.clipped_away += b.clipped_away;
+  a.degenerate += b.degenerate;
+  a.no_pixels += b.no_pixels;
+  a.overflow += b.overflow;
+  a.clip_splits += b.clip_splits;
+  a.culled += b.culled;
+  for (std::size_t k = 0; k < a.sides.size(); ++k) a.sides[k] += b.sides[k];
+  a.sphere_near += b.sphere_near;
+  a.sphere_behind += b.sphere_behind;
+  a.sphere_far += b.sphere_far;
+  return a;
+}
+
 GeometryEngine::GeometryEngine(const GeometryParams& params, const Scene& scene)
     : params_(params), scene_(scene), display_list_(make_display_list(scene)) {
   const float aspect =

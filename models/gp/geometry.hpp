@@ -49,6 +49,10 @@ struct GeometryParams {
   // scene's Scene::parameters, which win over the declared defaults.
   std::array<std::optional<std::int64_t>, static_cast<int>(Parameter::count)> frame{};
 };
+// Every field equal (SetupMemo's key). A field added above must be added to it: the
+// static_assert in geometry.cpp fails until it is.
+bool operator==(const GeometryParams& a, const GeometryParams& b);
+inline bool operator!=(const GeometryParams& a, const GeometryParams& b) { return !(a == b); }
 
 // A triangle after projection: screen position (pixels, y down), depth in [0, 1], and the
 // attributes the expressions interpolate.
@@ -84,6 +88,8 @@ struct SetupCounts {
   std::uint64_t sphere_behind = 0;  // a sphere wholly behind the eye
   std::uint64_t sphere_far = 0;     // a sphere reaching the far plane
 };
+// Adds every count (a field added above must be added to it: see geometry.cpp).
+SetupCounts& operator+=(SetupCounts& a, const SetupCounts& b);
 
 // The expressions a procedure uses (ProcedureCode::expressions): what the GP computes.
 using ExpressionSet = std::bitset<static_cast<int>(Expression::count)>;

@@ -5,6 +5,7 @@
 #include <iterator>
 
 #include "models/gp/primitive_kind.hpp"
+#include "models/gp/setup_memo.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -76,49 +77,88 @@ void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
     const PrimitiveKind* kind;
     std::unique_ptr<PrimitiveWorker> worker;
     GpWorkload workload;
+    // The operations and clocks of the tallies met so far: they depend on the workload and
+    // the tally alone (PrimitiveKind's contract), and most primitives share a few tallies.
+    struct Cost {
+      PrimitiveTally tally;
+      OpCounts ops;
+      GpClocks clocks;
+    };
+    std::vector<Cost> costs;
+    const Cost& cost(const PrimitiveTally& t, const I860Model& i860) {
+      for (const Cost& c : costs) {
+        if (c.tally.pieces == t.pieces && c.tally.setups == t.setups &&
+            c.tally.regions == t.regions)
+          return c;
+      }
+      const OpCounts ops = kind->operations(workload, t);
+      costs.push_back({t, ops, i860.clocks(ops, 1)});
+      return costs.back();
+    }
   };
   std::vector<KindState> kinds;
   for (const PrimitiveKind* k : primitive_kinds()) {
     GpWorkload w = machine.gp_workload();
     w.expressions = machine.program().procedure(k->procedure()).expressions;
     w.packet_words = machine.packet_words(w.expressions);
-    kinds.push_back({k, k->start(geometry), w});
+    kinds.push_back({k, k->start(geometry), w, {}});
   }
 
   // A bin per region: the packets this GP sends it, in display-list order. With a multipass
   // program the same packets go out once per pass.
   bins.assign(static_cast<std::size_t>(config.regions()), {});
+  SetupMemo* memo = machine.setup_memo();
   std::vector<int> regions;
   for (int i = first; i < last; ++i) {
     const PrimitiveRef ref = display_list.at(i);
     KindState& k = kinds[static_cast<std::size_t>(ref.kind)];
-    PrimitiveTally tally;
-    tally.pieces = k.worker->transform(ref.index, stats.setup);
     ++stats.triangles_in;
-    for (int piece = 0; piece < tally.pieces; ++piece) {
-      ++stats.screen_triangles;
-      ++tally.setups;
-      SetupResult result;
-      if (!k.worker->setup(piece, k.workload.expressions, result, stats.setup)) continue;
-      auto packet = std::make_shared<Packet>();
-      packet->procedure = k.kind->procedure();
-      packet->kind = ref.kind;
-      packet->primitive = i;
-      packet->group = k.kind->solid(geometry.scene(), ref.index);
-      packet->back = result.back;
-      packet->words = k.workload.packet_words;
-      regions.clear();
-      k.worker->bin(result, regions);
-      packet->values = std::move(result.values);
-      for (int r : regions) {
-        bins[r].push_back(packet);
-        ++stats.packets;
-        ++tally.regions;
+    PrimitiveTally tally;
+    if (memo != nullptr && memo->record(i).filled) {
+      // Set up at an earlier frame with the same key (models/gp/setup_memo.hpp).
+      const SetupMemo::Record& r = memo->record(i);
+      tally = r.tally;
+      stats.screen_triangles += static_cast<std::uint64_t>(tally.pieces);
+      stats.setup += r.counts;
+      for (std::uint32_t p = r.first; p < r.first + r.count; ++p) {
+        const SetupMemo::Placed& placed = memo->placed(p);
+        for (std::uint32_t q = placed.first; q < placed.first + placed.count; ++q) {
+          bins[static_cast<std::size_t>(memo->region(q))].push_back(placed.packet);
+        }
+        stats.packets += placed.count;
       }
+    } else {
+      SetupCounts counts;
+      if (memo != nullptr) memo->begin(i);
+      tally.pieces = k.worker->transform(ref.index, counts);
+      for (int piece = 0; piece < tally.pieces; ++piece) {
+        ++stats.screen_triangles;
+        ++tally.setups;
+        SetupResult result;
+        if (!k.worker->setup(piece, k.workload.expressions, result, counts)) continue;
+        auto packet = std::make_shared<Packet>();
+        packet->procedure = k.kind->procedure();
+        packet->kind = ref.kind;
+        packet->primitive = i;
+        packet->group = k.kind->solid(geometry.scene(), ref.index);
+        packet->back = result.back;
+        packet->words = k.workload.packet_words;
+        regions.clear();
+        k.worker->bin(result, regions);
+        packet->values = std::move(result.values);
+        for (int r : regions) {
+          bins[static_cast<std::size_t>(r)].push_back(packet);
+          ++stats.packets;
+          ++tally.regions;
+        }
+        if (memo != nullptr) memo->place(std::move(packet), regions);
+      }
+      stats.setup += counts;
+      if (memo != nullptr) memo->end(i, tally, counts);
     }
-    const OpCounts ops = k.kind->operations(k.workload, tally);
-    stats.ops += ops;
-    stats.geometry += machine.i860().clocks(ops, 1);
+    const KindState::Cost& cost = k.cost(tally, machine.i860());
+    stats.ops += cost.ops;
+    stats.geometry += cost.clocks;
   }
 }
 

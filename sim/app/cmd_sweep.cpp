@@ -26,6 +26,7 @@
 #include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
+#include "models/gp/setup_memo.hpp"
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/scene/scene.hpp"
@@ -240,13 +241,17 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
   const std::string firmware = firmware_for(o.firmware, scene);
   // Check every point's whole configuration, and the program against each distinct pixel
   // memory, before writing anything.
-  std::map<std::tuple<int, int, int, int>, bool> assembled;
-  for (std::uint64_t i = 0; i < points; ++i) {
-    const AssemblerOptions a = assembler_options(config_of(i));
+  // The program, assembled once for each distinct pixel memory, is kept for the points.
+  std::map<std::tuple<int, int, int, int>, Program> assembled;
+  auto program_of = [&](const MachineConfig& c) -> const Program& {
+    const AssemblerOptions a = assembler_options(c);
     const auto key =
         std::make_tuple(a.memory_bits, a.backing_store_bits, a.block_bits, a.enable_stack_depth);
-    if (assembled.emplace(key, true).second) assemble_file(firmware, a);
-  }
+    auto it = assembled.find(key);
+    if (it == assembled.end()) it = assembled.emplace(key, assemble_file(firmware, a)).first;
+    return it->second;
+  };
+  for (std::uint64_t i = 0; i < points; ++i) program_of(config_of(i));
 
   fs::create_directories(o.out_dir);
   nlohmann::json grid = nlohmann::json::object();
@@ -283,6 +288,9 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
       return command(values, fs::path(o.out_dir) / run_name(axes, values));
     });
   }
+  // Points that differ only in what set-up does not read (GP and Renderer counts, the ring,
+  // clocks) replay the first one's set-up (models/gp/setup_memo.hpp).
+  SetupMemo setup_memo(scene);
   for (std::uint64_t i = 0; i < points; ++i) {
     const std::vector<std::string> values = point(axes, i);
     const fs::path dir = fs::path(o.out_dir) / run_name(axes, values);
@@ -291,8 +299,8 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
       continue;
     }
     const MachineConfig config = config_of(i);
-    const Program program = assemble_file(firmware, assembler_options(config));
-    const FrameResult r = simulate_frame(config, scene, program, o.threads);
+    const FrameResult r =
+        simulate_frame(config, scene, program_of(config), o.threads, {}, nullptr, &setup_memo);
     fs::create_directories(dir);
     // A run's two files together, or neither (sim/output).
     OutputSet outputs;

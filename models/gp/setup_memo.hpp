@@ -1,0 +1,87 @@
+#pragma once
+// The GPs' set-up of one scene, kept from frame to frame: for runs of many configurations of
+// the same scene (pp5sim sweep, pp5sim validate), which would otherwise transform, light, clip
+// and set up every primitive again at every point.
+//
+// What geometry_pass makes of a display-list primitive (its pieces, the set-up counts, its
+// packets and the regions each goes to) depends only on the scene, the geometry parameters
+// (screen, regions, subpixel, fraction, depth and coefficient bits, culling, frame
+// parameters) and, for each primitive kind, the expressions its procedure uses and its
+// packet's ring words. Those are the key. A frame whose key matches the memo's replays each
+// primitive's record; one whose key differs empties the memo and fills it again. What
+// depends on the GP configuration, the i860 operations and clocks, is counted at every
+// frame from the record's tally, as for a primitive set up afresh.
+//
+// Contract:
+//  - A frame with the memo gives the same packets (shared, immutable), bins, set-up counts,
+//    operations and clocks as one without it: statistics and images are identical
+//    (tests/test_setup_memo.cpp).
+//  - One frame at a time: Machine::use_setup_memo binds it, and geometry_pass fills it; GPs
+//    run one after another (SystemC threads, or the analytic model's loop).
+//  - It serves one scene, the one it was made for; a Machine of another scene is refused.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "models/gp/geometry.hpp"
+#include "models/gp/primitive_kind.hpp"
+#include "models/renderer/packet.hpp"
+
+namespace pp5 {
+
+class SetupMemo {
+ public:
+  // What set-up depends on besides the scene.
+  struct Key {
+    GeometryParams params;
+    std::vector<ExpressionSet> expressions;  // per primitive kind, its procedure's
+    std::vector<std::uint64_t> words;        // per primitive kind, its packet's ring words
+  };
+  // A packet and the regions it was binned to: regions[first, first + count).
+  struct Placed {
+    std::shared_ptr<const Packet> packet;
+    std::uint32_t first = 0;
+    std::uint32_t count = 0;
+  };
+  // One primitive: its tally, what its transform and set-ups counted, and its packets
+  // placed[first, first + count).
+  struct Record {
+    bool filled = false;
+    PrimitiveTally tally;
+    SetupCounts counts;
+    std::uint32_t first = 0;
+    std::uint32_t count = 0;
+  };
+
+  explicit SetupMemo(const Scene& scene) : scene_(&scene) {}
+
+  const Scene& scene() const { return *scene_; }
+  // Keeps the records if `key` is the memo's, else empties it for a display list of
+  // `primitives`. Returns whether the records were kept.
+  bool bind(const Key& key, std::size_t primitives);
+
+  const Record& record(int primitive) const {
+    return records_[static_cast<std::size_t>(primitive)];
+  }
+  const Placed& placed(std::uint32_t k) const { return placed_[k]; }
+  int region(std::uint32_t k) const { return regions_[k]; }
+
+  // Filling primitive `primitive`'s record: begin, then place each packet, then end.
+  void begin(int primitive);
+  void place(std::shared_ptr<const Packet> packet, const std::vector<int>& regions);
+  void end(int primitive, const PrimitiveTally& tally, const SetupCounts& counts);
+
+  // Frames bound with a matching key (bind returned true), for tests and reports.
+  std::uint64_t reuses() const { return reuses_; }
+
+ private:
+  const Scene* scene_;
+  bool bound_ = false;
+  Key key_;
+  std::vector<Record> records_;
+  std::vector<Placed> placed_;
+  std::vector<int> regions_;
+  std::uint64_t reuses_ = 0;
+};
+
+}  // namespace pp5
