@@ -7,7 +7,8 @@
 #     word; below 1 means the simulator drew the frame faster than the machine did.
 #   - event / analytic host time at fidelity.pixels=none on the torus (the target is >= 100).
 #   - a 1,000-point sweep of the torus (gp.count 1..40 x renderer.count 1..25) at
-#     --fidelity timing and --fidelity analytic, split in two halves run at once (2 cores);
+#     --fidelity timing and --fidelity analytic, split in two halves run at once (2 cores),
+#     and the median point's timing-model host time at each level (the set-up replayed);
 #   - first, the process's start-up and exit alone (pp5sim --version): the floor under all.
 # Usage: bench/bench_fidelity.sh [build/pp5sim] [runs, default 3: each figure is the fastest]
 set -euo pipefail
@@ -81,3 +82,17 @@ for level in timing analytic; do
   printf '1,000-point sweep of the torus at --fidelity %-8s on 2 cores: %.1f s\n' "$level" \
     "$(echo "$t1 - $t0" | bc -l)"
 done
+# Per point, the timing model's own host time (host.timing_seconds: the analytic sums or the
+# SystemC run, after the set-up each half's first point made and the rest replay).
+median_point() {
+  python3 - "$scratch/sweep-$1-a" "$scratch/sweep-$1-b" <<'PY'
+import glob, json, sys
+t = sorted(json.load(open(f))["host"]["timing_seconds"]
+           for d in sys.argv[1:] for f in glob.glob(d + "/*/stats.json"))
+print(t[len(t) // 2])
+PY
+}
+event_point=$(median_point timing)
+analytic_point=$(median_point analytic)
+printf 'a sweep point, median host.timing_seconds: event %.6f s, analytic %.6f s (%.1fx)\n' \
+  "$event_point" "$analytic_point" "$(echo "$event_point / $analytic_point" | bc -l)"
