@@ -175,6 +175,24 @@ mv "$tmp/prefix" "$tmp/moved"
   || fail "the moved installation failed: $(cat "$tmp/inst.log")"
 grep -q "firmware $tmp/moved/share/pp5sim/programs/gouraud.pp5" "$tmp/inst.log" \
   || fail "the moved installation did not use its own programs: $(grep firmware "$tmp/inst.log")"
+# A mesh file loads the installation's own assimp module (sim/scene/assimp_reader.hpp), and a
+# process that reads none never loads assimp at all.
+[ -s "$tmp/moved/lib/pp5sim/libpp5_assimp.so" ] || fail "no lib/pp5sim/libpp5_assimp.so installed"
+cube="$(cd "$data" && pwd)/meshes/cube.obj"
+(cd "$tmp" && LD_DEBUG=files "$tmp/moved/bin/pp5sim" render --scene "$cube" \
+  --fidelity timing --out "$tmp/inst-mesh" >"$tmp/inst-mesh.log" 2>&1) \
+  || fail "the moved installation could not render a mesh: $(tail -3 "$tmp/inst-mesh.log")"
+grep -q "file=$tmp/moved/lib/pp5sim/libpp5_assimp.so .*dynamically loaded" "$tmp/inst-mesh.log" \
+  || fail "the moved installation did not load its own assimp module"
+(LD_DEBUG=files "$bin" render --scene two-triangles --fidelity timing --set screen.width=128 \
+  --set screen.height=128 --out "$tmp/no-mesh" >"$tmp/no-mesh.log" 2>&1) || fail "no-mesh run failed"
+if grep -q "libassimp" "$tmp/no-mesh.log"; then fail "a run without a mesh file loaded assimp"; fi
+# Without the module, a mesh file is a clear error naming it and where it was looked for, and
+# nothing is written (PP5_ASSIMP_MODULE names the one file to load).
+PP5_ASSIMP_MODULE="$tmp/absent/libpp5_assimp.so" expect_error \
+  "cube.obj: reading a mesh file needs pp5sim's assimp module, libpp5_assimp.so, which could not be loaded; tried $tmp/absent/libpp5_assimp.so (absent)" \
+  render --scene "$data/meshes/cube.obj" --out "$tmp/no-module"
+[ ! -e "$tmp/no-module" ] || fail "a run that could not load the assimp module left output"
 # A bare name is the built-in program even when a file of that name is in the current
 # directory; a path names the file.
 abs_bin="$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")"

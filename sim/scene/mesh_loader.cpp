@@ -1,13 +1,8 @@
 #include "sim/scene/mesh_loader.hpp"
 
-#include <assimp/BaseImporter.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <assimp/IOSystem.hpp>
-#include <assimp/Importer.hpp>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -19,6 +14,7 @@
 #include <vector>
 
 #include "common/read_file.hpp"
+#include "sim/scene/assimp_reader.hpp"
 
 namespace pp5 {
 
@@ -571,7 +567,7 @@ void check_stl_header(std::string_view data, const std::string& origin, const Lo
 }
 
 // "" for a finite position, else which coordinate is what.
-std::string non_finite(const aiVector3D& p) {
+std::string non_finite(const glm::vec3& p) {
   for (int c = 0; c < 3; ++c) {
     if (!std::isfinite(p[c])) {
       return fmt::format("{} is {}, expected a finite number", "xyz"[c],
@@ -579,41 +575,6 @@ std::string non_finite(const aiVector3D& p) {
     }
   }
   return "";
-}
-
-// assimp may read no file but the one in memory (an OBJ's "mtllib" names another file).
-class NoFiles : public Assimp::IOSystem {
- public:
-  bool Exists(const char*) const override { return false; }
-  char getOsSeparator() const override { return '/'; }
-  Assimp::IOStream* Open(const char*, const char*) override { return nullptr; }
-  void Close(Assimp::IOStream* stream) override { delete stream; }
-};
-
-// An importer that knows only the one format, so that no other of assimp's importers
-// guesses at the bytes.
-void keep_only(Assimp::Importer& importer, const std::string& format) {
-  const Assimp::BaseImporter* keep = importer.GetImporter(format.c_str());
-  for (std::size_t i = importer.GetImporterCount(); i-- > 0;) {
-    Assimp::BaseImporter* other = importer.GetImporter(i);
-    if (other == keep) continue;
-    importer.UnregisterLoader(other);
-    delete other;  // UnregisterLoader hands it back to the caller
-  }
-}
-
-// assimp's message names its in-memory file "$$$___magic___$$$.EXT"; call it "the file".
-std::string assimp_error(const Assimp::Importer& importer, const std::string& format) {
-  std::string what = importer.GetErrorString();
-  const std::string magic = "$$$___magic___$$$." + format;
-  for (auto at = what.find(magic); at != std::string::npos; at = what.find(magic)) {
-    what.replace(at, magic.size(), "the file");
-  }
-  while (!what.empty() &&
-         (what.back() == '.' || std::isspace(static_cast<unsigned char>(what.back())))) {
-    what.pop_back();
-  }
-  return what.empty() ? "assimp could not read it" : printable(what, 300);
 }
 
 }  // namespace
@@ -719,52 +680,59 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   if (format == "stl") check_stl_header(data, origin, limits);
   if (format == "obj") empty_faces = check_obj(data, origin);
 
-  Assimp::Importer importer;  // assimp logs nothing unless a DefaultLogger is created
-  keep_only(importer, format);
-  importer.SetIOHandler(new NoFiles);
-  // No triangulation (ear clipping below handles concave faces); the import is checked
-  // before any post-processing step runs on it.
-  const aiScene* scene = importer.ReadFileFromMemory(data.data(), data.size(), 0, format.c_str());
-  if (!scene) throw MeshError(fmt::format("{}: {}", origin, assimp_error(importer, format)));
+  // assimp, loaded on first use (sim/scene/assimp_reader.hpp); its message is printable and
+  // at most 300 characters.
+  std::unique_ptr<AssimpReader> reader;
+  try {
+    reader = open_assimp_reader();
+  } catch (const MeshError& e) {
+    throw MeshError(fmt::format("{}: {}", origin, e.what()));
+  }
+  std::string error;
+  if (!reader->read(data, format, error)) {
+    throw MeshError(fmt::format("{}: {}", origin, printable(error, 300)));
+  }
+  std::vector<ImportedMesh> meshes = reader->meshes();
 
   // The four importers put every mesh under identity node transforms, so the meshes are
   // taken as they are. Every face is checked before any step of assimp's touches the data.
   const bool per_face = format == "obj" || format == "stl";  // a vertex per face corner
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* mesh = scene->mMeshes[m];
-    const std::string where =
-        scene->mNumMeshes > 1 ? fmt::format("{}: mesh {}", origin, m) : origin;
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    const ImportedMesh& mesh = meshes[m];
+    const std::string where = meshes.size() > 1 ? fmt::format("{}: mesh {}", origin, m) : origin;
+    std::size_t at = 0;  // the face's first corner in mesh.indices
+    for (std::size_t f = 0; f < mesh.face_sizes.size(); ++f) {
+      const std::uint32_t corners = mesh.face_sizes[f];
       // OBJ's points and lines are skipped below; elsewhere a face needs three corners.
-      if (face.mNumIndices == 0 || (face.mNumIndices < 3 && format != "obj")) {
-        throw MeshError(fmt::format("{}: face {} has {} vertices, expected at least 3", where, f,
-                                    face.mNumIndices));
+      if (corners == 0 || (corners < 3 && format != "obj")) {
+        throw MeshError(
+            fmt::format("{}: face {} has {} vertices, expected at least 3", where, f, corners));
       }
-      if (face.mNumIndices > limits.max_polygon_vertices) {
+      if (corners > limits.max_polygon_vertices) {
         throw MeshError(fmt::format("{}: face {} has {} vertices; the limit is {}", where, f,
-                                    face.mNumIndices, limits.max_polygon_vertices));
+                                    corners, limits.max_polygon_vertices));
       }
-      for (unsigned k = 0; k < face.mNumIndices; ++k) {
-        const unsigned i = face.mIndices[k];
-        if (i >= mesh->mNumVertices) {
+      for (std::uint32_t k = 0; k < corners; ++k) {
+        const std::uint32_t i = mesh.indices[at + k];
+        if (i >= mesh.positions.size()) {
           throw MeshError(
               fmt::format("{}: face {}: vertex index {} out of range (the file has {} "
                           "vertices)",
-                          where, f, i, mesh->mNumVertices));
+                          where, f, i, mesh.positions.size()));
         }
         // OBJ's and STL's vertices are face corners: name the face.
-        const std::string bad = per_face ? non_finite(mesh->mVertices[i]) : "";
+        const std::string bad = per_face ? non_finite(mesh.positions[i]) : "";
         if (!bad.empty()) {
           throw MeshError(fmt::format("{}: face {}, corner {}: {}", where, f, k, bad));
         }
       }
+      at += corners;
     }
-    for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
-      const std::string bad = non_finite(mesh->mVertices[i]);
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+      const std::string bad = non_finite(mesh.positions[i]);
       if (!bad.empty()) throw MeshError(fmt::format("{}: vertex {}: {}", where, i, bad));
-      if (mesh->HasVertexColors(0)) {
-        const aiColor4D& col = mesh->mColors[0][i];
+      if (!mesh.colors.empty()) {
+        const glm::vec4& col = mesh.colors[i];
         if (!std::isfinite(col.r) || !std::isfinite(col.g) || !std::isfinite(col.b)) {
           throw MeshError(fmt::format("{}: vertex {}: the colour is not finite", where, i));
         }
@@ -774,12 +742,10 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   // OBJ and STL come with a vertex per face corner: identical positions (and colours) become
   // one vertex, so faces share their corners and the normals come out smooth.
   if (per_face) {
-    importer.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS |
-                                                            aiComponent_TANGENTS_AND_BITANGENTS |
-                                                            aiComponent_TEXCOORDS);
-    scene =
-        importer.ApplyPostProcessing(aiProcess_RemoveComponent | aiProcess_JoinIdenticalVertices);
-    if (!scene) throw MeshError(fmt::format("{}: {}", origin, assimp_error(importer, format)));
+    if (!reader->join_identical_vertices(error)) {
+      throw MeshError(fmt::format("{}: {}", origin, printable(error, 300)));
+    }
+    meshes = reader->meshes();
   }
 
   MeshLoadReport r;
@@ -788,19 +754,20 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   std::vector<glm::vec3> positions;
   std::vector<unsigned> polygon;
   std::vector<glm::uvec3> triangles;
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* mesh = scene->mMeshes[m];
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    const ImportedMesh& mesh = meshes[m];
     const auto base = static_cast<unsigned>(out.vertices.size());
-    if (out.vertices.size() + mesh->mNumVertices > limits.max_vertices) {
+    if (out.vertices.size() + mesh.positions.size() > limits.max_vertices) {
       throw MeshError(fmt::format("{}: {} vertices; the limit is {}", origin,
-                                  out.vertices.size() + mesh->mNumVertices, limits.max_vertices));
+                                  out.vertices.size() + mesh.positions.size(),
+                                  limits.max_vertices));
     }
-    for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
       Vertex v;
-      v.position = glm::vec3(mesh->mVertices[i].x, mesh->mVertices[i].y, mesh->mVertices[i].z);
+      v.position = mesh.positions[i];
       v.color = default_color;
-      if (mesh->HasVertexColors(0)) {
-        const aiColor4D& c = mesh->mColors[0][i];
+      if (!mesh.colors.empty()) {
+        const glm::vec4& c = mesh.colors[i];
         glm::vec3 rgb(c.r, c.g, c.b);
         // assimp's OFF importer passes COFF's 0-255 colours through as they are.
         if (format == "off" && (rgb.r > 1.0f || rgb.g > 1.0f || rgb.b > 1.0f)) rgb /= 255.0f;
@@ -809,14 +776,17 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
       out.vertices.push_back(v);
       positions.push_back(v.position);
     }
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices < 3) {  // a point or a line: nothing to fill
+    std::size_t at = 0;  // the face's first corner in mesh.indices
+    for (std::size_t f = 0; f < mesh.face_sizes.size(); ++f) {
+      const std::uint32_t corners = mesh.face_sizes[f];
+      const std::uint32_t* first = mesh.indices.data() + at;
+      at += corners;
+      if (corners < 3) {  // a point or a line: nothing to fill
         ++r.ignored_statements;
         continue;
       }
       ++r.polygons;
-      polygon.assign(face.mIndices, face.mIndices + face.mNumIndices);
+      polygon.assign(first, first + corners);
       for (unsigned& i : polygon) i += base;
       // A corner repeated at once (1 2 2 3, or the last equal to the first) is a collapsed
       // edge: dropped, and the face counted as degenerate if that leaves fewer than three.
@@ -837,8 +807,8 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
           throw MeshError(fmt::format(
               "{}: face {} visits vertex {} {} times ({} corners); a face must be a polygon "
               "that visits each vertex once",
-              scene->mNumMeshes > 1 ? fmt::format("{}: mesh {}", origin, m) : origin, f,
-              *again - base, times, face.mNumIndices));
+              meshes.size() > 1 ? fmt::format("{}: mesh {}", origin, m) : origin, f, *again - base,
+              times, corners));
         }
         if (kept.size() < 3) {
           ++r.dropped_degenerate;
