@@ -193,6 +193,12 @@ PP5_ASSIMP_MODULE="$tmp/absent/libpp5_assimp.so" expect_error \
   "cube.obj: reading a mesh file needs pp5sim's assimp module, libpp5_assimp.so, which could not be loaded; tried $tmp/absent/libpp5_assimp.so (absent)" \
   render --scene "$data/meshes/cube.obj" --out "$tmp/no-module"
 [ ! -e "$tmp/no-module" ] || fail "a run that could not load the assimp module left output"
+mkfifo "$tmp/module-fifo"
+PP5_ASSIMP_MODULE="$tmp/module-fifo" expect_error "module-fifo (not a regular file)" \
+  render --scene "$data/meshes/cube.obj" --out "$tmp/no-module"
+head -c 4096 /dev/zero > "$tmp/not-elf.so"
+PP5_ASSIMP_MODULE="$tmp/not-elf.so" expect_error "not-elf.so: invalid ELF header" \
+  render --scene "$data/meshes/cube.obj" --out "$tmp/no-module"
 # A bare name is the built-in program even when a file of that name is in the current
 # directory; a path names the file.
 abs_bin="$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")"

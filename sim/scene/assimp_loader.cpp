@@ -30,7 +30,9 @@ Loaded load_module() {
   std::vector<fs::path> candidates;
   std::error_code error;
   if (const char* named = std::getenv("PP5_ASSIMP_MODULE"); named && *named) {
-    candidates.push_back(named);  // the one file to load (packagers, tests)
+    // The one file to load (packagers, tests); a bare name is a file in the current folder,
+    // not a search of the library path.
+    candidates.push_back(fs::absolute(named, error));
   } else {
     const fs::path exe = fs::read_symlink("/proc/self/exe", error);
     if (!error) {
@@ -43,6 +45,11 @@ Loaded load_module() {
   for (const fs::path& path : candidates) {
     if (!fs::exists(path, error)) {
       tried += fmt::format("{}{} (absent)", tried.empty() ? "" : ", ", path.string());
+      continue;
+    }
+    // dlopen would wait forever on a FIFO, and read a device to no end.
+    if (!fs::is_regular_file(path, error)) {
+      tried += fmt::format("{}{} (not a regular file)", tried.empty() ? "" : ", ", path.string());
       continue;
     }
     // Never closed: its code may be running in any reader until the process ends.
