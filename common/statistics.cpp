@@ -27,8 +27,9 @@ std::vector<std::string> components(const std::string& name) {
   }
 }
 
-void check_name(const std::string& name) {
-  for (const std::string& c : components(name)) {
+// `parts` is components(name).
+void check_name(const std::string& name, const std::vector<std::string>& parts) {
+  for (const std::string& c : parts) {
     bool ok = !c.empty();
     for (char ch : c)
       ok = ok && ((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_');
@@ -37,7 +38,7 @@ void check_name(const std::string& name) {
                                   "': components must be non-empty and of [a-z0-9_]");
     }
   }
-  if (is_index(components(name).front())) {
+  if (is_index(parts.front())) {
     throw std::invalid_argument("statistic '" + name + "': the document itself is not an array");
   }
 }
@@ -70,14 +71,20 @@ const char* stat_kind_name(StatKind kind) {
   return "text";
 }
 
-std::string stat_pattern(const std::string& name) {
+namespace {
+
+std::string pattern_of(const std::vector<std::string>& parts) {
   std::string out;
-  for (const std::string& c : components(name)) {
+  for (const std::string& c : parts) {
     if (!out.empty()) out += '.';
     out += is_index(c) ? std::string("N") : c;
   }
   return out;
 }
+
+}  // namespace
+
+std::string stat_pattern(const std::string& name) { return pattern_of(components(name)); }
 
 void Statistics::add_integer(const std::string& name, const char* unit, const char* description,
                              std::function<std::int64_t()> get) {
@@ -99,12 +106,13 @@ void Statistics::add_text(const std::string& name, const char* unit, const char*
 
 void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
   const std::string& name = info.name;
-  check_name(name);
+  // The name's components, split once (this runs for every statistic of every frame).
+  const std::vector<std::string> parts = components(name);
+  check_name(name, parts);
   if (index_.count(name)) throw std::invalid_argument("statistic '" + name + "' registered twice");
   if (parents_.count(name)) {
     throw std::invalid_argument("statistic '" + name + "' is already a group of statistics");
   }
-  const std::vector<std::string> parts = components(name);
   // Check everything before changing anything, so that a refused name leaves no trace.
   std::string parent;
   for (std::size_t k = 0; k + 1 < parts.size(); ++k) {
@@ -124,7 +132,7 @@ void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
                                   "' must be registered from 0 without gaps");
     }
   }
-  const std::string pattern = stat_pattern(name);
+  const std::string pattern = pattern_of(parts);
   const auto first = patterns_.find(pattern);
   if (first != patterns_.end()) {
     const StatisticInfo& e = entries_[first->second].info;
