@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "models/gp/setup_memo.hpp"
@@ -93,4 +94,30 @@ TEST_CASE("setup memo: a machine of another scene is refused", "[setup_memo]") {
   CHECK_THROWS_WITH(
       project_frame(c, other, program, &memo),
       Catch::Contains("set-up memo of scene 'torus'") && Catch::Contains("scene 'two-triangles'"));
+}
+
+TEST_CASE("setup memo: spheres, adjacency-reading expressions and multipass programs",
+          "[setup_memo]") {
+  // Each kind and each way set-up reads the scene: sphere primitives beside triangles, the
+  // accurate program's side expressions (mesh adjacency), a pass plan that sends the same
+  // packets once per pass.
+  const std::vector<std::pair<std::string, std::string>> runs = {{"spheres-and-triangles", "phong"},
+                                                                 {"folded-slab", "accurate"},
+                                                                 {"crossing-quads", "transparent"}};
+  for (const auto& [scene_name, program_name] : runs) {
+    const Scene scene = make_builtin_scene(scene_name);
+    SetupMemo memo(scene);
+    for (const auto& sets : {std::vector<std::string>{"gp.count=1", "renderer.count=2"},
+                             std::vector<std::string>{"gp.count=4", "renderer.count=3"},
+                             std::vector<std::string>{"gp.count=3", "fidelity.timing=analytic"}}) {
+      const MachineConfig c = configured(sets);
+      const Program program = load_program(program_name, c);
+      INFO(scene_name << " " << program_name << " " << c.to_json().dump());
+      const FrameResult fresh = project_frame(c, scene, program);
+      const FrameResult replayed = project_frame(c, scene, program, &memo);
+      CHECK(without_host(replayed.stats_json) == without_host(fresh.stats_json));
+      CHECK(count(replayed.stats, "setup.packets") > 0);
+    }
+    CHECK(memo.reuses() == 2);
+  }
 }
