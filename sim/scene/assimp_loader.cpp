@@ -36,7 +36,10 @@ Loaded load_module() {
   } else {
     const fs::path exe = fs::read_symlink("/proc/self/exe", error);
     if (!error) {
+      // Installed (bin/../lib/pp5sim), then a build tree's own layout (build/pp5sim and
+      // build/lib/pp5sim), which still holds when the build tree is moved.
       candidates.push_back((exe.parent_path() / PP5_MODULE_FROM_BIN / kModule).lexically_normal());
+      candidates.push_back(exe.parent_path() / "lib" / "pp5sim" / kModule);
     }
     candidates.push_back(fs::path(PP5_MODULE_BUILD_DIR) / kModule);
   }

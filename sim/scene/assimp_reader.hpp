@@ -9,7 +9,8 @@
 //  - open_assimp_reader() loads the module once per process (thread-safe) and returns a new
 //    reader; if the module cannot be found or loaded it throws MeshError naming the paths it
 //    tried and the loader's message. It looks next to the executable (installed layout:
-//    bin/../lib/pp5sim, PP5_MODULE_FROM_BIN) and then in the build tree it was built in; the
+//    bin/../lib/pp5sim, PP5_MODULE_FROM_BIN), beside it as a build tree lays it out
+//    (lib/pp5sim), and then in the build tree it was built in; the
 //    environment variable PP5_ASSIMP_MODULE, if set, names the one file to load instead.
 //  - A reader reads one file: read(), then optionally join_identical_vertices(), then
 //    meshes(). It throws nothing; failures come back as false with assimp's message.
