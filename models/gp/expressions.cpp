@@ -251,7 +251,16 @@ bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& 
   const __int128 f0 = static_cast<__int128>(std::llround(f[0] * f_scale)) * scale;
   const __int128 num =
       f0 - static_cast<__int128>(Ai) * (xs[0] - half) - static_cast<__int128>(Bi) * (ys[0] - half);
-  __int128 C = (num >= 0 ? num + scale / 2 : num - scale / 2) / scale;
+  // Rounded to the nearest (halves away from zero) by a division that truncates toward zero;
+  // scale is a power of two, so by shifts (a 128-bit division is a library call).
+  const __int128 rounded = num >= 0 ? num + scale / 2 : num - scale / 2;
+  __int128 C;
+  if ((scale & (scale - 1)) == 0) {
+    const int shift = __builtin_ctzll(static_cast<unsigned long long>(scale));
+    C = rounded >= 0 ? rounded >> shift : -((-rounded) >> shift);
+  } else {
+    C = rounded / scale;
+  }
   // C is sent modulo 2^coefficient_bits when the evaluator's sums wrap at no more bits than
   // that: every pixel then still gets A x + B y + C exactly modulo 2^result_bits, and inside
   // the triangle, where the attribute lies within its range, that is its exact value. A
@@ -260,7 +269,7 @@ bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& 
   // matters at every pixel.)
   const __int128 span = static_cast<__int128>(1) << cb;
   if (params.result_bits <= cb) {
-    C = ((C % span) + span) % span;
+    C &= span - 1;  // C modulo 2^cb, in [0, span): two's complement
     if (C >= span / 2) C -= span;
   }
   if (C >= span / 2 || C < -span / 2) return false;
