@@ -118,19 +118,38 @@ glm::dvec3 GeometryEngine::light_vertex(const glm::dvec3& color, const glm::dvec
   return glm::clamp(color * level + glm::dvec3(specular), 0.0, 1.0);
 }
 
+const std::vector<GeometryEngine::VertexView>& GeometryEngine::vertex_views() const {
+  std::call_once(vertex_views_once_, [this] {
+    const Mesh& mesh = scene_.mesh;
+    vertex_views_.resize(mesh.vertices.size());
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const Vertex& src = mesh.vertices[i];
+      VertexView& w = vertex_views_[i];
+      const glm::dvec4 e = view_ * glm::dvec4(glm::dvec3(src.position), 1.0);
+      w.eye = glm::dvec3(e);
+      w.clip = projection_ * e;
+      w.normal = glm::normalize(normal_matrix_ * glm::dvec3(src.normal));
+      w.lit_front = light_vertex(glm::dvec3(src.color), w.normal);
+      w.lit_back = light_vertex(glm::dvec3(src.color), -w.normal);
+    }
+  });
+  return vertex_views_;
+}
+
 void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
                                SetupCounts& counts) const {
   const Mesh& mesh = scene_.mesh;
   const glm::uvec3 tri = mesh.triangles[index];
+  const std::vector<VertexView>& views = vertex_views();
   std::array<glm::dvec3, 3> eye;
   std::array<ClipVertex, 3> v;
   for (int k = 0; k < 3; ++k) {
     const Vertex& src = mesh.vertices[tri[k]];
-    const glm::dvec4 e = view_ * glm::dvec4(glm::dvec3(src.position), 1.0);
-    eye[k] = glm::dvec3(e);
-    v[k].clip = projection_ * e;
+    const VertexView& w = views[tri[k]];
+    eye[k] = w.eye;
+    v[k].clip = w.clip;
     v[k].base = glm::dvec3(src.color);
-    v[k].normal = glm::normalize(normal_matrix_ * glm::dvec3(src.normal));
+    v[k].normal = w.normal;
     v[k].opacity = src.opacity;
   }
   // Two-sided lighting: the surfaces of interest (the self-intersecting torus) show both
@@ -149,7 +168,7 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
   }
   const glm::dvec3 centroid_base = (v[0].base + v[1].base + v[2].base) / 3.0;
   const glm::dvec3 flat = light_vertex(centroid_base, face);
-  for (auto& x : v) x.lit = light_vertex(x.base, x.normal);
+  for (int k = 0; k < 3; ++k) v[k].lit = back ? views[tri[k]].lit_back : views[tri[k]].lit_front;
 
   std::vector<ClipVertex> poly(v.begin(), v.end());
   bool inside = true;

@@ -134,6 +134,17 @@ class GeometryEngine {
 
  private:
   glm::dvec3 light_vertex(const glm::dvec3& color, const glm::dvec3& normal) const;
+  // A mesh vertex as every triangle that uses it sees it: eye and clip position, eye-space
+  // unit normal, and its colour lit facing the viewer and lit with the normal turned (a
+  // back-facing triangle's). Computed once per vertex, on the first transform (thread-safe),
+  // with the very operations transform() would do per corner: the same bits.
+  struct VertexView {
+    glm::dvec3 eye;
+    glm::dvec4 clip;
+    glm::dvec3 normal;
+    glm::dvec3 lit_front, lit_back;
+  };
+  const std::vector<VertexView>& vertex_views() const;
 
   GeometryParams params_;
   const Scene& scene_;
@@ -144,6 +155,8 @@ class GeometryEngine {
   std::vector<glm::dvec3> half_eye_;
   DisplayList display_list_;
   mutable std::once_flag adjacency_once_;
+  mutable std::once_flag vertex_views_once_;
+  mutable std::vector<VertexView> vertex_views_;
   mutable MeshAdjacency adjacency_;
 };
 
