@@ -43,6 +43,19 @@ const std::vector<std::vector<std::string>> kRun = {
 // The configurations above that replay the set-up of the one before them.
 constexpr int kReplayed = 4;
 
+// Projects `c` afresh and with `memo`: the statistics must be the same, and the frame must
+// have made packets. Returns the replayed frame's statistics.
+Statistics check_replay(const MachineConfig& c, const Scene& scene, const std::string& program_name,
+                        SetupMemo& memo) {
+  const Program program = load_program(program_name, c);
+  INFO(scene.name << " " << program_name << " " << c.to_json().dump());
+  const FrameResult fresh = project_frame(c, scene, program);
+  FrameResult replayed = project_frame(c, scene, program, &memo);
+  CHECK(without_host(replayed.stats_json) == without_host(fresh.stats_json));
+  CHECK(count(replayed.stats, "setup.packets") > 0);
+  return std::move(replayed.stats);
+}
+
 }  // namespace
 
 TEST_CASE("setup memo: statistics are the same as without it, at both timing levels",
@@ -55,13 +68,8 @@ TEST_CASE("setup memo: statistics are the same as without it, at both timing lev
         std::vector<std::string> s = sets;
         s.push_back("fidelity.timing=" + timing);
         const MachineConfig c = configured(s);
-        const Program program = load_program(program_name, c);
-        INFO(timing << " " << program_name << " " << c.to_json().dump());
-        const FrameResult fresh = project_frame(c, scene, program);
-        const FrameResult replayed = project_frame(c, scene, program, &memo);
-        CHECK(without_host(replayed.stats_json) == without_host(fresh.stats_json));
-        CHECK(count(replayed.stats, "setup.packets") > 0);
-        if (c.gp.cull_back_faces) CHECK(count(replayed.stats, "setup.culled") > 0);
+        const Statistics replayed = check_replay(c, scene, program_name, memo);
+        if (c.gp.cull_back_faces) CHECK(count(replayed, "setup.culled") > 0);
       }
       CHECK(memo.reuses() == kReplayed);
     }
@@ -110,13 +118,7 @@ TEST_CASE("setup memo: spheres, adjacency-reading expressions and multipass prog
     for (const auto& sets : {std::vector<std::string>{"gp.count=1", "renderer.count=2"},
                              std::vector<std::string>{"gp.count=4", "renderer.count=3"},
                              std::vector<std::string>{"gp.count=3", "fidelity.timing=analytic"}}) {
-      const MachineConfig c = configured(sets);
-      const Program program = load_program(program_name, c);
-      INFO(scene_name << " " << program_name << " " << c.to_json().dump());
-      const FrameResult fresh = project_frame(c, scene, program);
-      const FrameResult replayed = project_frame(c, scene, program, &memo);
-      CHECK(without_host(replayed.stats_json) == without_host(fresh.stats_json));
-      CHECK(count(replayed.stats, "setup.packets") > 0);
+      check_replay(configured(sets), scene, program_name, memo);
     }
     CHECK(memo.reuses() == 2);
   }
