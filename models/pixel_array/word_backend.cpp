@@ -329,8 +329,8 @@ int WordBackend::count_enabled() const {
 
 namespace {
 
-// Whether qtest_linear's row walk can form its terms in 64 bits: E * (y0 + y), D * x0,
-// D * (width - 1) and their sums with F, for every row and column of the region.
+// Whether qtest_linear's row walk can form its terms in 64 bits, below 2^61: E * (y0 + y),
+// D * x0, D * (width - 1) and their sums with F, for every row and column of the region.
 bool fits_64(const QuadraticCoefficients& c, int y0, int x0, int width, int height) {
   using i128 = __int128;
   const i128 limit = i128(1) << 61;
@@ -359,101 +359,91 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
       if (v < lo || v > hi) return false;
     }
   }
+  // The row walk below is in 64-bit integers: every term it forms (and so every value,
+  // quotient and remainder) must stay below 2^61 in magnitude. Coefficients that large go
+  // the general way (qtest's per-pixel evaluation), which is exact for any.
+  if (!fits_64(c, y0_, x0_, width, geometry_.height)) return false;
   std::vector<Range>& kept = spare_spans_;  // becomes spans_; the old spans become the spare
   kept.clear();
-  // The row walk below in integers of type T: 64-bit when every quantity it forms fits
-  // (values within the band are below 2^(R-1) in magnitude, quotients and remainders no
-  // larger), else 128-bit. The same results either way; 64-bit arithmetic is about twice
-  // as fast, and a region's first edge test walks every row.
-  auto walk = [&](auto zero) {
-    using T = decltype(zero);
-    // Row y's columns where the condition holds: up to two intervals [a0, a1), [b0, b1).
-    int row_y = -1, a0 = 0, a1 = 0, b0 = 0, b1 = 0;
-    // In an increasing coordinate u (u = x when D >= 0, u = width - 1 - x otherwise) the
-    // value is g(u) = g0 + s u with s >= 0: "< 0" holds for u < lt, "<= 0" for u < le. With
-    // n = -g0 = s q + m (floor division, 0 <= m < s), lt = q + (m != 0) and le = q + 1. From
-    // row y to y + 1, n falls by E = s qe + me: q and m follow by a subtraction and a
-    // borrow, with no division per row (one per span of rows not following the last).
-    const T sl = c.D >= 0 ? T(c.D) : -T(c.D);
-    T q = 0, m = 0, qe = 0, me = 0;
-    auto floor_div = [](T n, T d, T& quo, T& rem) {
-      quo = n / d;
-      rem = n % d;
-      if (rem < 0) rem += d, --quo;
-    };
-    if (sl != 0) floor_div(T(c.E), sl, qe, me);
-    auto clamp_width = [width](T v) {
-      return static_cast<int>(v < 0 ? T(0) : (v > T(width) ? T(width) : v));
-    };
-    auto row_intervals = [&](int y) {
-      int lt, le;
-      if (sl == 0) {
-        const T g0 = T(c.E) * (y0_ + y) + T(c.F);
-        lt = g0 < 0 ? width : 0;
-        le = g0 <= 0 ? width : 0;
-      } else {
-        if (y == row_y + 1 && row_y >= 0) {
-          q -= qe;
-          m -= me;
-          if (m < 0) m += sl, --q;
-        } else {
-          const T f0 = T(c.E) * (y0_ + y) + T(c.F) + T(c.D) * x0_;  // column 0
-          const T g0 = c.D >= 0 ? f0 : f0 + T(c.D) * (width - 1);
-          floor_div(-g0, sl, q, m);
-        }
-        lt = clamp_width(m != 0 ? q + 1 : q);
-        le = clamp_width(q + 1);
-      }
-      int u[4] = {0, 0, 0, 0};  // [u0, u1) and [u2, u3) in u
-      switch (cond) {
-        case Compare::lt:
-          u[1] = lt;
-          break;
-        case Compare::le:
-          u[1] = le;
-          break;
-        case Compare::eq:
-          u[0] = lt, u[1] = le;
-          break;
-        case Compare::ne:
-          u[1] = lt, u[2] = le, u[3] = width;
-          break;
-        case Compare::ge:
-          u[0] = lt, u[1] = width;
-          break;
-        case Compare::gt:
-          u[0] = le, u[1] = width;
-          break;
-      }
-      if (c.D >= 0) {
-        a0 = u[0], a1 = u[1], b0 = u[2], b1 = u[3];
-      } else {  // x = width - u: the intervals mirror, and swap order
-        a0 = width - u[3], a1 = width - u[2], b0 = width - u[1], b1 = width - u[0];
-        if (u[3] <= u[2]) a0 = a1 = 0;  // the second was empty
-      }
-      row_y = y;
-    };
-    // Within a segment [from, to) of row y: what lies inside the row's intervals stays a
-    // span, the rest leaves the spans (and so is 0, whatever E's bytes there hold).
-    for (const Range& sp : spans_) {
-      for (int y = sp.begin / width; y * width < sp.end; ++y) {
-        if (y != row_y) row_intervals(y);
-        const int start = y * width;
-        const int from = std::max(sp.begin, start), to = std::min(sp.end, start + width);
-        const int k0 = std::max(from, start + a0), k1 = std::min(to, start + a1);
-        if (k1 > k0) kept.push_back({k0, k1});
-        const int l0 = std::max(from, start + b0), l1 = std::min(to, start + b1);
-        if (l1 > l0) kept.push_back({l0, l1});
-      }
-    }
+  using T = std::int64_t;
+  // Row y's columns where the condition holds: up to two intervals [a0, a1), [b0, b1).
+  int row_y = -1, a0 = 0, a1 = 0, b0 = 0, b1 = 0;
+  // In an increasing coordinate u (u = x when D >= 0, u = width - 1 - x otherwise) the
+  // value is g(u) = g0 + s u with s >= 0: "< 0" holds for u < lt, "<= 0" for u < le. With
+  // n = -g0 = s q + m (floor division, 0 <= m < s), lt = q + (m != 0) and le = q + 1. From
+  // row y to y + 1, n falls by E = s qe + me: q and m follow by a subtraction and a
+  // borrow, with no division per row (one per span of rows not following the last).
+  const T sl = c.D >= 0 ? T(c.D) : -T(c.D);
+  T q = 0, m = 0, qe = 0, me = 0;
+  auto floor_div = [](T n, T d, T& quo, T& rem) {
+    quo = n / d;
+    rem = n % d;
+    if (rem < 0) rem += d, --quo;
   };
-  // 64-bit suffices when every term the walk forms (and so every value, quotient and
-  // remainder) stays below 2^61 in magnitude.
-  const bool narrow = fits_64(c, y0_, x0_, width, geometry_.height);
-  if (narrow) {
-    walk(std::int64_t{0});
-  } else {
-    walk(i128{0});
+  if (sl != 0) floor_div(T(c.E), sl, qe, me);
+  auto clamp_width = [width](T v) {
+    return static_cast<int>(v < 0 ? T(0) : (v > T(width) ? T(width) : v));
+  };
+  auto row_intervals = [&](int y) {
+    int lt, le;
+    if (sl == 0) {
+      const T g0 = T(c.E) * (y0_ + y) + T(c.F);
+      lt = g0 < 0 ? width : 0;
+      le = g0 <= 0 ? width : 0;
+    } else {
+      if (y == row_y + 1 && row_y >= 0) {
+        q -= qe;
+        m -= me;
+        if (m < 0) m += sl, --q;
+      } else {
+        const T f0 = T(c.E) * (y0_ + y) + T(c.F) + T(c.D) * x0_;  // column 0
+        const T g0 = c.D >= 0 ? f0 : f0 + T(c.D) * (width - 1);
+        floor_div(-g0, sl, q, m);
+      }
+      lt = clamp_width(m != 0 ? q + 1 : q);
+      le = clamp_width(q + 1);
+    }
+    int u[4] = {0, 0, 0, 0};  // [u0, u1) and [u2, u3) in u
+    switch (cond) {
+      case Compare::lt:
+        u[1] = lt;
+        break;
+      case Compare::le:
+        u[1] = le;
+        break;
+      case Compare::eq:
+        u[0] = lt, u[1] = le;
+        break;
+      case Compare::ne:
+        u[1] = lt, u[2] = le, u[3] = width;
+        break;
+      case Compare::ge:
+        u[0] = lt, u[1] = width;
+        break;
+      case Compare::gt:
+        u[0] = le, u[1] = width;
+        break;
+    }
+    if (c.D >= 0) {
+      a0 = u[0], a1 = u[1], b0 = u[2], b1 = u[3];
+    } else {  // x = width - u: the intervals mirror, and swap order
+      a0 = width - u[3], a1 = width - u[2], b0 = width - u[1], b1 = width - u[0];
+      if (u[3] <= u[2]) a0 = a1 = 0;  // the second was empty
+    }
+    row_y = y;
+  };
+  // Within a segment [from, to) of row y: what lies inside the row's intervals stays a
+  // span, the rest leaves the spans (and so is 0, whatever E's bytes there hold).
+  for (const Range& sp : spans_) {
+    for (int y = sp.begin / width; y * width < sp.end; ++y) {
+      if (y != row_y) row_intervals(y);
+      const int start = y * width;
+      const int from = std::max(sp.begin, start), to = std::min(sp.end, start + width);
+      const int k0 = std::max(from, start + a0), k1 = std::min(to, start + a1);
+      if (k1 > k0) kept.push_back({k0, k1});
+      const int l0 = std::max(from, start + b0), l1 = std::min(to, start + b1);
+      if (l1 > l0) kept.push_back({l0, l1});
+    }
   }
   spans_.swap(kept);
   return true;
