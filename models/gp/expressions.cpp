@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "models/gp/accurate_expressions.hpp"
 #include "models/gp/sphere.hpp"
@@ -252,15 +253,12 @@ bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& 
   const __int128 num =
       f0 - static_cast<__int128>(Ai) * (xs[0] - half) - static_cast<__int128>(Bi) * (ys[0] - half);
   // Rounded to the nearest (halves away from zero) by a division that truncates toward zero;
-  // scale is a power of two, so by shifts (a 128-bit division is a library call).
+  // scale is 2^subpixel_bits (GeometryEngine::setup), so by shifts (a 128-bit division is a
+  // library call).
+  if ((scale & (scale - 1)) != 0) throw std::logic_error("SetupContext: scale is not 2^n");
+  const int shift = __builtin_ctzll(static_cast<unsigned long long>(scale));
   const __int128 rounded = num >= 0 ? num + scale / 2 : num - scale / 2;
-  __int128 C;
-  if ((scale & (scale - 1)) == 0) {
-    const int shift = __builtin_ctzll(static_cast<unsigned long long>(scale));
-    C = rounded >= 0 ? rounded >> shift : -((-rounded) >> shift);
-  } else {
-    C = rounded / scale;
-  }
+  __int128 C = rounded >= 0 ? rounded >> shift : -((-rounded) >> shift);
   // C is sent modulo 2^coefficient_bits when the evaluator's sums wrap at no more bits than
   // that: every pixel then still gets A x + B y + C exactly modulo 2^result_bits, and inside
   // the triangle, where the attribute lies within its range, that is its exact value. A
