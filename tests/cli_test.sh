@@ -199,6 +199,18 @@ PP5_ASSIMP_MODULE="$tmp/module-fifo" expect_error "module-fifo (not a regular fi
 head -c 4096 /dev/zero > "$tmp/not-elf.so"
 PP5_ASSIMP_MODULE="$tmp/not-elf.so" expect_error "not-elf.so: invalid ELF header" \
   render --scene "$data/meshes/cube.obj" --out "$tmp/no-module"
+# A shared object that is not the module, and a module of another interface, are refused.
+printf 'int unrelated(void) { return 1; }\n' > "$tmp/other.c"
+printf 'const int pp5_assimp_reader_interface = 999;\nvoid* pp5_new_assimp_reader(void) { return 0; }\n' \
+  > "$tmp/stale.c"
+for so in other stale; do
+  cc -shared -fPIC -o "$tmp/$so.so" "$tmp/$so.c" || fail "cc could not build $so.so"
+done
+PP5_ASSIMP_MODULE="$tmp/other.so" expect_error "other.so (not pp5sim's assimp module)" \
+  render --scene "$data/meshes/cube.obj" --out "$tmp/no-module"
+PP5_ASSIMP_MODULE="$tmp/stale.so" expect_error "stale.so (interface 999, this pp5sim needs 1)" \
+  render --scene "$data/meshes/cube.obj" --out "$tmp/no-module"
+[ ! -e "$tmp/no-module" ] || fail "a run that could not load the assimp module left output"
 # A bare name is the built-in program even when a file of that name is in the current
 # directory; a path names the file.
 abs_bin="$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")"

@@ -44,27 +44,39 @@ Loaded load_module() {
     candidates.push_back(fs::path(PP5_MODULE_BUILD_DIR) / kModule);
   }
   Loaded loaded;
-  std::string tried;
+  std::string tried;  // each path looked at, and why it was passed over
+  auto pass_over = [&tried](const fs::path& path, const std::string& why) {
+    tried += fmt::format("{}{} ({})", tried.empty() ? "" : ", ", path.string(), why);
+  };
   for (const fs::path& path : candidates) {
     if (!fs::exists(path, error)) {
-      tried += fmt::format("{}{} (absent)", tried.empty() ? "" : ", ", path.string());
+      pass_over(path, "absent");
       continue;
     }
     // dlopen would wait forever on a FIFO, and read a device to no end.
     if (!fs::is_regular_file(path, error)) {
-      tried += fmt::format("{}{} (not a regular file)", tried.empty() ? "" : ", ", path.string());
+      pass_over(path, "not a regular file");
       continue;
     }
-    // Never closed: its code may be running in any reader until the process ends.
     void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle) {
-      tried += fmt::format("{}{} ({})", tried.empty() ? "" : ", ", path.string(), dlerror());
+      pass_over(path, dlerror());
       continue;
     }
-    loaded.factory = reinterpret_cast<Factory>(dlsym(handle, "pp5_new_assimp_reader"));
-    if (loaded.factory) return loaded;
-    tried +=
-        fmt::format("{}{} (no pp5_new_assimp_reader)", tried.empty() ? "" : ", ", path.string());
+    // A module of another build may lay the interface out differently: it must say it
+    // implements this one (kAssimpReaderInterface).
+    const auto* version = static_cast<const int*>(dlsym(handle, "pp5_assimp_reader_interface"));
+    const auto factory = reinterpret_cast<Factory>(dlsym(handle, "pp5_new_assimp_reader"));
+    if (version == nullptr || factory == nullptr) {
+      pass_over(path, "not pp5sim's assimp module");
+    } else if (*version != kAssimpReaderInterface) {
+      pass_over(path, fmt::format("interface {}, this pp5sim needs {}", *version,
+                                  kAssimpReaderInterface));
+    } else {
+      loaded.factory = factory;  // never closed: readers may run its code until the end
+      return loaded;
+    }
+    dlclose(handle);
   }
   loaded.failure = fmt::format(
       "reading a mesh file needs pp5sim's assimp module, {}, which could not be "

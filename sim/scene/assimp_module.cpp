@@ -121,6 +121,9 @@ class Reader : public AssimpReader {
 
 }  // namespace pp5
 
+extern "C" __attribute__((visibility("default"))) const int pp5_assimp_reader_interface =
+    pp5::kAssimpReaderInterface;
+
 extern "C" __attribute__((visibility("default"))) pp5::AssimpReader* pp5_new_assimp_reader() {
   return new pp5::Reader;
 }

@@ -48,7 +48,13 @@ class AssimpReader {
 
 std::unique_ptr<AssimpReader> open_assimp_reader();
 
+// The layout of the interface above (AssimpReader, ImportedMesh): raised whenever it changes,
+// so that a module of another build is refused rather than called.
+inline constexpr int kAssimpReaderInterface = 1;
+
 }  // namespace pp5
 
-// The module's one entry point (C linkage, for dlsym): a new reader, owned by the caller.
+// The module's entry points (C linkage, for dlsym): the interface it implements, and a new
+// reader, owned by the caller.
+extern "C" const int pp5_assimp_reader_interface;
 extern "C" pp5::AssimpReader* pp5_new_assimp_reader();
