@@ -19,6 +19,8 @@
 //  - One frame at a time: Machine::use_setup_memo binds it, and geometry_pass fills it; GPs
 //    run one after another (SystemC threads, or the analytic model's loop).
 //  - It serves one scene, the one it was made for; a Machine of another scene is refused.
+//    The scene is known by its address, so it must not change while the memo serves it
+//    (sweep and validate hold theirs const).
 #include <cstdint>
 #include <memory>
 #include <vector>
