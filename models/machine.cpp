@@ -1,158 +1,30 @@
 #include "models/machine.hpp"
 
-#include <fmt/format.h>
-
-#include <stdexcept>
+#include <string>
 
 #include "models/frame_buffer/frame_buffer.hpp"
-#include "models/gp/expressions.hpp"
 #include "models/gp/graphics_processor.hpp"
-#include "models/gp/pass_plan.hpp"
-#include "models/gp/primitive_kind.hpp"
-#include "models/gp/setup_memo.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
 namespace pp5 {
 
-GeometryParams geometry_params(const MachineConfig& c) {
-  GeometryParams g;
-  g.screen_width = c.screen.width;
-  g.screen_height = c.screen.height;
-  g.region_width = c.renderer.region_width;
-  g.region_height = c.renderer.region_height;
-  g.subpixel_bits = c.gp.subpixel_bits;
-  g.edge_significand_bits = c.gp.edge_significand_bits;
-  g.depth_bits = c.gp.depth_bits;
-  g.fraction_bits = c.evaluator.fraction_bits;
-  g.coefficient_bits = c.evaluator.coefficient_bits;
-  g.result_bits = c.evaluator.result_bits;
-  g.cull_back_faces = c.gp.cull_back_faces != 0;
-  g.frame = c.frame.set;
-  return g;
-}
-
-TimingParams timing_params(const MachineConfig& c) {
-  TimingParams t;
-  t.fraction_bits = c.evaluator.fraction_bits;
-  t.result_bits = c.evaluator.result_bits;
-  t.evaluator_latency = c.evaluator.latency_cycles;
-  t.block_bits = c.renderer.block_bits;
-  t.backing_store_cycles_per_block = c.renderer.backing_store_cycles_per_block;
-  return t;
-}
-
-I860Params i860_params(const MachineConfig& c) {
-  I860Params p;
-  p.code = parse_gp_code(name_of(c.gp.code));
-  p.fp_latency_clocks = c.gp.fp_latency_clocks;
-  p.load_use_clocks = c.gp.load_use_clocks;
-  p.icache_bytes = c.gp.icache_bytes;
-  p.icache_line_bytes = c.gp.icache_line_bytes;
-  p.icache_miss_clocks = c.gp.icache_miss_clocks;
-  p.assembly_code_bytes = c.gp.assembly_code_bytes;
-  p.compiled_code_bytes = c.gp.compiled_code_bytes;
-  p.overhead_factor = c.gp.overhead_factor;
-  return p;
-}
-
-RendererBoardParams board_params(const MachineConfig& c) {
-  RendererBoardParams p;
-  p.array.width = c.renderer.region_width;
-  p.array.height = c.renderer.region_height;
-  p.array.memory_bits = c.renderer.memory_bits;
-  p.array.enable_stack_depth = c.renderer.enable_stack_depth;
-  p.array.backing_store_bits = c.renderer.backing_store_bits;
-  p.array.block_bits = c.renderer.block_bits;
-  p.evaluator.coefficient_bits = c.evaluator.coefficient_bits;
-  p.evaluator.result_bits = c.evaluator.result_bits;
-  p.timing = timing_params(c);
-  return p;
-}
-
-AssemblerOptions assembler_options(const MachineConfig& c) {
-  AssemblerOptions o;
-  o.memory_bits = c.renderer.memory_bits;
-  o.backing_store_bits = c.renderer.backing_store_bits;
-  o.block_bits = c.renderer.block_bits;
-  o.enable_stack_depth = c.renderer.enable_stack_depth;
-  return o;
-}
-
 Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, const Scene& scene,
                  const Program& program)
     : sc_module(name),
-      config_(config),
-      scene_(scene),
-      program_(program),
-      geometry_(geometry_params(config), scene),
-      timing_(timing_params(config)),
-      frame_values_(geometry_.frame_values()),
-      i860_(i860_params(config)),
+      plan_(config, scene, program),
       scheduler_(config.regions(), config.renderer.count,
                  config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic) {
-  check_pass_plan(program);
-  set_pass_plan(program, scene, frame_values_);
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
-  const ProcedureCode& triangle = program.procedure(Procedure::triangle);
-  workload_.expressions = triangle.expressions;
-  workload_.lights = geometry_.lights();
-  workload_.packet_words = packet_words(triangle.expressions);
-  if (workload_.packet_words + 1 > static_cast<std::uint64_t>(config.renderer.queue_words)) {
-    throw std::runtime_error(fmt::format(
-        "key 'renderer.queue_words' = {} is too small: one triangle packet of '{}' takes {} "
-        "words plus a header word",
-        config.renderer.queue_words, program.name, workload_.packet_words));
-  }
-  // Every other kind (the sphere): its procedure may use only what its set-up computes, its
-  // packet must fit a queue, and a scene with such primitives needs the procedure.
-  for (std::size_t k = 0; k < primitive_kinds().size(); ++k) {
-    const PrimitiveKind& kind = *primitive_kinds()[k];
-    const ProcedureCode& code = program.procedure(kind.procedure());
-    for (int e = 0; e < static_cast<int>(Expression::count); ++e) {
-      if (code.expressions.test(e) && !kind.supplies(static_cast<Expression>(e))) {
-        throw std::runtime_error(fmt::format(
-            "program '{}': procedure '{}' uses expression '{}', which the {} kind does not supply",
-            program.name, kProcedureNames[static_cast<int>(kind.procedure())], kExpressions[e].name,
-            kind.name()));
-      }
-    }
-    if (k == kTriangleKind) continue;
-    const int n = kind.count(scene);
-    if (n > 0 && !code.defined) {
-      throw std::runtime_error(
-          fmt::format("scene '{}' has {} {}s, but program '{}' defines no '{}' procedure (phong "
-                      "and threshold draw them)",
-                      scene.name, n, kind.name(), program.name,
-                      kProcedureNames[static_cast<int>(kind.procedure())]));
-    }
-    if (packet_words(code.expressions) + 1 >
-        static_cast<std::uint64_t>(config.renderer.queue_words)) {
-      throw std::runtime_error(fmt::format(
-          "key 'renderer.queue_words' = {} is too small: one {} packet of '{}' takes {} words "
-          "plus a header word",
-          config.renderer.queue_words, kind.name(), program.name, packet_words(code.expressions)));
-    }
-  }
-  RingParams rp;
-  rp.channels = config.ring.channels;
-  rp.word_bits = config.ring.word_bits;
-  rp.clock_hz = config.ring.clock_hz;
-  rp.hop_latency_cycles = config.ring.hop_latency_cycles;
-  ring_ = std::make_unique<Ring>("ring", rp, gps + renderers + 1);
+  ring_ = std::make_unique<Ring>("ring", ring_params(config), plan_.ring_stops());
   frame_buffer_ = std::make_unique<FrameBuffer>("frame_buffer", config.screen.width,
                                                 config.screen.height, config.regions());
   for (int k = 0; k < renderers; ++k) {
     renderers_.push_back(std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, *this));
   }
-  // The host spreads the display list over the GPs in contiguous blocks, so that the
-  // concatenation of the GPs' bins is in display-list order.
-  const auto n = static_cast<long long>(geometry_.display_list().size());
   for (int k = 0; k < gps; ++k) {
-    const int first = static_cast<int>(n * k / gps);
-    const int last = static_cast<int>(n * (k + 1) / gps);
-    if (last > first) ++busy_gps_;
+    const auto [first, last] = plan_.gp_block(k);
     gps_.push_back(
         std::make_unique<GraphicsProcessor>(fmt_name("gp", k).c_str(), k, first, last, *this));
   }
@@ -166,28 +38,6 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
 
 Machine::~Machine() = default;
 
-void Machine::use_setup_memo(SetupMemo& memo) {
-  if (&memo.scene() != &scene_) {
-    throw std::invalid_argument(
-        fmt::format("a set-up memo of scene '{}' given to a machine of scene '{}'",
-                    memo.scene().name, scene_.name));
-  }
-  SetupMemo::Key key;
-  key.params = geometry_.params();
-  for (const PrimitiveKind* k : primitive_kinds()) {
-    key.expressions.push_back(program_.procedure(k->procedure()).expressions);
-    key.words.push_back(packet_words(key.expressions.back()));
-  }
-  memo.bind(key, geometry_.display_list().size());
-  setup_memo_ = &memo;
-}
-
-std::uint64_t Machine::bin_map_words() const {
-  const auto bits = static_cast<std::uint64_t>(config_.regions());
-  const auto word = static_cast<std::uint64_t>(config_.ring.word_bits);
-  return 1 + (bits + word - 1) / word;
-}
-
 void Machine::record_timeline(bool on) {
   timeline_on_ = on;
   ring_->record_messages(on);
@@ -195,17 +45,6 @@ void Machine::record_timeline(bool on) {
 
 std::string Machine::fmt_name(const char* base, int k) {
   return std::string(base) + std::to_string(k);
-}
-
-std::uint64_t Machine::packet_words(const ExpressionSet& expressions) const {
-  return pp5::packet_words(
-      expressions, coefficient_words(config_.evaluator.coefficient_bits, config_.ring.word_bits));
-}
-
-std::uint64_t Machine::region_words() const {
-  const std::uint64_t bits = static_cast<std::uint64_t>(config_.renderer.region_width) *
-                             config_.renderer.region_height * config_.frame_buffer.bits_per_pixel;
-  return (bits + config_.ring.word_bits - 1) / config_.ring.word_bits;
 }
 
 }  // namespace pp5

@@ -30,12 +30,8 @@
 #include <systemc>
 #include <vector>
 
-#include "firmware/assembler/assembler.hpp"
-#include "models/config/machine_config.hpp"
-#include "models/display_list/scene.hpp"
 #include "models/frame_buffer/image.hpp"
-#include "models/gp/geometry.hpp"
-#include "models/gp/i860.hpp"
+#include "models/machine_plan.hpp"
 #include "models/renderer/packet.hpp"
 #include "models/renderer/region_scheduler.hpp"
 #include "models/renderer/region_stream.hpp"
@@ -58,31 +54,22 @@ struct TimelineSlice {
   sc_core::sc_time end;
 };
 
-// The machine configuration seen by each plain-C++ part.
-GeometryParams geometry_params(const MachineConfig& config);
-TimingParams timing_params(const MachineConfig& config);
-I860Params i860_params(const MachineConfig& config);
-struct RendererBoardParams;
-class BoardObserver;
-RendererBoardParams board_params(const MachineConfig& config);
-AssemblerOptions assembler_options(const MachineConfig& config);
-
 class Machine : public sc_core::sc_module {
  public:
   Machine(sc_core::sc_module_name name, const MachineConfig& config, const Scene& scene,
           const Program& program);
   ~Machine() override;
 
-  const MachineConfig& config() const { return config_; }
-  const Program& program() const { return program_; }
-  const Scene& scene() const { return scene_; }
-  const GeometryEngine& geometry() const { return geometry_; }
-  const TimingParams& timing() const { return timing_; }
-  // The values of clear, pass and shade, and of each light's `light` procedure; a packet
-  // binds frame.parameters when it runs (RegionStream); it never carries them.
-  const FrameValues& frame_values() const { return frame_values_; }
-  // Times the GPs send each region's triangles this frame (Program::pass_count).
-  int passes() const { return RegionStream::pass_count(program_, frame_values_); }
+  // What the units share, without SystemC (models/machine_plan.hpp); the accessors below
+  // forward to it.
+  const MachinePlan& plan() const { return plan_; }
+  const MachineConfig& config() const { return plan_.config(); }
+  const Program& program() const { return plan_.program(); }
+  const Scene& scene() const { return plan_.scene(); }
+  const GeometryEngine& geometry() const { return plan_.geometry(); }
+  const TimingParams& timing() const { return plan_.timing(); }
+  const FrameValues& frame_values() const { return plan_.frame_values(); }
+  int passes() const { return plan_.passes(); }
 
   Ring& ring() { return *ring_; }
   FrameBuffer& frame_buffer() { return *frame_buffer_; }
@@ -91,26 +78,23 @@ class Machine : public sc_core::sc_module {
   int gp_count() const { return static_cast<int>(gps_.size()); }
   // GPs whose share of the display list is not empty: only these take part in the frame
   // (the others, when there are fewer triangles than GPs, do nothing and send nothing).
-  int busy_gp_count() const { return busy_gps_; }
+  int busy_gp_count() const { return plan_.busy_gp_count(); }
   int renderer_count() const { return static_cast<int>(renderers_.size()); }
 
   // Ring stops: GPs first, then Renderers, then the frame buffer.
-  int gp_stop(int k) const { return k; }
-  int renderer_stop(int k) const { return gp_count() + k; }
-  int frame_buffer_stop() const { return gp_count() + renderer_count(); }
-  int ring_stops() const { return frame_buffer_stop() + 1; }
+  int gp_stop(int k) const { return plan_.gp_stop(k); }
+  int renderer_stop(int k) const { return plan_.renderer_stop(k); }
+  int frame_buffer_stop() const { return plan_.frame_buffer_stop(); }
+  int ring_stops() const { return plan_.ring_stops(); }
 
   // Which Renderer renders which region, and which GPs send it packets.
   RegionScheduler& scheduler() { return scheduler_; }
   const RegionScheduler& scheduler() const { return scheduler_; }
   // The Renderers' ring stops, in Renderer order: where a bin map goes.
   const std::vector<int>& renderer_stops() const { return renderer_stops_; }
-  // Words of one bin map on the ring: a header word and one bit per region.
-  std::uint64_t bin_map_words() const;
-
-  // The GP cost model and what the firmware asks of each triangle.
-  const I860Model& i860() const { return i860_; }
-  const GpWorkload& gp_workload() const { return workload_; }
+  std::uint64_t bin_map_words() const { return plan_.bin_map_words(); }
+  const I860Model& i860() const { return plan_.i860(); }
+  const GpWorkload& gp_workload() const { return plan_.gp_workload(); }
 
   // The timeline: when on, modules record slices of activity.
   void record_timeline(bool on);
@@ -120,37 +104,25 @@ class Machine : public sc_core::sc_module {
     if (timeline_on_) slices_.push_back({unit, index, std::move(name), start, end});
   }
   const std::vector<TimelineSlice>& slices() const { return slices_; }
-  // Ring words of a packet carrying `expressions`, each by its form (models/gp/expressions.hpp).
-  std::uint64_t packet_words(const ExpressionSet& expressions) const;
-
-  // Keep the GPs' set-up in `memo` for later frames of the same scene, or replay it from
-  // there if an earlier frame's key matches (models/gp/setup_memo.hpp); before the frame
-  // runs. The memo must outlive the frame. Throws if it was made for another scene.
-  void use_setup_memo(SetupMemo& memo);
-  SetupMemo* setup_memo() const { return setup_memo_; }
-  std::uint64_t region_words() const;
+  std::uint64_t packet_words(const ExpressionSet& expressions) const {
+    return plan_.packet_words(expressions);
+  }
+  std::uint64_t region_words() const { return plan_.region_words(); }
+  void use_setup_memo(SetupMemo& memo) { plan_.use_setup_memo(memo); }
+  SetupMemo* setup_memo() const { return plan_.setup_memo(); }
 
  private:
   static std::string fmt_name(const char* base, int k);
 
-  MachineConfig config_;
-  const Scene& scene_;
-  const Program& program_;
-  GeometryEngine geometry_;
-  TimingParams timing_;
-  FrameValues frame_values_;
+  MachinePlan plan_;
   std::unique_ptr<Ring> ring_;
   std::unique_ptr<FrameBuffer> frame_buffer_;
   std::vector<std::unique_ptr<Renderer>> renderers_;
   std::vector<std::unique_ptr<GraphicsProcessor>> gps_;
-  I860Model i860_;
-  GpWorkload workload_;
   RegionScheduler scheduler_;
   std::vector<int> renderer_stops_;
-  int busy_gps_ = 0;
   bool timeline_on_ = false;
   std::vector<TimelineSlice> slices_;
-  SetupMemo* setup_memo_ = nullptr;
 };
 
 }  // namespace pp5

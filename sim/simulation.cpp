@@ -14,6 +14,7 @@
 #include "firmware/assembler/program_statistics.hpp"
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/graphics_processor.hpp"
+#include "models/gp/setup_memo.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/analytic.hpp"
 #include "models/renderer/execute_pixels.hpp"
@@ -246,6 +247,9 @@ void check_memory(const MachineConfig& config, const Scene& scene, const Program
   const double packets = static_cast<double>(scene.mesh.triangles.size()) * (sizeof(Packet) + 64);
   const double frame = 2.0 * config.screen.width * config.screen.height * 3;
   const double need = board * boards + packets + frame;
+  // Below this a host always has the room, and asking it (reading /proc) would cost a sweep
+  // point more than the analytic model's sums.
+  if (need < 256.0 * 1024 * 1024) return;
   const double available = host_bytes_available();
   if (need > 0.9 * available) {
     const double gib = 1024.0 * 1024 * 1024;
@@ -337,20 +341,40 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
                            int threads, SetupMemo* memo) {
   const auto t0 = std::chrono::steady_clock::now();
   check_memory(config, scene, program, threads);
-  fresh_kernel();
-  auto machine = std::make_unique<Machine>("pp5", config, scene, program);
-  if (memo != nullptr) machine->use_setup_memo(*memo);
-  auto a = std::make_shared<const AnalyticTiming>(analytic_timing(*machine));
+  // Without a memo from the caller, one for this frame: the model sets up from a memo.
+  std::unique_ptr<SetupMemo> own;
+  if (memo == nullptr) memo = (own = std::make_unique<SetupMemo>(scene)).get();
+  MachinePlan plan(config, scene, program);
+  plan.use_setup_memo(*memo);
+  auto a = std::make_shared<const AnalyticTiming>(analytic_timing(plan));
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  std::vector<const std::vector<RegionWork>*> work;
-  for (const auto& w : a->work) work.push_back(&w);
-  execute_pixels(*machine, work, threads);
+  FrameResult result;
+  // Pixels need the Renderer boards and the frame buffer: only then is the Machine built.
+  if (config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none) {
+    fresh_kernel();
+    Machine machine("pp5", config, scene, program);
+    machine.use_setup_memo(*memo);
+    const std::vector<std::vector<RegionWork>> regions = analytic_work(*a, plan);
+    std::vector<const std::vector<RegionWork>*> work;
+    for (const auto& w : regions) work.push_back(&w);
+    execute_pixels(machine, work, threads);
+    result.image = machine.frame_buffer().take_image();
+  }
+  for (std::size_t k = 0; k < a->regions.size(); ++k) {
+    for (int r : a->regions[k]) {
+      // Regions at the right and bottom edges may reach past the screen: clipped.
+      const int x0 = (r % config.regions_x()) * config.renderer.region_width;
+      const int y0 = (r / config.regions_x()) * config.renderer.region_height;
+      result.regions.push_back(
+          {r, x0, y0, std::min(config.renderer.region_width, config.screen.width - x0),
+           std::min(config.renderer.region_height, config.screen.height - y0), static_cast<int>(k),
+           a->region_cycles[static_cast<std::size_t>(r)]});
+    }
+  }
   const double pixel_seconds = seconds_since(t1);
   const double host_seconds = seconds_since(t0);
 
-  FrameResult result;
-  result.image = machine->frame_buffer().take_image();
   const double T = a->frame_seconds;
   result.frame_seconds = T;
   const auto triangles = static_cast<std::int64_t>(scene.mesh.triangles.size());
@@ -423,7 +447,7 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
                   "Cycles executing micro-instructions, decoding packets, copying out",
                   [a, k] { return static_cast<std::int64_t>(a->renderer_busy_cycles[k]); });
     s.add_integer(p + "regions", u::count, "Regions it rendered",
-                  [a, k] { return static_cast<std::int64_t>(a->work[k].size()); });
+                  [a, k] { return static_cast<std::int64_t>(a->regions[k].size()); });
     s.add_real(p + "utilisation", u::ratio, "busy time / frame time", [util] { return util; });
   }
   s.add_integer("renderers_total.busy_cycles", u::array_cycles, "busy_cycles summed",
@@ -474,7 +498,7 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
              "The largest of gp_seconds, ring_seconds and renderer_seconds: GPs, ring or Renderers",
              [attribution] { return attribution->bottleneck; });
   const double gps = static_cast<double>(std::max<std::size_t>(1, a->gps.size()));
-  const double renderers = static_cast<double>(std::max<std::size_t>(1, a->work.size()));
+  const double renderers = static_cast<double>(std::max<std::size_t>(1, a->regions.size()));
   s.add_real("timing.gp_utilisation_mean", u::ratio, "Mean of gp.N.utilisation",
              [gp_busy_sum, gps, T] { return T > 0 ? gp_busy_sum / gps / T : 0; });
   s.add_real("timing.gp_utilisation_max", u::ratio, "Largest gp.N.utilisation",
@@ -514,7 +538,6 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
                            "geometry)");
   s.freeze();
   result.stats_json = s.to_json();
-  machine.reset();
   return result;
 }
 

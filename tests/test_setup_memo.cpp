@@ -1,12 +1,16 @@
 // The GPs' set-up kept from frame to frame (models/gp/setup_memo.hpp): a run of configurations
 // that replays it gives the same statistics and images as one that sets every frame up afresh.
 #include <catch2/catch.hpp>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "models/gp/graphics_processor.hpp"
 #include "models/gp/setup_memo.hpp"
+#include "models/machine_plan.hpp"
+#include "models/renderer/packet.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 #include "tests/support.hpp"
@@ -121,5 +125,82 @@ TEST_CASE("setup memo: spheres, adjacency-reading expressions and multipass prog
       check_replay(configured(sets), scene, program_name, memo);
     }
     CHECK(memo.reuses() == 2);
+  }
+}
+
+TEST_CASE("setup memo: its summary counts what the GPs' geometry passes make", "[setup_memo]") {
+  // A torus cut by the screen's edge (clipped and culled primitives count something) over an
+  // uneven number of GPs, so that blocks end between the summary's checkpoints.
+  MachineConfig c = configured({"screen.width=200", "gp.cull_back_faces=1"});
+  const Scene scene = make_builtin_scene("torus");
+  const Program program = load_program("threshold", c);
+  SetupMemo memo(scene);
+  MachinePlan plan(c, scene, program);
+  plan.use_setup_memo(memo);
+  const int n = static_cast<int>(plan.geometry().display_list().size());
+  const int gps = 7;
+  std::vector<std::vector<std::shared_ptr<const Packet>>> all(
+      static_cast<std::size_t>(c.regions()));
+  std::vector<GpStats> stats(gps);
+  std::vector<std::pair<int, int>> blocks;
+  for (int k = 0; k < gps; ++k) {
+    const int first = n * k / gps, last = n * (k + 1) / gps;
+    blocks.emplace_back(first, last);
+    std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
+    geometry_pass(plan, first, last, stats[static_cast<std::size_t>(k)], bins);
+    for (std::size_t r = 0; r < bins.size(); ++r)
+      all[r].insert(all[r].end(), bins[r].begin(), bins[r].end());
+  }
+  REQUIRE(memo.complete());
+  const SetupMemo::Summary& s = memo.summary(c.regions());
+  // Each region's packets, in display-list order, are the bins' (the same packets).
+  std::uint64_t packets = 0;
+  for (int r = 0; r < c.regions(); ++r) {
+    const auto i = static_cast<std::size_t>(r);
+    REQUIRE(s.region_first[i + 1] - s.region_first[i] == all[i].size());
+    for (std::size_t k = 0; k < all[i].size(); ++k) {
+      CHECK(s.region_packets[s.region_first[i] + k]->get() == all[i][k].get());
+      CHECK(s.region_primitive[s.region_first[i] + k] == all[i][k]->primitive);
+    }
+    std::uint32_t by_signature = 0;
+    for (std::uint32_t g = s.signature_first[i]; g < s.signature_first[i + 1]; ++g)
+      by_signature += s.signatures[g].count;
+    CHECK(by_signature == all[i].size());
+    packets += all[i].size();
+  }
+  CHECK(packets > 0);
+  // Each GP's classes add up to its pieces and packets; its counted primitives to its counts.
+  bool counted = false;
+  std::vector<std::uint32_t> in_class;
+  for (int k = 0; k < gps; ++k) {
+    const auto [first, last] = blocks[static_cast<std::size_t>(k)];
+    const GpStats& st = stats[static_cast<std::size_t>(k)];
+    s.count_classes(first, last, in_class);
+    std::uint64_t primitives = 0, pieces = 0, placed = 0;
+    for (std::size_t cl = 0; cl < in_class.size(); ++cl) {
+      primitives += in_class[cl];
+      pieces += static_cast<std::uint64_t>(s.classes[cl].tally.pieces) * in_class[cl];
+      placed += static_cast<std::uint64_t>(s.classes[cl].tally.regions) * in_class[cl];
+    }
+    CHECK(primitives == static_cast<std::uint64_t>(last - first));
+    CHECK(pieces == st.screen_triangles);
+    CHECK(placed == st.packets);
+    SetupCounts sum;
+    for (const auto& [i, counts] : s.counted) {
+      if (i >= first && i < last) sum += counts;
+    }
+    CHECK(sum.clipped_away == st.setup.clipped_away);
+    CHECK(sum.culled == st.setup.culled);
+    CHECK(sum.no_pixels == st.setup.no_pixels);
+    counted = counted || st.setup.culled > 0 || st.setup.clipped_away > 0;
+  }
+  CHECK(counted);
+  // Any block, against a count one primitive at a time.
+  for (const auto& [first, last] : std::vector<std::pair<int, int>>{
+           {0, 0}, {0, 1}, {63, 64}, {64, 128}, {1, n - 1}, {100, 1000}, {n - 65, n}, {0, n}}) {
+    s.count_classes(first, last, in_class);
+    std::vector<std::uint32_t> brute(s.classes.size(), 0);
+    for (int i = first; i < last; ++i) ++brute[s.class_of[static_cast<std::size_t>(i)]];
+    CHECK(in_class == brute);
   }
 }

@@ -66,7 +66,22 @@ void GraphicsProcessor::spend(GpClocks clocks) {
   wait(clock_ * static_cast<double>(clocks.count));
 }
 
-void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
+GpWorkload kind_workload(const MachinePlan& plan, const PrimitiveKind& kind) {
+  GpWorkload w = plan.gp_workload();
+  w.expressions = plan.program().procedure(kind.procedure()).expressions;
+  w.packet_words = plan.packet_words(w.expressions);
+  return w;
+}
+
+PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
+                             const GpWorkload& workload, const PrimitiveTally& tally) {
+  PrimitiveCost c;
+  c.ops = kind.operations(workload, tally);
+  c.clocks = plan.i860().clocks(c.ops, 1);
+  return c;
+}
+
+void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
                    std::vector<std::vector<std::shared_ptr<const Packet>>>& bins) {
   const MachineConfig& config = machine.config();
   const GeometryEngine& geometry = machine.geometry();
@@ -79,29 +94,19 @@ void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
     GpWorkload workload;
     // The operations and clocks of the tallies met so far: they depend on the workload and
     // the tally alone (PrimitiveKind's contract), and most primitives share a few tallies.
-    struct Cost {
-      PrimitiveTally tally;
-      OpCounts ops;
-      GpClocks clocks;
-    };
-    std::vector<Cost> costs;
-    const Cost& cost(const PrimitiveTally& t, const I860Model& i860) {
-      for (const Cost& c : costs) {
-        if (c.tally.pieces == t.pieces && c.tally.setups == t.setups &&
-            c.tally.regions == t.regions)
+    std::vector<std::pair<PrimitiveTally, PrimitiveCost>> costs;
+    const PrimitiveCost& cost(const PrimitiveTally& t, const MachinePlan& plan) {
+      for (const auto& [tally, c] : costs) {
+        if (tally.pieces == t.pieces && tally.setups == t.setups && tally.regions == t.regions)
           return c;
       }
-      const OpCounts ops = kind->operations(workload, t);
-      costs.push_back({t, ops, i860.clocks(ops, 1)});
-      return costs.back();
+      costs.emplace_back(t, primitive_cost(plan, *kind, workload, t));
+      return costs.back().second;
     }
   };
   std::vector<KindState> kinds;
   for (const PrimitiveKind* k : primitive_kinds()) {
-    GpWorkload w = machine.gp_workload();
-    w.expressions = machine.program().procedure(k->procedure()).expressions;
-    w.packet_words = machine.packet_words(w.expressions);
-    kinds.push_back({k, k->start(geometry), w, {}});
+    kinds.push_back({k, k->start(geometry), kind_workload(machine, *k), {}});
   }
 
   // A bin per region: the packets this GP sends it, in display-list order. With a multipass
@@ -154,9 +159,9 @@ void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
         if (memo != nullptr) memo->place(std::move(packet), regions);
       }
       stats.setup += counts;
-      if (memo != nullptr) memo->end(i, tally, counts);
+      if (memo != nullptr) memo->end(i, ref.kind, tally, counts);
     }
-    const KindState::Cost& cost = k.cost(tally, machine.i860());
+    const PrimitiveCost& cost = k.cost(tally, machine);
     stats.ops += cost.ops;
     stats.geometry += cost.clocks;
   }
@@ -171,7 +176,7 @@ void GraphicsProcessor::run() {
   }
   const MachineConfig& config = machine_.config();
   std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
-  geometry_pass(machine_, first_, last_, stats_, bins);
+  geometry_pass(machine_.plan(), first_, last_, stats_, bins);
   // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
   stats_.busy += stats_.geometry;
   wait(clock_ * static_cast<double>(stats_.geometry.count));

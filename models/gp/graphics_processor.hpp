@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/units.hpp"
+#include "models/gp/primitive_kind.hpp"
 #include "models/machine.hpp"
 #include "models/ring/ring.hpp"
 
@@ -80,12 +81,24 @@ class GraphicsProcessor : public sc_core::sc_module {
       {sc_core::SC_ZERO_TIME, GpActivity::compute}};
 };
 
+// What the cost model charges for one primitive of `kind`: the plan's workload with the
+// expressions of the kind's procedure and its packet's words.
+GpWorkload kind_workload(const MachinePlan& plan, const PrimitiveKind& kind);
+// The i860 operations of one primitive of `kind` with `tally`, and their clocks: they depend
+// on nothing else (PrimitiveKind's contract).
+struct PrimitiveCost {
+  OpCounts ops;
+  GpClocks clocks{};
+};
+PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
+                             const GpWorkload& workload, const PrimitiveTally& tally);
+
 // A GP's geometry phase as plain C++ (no simulated time): transforms, clips, sets up and
 // bins the display-list range [first, last), adding its operations, i860 geometry clocks,
 // packets and set-up counts to `stats` and leaving one bin per region in `bins`, each in
 // display-list order. GraphicsProcessor::run and the analytic timing model
 // (models/renderer/analytic.hpp) both use it, so both see the same packets and clocks.
-void geometry_pass(const Machine& machine, int first, int last, GpStats& stats,
+void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
                    std::vector<std::vector<std::shared_ptr<const Packet>>>& bins);
 
 // Registers setup.*: the packets and the set-up counts summed over `gps`.

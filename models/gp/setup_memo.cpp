@@ -1,5 +1,8 @@
 #include "models/gp/setup_memo.hpp"
 
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
 #include <utility>
 
 namespace pp5 {
@@ -22,6 +25,8 @@ bool SetupMemo::bind(const Key& key, std::size_t primitives) {
   records_.assign(primitives, Record{});
   placed_.clear();
   regions_.clear();
+  filled_ = 0;
+  summary_.reset();
   return false;
 }
 
@@ -40,12 +45,118 @@ void SetupMemo::place(std::shared_ptr<const Packet> packet, const std::vector<in
   placed_.push_back(std::move(p));
 }
 
-void SetupMemo::end(int primitive, const PrimitiveTally& tally, const SetupCounts& counts) {
+void SetupMemo::end(int primitive, int kind, const PrimitiveTally& tally,
+                    const SetupCounts& counts) {
   Record& r = records_[static_cast<std::size_t>(primitive)];
+  r.kind = kind;
   r.count = static_cast<std::uint32_t>(placed_.size()) - r.first;
   r.tally = tally;
   r.counts = counts;
+  if (!r.filled) ++filled_;
   r.filled = true;
+}
+
+namespace {
+
+// Whether a primitive's set-up counted anything (SetupCounts is all 64-bit counts, with no
+// padding: geometry.cpp asserts its size).
+bool counted_any(const SetupCounts& c) {
+  static const SetupCounts zero{};
+  return std::memcmp(&c, &zero, sizeof c) != 0;
+}
+
+}  // namespace
+
+const SetupMemo::Summary& SetupMemo::summary(int regions) {
+  if (!complete()) throw std::logic_error("SetupMemo::summary: a primitive has no record yet");
+  if (summary_ && summary_->region_first.size() == static_cast<std::size_t>(regions) + 1)
+    return *summary_;
+  auto s = std::make_unique<Summary>();
+  const std::size_t n = records_.size();
+  s->class_of.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Record& r = records_[i];
+    std::size_t c = 0;
+    while (c < s->classes.size() &&
+           !(s->classes[c].kind == r.kind && s->classes[c].tally.pieces == r.tally.pieces &&
+             s->classes[c].tally.setups == r.tally.setups &&
+             s->classes[c].tally.regions == r.tally.regions)) {
+      ++c;
+    }
+    if (c == s->classes.size()) {
+      if (c > 0xffff) throw std::length_error("SetupMemo::summary: over 65,535 tally classes");
+      s->classes.push_back({r.kind, r.tally});
+    }
+    s->class_of[i] = static_cast<std::uint16_t>(c);
+    if (counted_any(r.counts)) s->counted.emplace_back(static_cast<int>(i), r.counts);
+  }
+  // A checkpoint at every kCheckpoint-th primitive, and one at the end.
+  std::vector<std::uint32_t> running(s->classes.size(), 0);
+  for (std::size_t i = 0; i <= n; ++i) {
+    if (i % Summary::kCheckpoint == 0)
+      s->checkpoints.insert(s->checkpoints.end(), running.begin(), running.end());
+    if (i < n) ++running[s->class_of[i]];
+  }
+  // Region by region: a count pass, then a fill pass in display-list order.
+  s->region_first.assign(static_cast<std::size_t>(regions) + 1, 0);
+  for (int region : regions_) ++s->region_first[static_cast<std::size_t>(region) + 1];
+  for (int r = 0; r < regions; ++r) s->region_first[r + 1] += s->region_first[r];
+  s->region_primitive.resize(regions_.size());
+  s->region_packets.resize(regions_.size());
+  std::vector<std::uint32_t> next(s->region_first.begin(), s->region_first.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Record& r = records_[i];
+    for (std::uint32_t p = r.first; p < r.first + r.count; ++p) {
+      const Placed& placed = placed_[p];
+      for (std::uint32_t q = placed.first; q < placed.first + placed.count; ++q) {
+        const std::uint32_t k = next[static_cast<std::size_t>(regions_[q])]++;
+        s->region_primitive[k] = static_cast<int>(i);
+        s->region_packets[k] = &placed.packet;
+      }
+    }
+  }
+  s->signature_first.assign(static_cast<std::size_t>(regions) + 1, 0);
+  for (int r = 0; r < regions; ++r) {
+    const std::size_t begin = s->signatures.size();
+    for (std::uint32_t k = s->region_first[r]; k < s->region_first[r + 1]; ++k) {
+      const Packet& p = **s->region_packets[k];
+      auto same = [&p](const Summary::Signature& g) {
+        return g.example->procedure == p.procedure && g.example->group == p.group &&
+               g.example->back == p.back;
+      };
+      auto it =
+          std::find_if(s->signatures.begin() + static_cast<long>(begin), s->signatures.end(), same);
+      if (it == s->signatures.end()) {
+        s->signatures.push_back({&p, 1});
+      } else {
+        ++it->count;
+      }
+    }
+    s->signature_first[static_cast<std::size_t>(r) + 1] =
+        static_cast<std::uint32_t>(s->signatures.size());
+  }
+  summary_ = std::move(s);
+  return *summary_;
+}
+
+void SetupMemo::Summary::count_classes(int first, int last, std::vector<std::uint32_t>& out) const {
+  const std::size_t m = classes.size();
+  out.assign(m, 0);
+  if (last <= first) return;
+  // The counts before `last` minus those before `first`: each from the checkpoint at or
+  // below it, then the primitives from the checkpoint on.
+  auto add = [&](int at, bool plus) {
+    const std::size_t j = static_cast<std::size_t>(at / kCheckpoint);
+    for (std::size_t c = 0; c < m; ++c) {
+      out[c] = plus ? out[c] + checkpoints[j * m + c] : out[c] - checkpoints[j * m + c];
+    }
+    for (int i = static_cast<int>(j) * kCheckpoint; i < at; ++i) {
+      std::uint32_t& o = out[class_of[static_cast<std::size_t>(i)]];
+      o = plus ? o + 1 : o - 1;
+    }
+  };
+  add(last, true);
+  add(first, false);
 }
 
 }  // namespace pp5

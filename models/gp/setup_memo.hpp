@@ -21,6 +21,9 @@
 //  - It serves one scene, the one it was made for; a Machine of another scene is refused.
 //    The scene is known by its address, so it must not change while the memo serves it
 //    (sweep and validate hold theirs const).
+//  - summary() sums the records up for a model that needs counts, not packets (the analytic
+//    timing model, models/renderer/analytic.hpp); it needs every primitive's record
+//    (complete()) and lasts until the key changes.
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -45,10 +48,11 @@ class SetupMemo {
     std::uint32_t first = 0;
     std::uint32_t count = 0;
   };
-  // One primitive: its tally, what its transform and set-ups counted, and its packets
+  // One primitive: its kind, its tally, what its transform and set-ups counted, and its packets
   // placed[first, first + count).
   struct Record {
     bool filled = false;
+    int kind = 0;  // its primitive kind: index in primitive_kinds()
     PrimitiveTally tally;
     SetupCounts counts;
     std::uint32_t first = 0;
@@ -56,6 +60,9 @@ class SetupMemo {
   };
 
   explicit SetupMemo(const Scene& scene) : scene_(&scene) {}
+  // Its summary points into its records: not copied.
+  SetupMemo(const SetupMemo&) = delete;
+  SetupMemo& operator=(const SetupMemo&) = delete;
 
   const Scene& scene() const { return *scene_; }
   // Keeps the records if `key` is the memo's, else empties it for a display list of
@@ -71,7 +78,48 @@ class SetupMemo {
   // Filling primitive `primitive`'s record: begin, then place each packet, then end.
   void begin(int primitive);
   void place(std::shared_ptr<const Packet> packet, const std::vector<int>& regions);
-  void end(int primitive, const PrimitiveTally& tally, const SetupCounts& counts);
+  void end(int primitive, int kind, const PrimitiveTally& tally, const SetupCounts& counts);
+
+  // Whether every primitive's record is filled.
+  bool complete() const { return filled_ == records_.size(); }
+
+  // The records by what the GPs' costs and the Renderers' cycles depend on. A GP's share of
+  // the display list is a contiguous block, so each sum over a block comes from a few
+  // counts, not from one step per primitive.
+  struct Summary {
+    // The distinct (kind, tally) pairs met, each with the primitives of it: a GP's i860
+    // operations depend on nothing else (PrimitiveKind::operations).
+    struct TallyClass {
+      int kind = 0;
+      PrimitiveTally tally;
+    };
+    std::vector<TallyClass> classes;
+    std::vector<std::uint16_t> class_of;  // per primitive
+    // Per class, the primitives of it before primitive kCheckpoint * j:
+    // checkpoints[j * classes.size() + c].
+    static constexpr int kCheckpoint = 64;
+    std::vector<std::uint32_t> checkpoints;
+    // The primitives whose set-up counted something (most count nothing), in order.
+    std::vector<std::pair<int, SetupCounts>> counted;
+    // Per region, its packets in display-list order: packet k of region r is
+    // region_packets[region_first[r] + k], from primitive region_primitive[...].
+    std::vector<std::uint32_t> region_first;  // regions + 1
+    std::vector<int> region_primitive;
+    std::vector<const std::shared_ptr<const Packet>*> region_packets;
+    // Per region, its packets by what a Renderer's cycles for one depend on (procedure,
+    // solid, facing): signature_first[r] .. signature_first[r + 1] into `signatures`.
+    struct Signature {
+      const Packet* example = nullptr;  // one packet of the signature
+      std::uint32_t count = 0;
+    };
+    std::vector<std::uint32_t> signature_first;  // regions + 1
+    std::vector<Signature> signatures;
+
+    // Per class, the primitives of it in [first, last), into `out` (classes.size()).
+    void count_classes(int first, int last, std::vector<std::uint32_t>& out) const;
+  };
+  // Built on first use after the memo is complete; `regions` is the frame's region count.
+  const Summary& summary(int regions);
 
   // Frames bound with a matching key (bind returned true), for tests and reports.
   std::uint64_t reuses() const { return reuses_; }
@@ -83,6 +131,8 @@ class SetupMemo {
   std::vector<Record> records_;
   std::vector<Placed> placed_;
   std::vector<int> regions_;
+  std::size_t filled_ = 0;
+  std::unique_ptr<Summary> summary_;
   std::uint64_t reuses_ = 0;
 };
 

@@ -13,10 +13,12 @@
 //   drain   = the last region's trip to the frame buffer
 //
 // Contract:
-//  - The Machine must be built (its units exist) but its kernel never run: the model reads
-//    the configuration, the program, the geometry and the ring's hop delays, and runs
-//    geometry_pass for every GP's share of the display list, so its packets, set-up counts
-//    and GP clocks are exactly the event model's.
+//  - It needs no Machine, only what the units share (MachinePlan: the configuration, the
+//    program, the geometry, the ring's stops), with a set-up memo bound to it
+//    (MachinePlan::use_setup_memo). It fills the memo by geometry_pass if the memo is not
+//    complete, then sums each GP's share of the display list from the memo's summary
+//    (SetupMemo::Summary), so its packets, set-up counts and GP clocks are exactly the event
+//    model's, and a run of frames of one scene (a sweep) sets it up once.
 //  - No contention: no unit waits for another beyond the closed form (no queue-full stalls,
 //    no channel conflicts, no backing-store port stalls, coefficient loads overlapped when
 //    double-buffered); the error this makes against the event model is measured, not assumed
@@ -30,11 +32,10 @@
 #include <vector>
 
 #include "models/gp/graphics_processor.hpp"
+#include "models/machine_plan.hpp"
 #include "models/renderer/renderer.hpp"
 
 namespace pp5 {
-
-class Machine;
 
 struct AnalyticTiming {
   // Per GP (all of them, idle ones with empty statistics).
@@ -42,9 +43,10 @@ struct AnalyticTiming {
   std::vector<std::uint64_t> gp_send_clocks;  // starting its bin map and messages
   std::vector<std::uint64_t> gp_words;        // ring words it sends
   std::vector<std::uint64_t> gp_messages;
-  // Per Renderer: its regions, in the order it renders them, each with its packets in
-  // display-list order (what the event model records as RegionWork, without start cycles).
-  std::vector<std::vector<RegionWork>> work;
+  // Per Renderer: its regions, in the order it renders them (analytic_work gives their
+  // packets); per region, its busy cycles.
+  std::vector<std::vector<int>> regions;
+  std::vector<std::uint64_t> region_cycles;
   std::vector<std::uint64_t> renderer_busy_cycles;
   std::vector<std::uint64_t> renderer_packets;
   std::uint64_t ring_words = 0;
@@ -62,6 +64,12 @@ struct AnalyticTiming {
   int busiest_renderer = 0;
 };
 
-AnalyticTiming analytic_timing(Machine& machine);
+AnalyticTiming analytic_timing(const MachinePlan& plan);
+
+// The regions of `timing`, each with its packets in display-list order, per Renderer: what
+// the event model records as RegionWork (start cycles zero: traces need the event model),
+// for the boards to execute. `plan` is the one `timing` was made from, its memo unchanged.
+std::vector<std::vector<RegionWork>> analytic_work(const AnalyticTiming& timing,
+                                                   const MachinePlan& plan);
 
 }  // namespace pp5

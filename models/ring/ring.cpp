@@ -38,7 +38,7 @@ RingBooking Ring::reserve(int from, int to, std::uint64_t words, sc_core::sc_tim
 }
 
 sc_core::sc_time Ring::hop_delay(int from, int to) const {
-  return cycle_ * static_cast<double>(hops(from, to) * params_.hop_latency_cycles);
+  return ring_hop_delay(params_, cycle_, from, to, stops_);
 }
 
 void Ring::transfer(int from, int to, std::uint64_t words) {

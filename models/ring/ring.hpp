@@ -35,6 +35,14 @@ struct RingParams {
   int hop_latency_cycles = 1;
 };
 
+// Hops from stop `from` to stop `to` on a ring of `stops`, in the direction words travel.
+inline int ring_hops(int from, int to, int stops) { return ((to - from) % stops + stops) % stops; }
+// The latency of those hops: one ring cycle (`cycle`, 1 / clock_hz) per hop and latency cycle.
+inline sc_core::sc_time ring_hop_delay(const RingParams& params, sc_core::sc_time cycle, int from,
+                                       int to, int stops) {
+  return cycle * static_cast<double>(ring_hops(from, to, stops) * params.hop_latency_cycles);
+}
+
 // One message on the ring, for the timeline.
 struct RingMessage {
   int channel = 0;
@@ -112,7 +120,7 @@ class Ring : public sc_core::sc_module {
   // Time from a message's last word leaving `from` to its arrival at `to`: a message booked
   // to the farthest of several stops passes the nearer ones on the way (a broadcast).
   sc_core::sc_time hop_delay(int from, int to) const;
-  int hops(int from, int to) const { return ((to - from) % stops_ + stops_) % stops_; }
+  int hops(int from, int to) const { return ring_hops(from, to, stops_); }
 
   // Keep every message for the timeline (off by default: it costs memory).
   void record_messages(bool on) { record_ = on; }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #define SC_INCLUDE_DYNAMIC_PROCESSES
 #include <systemc>
 
@@ -306,7 +307,9 @@ SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& loa
   const Scene torus = make_builtin_scene("torus");
   // A set-up memo per workload (its program's expressions are part of the key): the points
   // that change no geometry parameter replay the torus's set-up (models/gp/setup_memo.hpp).
-  std::vector<SetupMemo> memos(workloads.size(), SetupMemo(torus));
+  std::vector<std::unique_ptr<SetupMemo>> memos;
+  for (std::size_t k = 0; k < workloads.size(); ++k)
+    memos.push_back(std::make_unique<SetupMemo>(torus));
   auto rate = [&](MachineConfig c, const SensitivityWorkload& w,
                   const std::vector<std::string>& sets) {
     c.gp.code = w.code;
@@ -318,7 +321,7 @@ SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& loa
       return std::nan("");
     }
     // The program is assembled for the point: its layout follows memory and block sizes.
-    SetupMemo& memo = memos[static_cast<std::size_t>(&w - workloads.data())];
+    SetupMemo& memo = *memos[static_cast<std::size_t>(&w - workloads.data())];
     return project_frame(c, torus, load(w.program, c), &memo).triangles_per_second;
   };
   SensitivityTable table;

@@ -94,14 +94,21 @@ int run_render(RenderOptions o) {
   const bool replacing = prepare_output_folder(o.out_dir, "--out");
 
   nlohmann::json timeline;
-  const FrameResult result = simulate_frame(config, scene, program, o.threads, {},
-                                            o.timeline.empty() ? nullptr : &timeline);
+  FrameResult result = simulate_frame(config, scene, program, o.threads, {},
+                                      o.timeline.empty() ? nullptr : &timeline);
   // All of the run's outputs, or none of them (sim/output/output_set.hpp).
   const fs::path dir(o.out_dir);
   OutputSet outputs;
-  // With fidelity.pixels=none no pixel executed: there is no image to write; regions.png
-  // needs the event model's per-region cycles (fidelity.timing=event).
+  // With fidelity.pixels=none no pixel executed: there is no image to write, and regions.png
+  // shows the regions' cycles on a black frame (the event model's frame buffer starts black;
+  // the analytic model builds none).
   const bool heat_map = !result.regions.empty();
+  if (heat_map && result.image.rgb.empty()) {
+    result.image.width = config.screen.width;
+    result.image.height = config.screen.height;
+    result.image.rgb.assign(
+        static_cast<std::size_t>(config.screen.width) * config.screen.height * 3, 0);
+  }
   // The two images are independent: encoded at once on the run's host threads.
   std::string frame_png, regions_png;
   parallel_for(2, o.threads, [&](int image) {
@@ -178,7 +185,7 @@ Command add_render_command(CLI::App& app) {
                      "Output folder for frame.png, regions.png (Renderer cycles per region as a "
                      "heat map), config.json and stats.json [out/SCENE]; a later run into the "
                      "same folder replaces them (no frame.png with --fidelity timing or "
-                     "analytic, no regions.png with analytic timing)");
+                     "analytic: regions.png then shows the cycles on a black frame)");
   render
       ->add_option("-j,--threads", o->threads,
                    "Host threads for the pixel arrays (results are identical for any number)")

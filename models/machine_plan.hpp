@@ -1,0 +1,101 @@
+#pragma once
+// What every unit of one frame shares, without a SystemC module: the configuration, the
+// scene's geometry, the program and its frame values, the GP cost model, the ring's stops
+// and the sizes of what crosses the ring. The event model's Machine holds one and builds its
+// modules around it; the analytic timing model (models/renderer/analytic.hpp) needs nothing
+// more, so a frame timed analytically builds no module and runs no kernel.
+//
+// Contract:
+//  - Constructing it checks the program against the scene and the configuration (pass plan,
+//    expressions each primitive kind supplies, packets that fit the Renderer's queue) and
+//    throws std::runtime_error naming the key or procedure, as the Machine did.
+//  - It holds references to the scene and the program: both must outlive it.
+//  - The host spreads the display list over the GPs in contiguous blocks (gp_block), so that
+//    the concatenation of the GPs' bins is in display-list order.
+#include <cstdint>
+#include <utility>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/config/machine_config.hpp"
+#include "models/display_list/scene.hpp"
+#include "models/gp/geometry.hpp"
+#include "models/gp/i860.hpp"
+#include "models/renderer/region_stream.hpp"
+#include "models/ring/ring.hpp"
+
+namespace pp5 {
+
+class SetupMemo;
+
+// The machine configuration seen by each plain-C++ part.
+GeometryParams geometry_params(const MachineConfig& config);
+TimingParams timing_params(const MachineConfig& config);
+I860Params i860_params(const MachineConfig& config);
+RingParams ring_params(const MachineConfig& config);
+struct RendererBoardParams;
+RendererBoardParams board_params(const MachineConfig& config);
+AssemblerOptions assembler_options(const MachineConfig& config);
+
+class MachinePlan {
+ public:
+  MachinePlan(const MachineConfig& config, const Scene& scene, const Program& program);
+
+  const MachineConfig& config() const { return config_; }
+  const Program& program() const { return program_; }
+  const Scene& scene() const { return scene_; }
+  const GeometryEngine& geometry() const { return geometry_; }
+  const TimingParams& timing() const { return timing_; }
+  // The values of clear, pass and shade, and of each light's `light` procedure; a packet
+  // binds frame.parameters when it runs (RegionStream); it never carries them.
+  const FrameValues& frame_values() const { return frame_values_; }
+  // Times the GPs send each region's triangles this frame (Program::pass_count).
+  int passes() const { return RegionStream::pass_count(program_, frame_values_); }
+
+  int gp_count() const { return config_.gp.count; }
+  int renderer_count() const { return config_.renderer.count; }
+  // GP k's share of the display list: primitives [first, second).
+  std::pair<int, int> gp_block(int k) const;
+  // GPs whose share is not empty: only these take part in the frame (the others, when
+  // there are fewer primitives than GPs, do nothing and send nothing).
+  int busy_gp_count() const { return busy_gps_; }
+
+  // Ring stops: GPs first, then Renderers, then the frame buffer.
+  int gp_stop(int k) const { return k; }
+  int renderer_stop(int k) const { return gp_count() + k; }
+  int frame_buffer_stop() const { return gp_count() + renderer_count(); }
+  int ring_stops() const { return frame_buffer_stop() + 1; }
+  // The ring's latency from stop `from` to stop `to` (Ring::hop_delay, without a Ring).
+  sc_core::sc_time hop_delay(int from, int to) const;
+
+  // Words of one bin map on the ring: a header word and one bit per region.
+  std::uint64_t bin_map_words() const;
+  // Ring words of a packet carrying `expressions`, each by its form (models/gp/expressions.hpp).
+  std::uint64_t packet_words(const ExpressionSet& expressions) const;
+  // Ring words of one finished region on its way to the frame buffer.
+  std::uint64_t region_words() const;
+
+  // The GP cost model and what the firmware asks of each triangle.
+  const I860Model& i860() const { return i860_; }
+  const GpWorkload& gp_workload() const { return workload_; }
+
+  // Keep the GPs' set-up in `memo` for later frames of the same scene, or replay it from
+  // there if an earlier frame's key matches (models/gp/setup_memo.hpp); before the frame
+  // runs. The memo must outlive the frame. Throws if it was made for another scene.
+  void use_setup_memo(SetupMemo& memo);
+  SetupMemo* setup_memo() const { return setup_memo_; }
+
+ private:
+  MachineConfig config_;
+  const Scene& scene_;
+  const Program& program_;
+  GeometryEngine geometry_;
+  TimingParams timing_;
+  FrameValues frame_values_;
+  I860Model i860_;
+  GpWorkload workload_;
+  RingParams ring_;
+  int busy_gps_ = 0;
+  SetupMemo* setup_memo_ = nullptr;
+};
+
+}  // namespace pp5
