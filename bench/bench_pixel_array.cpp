@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "models/pixel_array/pixel_array.hpp"
+#include "sim/host_memory.hpp"
 
 namespace {
 
@@ -157,4 +158,13 @@ BENCHMARK(BM_StreamXor32);
 
 }  // namespace
 
-BENCHMARK_MAIN();
+// The benchmarks measure frames as pp5sim runs them: with its allocator settings
+// (sim/host_memory.hpp), set before anything allocates.
+int main(int argc, char** argv) {
+  pp5::tune_host_memory();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

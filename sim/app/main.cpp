@@ -1,6 +1,4 @@
 // pp5sim: the command-line program. Each subcommand is in its own file (see commands.hpp).
-#include <malloc.h>
-#include <sys/mman.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -12,6 +10,7 @@
 #include <vector>
 
 #include "sim/app/commands.hpp"
+#include "sim/host_memory.hpp"
 #include "sim/output/output_set.hpp"
 
 namespace {
@@ -78,37 +77,12 @@ int report_parse_error(const CLI::App& app, const CLI::ParseError& e, int argc, 
   return 2;
 }
 
-// Host speed only (no result depends on it). Measured on the Banks frame (perf): page faults
-// had become the largest cost after the simulation's own work, each first touch of a 4 KB
-// page costing microseconds in a virtual machine.
-//  - A frame allocates and frees pixel arrays of hundreds of KB per Renderer board, which glibc
-//    would hand to mmap and back to the kernel when freed, so every board paid for its pages
-//    afresh: freed memory stays in the process instead (mmap and trim thresholds).
-//  - The heap is grown by 64 MB at once and advised to use transparent huge pages (where the
-//    kernel offers them on request, "madvise" mode): one fault per 2 MB instead of 512.
-//    Untouched pages cost nothing; on a kernel without them the advice is ignored. The Banks
-//    frame's page faults went from about 4,600 to about 2,000 and its wall time down by 11
-//    to 18% (perf stat -r 5, alternating with the build before).
-void tune_host_memory() {
-  mallopt(M_MMAP_THRESHOLD, 256 << 20);
-  mallopt(M_TRIM_THRESHOLD, 512 << 20);
-  constexpr std::size_t kHeap = std::size_t{64} << 20;
-  constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
-  void* grown = std::malloc(kHeap);
-  if (grown == nullptr) return;
-  const auto lo = reinterpret_cast<std::uintptr_t>(grown);
-  const std::uintptr_t from = (lo + kHuge - 1) & ~(kHuge - 1);
-  const std::uintptr_t to = (lo + kHeap) & ~(kHuge - 1);
-  std::free(grown);  // stays in the heap (below the trim threshold) for what comes next
-  if (to > from) madvise(reinterpret_cast<void*>(from), to - from, MADV_HUGEPAGE);
-}
-
 // Called from the executable's .preinit_array, which runs before any shared library's
 // initialisers: SystemC's own start-up allocation (3 MB, zeroed by its static constructor,
 // 768 page faults, about 15 ms of every run on the development machine) lands in the tuned
 // heap too. Only C library calls, which are ready by then. Not under the sanitizers, whose
 // runtimes own malloc and their own start-up.
-void preinit(int, char**, char**) { tune_host_memory(); }
+void preinit(int, char**, char**) { pp5::tune_host_memory(); }
 
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
