@@ -31,7 +31,7 @@ fastest() {
   echo "$best"
 }
 simulated() {  # the frame time a render wrote, in seconds
-  python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["frame"]["simulated_seconds"])' \
+  python3 -c 'import json,sys; print("%.9f" % json.load(open(sys.argv[1]))["frame"]["simulated_seconds"])' \
     "$1/stats.json"
 }
 
@@ -63,7 +63,7 @@ least_host_seconds() {
   local best="" t
   for k in $(seq "$runs"); do
     "$bin" render --fidelity "$1" --out "$scratch/host-$1-$k" >/dev/null
-    t=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["host"]["seconds"])' \
+    t=$(python3 -c 'import json,sys; print("%.9f" % json.load(open(sys.argv[1]))["host"]["seconds"])' \
       "$scratch/host-$1-$k/stats.json")
     if [ -z "$best" ] || [ "$(echo "$t < $best" | bc -l)" = 1 ]; then best=$t; fi
   done
@@ -98,7 +98,7 @@ median_point() {
 import glob, json, sys
 t = sorted(json.load(open(f))["host"]["timing_seconds"]
            for d in sys.argv[1:] for f in glob.glob(d + "/*/stats.json"))
-print(t[len(t) // 2])
+print(f"{t[len(t) // 2]:.9f}")  # bc reads no exponent
 PY
 }
 event_point=$(median_point timing)

@@ -204,3 +204,24 @@ TEST_CASE("setup memo: its summary counts what the GPs' geometry passes make", "
     CHECK(in_class == brute);
   }
 }
+
+TEST_CASE("setup memo: a summary of many tally classes counts a block one by one", "[setup_memo]") {
+  // More classes than the summary keeps checkpoints for (kMaxCheckpointed): no checkpoints,
+  // and every block is counted from class_of.
+  SetupMemo::Summary s;
+  const std::size_t classes = SetupMemo::Summary::kMaxCheckpointed + 44;
+  s.classes.resize(classes);
+  std::uint32_t state = 12345;
+  for (int i = 0; i < 5000; ++i) {
+    state = state * 1664525u + 1013904223u;
+    s.class_of.push_back((state >> 8) % static_cast<std::uint32_t>(classes));
+  }
+  std::vector<std::uint32_t> in_class;
+  for (const auto& [first, last] :
+       std::vector<std::pair<int, int>>{{0, 0}, {0, 5000}, {17, 4093}, {4999, 5000}}) {
+    s.count_classes(first, last, in_class);
+    std::vector<std::uint32_t> brute(classes, 0);
+    for (int i = first; i < last; ++i) ++brute[s.class_of[static_cast<std::size_t>(i)]];
+    CHECK(in_class == brute);
+  }
+}

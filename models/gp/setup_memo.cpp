@@ -1,7 +1,9 @@
 #include "models/gp/setup_memo.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
+#include <map>
 #include <stdexcept>
 #include <utility>
 
@@ -74,28 +76,31 @@ const SetupMemo::Summary& SetupMemo::summary(int regions) {
   auto s = std::make_unique<Summary>();
   const std::size_t n = records_.size();
   s->class_of.resize(n);
+  // Classes by (kind, pieces, setups, regions); most primitives have their neighbour's.
+  std::map<std::array<int, 4>, std::uint32_t> class_index;
+  std::array<int, 4> last_key{-1, -1, -1, -1};
+  std::uint32_t last_class = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Record& r = records_[i];
-    std::size_t c = 0;
-    while (c < s->classes.size() &&
-           !(s->classes[c].kind == r.kind && s->classes[c].tally.pieces == r.tally.pieces &&
-             s->classes[c].tally.setups == r.tally.setups &&
-             s->classes[c].tally.regions == r.tally.regions)) {
-      ++c;
+    const std::array<int, 4> key{r.kind, r.tally.pieces, r.tally.setups, r.tally.regions};
+    if (key != last_key) {
+      const auto [it, added] =
+          class_index.emplace(key, static_cast<std::uint32_t>(s->classes.size()));
+      if (added) s->classes.push_back({r.kind, r.tally});
+      last_key = key;
+      last_class = it->second;
     }
-    if (c == s->classes.size()) {
-      if (c > 0xffff) throw std::length_error("SetupMemo::summary: over 65,535 tally classes");
-      s->classes.push_back({r.kind, r.tally});
-    }
-    s->class_of[i] = static_cast<std::uint16_t>(c);
+    s->class_of[i] = last_class;
     if (counted_any(r.counts)) s->counted.emplace_back(static_cast<int>(i), r.counts);
   }
   // A checkpoint at every kCheckpoint-th primitive, and one at the end.
-  std::vector<std::uint32_t> running(s->classes.size(), 0);
-  for (std::size_t i = 0; i <= n; ++i) {
-    if (i % Summary::kCheckpoint == 0)
-      s->checkpoints.insert(s->checkpoints.end(), running.begin(), running.end());
-    if (i < n) ++running[s->class_of[i]];
+  if (s->classes.size() <= Summary::kMaxCheckpointed) {
+    std::vector<std::uint32_t> running(s->classes.size(), 0);
+    for (std::size_t i = 0; i <= n; ++i) {
+      if (i % Summary::kCheckpoint == 0)
+        s->checkpoints.insert(s->checkpoints.end(), running.begin(), running.end());
+      if (i < n) ++running[s->class_of[i]];
+    }
   }
   // Region by region: a count pass, then a fill pass in display-list order.
   s->region_first.assign(static_cast<std::size_t>(regions) + 1, 0);
@@ -143,6 +148,10 @@ void SetupMemo::Summary::count_classes(int first, int last, std::vector<std::uin
   const std::size_t m = classes.size();
   out.assign(m, 0);
   if (last <= first) return;
+  if (checkpoints.empty()) {  // too many classes for checkpoints
+    for (int i = first; i < last; ++i) ++out[class_of[static_cast<std::size_t>(i)]];
+    return;
+  }
   // The counts before `last` minus those before `first`: each from the checkpoint at or
   // below it, then the primitives from the checkpoint on.
   auto add = [&](int at, bool plus) {

@@ -94,10 +94,13 @@ class SetupMemo {
       PrimitiveTally tally;
     };
     std::vector<TallyClass> classes;
-    std::vector<std::uint16_t> class_of;  // per primitive
+    std::vector<std::uint32_t> class_of;  // per primitive
     // Per class, the primitives of it before primitive kCheckpoint * j:
-    // checkpoints[j * classes.size() + c].
+    // checkpoints[j * classes.size() + c]. Only for up to kMaxCheckpointed classes (a few
+    // usually: their size grows with the classes); beyond, a block is counted primitive by
+    // primitive.
     static constexpr int kCheckpoint = 64;
+    static constexpr std::size_t kMaxCheckpointed = 256;
     std::vector<std::uint32_t> checkpoints;
     // The primitives whose set-up counted something (most count nothing), in order.
     std::vector<std::pair<int, SetupCounts>> counted;
