@@ -147,7 +147,7 @@ TEST_CASE("setup memo: its summary counts what the GPs' geometry passes make", "
     const int first = n * k / gps, last = n * (k + 1) / gps;
     blocks.emplace_back(first, last);
     std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
-    geometry_pass(plan, first, last, stats[static_cast<std::size_t>(k)], bins);
+    geometry_pass(plan, first, last, stats[static_cast<std::size_t>(k)], &bins);
     for (std::size_t r = 0; r < bins.size(); ++r)
       all[r].insert(all[r].end(), bins[r].begin(), bins[r].end());
   }

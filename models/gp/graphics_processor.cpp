@@ -82,7 +82,7 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
 }
 
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
-                   std::vector<std::vector<std::shared_ptr<const Packet>>>& bins) {
+                   std::vector<std::vector<std::shared_ptr<const Packet>>>* bins) {
   const MachineConfig& config = machine.config();
   const GeometryEngine& geometry = machine.geometry();
   const DisplayList& display_list = geometry.display_list();
@@ -111,7 +111,7 @@ void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& sta
 
   // A bin per region: the packets this GP sends it, in display-list order. With a multipass
   // program the same packets go out once per pass.
-  bins.assign(static_cast<std::size_t>(config.regions()), {});
+  if (bins != nullptr) bins->assign(static_cast<std::size_t>(config.regions()), {});
   SetupMemo* memo = machine.setup_memo();
   std::vector<int> regions;
   for (int i = first; i < last; ++i) {
@@ -124,11 +124,12 @@ void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& sta
       const SetupMemo::Record& r = memo->record(i);
       tally = r.tally;
       stats.screen_triangles += static_cast<std::uint64_t>(tally.pieces);
-      stats.setup += r.counts;
+      stats.setup += memo->counts(r);
       for (std::uint32_t p = r.first; p < r.first + r.count; ++p) {
         const SetupMemo::Placed& placed = memo->placed(p);
-        for (std::uint32_t q = placed.first; q < placed.first + placed.count; ++q) {
-          bins[static_cast<std::size_t>(memo->region(q))].push_back(placed.packet);
+        for (std::uint32_t q = placed.first; bins != nullptr && q < placed.first + placed.count;
+             ++q) {
+          (*bins)[static_cast<std::size_t>(memo->region(q))].push_back(placed.packet);
         }
         stats.packets += placed.count;
       }
@@ -152,7 +153,7 @@ void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& sta
         k.worker->bin(result, regions);
         packet->values = std::move(result.values);
         for (int r : regions) {
-          bins[static_cast<std::size_t>(r)].push_back(packet);
+          if (bins != nullptr) (*bins)[static_cast<std::size_t>(r)].push_back(packet);
           ++stats.packets;
           ++tally.regions;
         }
@@ -176,7 +177,7 @@ void GraphicsProcessor::run() {
   }
   const MachineConfig& config = machine_.config();
   std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
-  geometry_pass(machine_.plan(), first_, last_, stats_, bins);
+  geometry_pass(machine_.plan(), first_, last_, stats_, &bins);
   // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
   stats_.busy += stats_.geometry;
   wait(clock_ * static_cast<double>(stats_.geometry.count));

@@ -95,11 +95,13 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
 
 // A GP's geometry phase as plain C++ (no simulated time): transforms, clips, sets up and
 // bins the display-list range [first, last), adding its operations, i860 geometry clocks,
-// packets and set-up counts to `stats` and leaving one bin per region in `bins`, each in
-// display-list order. GraphicsProcessor::run and the analytic timing model
-// (models/renderer/analytic.hpp) both use it, so both see the same packets and clocks.
+// packets and set-up counts to `stats` and leaving one bin per region in `*bins`, each in
+// display-list order (no bins when `bins` is null: the analytic timing model fills the
+// plan's set-up memo and reads the bins from its summary). GraphicsProcessor::run and the
+// analytic timing model (models/renderer/analytic.hpp) both use it, so both see the same
+// packets and clocks.
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
-                   std::vector<std::vector<std::shared_ptr<const Packet>>>& bins);
+                   std::vector<std::vector<std::shared_ptr<const Packet>>>* bins);
 
 // Registers setup.*: the packets and the set-up counts summed over `gps`.
 void register_setup_statistics(Statistics& stats, std::vector<const GraphicsProcessor*> gps);

@@ -15,6 +15,13 @@ bool same(const SetupMemo::Key& a, const SetupMemo::Key& b) {
   return a.params == b.params && a.expressions == b.expressions && a.words == b.words;
 }
 
+// Whether a primitive's set-up counted anything (SetupCounts is all 64-bit counts, with no
+// padding: geometry.cpp asserts its size).
+bool counted_any(const SetupCounts& c) {
+  static const SetupCounts zero{};
+  return std::memcmp(&c, &zero, sizeof c) != 0;
+}
+
 }  // namespace
 
 bool SetupMemo::bind(const Key& key, std::size_t primitives) {
@@ -27,6 +34,7 @@ bool SetupMemo::bind(const Key& key, std::size_t primitives) {
   records_.assign(primitives, Record{});
   placed_.clear();
   regions_.clear();
+  counted_.clear();
   filled_ = 0;
   summary_.reset();
   return false;
@@ -53,21 +61,14 @@ void SetupMemo::end(int primitive, int kind, const PrimitiveTally& tally,
   r.kind = kind;
   r.count = static_cast<std::uint32_t>(placed_.size()) - r.first;
   r.tally = tally;
-  r.counts = counts;
+  r.counted = kNothingCounted;
+  if (counted_any(counts)) {
+    r.counted = static_cast<std::uint32_t>(counted_.size());
+    counted_.push_back(counts);
+  }
   if (!r.filled) ++filled_;
   r.filled = true;
 }
-
-namespace {
-
-// Whether a primitive's set-up counted anything (SetupCounts is all 64-bit counts, with no
-// padding: geometry.cpp asserts its size).
-bool counted_any(const SetupCounts& c) {
-  static const SetupCounts zero{};
-  return std::memcmp(&c, &zero, sizeof c) != 0;
-}
-
-}  // namespace
 
 const SetupMemo::Summary& SetupMemo::summary(int regions) {
   if (!complete()) throw std::logic_error("SetupMemo::summary: a primitive has no record yet");
@@ -91,7 +92,7 @@ const SetupMemo::Summary& SetupMemo::summary(int regions) {
       last_class = it->second;
     }
     s->class_of[i] = last_class;
-    if (counted_any(r.counts)) s->counted.emplace_back(static_cast<int>(i), r.counts);
+    if (r.counted != kNothingCounted) s->counted.emplace_back(static_cast<int>(i), counts(r));
   }
   // A checkpoint at every kCheckpoint-th primitive, and one at the end.
   if (s->classes.size() <= Summary::kMaxCheckpointed) {

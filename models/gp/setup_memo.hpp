@@ -54,10 +54,12 @@ class SetupMemo {
     bool filled = false;
     int kind = 0;  // its primitive kind: index in primitive_kinds()
     PrimitiveTally tally;
-    SetupCounts counts;
     std::uint32_t first = 0;
     std::uint32_t count = 0;
+    // Its set-up counts, counts(record): most primitives count nothing, and keep no copy.
+    std::uint32_t counted = kNothingCounted;
   };
+  static constexpr std::uint32_t kNothingCounted = 0xffffffffu;
 
   explicit SetupMemo(const Scene& scene) : scene_(&scene) {}
   // Its summary points into its records: not copied.
@@ -73,6 +75,11 @@ class SetupMemo {
     return records_[static_cast<std::size_t>(primitive)];
   }
   const Placed& placed(std::uint32_t k) const { return placed_[k]; }
+  // What a record's transform and set-ups counted.
+  const SetupCounts& counts(const Record& r) const {
+    static const SetupCounts nothing{};
+    return r.counted == kNothingCounted ? nothing : counted_[r.counted];
+  }
   int region(std::uint32_t k) const { return regions_[k]; }
 
   // Filling primitive `primitive`'s record: begin, then place each packet, then end.
@@ -134,6 +141,7 @@ class SetupMemo {
   std::vector<Record> records_;
   std::vector<Placed> placed_;
   std::vector<int> regions_;
+  std::vector<SetupCounts> counted_;  // the records' counts that are not all 0
   std::size_t filled_ = 0;
   std::unique_ptr<Summary> summary_;
   std::uint64_t reuses_ = 0;

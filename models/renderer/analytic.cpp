@@ -52,8 +52,7 @@ AnalyticTiming analytic_timing(const MachinePlan& plan) {
   const int n = static_cast<int>(plan.geometry().display_list().size());
   if (!memo->complete()) {
     GpStats scratch;
-    std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
-    geometry_pass(plan, 0, n, scratch, bins);
+    geometry_pass(plan, 0, n, scratch, nullptr);
   }
   const SetupMemo::Summary& summary = memo->summary(regions);
 
