@@ -346,6 +346,7 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
   if (memo == nullptr) memo = (own = std::make_unique<SetupMemo>(scene)).get();
   MachinePlan plan(config, scene, program);
   plan.use_setup_memo(*memo);
+  fill_setup_memo(plan, threads);
   auto a = std::make_shared<const AnalyticTiming>(analytic_timing(plan));
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
@@ -549,7 +550,14 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
   check_memory(config, scene, program, threads);
   fresh_kernel();
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
-  if (memo != nullptr) machine->use_setup_memo(*memo);
+  // With host threads to spare, the display list is set up on them first, into a memo the
+  // GPs replay (models/gp/setup_memo.hpp): the same packets and counts.
+  std::unique_ptr<SetupMemo> own;
+  if (memo == nullptr && threads > 1) memo = (own = std::make_unique<SetupMemo>(scene)).get();
+  if (memo != nullptr) {
+    machine->use_setup_memo(*memo);
+    fill_setup_memo(machine->plan(), threads);
+  }
   machine->record_timeline(timeline != nullptr);
   run_kernel();
   check_time_did_not_wrap(*machine);

@@ -225,3 +225,34 @@ TEST_CASE("setup memo: a summary of many tally classes counts a block one by one
     CHECK(in_class == brute);
   }
 }
+
+TEST_CASE("setup memo: filled in parts on several threads, it replays the frame set up alone",
+          "[setup_memo]") {
+  const MachineConfig c = configured({"gp.count=3", "renderer.count=2"});
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"torus", "phong"},
+      {"spheres-and-triangles", "phong"},
+      {"molecule", "threshold"},
+      {"figure-eight", "parity_accurate"}};
+  for (const auto& [scene_name, program_name] : cases) {
+    const Scene scene = make_builtin_scene(scene_name);
+    const Program program = load_program(program_name, c);
+    INFO(scene_name << " " << program_name);
+    SetupMemo memo(scene);
+    {
+      MachinePlan plan(c, scene, program);
+      plan.use_setup_memo(memo);
+      // Parts of 64 primitives at least, on 3 threads: several parts even for small scenes.
+      fill_setup_memo(plan, 3, 64);
+    }
+    REQUIRE(memo.complete());
+    const FrameResult fresh = project_frame(c, scene, program);
+    const FrameResult replayed = project_frame(c, scene, program, &memo);
+    CHECK(memo.reuses() == 1);
+    CHECK(without_host(replayed.stats_json) == without_host(fresh.stats_json));
+    MachineConfig word = c;
+    word.set(std::vector<std::string>{"fidelity.pixels=word"});
+    CHECK(simulate_frame(word, scene, program, 2, {}, nullptr, &memo).image.rgb ==
+          simulate_frame(word, scene, program, 1).image.rgb);
+  }
+}

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <iterator>
 
+#include "common/parallel_for.hpp"
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/setup_memo.hpp"
 #include "models/renderer/renderer.hpp"
@@ -81,8 +82,12 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
   return c;
 }
 
-void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
-                   std::vector<std::vector<std::shared_ptr<const Packet>>>* bins) {
+namespace {
+
+// geometry_pass into `memo` (null for none).
+void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats& stats,
+                        std::vector<std::vector<std::shared_ptr<const Packet>>>* bins,
+                        SetupMemo* memo) {
   const MachineConfig& config = machine.config();
   const GeometryEngine& geometry = machine.geometry();
   const DisplayList& display_list = geometry.display_list();
@@ -112,7 +117,6 @@ void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& sta
   // A bin per region: the packets this GP sends it, in display-list order. With a multipass
   // program the same packets go out once per pass.
   if (bins != nullptr) bins->assign(static_cast<std::size_t>(config.regions()), {});
-  SetupMemo* memo = machine.setup_memo();
   std::vector<int> regions;
   for (int i = first; i < last; ++i) {
     const PrimitiveRef ref = display_list.at(i);
@@ -166,6 +170,40 @@ void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& sta
     stats.ops += cost.ops;
     stats.geometry += cost.clocks;
   }
+}
+
+}  // namespace
+
+void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
+                   std::vector<std::vector<std::shared_ptr<const Packet>>>* bins) {
+  geometry_pass_with(machine, first, last, stats, bins, machine.setup_memo());
+}
+
+void fill_setup_memo(const MachinePlan& plan, int threads, int least_part) {
+  SetupMemo* memo = plan.setup_memo();
+  if (memo == nullptr || !memo->empty()) return;
+  const int n = static_cast<int>(plan.geometry().display_list().size());
+  // A part per thread, a few thousand primitives at least (the default): below that a
+  // thread costs more than it saves.
+  const int parts = std::max(1, std::min(threads, n / std::max(1, least_part)));
+  if (parts <= 1) {
+    GpStats scratch;
+    geometry_pass_with(plan, 0, n, scratch, nullptr, memo);
+    return;
+  }
+  std::vector<std::unique_ptr<SetupMemo>> filled(static_cast<std::size_t>(parts));
+  auto block = [n, parts](int k) {
+    return static_cast<int>(static_cast<long long>(n) * k / parts);
+  };
+  parallel_for(parts, threads, [&](int k) {
+    auto part = std::make_unique<SetupMemo>(memo->scene());
+    part->bind(memo->key(), static_cast<std::size_t>(n));
+    GpStats scratch;
+    geometry_pass_with(plan, block(k), block(k + 1), scratch, nullptr, part.get());
+    filled[static_cast<std::size_t>(k)] = std::move(part);
+  });
+  for (int k = 0; k < parts; ++k)
+    memo->absorb(std::move(*filled[static_cast<std::size_t>(k)]), block(k), block(k + 1));
 }
 
 void GraphicsProcessor::run() {

@@ -103,6 +103,13 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
                    std::vector<std::vector<std::shared_ptr<const Packet>>>* bins);
 
+// Fills the plan's set-up memo, if it has one and it holds nothing yet, by geometry_pass over
+// the whole display list, in contiguous parts on up to `threads` host threads: the records
+// are the same with any number (each primitive's set-up depends on nothing else), and the
+// GPs of the frame then replay them. Host speed only. A part has `least_part` primitives at
+// least (fewer parts than threads for a small display list).
+void fill_setup_memo(const MachinePlan& plan, int threads, int least_part = 2048);
+
 // Registers setup.*: the packets and the set-up counts summed over `gps`.
 void register_setup_statistics(Statistics& stats, std::vector<const GraphicsProcessor*> gps);
 // The same from the GPs' statistics (the analytic model has no GraphicsProcessor modules).

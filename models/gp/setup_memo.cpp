@@ -70,6 +70,31 @@ void SetupMemo::end(int primitive, int kind, const PrimitiveTally& tally,
   r.filled = true;
 }
 
+void SetupMemo::absorb(SetupMemo&& part, int first, int last) {
+  if (part.scene_ != scene_ || !same(part.key_, key_) || part.records_.size() != records_.size())
+    throw std::logic_error("SetupMemo::absorb: a part of another scene or key");
+  const auto placed_base = static_cast<std::uint32_t>(placed_.size());
+  const auto region_base = static_cast<std::uint32_t>(regions_.size());
+  const auto counted_base = static_cast<std::uint32_t>(counted_.size());
+  for (int i = first; i < last; ++i) {
+    Record r = part.records_[static_cast<std::size_t>(i)];
+    if (!r.filled) throw std::logic_error("SetupMemo::absorb: a part without a record");
+    r.first += placed_base;
+    if (r.counted != kNothingCounted) r.counted += counted_base;
+    Record& into = records_[static_cast<std::size_t>(i)];
+    if (into.filled) throw std::logic_error("SetupMemo::absorb: a record filled twice");
+    into = r;
+    ++filled_;
+  }
+  for (Placed& p : part.placed_) {
+    p.first += region_base;
+    placed_.push_back(std::move(p));
+  }
+  regions_.insert(regions_.end(), part.regions_.begin(), part.regions_.end());
+  counted_.insert(counted_.end(), part.counted_.begin(), part.counted_.end());
+  summary_.reset();
+}
+
 const SetupMemo::Summary& SetupMemo::summary(int regions) {
   if (!complete()) throw std::logic_error("SetupMemo::summary: a primitive has no record yet");
   if (summary_ && summary_->region_first.size() == static_cast<std::size_t>(regions) + 1)

@@ -87,8 +87,16 @@ class SetupMemo {
   void place(std::shared_ptr<const Packet> packet, const std::vector<int>& regions);
   void end(int primitive, int kind, const PrimitiveTally& tally, const SetupCounts& counts);
 
-  // Whether every primitive's record is filled.
+  // Whether every primitive's record is filled, or none is.
   bool complete() const { return filled_ == records_.size(); }
+  bool empty() const { return filled_ == 0; }
+  const Key& key() const { return key_; }
+
+  // Takes over the records of primitives [first, last) from `part`, a memo of the same
+  // scene and key that holds those and no others, as if this memo had filled them itself;
+  // this memo must hold none at or after `first`, and the parts come in display-list order
+  // (fill_setup_memo, models/gp/graphics_processor.hpp, fills parts on several threads).
+  void absorb(SetupMemo&& part, int first, int last);
 
   // The records by what the GPs' costs and the Renderers' cycles depend on. A GP's share of
   // the display list is a contiguous block, so each sum over a block comes from a few
