@@ -550,10 +550,11 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
   check_memory(config, scene, program, threads);
   fresh_kernel();
   auto machine = std::make_unique<Machine>("pp5", config, scene, program);
-  // With host threads to spare, the display list is set up on them first, into a memo the
-  // GPs replay (models/gp/setup_memo.hpp): the same packets and counts.
+  // A display list large enough to split over the host threads is set up on them first,
+  // into a memo the GPs replay (models/gp/setup_memo.hpp): the same packets and counts.
   std::unique_ptr<SetupMemo> own;
-  if (memo == nullptr && threads > 1) memo = (own = std::make_unique<SetupMemo>(scene)).get();
+  if (memo == nullptr && setup_parts(machine->plan(), threads) > 1)
+    memo = (own = std::make_unique<SetupMemo>(scene)).get();
   if (memo != nullptr) {
     machine->use_setup_memo(*memo);
     fill_setup_memo(machine->plan(), threads);

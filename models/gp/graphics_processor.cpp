@@ -179,13 +179,16 @@ void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& sta
   geometry_pass_with(machine, first, last, stats, bins, machine.setup_memo());
 }
 
+int setup_parts(const MachinePlan& plan, int threads, int least_part) {
+  const int n = static_cast<int>(plan.geometry().display_list().size());
+  return std::max(1, std::min(threads, n / std::max(1, least_part)));
+}
+
 void fill_setup_memo(const MachinePlan& plan, int threads, int least_part) {
   SetupMemo* memo = plan.setup_memo();
   if (memo == nullptr || !memo->empty()) return;
   const int n = static_cast<int>(plan.geometry().display_list().size());
-  // A part per thread, a few thousand primitives at least (the default): below that a
-  // thread costs more than it saves.
-  const int parts = std::max(1, std::min(threads, n / std::max(1, least_part)));
+  const int parts = setup_parts(plan, threads, least_part);
   if (parts <= 1) {
     GpStats scratch;
     geometry_pass_with(plan, 0, n, scratch, nullptr, memo);

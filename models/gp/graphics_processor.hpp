@@ -103,12 +103,18 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
                    std::vector<std::vector<std::shared_ptr<const Packet>>>* bins);
 
+// The parts fill_setup_memo splits the display list into: one per thread, each of
+// `least_part` primitives at least. On the development machine (a virtual machine) a
+// thread's first touch of fresh memory cost more than the set-up it took over below about
+// 100,000 primitives (a torus of 131,072 triangles broke even, one of 524,288 took 0.45 s
+// less on 2 threads): hence the default.
+constexpr int kLeastSetupPart = 65536;
+int setup_parts(const MachinePlan& plan, int threads, int least_part = kLeastSetupPart);
 // Fills the plan's set-up memo, if it has one and it holds nothing yet, by geometry_pass over
-// the whole display list, in contiguous parts on up to `threads` host threads: the records
-// are the same with any number (each primitive's set-up depends on nothing else), and the
-// GPs of the frame then replay them. Host speed only. A part has `least_part` primitives at
-// least (fewer parts than threads for a small display list).
-void fill_setup_memo(const MachinePlan& plan, int threads, int least_part = 2048);
+// the whole display list, in setup_parts() contiguous parts on up to `threads` host threads:
+// the records are the same with any number (each primitive's set-up depends on nothing
+// else), and the GPs of the frame then replay them. Host speed only.
+void fill_setup_memo(const MachinePlan& plan, int threads, int least_part = kLeastSetupPart);
 
 // Registers setup.*: the packets and the set-up counts summed over `gps`.
 void register_setup_statistics(Statistics& stats, std::vector<const GraphicsProcessor*> gps);
