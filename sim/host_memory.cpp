@@ -12,7 +12,6 @@ namespace pp5 {
 void tune_host_memory() {
   mallopt(M_MMAP_THRESHOLD, 256 << 20);
   mallopt(M_TRIM_THRESHOLD, 512 << 20);
-  mallopt(M_ARENA_MAX, 1);
   constexpr std::size_t kHeap = std::size_t{64} << 20;
   constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
   void* grown = std::malloc(kHeap);

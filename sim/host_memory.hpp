@@ -17,12 +17,6 @@ namespace pp5 {
 //    Untouched pages cost nothing; on a kernel without them the advice is ignored. The Banks
 //    frame's page faults went from about 4,600 to about 2,000 and its wall time down by 11
 //    to 18% (perf stat -r 5, alternating with the build before).
-//  - One malloc arena for every thread: a worker thread's own arena is fresh memory in 4 KB
-//    pages, which it faults in one by one (the set-up, Renderer boards and PNG encoding run
-//    on worker threads), while the main heap above is grown and advised already. The Banks
-//    frame at word: 775 to 564 page faults, 176 to 158 ms of processor time; whole renders 1
-//    to 10% faster (minimum and median of 10 alternating runs, torus at bit and word, the
-//    molecule at word). The threads allocate little once running: no lock contention showed.
 // Only C library calls: safe before any C++ static initialiser has run.
 void tune_host_memory();
 
