@@ -12,6 +12,7 @@
 #include "models/gp/setup_memo.hpp"
 #include "models/machine.hpp"
 #include "models/pixel_array/backends.hpp"
+#include "models/renderer/renderer_board.hpp"
 #include "models/ring/ring.hpp"
 #include "sim/kernel.hpp"
 #include "sim/scene/scene.hpp"
@@ -118,15 +119,10 @@ end
 // quadrics of spheres spread over the region, and returns the array cycles they cost.
 std::uint64_t quadric_operation_cycles(const MachineConfig& c, int operations) {
   const Program program = assemble(kQuadricOperation, "validate-quadric", assembler_options(c));
+  const RendererBoardParams board = board_params(c);  // a board's array and evaluator
   PixelBackendParams params;
-  params.array.width = c.renderer.region_width;
-  params.array.height = c.renderer.region_height;
-  params.array.memory_bits = c.renderer.memory_bits;
-  params.array.enable_stack_depth = c.renderer.enable_stack_depth;
-  params.array.backing_store_bits = c.renderer.backing_store_bits;
-  params.array.block_bits = c.renderer.block_bits;
-  params.evaluator.coefficient_bits = c.evaluator.coefficient_bits;
-  params.evaluator.result_bits = c.evaluator.result_bits;
+  params.array = board.array;
+  params.evaluator = board.evaluator;
   params.fraction_bits = c.evaluator.fraction_bits;
   auto array = make_pixel_backend("bit", params);
   const TimingParams timing = timing_params(c);
