@@ -134,6 +134,8 @@ const SetupMemo::Summary& SetupMemo::summary(int regions) {
   for (int r = 0; r < regions; ++r) s->region_first[r + 1] += s->region_first[r];
   s->region_primitive.resize(regions_.size());
   s->region_packets.resize(regions_.size());
+  s->region_words.resize(regions_.size());
+  bool uniform = true;
   std::vector<std::uint32_t> next(s->region_first.begin(), s->region_first.end() - 1);
   for (std::size_t i = 0; i < n; ++i) {
     const Record& r = records_[i];
@@ -143,9 +145,13 @@ const SetupMemo::Summary& SetupMemo::summary(int regions) {
         const std::uint32_t k = next[static_cast<std::size_t>(regions_[q])]++;
         s->region_primitive[k] = static_cast<int>(i);
         s->region_packets[k] = &placed.packet;
+        s->region_words[k] = static_cast<std::uint32_t>(placed.packet->words);
+        if (s->uniform_words == 0) s->uniform_words = placed.packet->words;
+        uniform = uniform && placed.packet->words == s->uniform_words;
       }
     }
   }
+  if (!uniform) s->uniform_words = 0;
   s->signature_first.assign(static_cast<std::size_t>(regions) + 1, 0);
   for (int r = 0; r < regions; ++r) {
     const std::size_t begin = s->signatures.size();

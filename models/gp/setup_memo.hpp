@@ -124,6 +124,9 @@ class SetupMemo {
     std::vector<std::uint32_t> region_first;  // regions + 1
     std::vector<int> region_primitive;
     std::vector<const std::shared_ptr<const Packet>*> region_packets;
+    std::vector<std::uint32_t> region_words;  // each packet's ring words (Packet::words)
+    // Every packet's words, when all have the same (one primitive kind), else 0.
+    std::uint64_t uniform_words = 0;
     // Per region, its packets by what a Renderer's cycles for one depend on (procedure,
     // solid, facing): signature_first[r] .. signature_first[r + 1] into `signatures`.
     struct Signature {

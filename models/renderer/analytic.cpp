@@ -58,9 +58,11 @@ AnalyticTiming analytic_timing(const MachinePlan& plan) {
 
   // GPs: each one's share of the display list summed from the summary, then the messages
   // its bins make (Machine and GraphicsProcessor::run split them alike).
-  const std::uint64_t words = plan.gp_workload().packet_words;
-  const std::uint64_t per_message =
-      (static_cast<std::uint64_t>(config.renderer.queue_words) - 1) / words;
+  // A message carries a header word and as many of the bin's next packets as fit in a
+  // Renderer's queue (GraphicsProcessor::run); packets of one kind all have the same words.
+  const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
+  const std::uint64_t uniform = summary.uniform_words;
+  const std::uint64_t per_message = uniform > 0 ? (capacity - 1) / uniform : 0;
   const std::uint64_t send_clocks = plan.i860().clocks(I860Work::send_bin(), 0).count;
   a.gps.resize(static_cast<std::size_t>(gps));
   a.gp_send_clocks.assign(static_cast<std::size_t>(gps), 0);
@@ -109,13 +111,24 @@ AnalyticTiming analytic_timing(const MachinePlan& plan) {
     for (int k = 0; k < gps && at < end; ++k) {
       const int last = block_end[static_cast<std::size_t>(k)];
       const std::uint32_t from = at;
-      while (at < end && primitive[at] < last) ++at;
-      const std::uint64_t bin = at - from;
-      if (bin == 0) continue;
-      const std::uint64_t m = ceil_div(bin, per_message);
+      std::uint64_t m = 0, sent = 0;
+      if (uniform > 0) {
+        while (at < end && primitive[at] < last) ++at;
+        const std::uint64_t bin = at - from;
+        m = ceil_div(bin, per_message);
+        sent = m + bin * uniform;  // a header word per message
+      } else {  // packets of several kinds: filled one by one, as the GP fills them
+        std::uint64_t used = capacity;
+        for (; at < end && primitive[at] < last; ++at) {
+          const std::uint64_t w = summary.region_words[at];
+          if (used + w > capacity) ++m, used = 1, sent += 1;
+          used += w;
+          sent += w;
+        }
+      }
       a.gp_messages[static_cast<std::size_t>(k)] += m * passes;
-      a.gp_words[static_cast<std::size_t>(k)] += (m + bin * words) * passes;  // a header word
-    }                                                                         // per message
+      a.gp_words[static_cast<std::size_t>(k)] += sent * passes;
+    }
   }
   for (int k = 0; k < gps; ++k) {
     const auto i = static_cast<std::size_t>(k);
@@ -146,11 +159,13 @@ AnalyticTiming analytic_timing(const MachinePlan& plan) {
     code_cycles.emplace_back(&step.code, busy_cycles(step.code, step.values, config, timing));
     return code_cycles.back().second;
   };
-  const std::uint64_t load =
-      config.evaluator.double_buffered
-          ? 0
-          : ceil_div(words > 0 ? words - 1 : 0,
-                     static_cast<std::uint64_t>(config.evaluator.coefficient_words_per_cycle));
+  // A packet's coefficients (its words after the header) move into the evaluator, unless
+  // double buffering hides the move (Renderer::load_coefficients).
+  auto load = [&config](const Packet& p) -> std::uint64_t {
+    if (config.evaluator.double_buffered) return 0;
+    return ceil_div(p.words > 0 ? p.words - 1 : 0,
+                    static_cast<std::uint64_t>(config.evaluator.coefficient_words_per_cycle));
+  };
   std::uint64_t copy_cycles = 0;
   if (config.renderer.overlap_shipping) {
     const int blocks = (config.frame_buffer.bits_per_pixel + config.renderer.block_bits - 1) /
@@ -173,10 +188,11 @@ AnalyticTiming analytic_timing(const MachinePlan& plan) {
         // A pass plan: each pass runs the packet with its procedure, or not at all.
         for (int pass = 0; pass < passes; ++pass) {
           const RegionStep step = stream.packet(*sig.example, pass, 0);
-          if (step.code.defined) cycles += (cycles_of(step) + load) * sig.count;
+          if (step.code.defined) cycles += (cycles_of(step) + load(*sig.example)) * sig.count;
         }
       } else {
-        cycles += (cycles_of(stream.packet(*sig.example, 0, 0)) + load) * passes * sig.count;
+        cycles += (cycles_of(stream.packet(*sig.example, 0, 0)) + load(*sig.example)) * passes *
+                  sig.count;
       }
     }
     int owner = r % renderers;
