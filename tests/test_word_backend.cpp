@@ -405,3 +405,78 @@ TEST_CASE("the word backend's state: empty-region reuse and a bad geometry", "[w
   p.array.width = 100;
   CHECK_THROWS_AS(make_pixel_backend("word", p), std::invalid_argument);
 }
+
+TEST_CASE("word and bit agree on runs of linear tests (the word backend applies them together)",
+          "[word][backend]") {
+  // Runs of one to five half-plane tests after eall, as a triangle's edges (the word backend
+  // defers up to four and walks only the rows of their band), with every condition, edges of
+  // every slope (D or E zero too), regions anywhere on the screen; then a test it cannot
+  // defer (eq), a save, another run and a restore. E must be the same pixel for pixel.
+  PixelBackendParams p;
+  p.array.width = 128;
+  p.array.height = 128;
+  p.array.memory_bits = 64;
+  p.array.enable_stack_depth = 2;
+  p.evaluator.coefficient_bits = 40;
+  p.evaluator.result_bits = 40;
+  p.fraction_bits = 8;
+  auto word = make_pixel_backend("word", p);
+  auto bit = make_pixel_backend("bit", p);
+  std::mt19937_64 rng(20261125);
+  auto uniform = [&](std::int64_t lo, std::int64_t hi) {
+    return std::uniform_int_distribution<std::int64_t>(lo, hi)(rng);
+  };
+  const Compare one_interval[] = {Compare::lt, Compare::le, Compare::gt, Compare::ge};
+  int x0 = 0, y0 = 0;
+  auto edge = [&] {
+    QuadraticCoefficients c;
+    const int kind = static_cast<int>(uniform(0, 9));
+    c.D = kind == 0 ? 0 : uniform(-4096, 4096);
+    c.E = kind == 1 ? 0 : uniform(-4096, 4096);
+    // Through a point near the region (the value is D (x0 + x) + E (y0 + y) + F), so that
+    // the edge usually crosses it.
+    const std::int64_t px = x0 + uniform(-32, 160), py = y0 + uniform(-32, 160);
+    c.F = -(c.D * px + c.E * py) + uniform(-2048, 2048);
+    return c;
+  };
+  auto same_enable = [&](const char* when) {
+    INFO(when);
+    int differing = 0;
+    for (int px = 0; px < 128 * 128; ++px) differing += word->enabled(px) != bit->enabled(px);
+    REQUIRE(differing == 0);
+    REQUIRE(word->count_enabled() == bit->count_enabled());
+  };
+  int narrowed = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    INFO("trial " << trial);
+    x0 = static_cast<int>(uniform(-2, 30)) * 128;
+    y0 = static_cast<int>(uniform(-2, 30)) * 128;
+    for (auto* b : {word.get(), bit.get()}) b->set_origin(x0, y0);
+    for (auto* b : {word.get(), bit.get()}) b->enable_all();
+    const int run = static_cast<int>(uniform(1, 5));
+    for (int k = 0; k < run; ++k) {
+      const QuadraticCoefficients c = edge();
+      const Compare cond = one_interval[uniform(0, 3)];
+      word->qtest(c, cond);
+      bit->qtest(c, cond);
+    }
+    same_enable("after the run");
+    const int left = word->count_enabled();
+    narrowed += left > 0 && left < 128 * 128;
+    const QuadraticCoefficients eq = edge();
+    word->push_enable();
+    bit->push_enable();
+    word->qtest(eq, Compare::ne);
+    bit->qtest(eq, Compare::ne);
+    for (int k = 0; k < 3; ++k) {
+      const QuadraticCoefficients c = edge();
+      word->qtest(c, Compare::ge);
+      bit->qtest(c, Compare::ge);
+    }
+    same_enable("after a save and another run");
+    word->pop_enable();
+    bit->pop_enable();
+    same_enable("after the restore");
+  }
+  CHECK(narrowed > 100);
+}

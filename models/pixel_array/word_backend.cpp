@@ -1,6 +1,8 @@
 #include "models/pixel_array/word_backend.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <iterator>
@@ -255,11 +257,13 @@ void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& 
 }
 
 void WordBackend::enable_all() {
+  pending_.clear();  // E becomes all 1: no earlier test matters
   std::fill(enable_.begin(), enable_.end(), std::uint8_t{1});
   spans_ = {Range{0, pixels_}};
 }
 
 void WordBackend::push_enable() {
+  materialize();
   if (stack_top_ >= geometry_.enable_stack_depth) {
     throw std::overflow_error("enable stack overflow: depth " +
                               std::to_string(geometry_.enable_stack_depth));
@@ -277,6 +281,7 @@ void WordBackend::push_enable() {
 }
 
 void WordBackend::pop_enable() {
+  materialize();
   if (stack_top_ == 0) throw std::underflow_error("enable stack underflow");
   --stack_top_;
   const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_) * pixels_];
@@ -286,6 +291,7 @@ void WordBackend::pop_enable() {
 }
 
 void WordBackend::else_enable() {
+  materialize();
   if (stack_top_ == 0) throw std::underflow_error("else without a saved enable");
   const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_ - 1) * pixels_];
   std::uint8_t* e = enable_.data();
@@ -313,6 +319,7 @@ void WordBackend::else_enable() {
 }
 
 bool WordBackend::enabled(int pixel) const {
+  materialize();
   // The span holding the pixel, if any: the first that ends after it.
   const auto it = std::upper_bound(spans_.begin(), spans_.end(), pixel,
                                    [](int p, const Range& r) { return p < r.end; });
@@ -320,6 +327,7 @@ bool WordBackend::enabled(int pixel) const {
 }
 
 int WordBackend::count_enabled() const {
+  materialize();
   int n = 0;
   for (const Range& r : spans_) {
     for (int p = r.begin; p < r.end; ++p) n += enable_[static_cast<std::size_t>(p)];
@@ -341,70 +349,44 @@ bool fits_64(const QuadraticCoefficients& c, int y0, int x0, int width, int heig
   return small(magnitude(c.F) + magnitude(ey) + magnitude(dx));
 }
 
-}  // namespace
-
-bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
-  using i128 = __int128;
-  if (!c.is_linear()) return false;
-  if (spans_.empty()) return true;
-  const int width = geometry_.width;
-  const int R = evaluator_.result_bits;
-  const i128 lo = -(i128(1) << (R - 1)), hi = (i128(1) << (R - 1)) - 1;
-  const int first = spans_.front().begin / width, last = (spans_.back().end - 1) / width;
-  // The value is linear: exact (no wrap) over the band of rows when it is at its corners.
-  for (const int y : {first, last}) {
-    const i128 row = i128(c.E) * (y0_ + y) + c.F;
-    for (const int x : {0, width - 1}) {
-      const i128 v = row + i128(c.D) * (x0_ + x);
-      if (v < lo || v > hi) return false;
-    }
-  }
-  // The row walk below is in 64-bit integers: every term it forms (and so every value,
-  // quotient and remainder) must stay below 2^61 in magnitude. Coefficients that large go
-  // the general way (qtest's per-pixel evaluation), which is exact for any.
-  if (!fits_64(c, y0_, x0_, width, geometry_.height)) return false;
-  std::vector<Range>& kept = spare_spans_;  // becomes spans_; the old spans become the spare
-  kept.clear();
+// A linear test's columns row by row: row y's columns where the condition holds are up to
+// two intervals [a0, a1), [b0, b1). In an increasing coordinate u (u = x when D >= 0,
+// u = width - 1 - x otherwise) the value is g(u) = g0 + s u with s >= 0: "< 0" holds for
+// u < lt, "<= 0" for u < le. With n = -g0 = s q + m (floor division, 0 <= m < s), lt = q +
+// (m != 0) and le = q + 1. From row y to y + 1, n falls by E = s qe + me: q and m follow by a
+// subtraction and a borrow, with no division per row (one per jump to a row not following
+// the last). In 64-bit integers: the caller checks fits_64 and that the values do not wrap.
+class LinearRows {
+ public:
   using T = std::int64_t;
-  // Row y's columns where the condition holds: up to two intervals [a0, a1), [b0, b1).
-  int row_y = -1, a0 = 0, a1 = 0, b0 = 0, b1 = 0;
-  // In an increasing coordinate u (u = x when D >= 0, u = width - 1 - x otherwise) the
-  // value is g(u) = g0 + s u with s >= 0: "< 0" holds for u < lt, "<= 0" for u < le. With
-  // n = -g0 = s q + m (floor division, 0 <= m < s), lt = q + (m != 0) and le = q + 1. From
-  // row y to y + 1, n falls by E = s qe + me: q and m follow by a subtraction and a
-  // borrow, with no division per row (one per span of rows not following the last).
-  const T sl = c.D >= 0 ? T(c.D) : -T(c.D);
-  T q = 0, m = 0, qe = 0, me = 0;
-  auto floor_div = [](T n, T d, T& quo, T& rem) {
-    quo = n / d;
-    rem = n % d;
-    if (rem < 0) rem += d, --quo;
-  };
-  if (sl != 0) floor_div(T(c.E), sl, qe, me);
-  auto clamp_width = [width](T v) {
-    return static_cast<int>(v < 0 ? T(0) : (v > T(width) ? T(width) : v));
-  };
-  auto row_intervals = [&](int y) {
+  LinearRows() = default;
+  LinearRows(const QuadraticCoefficients& c, Compare cond, int x0, int y0, int width)
+      : c_(c), cond_(cond), x0_(x0), y0_(y0), width_(width), sl_(c.D >= 0 ? T(c.D) : -T(c.D)) {
+    if (sl_ != 0) floor_div(T(c.E), sl_, qe_, me_);
+  }
+  int a0 = 0, a1 = 0, b0 = 0, b1 = 0;
+  void at(int y) {
+    if (y == row_y_) return;
     int lt, le;
-    if (sl == 0) {
-      const T g0 = T(c.E) * (y0_ + y) + T(c.F);
-      lt = g0 < 0 ? width : 0;
-      le = g0 <= 0 ? width : 0;
+    if (sl_ == 0) {
+      const T g0 = T(c_.E) * (y0_ + y) + T(c_.F);
+      lt = g0 < 0 ? width_ : 0;
+      le = g0 <= 0 ? width_ : 0;
     } else {
-      if (y == row_y + 1 && row_y >= 0) {
-        q -= qe;
-        m -= me;
-        if (m < 0) m += sl, --q;
+      if (y == row_y_ + 1 && row_y_ >= 0) {
+        q_ -= qe_;
+        m_ -= me_;
+        if (m_ < 0) m_ += sl_, --q_;
       } else {
-        const T f0 = T(c.E) * (y0_ + y) + T(c.F) + T(c.D) * x0_;  // column 0
-        const T g0 = c.D >= 0 ? f0 : f0 + T(c.D) * (width - 1);
-        floor_div(-g0, sl, q, m);
+        const T f0 = T(c_.E) * (y0_ + y) + T(c_.F) + T(c_.D) * x0_;  // column 0
+        const T g0 = c_.D >= 0 ? f0 : f0 + T(c_.D) * (width_ - 1);
+        floor_div(-g0, sl_, q_, m_);
       }
-      lt = clamp_width(m != 0 ? q + 1 : q);
-      le = clamp_width(q + 1);
+      lt = clamp_width(m_ != 0 ? q_ + 1 : q_);
+      le = clamp_width(q_ + 1);
     }
     int u[4] = {0, 0, 0, 0};  // [u0, u1) and [u2, u3) in u
-    switch (cond) {
+    switch (cond_) {
       case Compare::lt:
         u[1] = lt;
         break;
@@ -415,33 +397,182 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
         u[0] = lt, u[1] = le;
         break;
       case Compare::ne:
-        u[1] = lt, u[2] = le, u[3] = width;
+        u[1] = lt, u[2] = le, u[3] = width_;
         break;
       case Compare::ge:
-        u[0] = lt, u[1] = width;
+        u[0] = lt, u[1] = width_;
         break;
       case Compare::gt:
-        u[0] = le, u[1] = width;
+        u[0] = le, u[1] = width_;
         break;
     }
-    if (c.D >= 0) {
+    if (c_.D >= 0) {
       a0 = u[0], a1 = u[1], b0 = u[2], b1 = u[3];
     } else {  // x = width - u: the intervals mirror, and swap order
-      a0 = width - u[3], a1 = width - u[2], b0 = width - u[1], b1 = width - u[0];
+      a0 = width_ - u[3], a1 = width_ - u[2], b0 = width_ - u[1], b1 = width_ - u[0];
       if (u[3] <= u[2]) a0 = a1 = 0;  // the second was empty
     }
-    row_y = y;
+    row_y_ = y;
+  }
+
+ private:
+  static void floor_div(T n, T d, T& quo, T& rem) {
+    quo = n / d;
+    rem = n % d;
+    if (rem < 0) rem += d, --quo;
+  }
+  int clamp_width(T v) const {
+    return static_cast<int>(v < 0 ? T(0) : (v > T(width_) ? T(width_) : v));
+  }
+  QuadraticCoefficients c_{};
+  Compare cond_ = Compare::ge;
+  int x0_ = 0, y0_ = 0, width_ = 0;
+  T sl_ = 0;
+  T q_ = 0, m_ = 0, qe_ = 0, me_ = 0;
+  int row_y_ = -1;
+};
+
+// The rows [lo, hi] outside which one-interval linear tests (lt, le, gt, ge) hold together
+// nowhere in the region: the region's rectangle of pixel centres clipped by each test's
+// half-plane (Sutherland-Hodgman), each half-plane widened by half a pixel so that rounding
+// cannot lose a pixel on its edge, and a row more each way. Only too narrow a range could be
+// wrong (the rows inside are tested exactly). In doubles: a test's value at the region's
+// origin is formed exactly in 64 bits (its terms are below 2^61: fits_64), and rounding it
+// errs by 2^-53 of it, which is a tiny part of a pixel where the edge crosses the region
+// (there it is at most the gradient times the region's size) and cannot turn the sign of a
+// value far from zero.
+constexpr std::size_t kMaxLinear = 4;  // WordBackend::kMaxPending
+
+template <class Tests>
+void linear_row_band(const Tests& tests, std::size_t n, int x0, int y0, int width, int height,
+                     int& lo, int& hi) {
+  using R = double;
+  struct Point {
+    R x, y;
   };
+  std::array<Point, 4 + 2 * kMaxLinear> poly{}, next{};
+  std::size_t m = 4;
+  poly[0] = {0, 0};
+  poly[1] = {R(width - 1), 0};
+  poly[2] = {R(width - 1), R(height - 1)};
+  poly[3] = {0, R(height - 1)};
+  for (std::size_t k = 0; k < n && m > 0; ++k) {
+    const QuadraticCoefficients& c = tests[k].c;
+    if (c.D == 0 && c.E == 0) continue;  // all or nothing: left to the rows
+    // h(x, y) >= 0 on the side where the test can hold: g = D (x0 + x) + E (y0 + y) + F,
+    // its sign turned for lt and le, widened by half a pixel.
+    const R sign = (tests[k].cond == Compare::lt || tests[k].cond == Compare::le) ? -1 : 1;
+    const R a = sign * R(c.D), b = sign * R(c.E);
+    const std::int64_t at_origin = c.D * x0 + c.E * y0 + c.F;  // exact: below 3 x 2^61
+    const R d = sign * R(at_origin) + R(0.5) * (std::fabs(R(c.D)) + std::fabs(R(c.E)));
+    auto h = [&](const Point& p) { return a * p.x + b * p.y + d; };
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const Point& p = poly[i];
+      const Point& q = poly[(i + 1) % m];
+      const R hp = h(p), hq = h(q);
+      if (hp >= 0) next[out++] = p;
+      if ((hp >= 0) != (hq >= 0)) {
+        const R t = hp / (hp - hq);
+        next[out++] = {p.x + t * (q.x - p.x), p.y + t * (q.y - p.y)};
+      }
+    }
+    poly = next;
+    m = out;
+  }
+  if (m == 0) {
+    lo = hi + 1;  // no row
+    return;
+  }
+  R ymin = poly[0].y, ymax = poly[0].y;
+  for (std::size_t i = 1; i < m; ++i)
+    ymin = std::min(ymin, poly[i].y), ymax = std::max(ymax, poly[i].y);
+  if (!std::isfinite(static_cast<double>(ymin)) || !std::isfinite(static_cast<double>(ymax)))
+    return;
+  lo = std::max(lo, static_cast<int>(std::floor(ymin)) - 1);
+  hi = std::min(hi, static_cast<int>(std::ceil(ymax)) + 1);
+}
+
+bool one_interval(Compare cond) {
+  return cond == Compare::lt || cond == Compare::le || cond == Compare::gt || cond == Compare::ge;
+}
+
+}  // namespace
+
+void WordBackend::materialize() const {
+  if (pending_.empty()) return;
+  const int width = geometry_.width;
+  int lo = 0, hi = geometry_.height - 1;
+  static_assert(kMaxPending == kMaxLinear, "linear_row_band's polygon holds kMaxPending cuts");
+  std::array<LinearRows, kMaxPending> tests;
+  const std::size_t n = pending_.size();
+  linear_row_band(pending_, n, x0_, y0_, width, geometry_.height, lo, hi);
+  for (std::size_t k = 0; k < n; ++k) {
+    const PendingTest& t = pending_[k];
+    tests[k] = LinearRows(t.c, t.cond, x0_, y0_, width);
+  }
+  pending_.clear();
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
+  for (const Range& sp : spans_) {
+    const int first = std::max(sp.begin / width, lo);
+    for (int y = first; y * width < sp.end && y <= hi; ++y) {
+      const int start = y * width;
+      int from = std::max(sp.begin, start), to = std::min(sp.end, start + width);
+      for (std::size_t k = 0; k < n; ++k) {
+        LinearRows& t = tests[k];
+        t.at(y);
+        // One interval: [a0, a1), or [b0, b1) when D < 0 mirrors it there.
+        const bool a = t.a1 > t.a0;
+        from = std::max(from, start + (a ? t.a0 : t.b0));
+        to = std::min(to, start + (a ? t.a1 : t.b1));
+        if (to <= from) break;
+      }
+      if (to > from) kept.push_back({from, to});
+    }
+  }
+  spans_.swap(kept);
+}
+
+bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
+  using i128 = __int128;
+  if (!c.is_linear()) return false;
+  if (spans_.empty()) return true;
+  const int width = geometry_.width;
+  const int R = evaluator_.result_bits;
+  const i128 lo = -(i128(1) << (R - 1)), hi = (i128(1) << (R - 1)) - 1;
+  // Rows of the spans before any pending test: a superset of the rows after them.
+  const int first = spans_.front().begin / width, last = (spans_.back().end - 1) / width;
+  // The value is linear: exact (no wrap) over the band of rows when it is at its corners.
+  for (const int y : {first, last}) {
+    const i128 row = i128(c.E) * (y0_ + y) + c.F;
+    for (const int x : {0, width - 1}) {
+      const i128 v = row + i128(c.D) * (x0_ + x);
+      if (v < lo || v > hi) return false;
+    }
+  }
+  // The row walk is in 64-bit integers: every term it forms (and so every value, quotient
+  // and remainder) must stay below 2^61 in magnitude. Coefficients that large go the general
+  // way (qtest's per-pixel evaluation), which is exact for any.
+  if (!fits_64(c, y0_, x0_, width, geometry_.height)) return false;
+  if (one_interval(cond) && pending_.size() < kMaxPending) {
+    pending_.push_back({c, cond});
+    return true;
+  }
+  materialize();
+  std::vector<Range>& kept = spare_spans_;  // becomes spans_; the old spans become the spare
+  kept.clear();
+  LinearRows rows(c, cond, x0_, y0_, width);
   // Within a segment [from, to) of row y: what lies inside the row's intervals stays a
   // span, the rest leaves the spans (and so is 0, whatever E's bytes there hold).
   for (const Range& sp : spans_) {
     for (int y = sp.begin / width; y * width < sp.end; ++y) {
-      if (y != row_y) row_intervals(y);
+      rows.at(y);
       const int start = y * width;
       const int from = std::max(sp.begin, start), to = std::min(sp.end, start + width);
-      const int k0 = std::max(from, start + a0), k1 = std::min(to, start + a1);
+      const int k0 = std::max(from, start + rows.a0), k1 = std::min(to, start + rows.a1);
       if (k1 > k0) kept.push_back({k0, k1});
-      const int l0 = std::max(from, start + b0), l1 = std::min(to, start + b1);
+      const int l0 = std::max(from, start + rows.b0), l1 = std::min(to, start + rows.b1);
       if (l1 > l0) kept.push_back({l0, l1});
     }
   }
@@ -451,6 +582,7 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
 
 void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
   if (qtest_linear(expr, cond)) return;
+  materialize();
   prepare_columns(expr);
   u64* v = scratch().s0.data();
   const std::uint8_t* e = enable_.data();
@@ -477,6 +609,7 @@ void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
 }
 
 void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
+  materialize();
   check_field(dst, "assign");
   prepare_columns(expr);
   const int off = dst.lo % 64;
@@ -502,6 +635,7 @@ void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
 }
 
 void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) {
+  materialize();
   check_field(field, "operand");
   prepare_columns(expr);
   const bool wide = !field.is_signed && field.width == 64;
@@ -531,6 +665,7 @@ void WordBackend::compare_values(const u64* a, bool a_unsigned64, const u64* b, 
 }
 
 void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
+  materialize();
   check_field(a, "operand");
   if (b.is_field) check_field(b.field, "operand");
   for (const Range& r : spans_) compare_range(a, b, cond, r);
@@ -556,6 +691,7 @@ void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, R
 }
 
 void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
+  materialize();
   if (src.is_field) check_field(src.field, "operand");
   check_field(dst, op == Alu::mov   ? "assign"
                    : op == Alu::add ? "add"
@@ -679,6 +815,7 @@ void WordBackend::logic(const Field& dst, const Source& src, Logic op) {
 }
 
 void WordBackend::invert(const Field& dst) {
+  materialize();
   check_field(dst, "not");
   u64* a = scratch().s0.data();
   for (const Range& r : spans_) {
@@ -695,6 +832,7 @@ bool overlaps(const Field& a, const Field& b) {
 }  // namespace
 
 void WordBackend::multiply(const Field& dst, const Field& a, const Field& b) {
+  materialize();
   check_field(a, "operand");
   check_field(b, "operand");
   check_field(dst, "mul");
@@ -712,6 +850,7 @@ void WordBackend::multiply(const Field& dst, const Field& a, const Field& b) {
 }
 
 void WordBackend::multiply_accumulate(const Field& dst, const Field& a, i64 k) {
+  materialize();
   check_field(a, "operand");
   check_field(dst, "mac");
   if (overlaps(dst, a)) throw std::invalid_argument("mac: destination overlaps a source");
@@ -735,6 +874,7 @@ u64* WordBackend::backing() {
 }
 
 void WordBackend::store_to_backing(const Field& field, int block) {
+  materialize();
   check_field(field, "backing-store transfer");
   const int first = block * geometry_.block_bits;
   if (block < 0 || first + field.width > geometry_.backing_store_bits) {
@@ -746,6 +886,7 @@ void WordBackend::store_to_backing(const Field& field, int block) {
 }
 
 void WordBackend::load_from_backing(const Field& field, int block) {
+  materialize();
   check_field(field, "backing-store transfer");
   const int first = block * geometry_.block_bits;
   if (block < 0 || first + field.width > geometry_.backing_store_bits) {
@@ -802,12 +943,15 @@ void WordBackend::write(int pixel, const Field& field, u64 value) {
 }
 
 std::unique_ptr<PixelBackend> WordBackend::clone() const {
+  materialize();
   return std::make_unique<WordBackend>(*this);
 }
 
 bool WordBackend::same_state(const PixelBackend& other) const {
   const auto* o = dynamic_cast<const WordBackend*>(&other);
   if (o == nullptr || o->geometry_ != geometry_) return false;
+  materialize();
+  o->materialize();
   if (stack_top_ != o->stack_top_ || memory_ != o->memory_) return false;
   // E and each saved level compared as values: 0 outside their spans, whatever the bytes
   // there hold. Stack levels above the top are never read before a push overwrites them.
@@ -839,6 +983,8 @@ void WordBackend::copy_state_from(const PixelBackend& other) {
     throw std::invalid_argument(std::string("word backend: cannot take the state of a '") +
                                 other.name() + "' backend of another kind or geometry");
   }
+  o->materialize();
+  pending_.clear();
   memory_ = o->memory_;
   enable_ = o->enable_;
   stack_ = o->stack_;

@@ -34,6 +34,7 @@ class WordBackend final : public PixelBackend {
   const char* name() const override { return "word"; }
   const PixelArrayGeometry& geometry() const override { return geometry_; }
   void set_origin(int x0, int y0) override {
+    materialize();
     x0_ = x0;
     y0_ = y0;
   }
@@ -132,9 +133,22 @@ class WordBackend final : public PixelBackend {
   // most two ranges per row after a linear qtest, one from the first to the last enabled
   // pixel after a quadratic one): every operation walks only these. The same for each saved
   // level of the stack.
-  std::vector<Range> spans_;
-  std::vector<Range> spare_spans_;  // qtest's new spans are built here, then swapped in
+  // Lazily narrowed (materialize()): mutable so that reading E from a const backend applies
+  // what is pending.
+  mutable std::vector<Range> spans_;
+  mutable std::vector<Range> spare_spans_;  // qtest's new spans are built here, then swapped in
   std::vector<std::vector<Range>> stack_spans_;
+  // Linear half-plane tests (lt, le, gt, ge) not yet applied to spans_: consecutive ones (a
+  // triangle's edge tests) are applied together, in one walk over only the rows where all of
+  // them can hold, instead of one walk each over what the one before left. Every other
+  // operation applies them first; the result is the same as applying them one by one.
+  struct PendingTest {
+    QuadraticCoefficients c;
+    Compare cond;
+  };
+  static constexpr std::size_t kMaxPending = 4;
+  mutable std::vector<PendingTest> pending_;
+  void materialize() const;
   // Scratch of pixels_ values each: operands, results, the evaluator's row tables (width
   // entries each). Not state: a copy (clone, copy_state_from) starts without it, and it is
   // allocated when the copy first executes, so a kept state costs only its state.
