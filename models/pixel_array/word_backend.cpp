@@ -47,30 +47,35 @@ inline bool holds(Compare cond, T a, T b) {
 
 // E &= (a[p] cond b[p]) as signed 64-bit values; one loop per condition so that each
 // vectorises.
-template <class GetB>
-void and_compare(std::uint8_t* e, const u64* a, GetB b, Compare cond, int begin, int end) {
+template <class GetA, class GetB>
+void and_compare_with(std::uint8_t* e, GetA a, GetB b, Compare cond, int begin, int end) {
   switch (cond) {
     case Compare::lt:
-      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) < b(p);
+      for (int p = begin; p < end; ++p) e[p] &= a(p) < b(p);
       break;
     case Compare::le:
-      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) <= b(p);
+      for (int p = begin; p < end; ++p) e[p] &= a(p) <= b(p);
       break;
     case Compare::eq:
-      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) == b(p);
+      for (int p = begin; p < end; ++p) e[p] &= a(p) == b(p);
       break;
     case Compare::ne:
-      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) != b(p);
+      for (int p = begin; p < end; ++p) e[p] &= a(p) != b(p);
       break;
     case Compare::ge:
-      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) >= b(p);
+      for (int p = begin; p < end; ++p) e[p] &= a(p) >= b(p);
       break;
     case Compare::gt:
-      for (int p = begin; p < end; ++p) e[p] &= static_cast<i64>(a[p]) > b(p);
+      for (int p = begin; p < end; ++p) e[p] &= a(p) > b(p);
       break;
   }
 }
 
+template <class GetB>
+void and_compare(std::uint8_t* e, const u64* a, GetB b, Compare cond, int begin, int end) {
+  and_compare_with(
+      e, [a](int p) { return static_cast<i64>(a[p]); }, b, cond, begin, end);
+}
 }  // namespace
 
 WordBackend::WordBackend(const PixelBackendParams& params)
@@ -672,8 +677,32 @@ void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
 }
 
 void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {
-  load(memory_.data(), a, r, scratch().s0.data(), true);
   const bool a_wide = !a.is_signed && a.width == 64;
+  if (!b.is_field && !a_wide && a.lo % 64 + a.width <= 64) {
+    // A field within one lane against a constant: read and compared in one pass.
+    const u64* lane = memory_.data() + static_cast<std::size_t>(a.lo / 64) * pixels_;
+    const int off = a.lo % 64;
+    const u64 mask = low_mask(a.width);
+    const i64 k = b.constant;
+    auto constant = [k](int) { return k; };
+    if (a.is_signed && a.width < 64) {
+      const int sh = 64 - a.width;
+      and_compare_with(
+          enable_.data(),
+          [lane, off, mask, sh](int p) {
+            return static_cast<i64>(((lane[p] >> off) & mask) << sh) >> sh;
+          },
+          constant, cond, r.begin, r.end);
+    } else {
+      and_compare_with(
+          enable_.data(),
+          [lane, off, mask](int p) { return static_cast<i64>((lane[p] >> off) & mask); }, constant,
+          cond, r.begin, r.end);
+    }
+    enable_changed();
+    return;
+  }
+  load(memory_.data(), a, r, scratch().s0.data(), true);
   if (b.is_field) {
     load(memory_.data(), b.field, r, scratch().s1.data(), true);
     compare_values(scratch().s0.data(), a_wide, scratch().s1.data(),
@@ -708,7 +737,70 @@ void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
   }
 }
 
+// One ALU operation on one span where the destination (and a field source) lie within one
+// 64-bit lane each: read, operate and merge under E in a single pass, as alu_range's general
+// path does in three (load, operate, store) with the same result: the destination read
+// unsigned, a field source sign-extended when signed, the result cut to the destination.
+template <WordBackend::Alu kOp, class Read>
+void WordBackend::alu_lane(u64* dst_lane, int off, u64 mask, const std::uint8_t* e, Range r,
+                           Read source) {
+  const u64 bits = mask << off;
+  for (int p = r.begin; p < r.end; ++p) {
+    const u64 m = bits & (u64{0} - e[p]);
+    const u64 a = (dst_lane[p] >> off) & mask;
+    const u64 b = source(p);
+    u64 v = 0;
+    if constexpr (kOp == Alu::mov) v = b;
+    if constexpr (kOp == Alu::add) v = a + b;
+    if constexpr (kOp == Alu::sub) v = a - b;
+    if constexpr (kOp == Alu::and_) v = a & b;
+    if constexpr (kOp == Alu::or_) v = a | b;
+    if constexpr (kOp == Alu::xor_) v = a ^ b;
+    dst_lane[p] = (dst_lane[p] & ~m) | ((v << off) & m);
+  }
+}
+
+template <class Read>
+void WordBackend::alu_lane_op(Alu op, u64* dst_lane, int off, u64 mask, const std::uint8_t* e,
+                              Range r, Read source) {
+  switch (op) {
+    case Alu::mov:
+      return alu_lane<Alu::mov>(dst_lane, off, mask, e, r, source);
+    case Alu::add:
+      return alu_lane<Alu::add>(dst_lane, off, mask, e, r, source);
+    case Alu::sub:
+      return alu_lane<Alu::sub>(dst_lane, off, mask, e, r, source);
+    case Alu::and_:
+      return alu_lane<Alu::and_>(dst_lane, off, mask, e, r, source);
+    case Alu::or_:
+      return alu_lane<Alu::or_>(dst_lane, off, mask, e, r, source);
+    case Alu::xor_:
+      return alu_lane<Alu::xor_>(dst_lane, off, mask, e, r, source);
+  }
+}
+
 void WordBackend::alu_range(const Field& dst, const Source& src, Alu op, Range r) {
+  const int off = dst.lo % 64;
+  if (off + dst.width <= 64 && (!src.is_field || src.field.lo % 64 + src.field.width <= 64)) {
+    u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
+    const u64 mask = low_mask(dst.width);
+    const std::uint8_t* e = enable_.data();
+    if (!src.is_field) {
+      const u64 k = static_cast<u64>(src.constant);
+      return alu_lane_op(op, lane, off, mask, e, r, [k](int) { return k; });
+    }
+    const u64* s = memory_.data() + static_cast<std::size_t>(src.field.lo / 64) * pixels_;
+    const int soff = src.field.lo % 64;
+    const u64 smask = low_mask(src.field.width);
+    if (src.field.is_signed && src.field.width < 64) {
+      const int sh = 64 - src.field.width;
+      return alu_lane_op(op, lane, off, mask, e, r, [s, soff, smask, sh](int p) {
+        return static_cast<u64>(static_cast<i64>(((s[p] >> soff) & smask) << sh) >> sh);
+      });
+    }
+    return alu_lane_op(op, lane, off, mask, e, r,
+                       [s, soff, smask](int p) { return (s[p] >> soff) & smask; });
+  }
   u64* a = scratch().s0.data();
   u64* out = scratch().s2.data();
   if (op != Alu::mov) load(memory_.data(), dst, r, a, false);

@@ -108,6 +108,13 @@ class WordBackend final : public PixelBackend {
                         std::uint64_t* out) const;
   void alu(const Field& dst, const Source& src, Alu op);
   void alu_range(const Field& dst, const Source& src, Alu op, Range r);
+  // alu_range's single pass for a destination (and a field source) within one lane each.
+  template <Alu kOp, class Read>
+  static void alu_lane(std::uint64_t* dst_lane, int off, std::uint64_t mask, const std::uint8_t* e,
+                       Range r, Read source);
+  template <class Read>
+  static void alu_lane_op(Alu op, std::uint64_t* dst_lane, int off, std::uint64_t mask,
+                          const std::uint8_t* e, Range r, Read source);
   void compare_range(const Field& a, const Source& b, Compare cond, Range r);
   void alu_serial(const Field& dst, const Field& src, Alu op, Range r);
   // E &= (a cond b) over r, a and b extended values; wide when either is an unsigned 64-bit
