@@ -14,7 +14,9 @@
 // operation runs only over the spans (after a triangle's edge tests, its own columns of each
 // of its rows), which is exact (E = 0 is never written) and makes its cost the pixels a
 // primitive's bounding rows and edges leave; an edge test only narrows the spans, and
-// saving or restoring E copies only them. E's bytes outside the spans are never read.
+// saving or restoring E copies only them. E's bytes outside the spans are never read. A run
+// of half-plane tests (a triangle's edges) is applied together when the next operation
+// needs E, over only the rows of the band where all of them can hold (materialize()).
 //
 // Contract: implements PixelBackend (firmware/isa/backend.hpp), including its one bit-serial
 // corner: an ALU source field that overlaps its destination from below (src.lo < dst.lo)
