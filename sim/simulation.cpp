@@ -247,9 +247,12 @@ void check_memory(const MachineConfig& config, const Scene& scene, const Program
   const double packets = static_cast<double>(scene.mesh.triangles.size()) * (sizeof(Packet) + 64);
   const double frame = 2.0 * config.screen.width * config.screen.height * 3;
   const double need = board * boards + packets + frame;
-  // Below this a host always has the room, and asking it (reading /proc) would cost a sweep
-  // point more than the analytic model's sums.
-  if (need < 256.0 * 1024 * 1024) return;
+  // Below this a host always has the memory, and asking it (reading /proc) would cost a
+  // sweep point more than the analytic model's sums; an address-space limit (ulimit -v) is
+  // always checked, since it can be smaller.
+  struct rlimit limit {};
+  const bool limited = ::getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur != RLIM_INFINITY;
+  if (need < 256.0 * 1024 * 1024 && !limited) return;
   const double available = host_bytes_available();
   if (need > 0.9 * available) {
     const double gib = 1024.0 * 1024 * 1024;
