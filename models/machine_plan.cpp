@@ -93,7 +93,8 @@ MachinePlan::MachinePlan(const MachineConfig& config, const Scene& scene, const 
       timing_(timing_params(config)),
       frame_values_(geometry_.frame_values()),
       i860_(i860_params(config)),
-      ring_(ring_params(config)) {
+      ring_(ring_params(config)),
+      ring_cycle_(1.0 / ring_.clock_hz, sc_core::SC_SEC) {
   check_pass_plan(program);
   set_pass_plan(program, scene, frame_values_);
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);
@@ -149,8 +150,7 @@ std::pair<int, int> MachinePlan::gp_block(int k) const {
 }
 
 sc_core::sc_time MachinePlan::hop_delay(int from, int to) const {
-  return ring_hop_delay(ring_, sc_core::sc_time(1.0 / ring_.clock_hz, sc_core::SC_SEC), from, to,
-                        ring_stops());
+  return ring_hop_delay(ring_, ring_cycle_, from, to, ring_stops());
 }
 
 void MachinePlan::use_setup_memo(SetupMemo& memo) {

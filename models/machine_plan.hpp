@@ -94,6 +94,7 @@ class MachinePlan {
   I860Model i860_;
   GpWorkload workload_;
   RingParams ring_;
+  sc_core::sc_time ring_cycle_;  // 1 / ring.clock_hz
   int busy_gps_ = 0;
   SetupMemo* setup_memo_ = nullptr;
 };

@@ -336,10 +336,25 @@ void register_host_statistics(Statistics& s, const HostTimes& t, const char* tim
       });
 }
 
-// fidelity.timing=analytic: the machine is built but its kernel never runs; the analytic
-// model (models/renderer/analytic.hpp) gives every unit's work and the frame time, and the
-// boards execute the regions it assigned. It registers the statistics the summary, sweeps and
-// `pp5sim fidelity` read, under the event model's names, and its own terms as analytic.*.
+// Region r's place on the screen and the cycles Renderer `renderer` spent on it, for
+// regions.png. Regions at the right and bottom edges may reach past the screen: clipped, as
+// in the frame.
+RegionLoad region_load(const MachineConfig& config, int r, int renderer, std::uint64_t cycles) {
+  const int x0 = config.region_x0(r), y0 = config.region_y0(r);
+  return {r,
+          x0,
+          y0,
+          std::min(config.renderer.region_width, config.screen.width - x0),
+          std::min(config.renderer.region_height, config.screen.height - y0),
+          renderer,
+          cycles};
+}
+
+// fidelity.timing=analytic: no kernel runs; the analytic model (models/renderer/analytic.hpp)
+// gives every unit's work and the frame time from the MachinePlan alone, and, with pixels,
+// the Machine is built for its boards, which execute the regions the model assigned. It
+// registers the statistics the summary, sweeps and `pp5sim fidelity` read, under the event
+// model's names, and its own terms as analytic.*.
 FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                            int threads, SetupMemo* memo) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -347,33 +362,36 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
   // Without a memo from the caller, one for this frame: the model sets up from a memo.
   std::unique_ptr<SetupMemo> own;
   if (memo == nullptr) memo = (own = std::make_unique<SetupMemo>(scene)).get();
-  MachinePlan plan(config, scene, program);
-  plan.use_setup_memo(*memo);
+  // Pixels need the Renderer boards and the frame buffer: only then is the Machine built,
+  // and the model reads its plan; otherwise a plan alone.
+  const bool pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
+  std::unique_ptr<Machine> machine;
+  std::unique_ptr<MachinePlan> alone;
+  if (pixels) {
+    fresh_kernel();
+    machine = std::make_unique<Machine>("pp5", config, scene, program);
+    machine->use_setup_memo(*memo);
+  } else {
+    alone = std::make_unique<MachinePlan>(config, scene, program);
+    alone->use_setup_memo(*memo);
+  }
+  const MachinePlan& plan = machine ? machine->plan() : *alone;
   fill_setup_memo(plan, threads);
   auto a = std::make_shared<const AnalyticTiming>(analytic_timing(plan));
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
   FrameResult result;
-  // Pixels need the Renderer boards and the frame buffer: only then is the Machine built.
-  if (config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none) {
-    fresh_kernel();
-    Machine machine("pp5", config, scene, program);
-    machine.use_setup_memo(*memo);
+  if (machine) {
     const std::vector<std::vector<RegionWork>> regions = analytic_work(*a, plan);
     std::vector<const std::vector<RegionWork>*> work;
     for (const auto& w : regions) work.push_back(&w);
-    execute_pixels(machine, work, threads);
-    result.image = machine.frame_buffer().take_image();
+    execute_pixels(*machine, work, threads);
+    result.image = machine->frame_buffer().take_image();
   }
   for (std::size_t k = 0; k < a->regions.size(); ++k) {
     for (int r : a->regions[k]) {
-      // Regions at the right and bottom edges may reach past the screen: clipped.
-      const int x0 = (r % config.regions_x()) * config.renderer.region_width;
-      const int y0 = (r / config.regions_x()) * config.renderer.region_height;
-      result.regions.push_back(
-          {r, x0, y0, std::min(config.renderer.region_width, config.screen.width - x0),
-           std::min(config.renderer.region_height, config.screen.height - y0), static_cast<int>(k),
-           a->region_cycles[static_cast<std::size_t>(r)]});
+      result.regions.push_back(region_load(config, r, static_cast<int>(k),
+                                           a->region_cycles[static_cast<std::size_t>(r)]));
     }
   }
   const double pixel_seconds = seconds_since(t1);
@@ -577,10 +595,7 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
   result.image = fb.take_image();
   for (int k = 0; k < machine->renderer_count(); ++k) {
     for (const RegionWork& w : machine->renderer(k).work()) {
-      // Regions at the right and bottom edges may reach past the screen: clipped, as in the frame.
-      result.regions.push_back(
-          {w.region, w.x0, w.y0, std::min(config.renderer.region_width, config.screen.width - w.x0),
-           std::min(config.renderer.region_height, config.screen.height - w.y0), k, w.busy_cycles});
+      result.regions.push_back(region_load(config, w.region, k, w.busy_cycles));
     }
   }
   result.frame_seconds = fb.frame_complete().to_seconds();

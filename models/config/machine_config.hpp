@@ -133,6 +133,9 @@ struct MachineConfig {
     return (screen.height + renderer.region_height - 1) / renderer.region_height;
   }
   int regions() const { return regions_x() * regions_y(); }
+  // Region r's first pixel column and row (regions are numbered row-major).
+  int region_x0(int r) const { return (r % regions_x()) * renderer.region_width; }
+  int region_y0(int r) const { return (r / regions_x()) * renderer.region_height; }
 };
 
 // The names of the choice values, as the configuration and stats.json spell them.

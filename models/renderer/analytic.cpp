@@ -279,8 +279,8 @@ std::vector<std::vector<RegionWork>> analytic_work(const AnalyticTiming& timing,
       const auto i = static_cast<std::size_t>(r);
       RegionWork w;
       w.region = r;
-      w.x0 = (r % config.regions_x()) * config.renderer.region_width;
-      w.y0 = (r / config.regions_x()) * config.renderer.region_height;
+      w.x0 = config.region_x0(r);
+      w.y0 = config.region_y0(r);
       for (std::uint32_t p = summary.region_first[i]; p < summary.region_first[i + 1]; ++p) {
         w.triangles.push_back(*summary.region_packets[p]);
       }

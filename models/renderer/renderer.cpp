@@ -283,8 +283,8 @@ void Renderer::run() {
                        region_start, cursor_);
     RegionWork w;
     w.region = stage.region;
-    w.x0 = (stage.region % config.regions_x()) * config.renderer.region_width;
-    w.y0 = (stage.region / config.regions_x()) * config.renderer.region_height;
+    w.x0 = config.region_x0(stage.region);
+    w.y0 = config.region_y0(stage.region);
     for (auto& v : by_gp) w.triangles.insert(w.triangles.end(), v.begin(), v.end());
     w.step_start = step_start;
     for (const auto& pass : starts)

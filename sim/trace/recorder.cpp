@@ -252,7 +252,7 @@ Recorder::Recorder(const MachineConfig& config, const Scene& scene, const Progra
       throw std::runtime_error(
           fmt::format("--region {}: the screen has regions 0..{}", region, config.regions() - 1));
     }
-    const int x0 = (region % config.regions_x()) * rw, y0 = (region / config.regions_x()) * rh;
+    const int x0 = config.region_x0(region), y0 = config.region_y0(region);
     for (int y = y0; y < std::min(y0 + rh, sh); ++y) {
       for (int x = x0; x < std::min(x0 + rw, sw); ++x) chosen.insert({y, x});
     }

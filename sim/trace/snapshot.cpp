@@ -105,8 +105,8 @@ const Snapshot& SnapshotTaker::snapshot() const {
   std::vector<bool> traced(program_.fields.size(), true);
   s.header["firmware"] = firmware_json(program_, traced);
   s.header["region"] = region_;
-  s.header["x0"] = (region_ % config_.regions_x()) * config_.renderer.region_width;
-  s.header["y0"] = (region_ / config_.regions_x()) * config_.renderer.region_height;
+  s.header["x0"] = config_.region_x0(region_);
+  s.header["y0"] = config_.region_y0(region_);
   s.header["width"] = s.width;
   s.header["height"] = s.height;
   s.header["memory_bits"] = s.memory_bits;
