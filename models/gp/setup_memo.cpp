@@ -1,10 +1,10 @@
 #include "models/gp/setup_memo.hpp"
 
-#include <algorithm>
 #include <array>
 #include <cstring>
 #include <map>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 namespace pp5 {
@@ -153,20 +153,19 @@ const SetupMemo::Summary& SetupMemo::summary(int regions) {
   }
   if (!uniform) s->uniform_words = 0;
   s->signature_first.assign(static_cast<std::size_t>(regions) + 1, 0);
+  // A region's signatures by (procedure, solid, facing): a map, since a scene of many solids
+  // gives a region many.
+  std::map<std::tuple<int, int, bool>, std::size_t> in_region;
   for (int r = 0; r < regions; ++r) {
-    const std::size_t begin = s->signatures.size();
+    in_region.clear();
     for (std::uint32_t k = s->region_first[r]; k < s->region_first[r + 1]; ++k) {
       const Packet& p = **s->region_packets[k];
-      auto same = [&p](const Summary::Signature& g) {
-        return g.example->procedure == p.procedure && g.example->group == p.group &&
-               g.example->back == p.back;
-      };
-      auto it =
-          std::find_if(s->signatures.begin() + static_cast<long>(begin), s->signatures.end(), same);
-      if (it == s->signatures.end()) {
+      const auto [it, added] = in_region.emplace(
+          std::make_tuple(static_cast<int>(p.procedure), p.group, p.back), s->signatures.size());
+      if (added) {
         s->signatures.push_back({&p, 1});
       } else {
-        ++it->count;
+        ++s->signatures[it->second].count;
       }
     }
     s->signature_first[static_cast<std::size_t>(r) + 1] =
