@@ -492,8 +492,7 @@ void linear_row_band(const Tests& tests, std::size_t n, int x0, int y0, int widt
   R ymin = poly[0].y, ymax = poly[0].y;
   for (std::size_t i = 1; i < m; ++i)
     ymin = std::min(ymin, poly[i].y), ymax = std::max(ymax, poly[i].y);
-  if (!std::isfinite(static_cast<double>(ymin)) || !std::isfinite(static_cast<double>(ymax)))
-    return;
+  if (!std::isfinite(ymin) || !std::isfinite(ymax)) return;
   lo = std::max(lo, static_cast<int>(std::floor(ymin)) - 1);
   hi = std::min(hi, static_cast<int>(std::ceil(ymax)) + 1);
 }
