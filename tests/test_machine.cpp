@@ -35,6 +35,44 @@ TEST_CASE("frames and statistics are identical across runs and host thread count
   CHECK(one.stats.integer("frame.array_cycles") > 0);
 }
 
+TEST_CASE("each Renderer's board starts as a new one, whatever the host thread count",
+          "[machine]") {
+  // A program whose clear leaves a field alone: each region's colour counts the regions its
+  // board ran before, so the frame shows each board's history. The host reuses one board
+  // per thread (execute_pixels): a board carried over from another Renderer unrestarted
+  // would make the frame depend on the thread count.
+  const std::string source = R"(field runs 8
+field zero 8
+output runs zero zero
+proc clear
+  eall
+  add runs, 40
+  mov zero, 0
+end
+proc triangle
+  eall
+end
+)";
+  MachineConfig config = MachineConfig::defaults();
+  config.screen.width = 768;
+  config.screen.height = 256;
+  config.gp.count = 2;
+  config.renderer.count = 5;
+  const Scene scene = make_builtin_scene("torus", {16, 8});
+  for (const char* pixels : {"word", "bit"}) {
+    config.set({std::string("fidelity.pixels=") + pixels});
+    const Program program = assemble(source, "runs", assembler_options(config));
+    const FrameResult one = simulate_frame(config, scene, program, 1);
+    const FrameResult three = simulate_frame(config, scene, program, 3);
+    CHECK(one.image.rgb == three.image.rgb);
+    // Renderer k's first region (region k) shows one run from a new board's zeros.
+    for (int k = 0; k < config.renderer.count; ++k) {
+      const std::size_t pixel = static_cast<std::size_t>(k) * 128;  // row 0, region k
+      CHECK(static_cast<int>(one.image.rgb[pixel * 3]) == 40);
+    }
+  }
+}
+
 TEST_CASE("each Renderer is busy for exactly the instruction table's cycles", "[machine]") {
   MachineConfig config = MachineConfig::defaults();
   config.screen.width = 512;

@@ -99,6 +99,7 @@ WordBackend::WordBackend(const PixelBackendParams& params)
   enable_.assign(n, 1);
   spans_ = {Range{0, pixels_}};
   stack_spans_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
+  allocate_scratch();  // here, on the thread that makes the backend (see Scratch)
 }
 
 void WordBackend::allocate_scratch() const {

@@ -159,15 +159,17 @@ class WordBackend final : public PixelBackend {
   mutable std::vector<PendingTest> pending_;
   void materialize() const;
   // Scratch of pixels_ values each: operands, results, the evaluator's row tables (width
-  // entries each). Not state: a copy (clone, copy_state_from) starts without it, and it is
-  // allocated when the copy first executes, so a kept state costs only its state.
+  // entries each). Not state: a new backend allocates it, on the thread that makes it (a
+  // host thread's first allocations cost page faults in its own malloc arena); a copy
+  // (clone, copy_state_from) starts without it, and it is allocated when the copy first
+  // executes, so a kept state costs only its state.
   struct Scratch {
     std::vector<std::uint64_t> s0, s1, s2, row_a, row_b;
     Scratch() = default;
     Scratch(const Scratch&) {}
     Scratch& operator=(const Scratch&) { return *this; }
   };
-  // The scratch, allocated on first use.
+  // The scratch, allocated on first use by a copy.
   Scratch& scratch() const {
     if (scratch_.s0.empty()) allocate_scratch();
     return scratch_;

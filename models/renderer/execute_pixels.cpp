@@ -1,6 +1,8 @@
 #include "models/renderer/execute_pixels.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <memory>
 
 #include "common/parallel_for.hpp"
 #include "models/frame_buffer/frame_buffer.hpp"
@@ -33,10 +35,22 @@ void execute_pixels(Machine& machine, const std::vector<const std::vector<Region
   RendererBoard first(params);
   std::vector<std::uint8_t> empty_rgb;
   first.run_empty_region(0, 0, program, machine.frame_values(), empty_rgb);
-  parallel_for(static_cast<int>(work.size()), threads, [&](int k) {
+  // One board per host worker, made here on the calling thread and restarted, for each
+  // Renderer after its first, in the state of a newly made board (`fresh`): the same results
+  // as a new board per Renderer, whatever the thread count, without a worker thread's first
+  // allocations, whose page faults in a new malloc arena cost more than the copy.
+  const int count = static_cast<int>(work.size());
+  const int workers = parallel_workers(count, threads);
+  const RendererBoard fresh(params);
+  std::vector<std::unique_ptr<RendererBoard>> boards;
+  for (int w = 0; w < workers; ++w) boards.push_back(std::make_unique<RendererBoard>(params));
+  std::vector<std::uint8_t> started(static_cast<std::size_t>(workers), 0);  // one per worker
+  parallel_for(count, threads, [&](int k, int worker) {
     const std::vector<RegionWork>& regions = *work[static_cast<std::size_t>(k)];
     if (regions.empty()) return;  // a Renderer the frame did not use
-    RendererBoard board(params);
+    RendererBoard& board = *boards[static_cast<std::size_t>(worker)];
+    if (started[static_cast<std::size_t>(worker)]) board.restart(fresh);
+    started[static_cast<std::size_t>(worker)] = 1;
     if (observe) board.set_observer(observe(k));
     board.share_empty_region(first);
     const int columns = config.regions_x();

@@ -93,6 +93,20 @@ void RendererBoard::keep_state(std::shared_ptr<PixelBackend>& slot) const {
   }
 }
 
+void RendererBoard::restart(const RendererBoard& fresh) {
+  array_->copy_state_from(fresh.array());
+  lazy_ = false;
+  empty_after_clear_.reset();
+  empty_after_shade_.reset();
+  empty_rgb_.reset();
+  clear_restores_.reset();
+  empty_reused_ = 0;
+  observer_ = nullptr;
+  packet_ = PacketContext{};
+  instructions_ = 0;
+  cycles_ = ArrayCycles{};
+}
+
 void RendererBoard::share_empty_region(const RendererBoard& other) {
   if (!other.empty_after_clear_ || empty_after_clear_) return;
   empty_after_clear_ = other.empty_after_clear_;

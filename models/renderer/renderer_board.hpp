@@ -65,6 +65,11 @@ class RendererBoard {
   // would): the program's clear procedure is what initialises it.
   void begin_region(int x0, int y0);
   ArrayCycles run(const ProcedureCode& procedure, const PacketValues& values);
+  // Back to the state of a newly made board: `fresh` is one of the same parameters that has
+  // executed nothing (its state is copied, not assumed). What follows runs exactly as on a
+  // new board; only the host memory is reused (execute_pixels keeps one board per host
+  // thread, made on the calling thread, instead of one per Renderer).
+  void restart(const RendererBoard& fresh);
   // Observation (tracing): `observer` may be null; the board does not own it.
   void set_observer(BoardObserver* observer) { observer_ = observer; }
   bool observed() const { return observer_ != nullptr; }
