@@ -616,34 +616,139 @@ void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
 void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
   materialize();
   check_field(dst, "assign");
-  prepare_columns(expr);
   const int off = dst.lo % 64;
   if (off + dst.width > 64) {  // the field straddles two lanes
+    prepare_columns(expr);
     for (const Range& r : spans_) {
       expression_field(expr, dst, r, scratch().s0.data());
       store(memory_.data(), dst, r, scratch().s0.data(), true);
     }
     return;
   }
-  // The value merged into its lane under E as it is computed (store() fused in).
+  if (expr.A != 0) {
+    qload_lane<true>(dst, expr);
+  } else {
+    qload_lane<false>(dst, expr);
+  }
+}
+
+template <class F>
+void WordBackend::for_each_span_row(F f) const {
+  const int width = geometry_.width;
+  int y = 0;
+  int row_start = 0;
+  for (const Range& r : spans_) {
+    if (r.begin >= r.end) continue;
+    if (r.begin < row_start || r.begin - row_start >= 2 * width) {
+      y = r.begin / width;
+      row_start = y * width;
+    } else if (r.begin - row_start >= width) {
+      ++y;
+      row_start += width;
+    }
+    int from = r.begin - row_start;
+    for (;;) {
+      f(y, static_cast<std::size_t>(row_start), from, std::min(r.end - row_start, width));
+      if (r.end <= row_start + width) break;
+      ++y;
+      row_start += width;
+      from = 0;
+    }
+  }
+}
+
+// The value as for_each_value computes it, merged into its lane under E as it is computed
+// (store() fused in). Only the field's low width bits are written, so its signedness does
+// not matter here.
+template <bool kSquare>
+void WordBackend::qload_lane(const Field& dst, const QuadraticCoefficients& c) {
+  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), C = static_cast<u64>(c.C),
+            D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  const u64 X0 = static_cast<u64>(static_cast<i64>(x0_));
+  const int s = 64 - evaluator_.result_bits;
+  const int shift = std::min(fraction_bits_, 63);
+  const int off = dst.lo % 64;
+  const u64 bits = low_mask(dst.width) << off;
   u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
   const std::uint8_t* e = enable_.data();
-  const u64 bits = low_mask(dst.width) << off;
-  for (const Range& r : spans_) {
-    for_each_value(expr, r, std::min(fraction_bits_, 63), dst, [&](std::size_t row_start) {
-      return [m = lane + row_start, en = e + row_start, bits, off](int x, u64 v) {
-        const u64 k = bits & (u64{0} - en[x]);
-        m[x] = (m[x] & ~k) | ((v << off) & k);
-      };
-    });
-  }
+  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+    const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
+    const u64 row = C * Y * Y + E * Y + F;
+    const u64 linear = D + B * Y;
+    u64* m = lane + row_start;
+    const std::uint8_t* en = e + row_start;
+    for (int x = from; x < to; ++x) {
+      const u64 X = X0 + static_cast<u64>(x);
+      u64 v = kSquare ? (A * X + linear) * X + row : linear * X + row;
+      v = static_cast<u64>(static_cast<i64>(v << s) >> s);
+      v = static_cast<u64>(static_cast<i64>(v) >> shift);
+      const u64 k = bits & (u64{0} - en[x]);
+      m[x] = (m[x] & ~k) | ((v << off) & k);
+    }
+  });
+}
+
+// E &= (value cond field), both cut to the field's width and extended by its signedness
+// (as expression_field and load give them to compare_values), in one pass. The condition
+// as three flags: (less and lt) or (equal and eq), inverted when inv.
+template <bool kSquare, bool kSigned>
+void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, Compare cond) {
+  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), C = static_cast<u64>(c.C),
+            D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  const u64 X0 = static_cast<u64>(static_cast<i64>(x0_));
+  const int s = 64 - evaluator_.result_bits;
+  const int shift = std::min(fraction_bits_, 63);
+  const int off = field.lo % 64;
+  const int sw = 64 - field.width;
+  const u64 mask = low_mask(field.width);
+  const u64* lane = memory_.data() + static_cast<std::size_t>(field.lo / 64) * pixels_;
+  std::uint8_t* e = enable_.data();
+  const bool lt =
+      cond == Compare::lt || cond == Compare::le || cond == Compare::ge || cond == Compare::gt;
+  const bool eq =
+      cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
+  const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
+  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+    const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
+    const u64 row = C * Y * Y + E * Y + F;
+    const u64 linear = D + B * Y;
+    const u64* m = lane + row_start;
+    std::uint8_t* en = e + row_start;
+    for (int x = from; x < to; ++x) {
+      const u64 X = X0 + static_cast<u64>(x);
+      u64 v = kSquare ? (A * X + linear) * X + row : linear * X + row;
+      v = static_cast<u64>(static_cast<i64>(v << s) >> s);
+      v = static_cast<u64>(static_cast<i64>(v) >> shift);
+      u64 f = (m[x] >> off) & mask;
+      if constexpr (kSigned) {
+        v = static_cast<u64>(static_cast<i64>(v << sw) >> sw);
+        f = static_cast<u64>(static_cast<i64>(f << sw) >> sw);
+      } else {
+        v &= mask;
+      }
+      const i64 a = static_cast<i64>(v), b = static_cast<i64>(f);
+      const bool holds = (((a < b) & lt) | ((a == b) & eq)) ^ inv;
+      en[x] &= static_cast<std::uint8_t>(holds);
+    }
+  });
 }
 
 void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) {
   materialize();
   check_field(field, "operand");
-  prepare_columns(expr);
   const bool wide = !field.is_signed && field.width == 64;
+  if (!wide && field.lo % 64 + field.width <= 64) {
+    const bool square = expr.A != 0;
+    if (field.is_signed) {
+      square ? qcmp_lane<true, true>(field, expr, cond) : qcmp_lane<false, true>(field, expr, cond);
+    } else {
+      square ? qcmp_lane<true, false>(field, expr, cond)
+             : qcmp_lane<false, false>(field, expr, cond);
+    }
+    enable_changed();
+    return;
+  }
+  prepare_columns(expr);
   for (const Range& r : spans_) {
     expression_field(expr, field, r, scratch().s0.data());
     load(memory_.data(), field, r, scratch().s1.data(), true);
@@ -728,6 +833,7 @@ void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
                                     : "logic");
   const bool serial =
       src.is_field && src.field.lo < dst.lo && src.field.lo + src.field.width > dst.lo;
+  if (!serial && alu_in_lane(dst, src, op)) return;
   for (const Range& r : spans_) {
     if (serial) {
       alu_serial(dst, src.field, op, r);
@@ -742,65 +848,74 @@ void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
 // path does in three (load, operate, store) with the same result: the destination read
 // unsigned, a field source sign-extended when signed, the result cut to the destination.
 template <WordBackend::Alu kOp, class Read>
-void WordBackend::alu_lane(u64* dst_lane, int off, u64 mask, const std::uint8_t* e, Range r,
-                           Read source) {
+void WordBackend::alu_lane(u64* dst_lane, int off, u64 mask, const std::uint8_t* e,
+                           const std::vector<Range>& spans, Read source) {
   const u64 bits = mask << off;
-  for (int p = r.begin; p < r.end; ++p) {
-    const u64 m = bits & (u64{0} - e[p]);
-    const u64 a = (dst_lane[p] >> off) & mask;
-    const u64 b = source(p);
-    u64 v = 0;
-    if constexpr (kOp == Alu::mov) v = b;
-    if constexpr (kOp == Alu::add) v = a + b;
-    if constexpr (kOp == Alu::sub) v = a - b;
-    if constexpr (kOp == Alu::and_) v = a & b;
-    if constexpr (kOp == Alu::or_) v = a | b;
-    if constexpr (kOp == Alu::xor_) v = a ^ b;
-    dst_lane[p] = (dst_lane[p] & ~m) | ((v << off) & m);
+  for (const Range& r : spans) {
+    for (int p = r.begin; p < r.end; ++p) {
+      const u64 m = bits & (u64{0} - e[p]);
+      const u64 a = (dst_lane[p] >> off) & mask;
+      const u64 b = source(p);
+      u64 v = 0;
+      if constexpr (kOp == Alu::mov) v = b;
+      if constexpr (kOp == Alu::add) v = a + b;
+      if constexpr (kOp == Alu::sub) v = a - b;
+      if constexpr (kOp == Alu::and_) v = a & b;
+      if constexpr (kOp == Alu::or_) v = a | b;
+      if constexpr (kOp == Alu::xor_) v = a ^ b;
+      dst_lane[p] = (dst_lane[p] & ~m) | ((v << off) & m);
+    }
   }
 }
 
 template <class Read>
 void WordBackend::alu_lane_op(Alu op, u64* dst_lane, int off, u64 mask, const std::uint8_t* e,
-                              Range r, Read source) {
+                              const std::vector<Range>& spans, Read source) {
   switch (op) {
     case Alu::mov:
-      return alu_lane<Alu::mov>(dst_lane, off, mask, e, r, source);
+      return alu_lane<Alu::mov>(dst_lane, off, mask, e, spans, source);
     case Alu::add:
-      return alu_lane<Alu::add>(dst_lane, off, mask, e, r, source);
+      return alu_lane<Alu::add>(dst_lane, off, mask, e, spans, source);
     case Alu::sub:
-      return alu_lane<Alu::sub>(dst_lane, off, mask, e, r, source);
+      return alu_lane<Alu::sub>(dst_lane, off, mask, e, spans, source);
     case Alu::and_:
-      return alu_lane<Alu::and_>(dst_lane, off, mask, e, r, source);
+      return alu_lane<Alu::and_>(dst_lane, off, mask, e, spans, source);
     case Alu::or_:
-      return alu_lane<Alu::or_>(dst_lane, off, mask, e, r, source);
+      return alu_lane<Alu::or_>(dst_lane, off, mask, e, spans, source);
     case Alu::xor_:
-      return alu_lane<Alu::xor_>(dst_lane, off, mask, e, r, source);
+      return alu_lane<Alu::xor_>(dst_lane, off, mask, e, spans, source);
   }
 }
 
-void WordBackend::alu_range(const Field& dst, const Source& src, Alu op, Range r) {
+bool WordBackend::alu_in_lane(const Field& dst, const Source& src, Alu op) {
   const int off = dst.lo % 64;
-  if (off + dst.width <= 64 && (!src.is_field || src.field.lo % 64 + src.field.width <= 64)) {
-    u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
-    const u64 mask = low_mask(dst.width);
-    const std::uint8_t* e = enable_.data();
-    if (!src.is_field) {
-      const u64 k = static_cast<u64>(src.constant);
-      return alu_lane_op(op, lane, off, mask, e, r, [k](int) { return k; });
-    }
-    const u64* s = memory_.data() + static_cast<std::size_t>(src.field.lo / 64) * pixels_;
-    const int soff = src.field.lo % 64;
-    const u64 smask = low_mask(src.field.width);
-    if (src.field.is_signed && src.field.width < 64) {
-      const int sh = 64 - src.field.width;
-      return alu_lane_op(op, lane, off, mask, e, r, [s, soff, smask, sh](int p) {
-        return static_cast<u64>(static_cast<i64>(((s[p] >> soff) & smask) << sh) >> sh);
-      });
-    }
-    return alu_lane_op(op, lane, off, mask, e, r,
-                       [s, soff, smask](int p) { return (s[p] >> soff) & smask; });
+  if (off + dst.width > 64 || (src.is_field && src.field.lo % 64 + src.field.width > 64)) {
+    return false;
   }
+  u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
+  const u64 mask = low_mask(dst.width);
+  const std::uint8_t* e = enable_.data();
+  if (!src.is_field) {
+    const u64 k = static_cast<u64>(src.constant);
+    alu_lane_op(op, lane, off, mask, e, spans_, [k](int) { return k; });
+    return true;
+  }
+  const u64* s = memory_.data() + static_cast<std::size_t>(src.field.lo / 64) * pixels_;
+  const int soff = src.field.lo % 64;
+  const u64 smask = low_mask(src.field.width);
+  if (src.field.is_signed && src.field.width < 64) {
+    const int sh = 64 - src.field.width;
+    alu_lane_op(op, lane, off, mask, e, spans_, [s, soff, smask, sh](int p) {
+      return static_cast<u64>(static_cast<i64>(((s[p] >> soff) & smask) << sh) >> sh);
+    });
+    return true;
+  }
+  alu_lane_op(op, lane, off, mask, e, spans_,
+              [s, soff, smask](int p) { return (s[p] >> soff) & smask; });
+  return true;
+}
+
+void WordBackend::alu_range(const Field& dst, const Source& src, Alu op, Range r) {
   u64* a = scratch().s0.data();
   u64* out = scratch().s2.data();
   if (op != Alu::mov) load(memory_.data(), dst, r, a, false);

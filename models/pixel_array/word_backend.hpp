@@ -105,18 +105,38 @@ class WordBackend final : public PixelBackend {
   template <class RowSink>
   void for_each_value(const QuadraticCoefficients& c, Range r, int shift, const Field& as,
                       RowSink row_sink) const;
+  // f(y, row_start, from, to) for each row's part of each span in turn: pixels row_start +
+  // [from, to) of row y. Rows are found by stepping from the span before (spans are in
+  // order), not by a division per span: after a triangle's edge tests a span is one short
+  // row, and the walk's cost per span is what the instructions below pay per row.
+  template <class F>
+  void for_each_span_row(F f) const;
+  // qload's and qcmp's single pass over the spans for a field within one lane: the value
+  // (as for_each_value gives it, modulo 2^64 the same sum) computed per pixel as
+  // ((A X + (D + B Y)) X + (C Y^2 + E Y + F), no column tables: a triangle's rows are
+  // shorter than the region is wide), and merged under E, or compared with the field in
+  // place. Only a square term (kSquare: A != 0) and the field's signedness (kSigned) are
+  // compiled in; the condition is applied without a branch per pixel.
+  template <bool kSquare>
+  void qload_lane(const Field& dst, const QuadraticCoefficients& c);
+  template <bool kSquare, bool kSigned>
+  void qcmp_lane(const Field& field, const QuadraticCoefficients& c, Compare cond);
   // qload and qcmp's operand: bits [fraction_bits, fraction_bits + width) of the value.
   void expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
                         std::uint64_t* out) const;
   void alu(const Field& dst, const Source& src, Alu op);
   void alu_range(const Field& dst, const Source& src, Alu op, Range r);
   // alu_range's single pass for a destination (and a field source) within one lane each.
+  // Over every span: the operation chosen once per instruction, not once per span.
   template <Alu kOp, class Read>
   static void alu_lane(std::uint64_t* dst_lane, int off, std::uint64_t mask, const std::uint8_t* e,
-                       Range r, Read source);
+                       const std::vector<Range>& spans, Read source);
   template <class Read>
   static void alu_lane_op(Alu op, std::uint64_t* dst_lane, int off, std::uint64_t mask,
-                          const std::uint8_t* e, Range r, Read source);
+                          const std::uint8_t* e, const std::vector<Range>& spans, Read source);
+  // alu's path for a destination (and a field source) within one lane each; false when the
+  // operands are not such.
+  bool alu_in_lane(const Field& dst, const Source& src, Alu op);
   void compare_range(const Field& a, const Source& b, Compare cond, Range r);
   void alu_serial(const Field& dst, const Field& src, Alu op, Range r);
   // E &= (a cond b) over r, a and b extended values; wide when either is an unsigned 64-bit
