@@ -671,7 +671,7 @@ void WordBackend::qload_lane(const Field& dst, const QuadraticCoefficients& c) {
   const u64 bits = low_mask(dst.width) << off;
   u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
   const std::uint8_t* e = enable_.data();
-  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+  for_each_span_row([=](int y, std::size_t row_start, int from, int to) {
     const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
     const u64 row = C * Y * Y + E * Y + F;
     const u64 linear = D + B * Y;
@@ -708,7 +708,7 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
   const bool eq =
       cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
   const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
-  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+  for_each_span_row([=](int y, std::size_t row_start, int from, int to) {
     const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
     const u64 row = C * Y * Y + E * Y + F;
     const u64 linear = D + B * Y;
