@@ -36,39 +36,48 @@ class PngImageGuard {
   throw std::runtime_error(fmt::format("{} '{}': {}", what, path, reason));
 }
 
-// zlib's level 1 (Z_BEST_SPEED).
+// zlib's level 1 (Z_BEST_SPEED), run-length matches only (Z_RLE), after the Up filter: a
+// rendered frame's flat areas and repeated rows compress almost as well as with the default
+// search, in a fraction of the time (the image bits are the same).
 constexpr int kCompressionLevel = 1;
+// Rows are filtered and compressed this many bytes at a time: nothing holds the whole
+// filtered image.
+constexpr std::size_t kStripBytes = std::size_t{1} << 18;
+// The longest IDAT chunk written (PNG allows 2^31 - 1 bytes).
+constexpr std::size_t kMaxChunk = std::size_t{1} << 30;
 
-// Where the encoder's bytes and its error go; libpng's callbacks reach it through their
-// user pointers.
-struct PngWriteState {
-  std::string what;
-  std::string bytes;
-  std::string message = "libpng reported an error";
-};
-
-void on_png_write(png_structp png, png_bytep data, png_size_t length) {
-  auto* state = static_cast<PngWriteState*>(png_get_io_ptr(png));
-  state->bytes.append(reinterpret_cast<const char*>(data), length);
+void put_u32(std::string& out, std::uint32_t v) {
+  const char bytes[4] = {static_cast<char>(v >> 24), static_cast<char>(v >> 16),
+                         static_cast<char>(v >> 8), static_cast<char>(v)};
+  out.append(bytes, 4);
 }
 
-[[noreturn]] void on_png_error(png_structp png, png_const_charp message) {
-  auto* state = static_cast<PngWriteState*>(png_get_error_ptr(png));
-  state->message = message;
-  png_longjmp(png, 1);
+// A PNG chunk: length, type, data, and the CRC of type and data.
+void put_chunk(std::string& out, const char type[4], const char* data, std::size_t size) {
+  put_u32(out, static_cast<std::uint32_t>(size));
+  const std::size_t at = out.size();
+  out.append(type, 4);
+  out.append(data, size);
+  const auto* crc_from = reinterpret_cast<const Bytef*>(out.data() + at);
+  uLong crc = crc32(0L, Z_NULL, 0);
+  for (std::size_t done = 0; done < size + 4;) {  // crc32 takes a uInt length
+    const auto n = static_cast<uInt>(std::min<std::size_t>(size + 4 - done, 1u << 30));
+    crc = crc32(crc, crc_from + done, n);
+    done += n;
+  }
+  put_u32(out, static_cast<std::uint32_t>(crc));
 }
 
-// Releases the write structures on every exit path.
-class PngWriteGuard {
+// Releases zlib's state on every exit path.
+class DeflateGuard {
  public:
-  PngWriteGuard(png_structp& png, png_infop& info) : png_(png), info_(info) {}
-  ~PngWriteGuard() { png_destroy_write_struct(&png_, &info_); }
-  PngWriteGuard(const PngWriteGuard&) = delete;
-  PngWriteGuard& operator=(const PngWriteGuard&) = delete;
+  explicit DeflateGuard(z_stream& z) : z_(z) {}
+  ~DeflateGuard() { deflateEnd(&z_); }
+  DeflateGuard(const DeflateGuard&) = delete;
+  DeflateGuard& operator=(const DeflateGuard&) = delete;
 
  private:
-  png_structp& png_;
-  png_infop& info_;
+  z_stream& z_;
 };
 
 }  // namespace
@@ -98,35 +107,64 @@ std::string encode_png(int width, int height,
   if (width <= 0 || height <= 0) {
     fail(kWhat, what, fmt::format("invalid size {}x{}", width, height));
   }
-  // The full libpng API rather than png_image_write_to_memory, for its compression settings:
-  // run-length matches only (Z_RLE) at zlib's fastest level after the Up filter: a rendered
-  // frame's flat areas and repeated rows compress almost as well as with the default search,
-  // in a fraction of the time (the image bits are the same).
-  PngWriteState state;
-  state.what = what;
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, on_png_error, nullptr);
-  if (png == nullptr) fail(kWhat, what, "libpng could not start");
-  png_infop info = png_create_info_struct(png);
-  PngWriteGuard guard(png, info);
-  if (info == nullptr) fail(kWhat, what, "libpng could not start");
-  // One row's buffer, outside the setjmp scope (no object with a destructor is created
-  // between setjmp and a longjmp back to it).
-  std::vector<std::uint8_t> row(static_cast<std::size_t>(width) * 3u);
-  if (setjmp(png_jmpbuf(png)) != 0) fail(kWhat, what, state.message);
-  png_set_write_fn(png, &state, on_png_write, nullptr);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 8,
-               PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-               PNG_FILTER_TYPE_DEFAULT);
-  png_set_compression_level(png, kCompressionLevel);
-  png_set_compression_strategy(png, Z_RLE);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_UP);
-  png_write_info(png, info);
+  // The PNG container written here, its zlib stream made by zlib directly (libpng reads):
+  // the rows are filtered a strip at a time, without libpng's per-row calls.
+  const std::size_t stride = static_cast<std::size_t>(width) * 3u;
+  std::vector<std::uint8_t> row(stride), above(stride, 0);  // row 0's Up is its bytes
+  const std::size_t strip_rows = std::max<std::size_t>(1, kStripBytes / (stride + 1));
+  std::vector<std::uint8_t> strip(strip_rows * (stride + 1));
+  z_stream z{};
+  if (deflateInit2(&z, kCompressionLevel, Z_DEFLATED, 15, 8, Z_RLE) != Z_OK) {
+    fail(kWhat, what, "zlib could not start");
+  }
+  DeflateGuard guard(z);
+  std::string stream;
+  stream.resize(std::max<std::size_t>(stride * 2, 1u << 16));
+  std::size_t written = 0;
+  // Compresses `n` bytes of filtered rows, growing the stream's buffer as it fills.
+  auto compress = [&](const std::uint8_t* in, std::size_t n, bool last) {
+    z.next_in = const_cast<Bytef*>(in);
+    z.avail_in = static_cast<uInt>(n);
+    for (;;) {
+      if (written == stream.size()) stream.resize(stream.size() * 2);
+      const std::size_t room = std::min<std::size_t>(stream.size() - written, 1u << 30);
+      z.next_out = reinterpret_cast<Bytef*>(&stream[written]);
+      z.avail_out = static_cast<uInt>(room);
+      const int rc = deflate(&z, last ? Z_FINISH : Z_NO_FLUSH);
+      written += room - z.avail_out;
+      if (rc == Z_STREAM_END) return;
+      if (rc != Z_OK && rc != Z_BUF_ERROR) fail(kWhat, what, "zlib reported an error");
+      if (!last && z.avail_in == 0) return;
+    }
+  };
+  std::size_t filled = 0;  // bytes of `strip` in use
   for (int y = 0; y < height; ++y) {
     rows(y, row.data());
-    png_write_row(png, row.data());
+    std::uint8_t* out = strip.data() + filled;
+    out[0] = 2;  // the Up filter: each byte less the byte above it
+    for (std::size_t i = 0; i < stride; ++i)
+      out[1 + i] = static_cast<std::uint8_t>(row[i] - above[i]);
+    row.swap(above);
+    filled += stride + 1;
+    const bool last = y + 1 == height;
+    if (last || filled == strip.size()) {
+      compress(strip.data(), filled, last);
+      filled = 0;
+    }
   }
-  png_write_end(png, nullptr);
-  return std::move(state.bytes);
+  std::string png;
+  png.reserve(written + 64 + written / kMaxChunk * 12);
+  png.append("\x89PNG\r\n\x1a\n", 8);
+  std::string header;
+  put_u32(header, static_cast<std::uint32_t>(width));
+  put_u32(header, static_cast<std::uint32_t>(height));
+  header.append("\x08\x02\x00\x00\x00", 5);  // 8 bits, RGB, deflate, filters 0, no interlace
+  put_chunk(png, "IHDR", header.data(), header.size());
+  for (std::size_t at = 0; at < written; at += kMaxChunk) {
+    put_chunk(png, "IDAT", stream.data() + at, std::min(kMaxChunk, written - at));
+  }
+  put_chunk(png, "IEND", "", 0);
+  return png;
 }
 
 void write_png(const std::string& path, const RgbImage& image) {

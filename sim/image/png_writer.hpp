@@ -9,7 +9,7 @@
 namespace pp5 {
 
 // `image` as the bytes of an 8-bit RGB PNG file; std::runtime_error naming `what` on a bad
-// image or a libpng error.
+// image or a zlib error.
 std::string encode_png(const RgbImage& image, const std::string& what = "image");
 
 // The same for an image made a row at a time: rows(y, out) writes row y's width * 3 bytes
@@ -20,7 +20,7 @@ std::string encode_png(int width, int height,
 
 // Writes `image` as an 8-bit RGB PNG. The data go to `path + ".tmp"` first, which is then renamed
 // onto `path`, so a reader never sees a half-written file. On any failure (bad image dimensions,
-// unwritable directory, libpng error, failed rename) the temporary file is removed, `path` is left
+// unwritable directory, zlib error, failed rename) the temporary file is removed, `path` is left
 // as it was, and std::runtime_error is thrown with the path and the reason in its message.
 void write_png(const std::string& path, const RgbImage& image);
 

@@ -76,7 +76,7 @@ void heat_colour(double t, std::uint8_t rgb[3]) {
 }
 
 RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions)
-    : frame_(frame) {
+    : frame_(frame), grey_(static_cast<std::size_t>(std::max(frame.width, 0))) {
   if (frame.width <= 0 || frame.height <= 0 ||
       frame.rgb.size() != static_cast<std::size_t>(frame.width) * frame.height * 3) {
     throw std::invalid_argument("regions.png: the frame's pixel buffer does not match its size");
@@ -136,16 +136,17 @@ void RegionHeatMap::row(int y, std::uint8_t* out) const {
   // The frame in grey, then the tint of each region on this row (in order), then the
   // busiest Renderer's outlines.
   const std::uint8_t* src = frame_.rgb.data() + static_cast<std::size_t>(y) * width * 3;
-  auto grey = [src](int x) {
-    return static_cast<std::uint8_t>(
+  std::uint8_t* grey = grey_.data();  // the row's grey, computed once
+  for (int x = 0; x < width; ++x) {
+    grey[x] = static_cast<std::uint8_t>(
         (77 * src[3 * x] + 150 * src[3 * x + 1] + 29 * src[3 * x + 2]) >> 8);
-  };
-  for (int x = 0; x < width; ++x) out[3 * x] = out[3 * x + 1] = out[3 * x + 2] = grey(x);
+  }
+  for (int x = 0; x < width; ++x) out[3 * x] = out[3 * x + 1] = out[3 * x + 2] = grey[x];
   for (const Tint& t : tints_) {
     const RegionLoad& r = t.load;
     if (y < r.y0 || y >= r.y0 + r.height) continue;
     for (int x = r.x0; x < r.x0 + r.width; ++x) {
-      const auto& c = t.table[grey(x)];
+      const auto& c = t.table[grey[x]];
       out[3 * x] = c[0];
       out[3 * x + 1] = c[1];
       out[3 * x + 2] = c[2];

@@ -43,7 +43,7 @@ class RegionHeatMap {
   RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions);
   int width() const { return frame_.width; }
   int height() const { return frame_.height + kLegendHeight; }
-  // Row y's width() * 3 bytes (RGB) into out.
+  // Row y's width() * 3 bytes (RGB) into out. Not for two threads at once on one map.
   void row(int y, std::uint8_t* out) const;
 
  private:
@@ -55,6 +55,8 @@ class RegionHeatMap {
   std::vector<Tint> tints_;  // in the order of the loads
   int busiest_ = -1;         // the busiest Renderer
   RgbImage legend_;          // the kLegendHeight rows below the frame
+  // row()'s grey of a frame row: row() is called from one thread at a time.
+  mutable std::vector<std::uint8_t> grey_;
 };
 
 }  // namespace pp5
