@@ -590,26 +590,70 @@ void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
   materialize();
   prepare_columns(expr);
   u64* v = scratch().s0.data();
-  const std::uint8_t* e = enable_.data();
-  const int width = geometry_.width;
   // As for a linear test, the spans narrow to what the test leaves: on each row of a span,
   // from its first pixel with E = 1 to its last (a sphere's disc, not the region, for every
   // instruction after it).
-  std::vector<Range>& kept = spare_spans_;
-  kept.clear();
   for (const Range& r : spans_) {
     evaluate(expr, r, v);
     and_compare(
         enable_.data(), v, [](int) { return i64{0}; }, cond, r.begin, r.end);
-    for (int start = r.begin; start < r.end;) {
-      const int end = std::min(r.end, (start / width + 1) * width);  // this row's part
-      int a = start, b = end;
-      while (a < b && e[a] == 0) ++a;
-      while (b > a && e[b - 1] == 0) --b;
-      if (b > a) kept.push_back({a, b});
-      start = end;
-    }
   }
+  narrow_spans();
+}
+
+namespace {
+
+// The first pixel in [from, to) whose E byte is set, else `to`; the last one plus one, else
+// `from`. Eight bytes at a time.
+int first_enabled(const std::uint8_t* e, int from, int to) {
+  while (from < to && (from & 7) != 0) {
+    if (e[from] != 0) return from;
+    ++from;
+  }
+  for (; from + 8 <= to; from += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, e + from, 8);
+    if (w != 0) return from + __builtin_ctzll(w) / 8;  // little-endian: the lowest byte first
+  }
+  for (; from < to; ++from) {
+    if (e[from] != 0) return from;
+  }
+  return to;
+}
+
+int end_of_enabled(const std::uint8_t* e, int from, int to) {
+  while (to > from && (to & 7) != 0) {
+    if (e[to - 1] != 0) return to;
+    --to;
+  }
+  for (; to - 8 >= from; to -= 8) {
+    std::uint64_t w;
+    std::memcpy(&w, e + to - 8, 8);
+    if (w != 0) return to - __builtin_clzll(w) / 8;
+  }
+  for (; to > from; --to) {
+    if (e[to - 1] != 0) return to;
+  }
+  return from;
+}
+
+}  // namespace
+
+void WordBackend::narrow_spans() {
+  const std::uint8_t* e = enable_.data();
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
+  for_each_span_row([&](int, std::size_t row_start, int from, int to) {
+    const int start = static_cast<int>(row_start);
+    const int a = first_enabled(e, start + from, start + to);
+    if (a == start + to) return;
+    const int b = end_of_enabled(e, a, start + to);
+    if (!kept.empty() && kept.back().end == a) {
+      kept.back().end = b;  // a row enabled to its end and the next from its start: one span
+    } else {
+      kept.push_back({a, b});
+    }
+  });
   spans_.swap(kept);
 }
 
@@ -745,7 +789,7 @@ void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Co
       square ? qcmp_lane<true, false>(field, expr, cond)
              : qcmp_lane<false, false>(field, expr, cond);
     }
-    enable_changed();
+    narrow_spans();
     return;
   }
   prepare_columns(expr);
@@ -754,6 +798,7 @@ void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Co
     load(memory_.data(), field, r, scratch().s1.data(), true);
     compare_values(scratch().s0.data(), wide, scratch().s1.data(), wide, cond, r);
   }
+  narrow_spans();
 }
 
 void WordBackend::compare_values(const u64* a, bool a_unsigned64, const u64* b, bool b_unsigned64,
@@ -779,6 +824,7 @@ void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
   check_field(a, "operand");
   if (b.is_field) check_field(b.field, "operand");
   for (const Range& r : spans_) compare_range(a, b, cond, r);
+  narrow_spans();
 }
 
 void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {

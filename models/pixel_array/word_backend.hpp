@@ -82,6 +82,12 @@ class WordBackend final : public PixelBackend {
   };
   // After E was ANDed with something: it is still 0 outside spans_, which stay as they are.
   void enable_changed() {}
+  // After an instruction that ANDed E with a test (cmp, qcmp, a quadratic qtest): each row's
+  // part of each span narrowed to its first to last pixel with E = 1 (a row with none
+  // leaves the spans; a row enabled to its end and the next from its start stay one span).
+  // Exact, as E = 0 outside; what follows walks only what the test left: shade only the
+  // pixels a primitive reached, the attributes only where a triangle is in front.
+  void narrow_spans();
   // qtest of a linear expression whose value cannot wrap along a row: E cleared outside the
   // interval of each row where the condition holds, found by division, as the evaluator's
   // own fast path does, and spans_ narrowed to those intervals. False (nothing done) when
