@@ -13,8 +13,10 @@
 // both per level, the backing store lanes like pixel memory (allocated on first use). Every
 // operation runs only over the spans (after a triangle's edge tests, its own columns of each
 // of its rows), which is exact (E = 0 is never written) and makes its cost the pixels a
-// primitive's bounding rows and edges leave; an edge test only narrows the spans, and
-// saving or restoring E copies only them. E's bytes outside the spans are never read. A run
+// primitive's bounding rows and edges leave; an edge test only narrows the spans, any other
+// test (cmp, qcmp, a quadratic qtest) narrows each row's part to its first to last enabled
+// pixel, and saving or restoring E copies only them. E's bytes outside the spans are never
+// read. A run
 // of half-plane tests (a triangle's edges) is applied together when the next operation
 // needs E, over only the rows of the band where all of them can hold (materialize()).
 //
