@@ -53,14 +53,11 @@ proc triangle
   eall
 end
 )";
-  MachineConfig config = MachineConfig::defaults();
-  config.screen.width = 768;
-  config.screen.height = 256;
-  config.gp.count = 2;
-  config.renderer.count = 5;
   const Scene scene = make_builtin_scene("torus", {16, 8});
   for (const char* pixels : {"word", "bit"}) {
-    config.set({std::string("fidelity.pixels=") + pixels});
+    MachineConfig config = MachineConfig::defaults();
+    config.set({"screen.width=768", "screen.height=256", "gp.count=2", "renderer.count=5",
+                std::string("fidelity.pixels=") + pixels});
     const Program program = assemble(source, "runs", assembler_options(config));
     const FrameResult one = simulate_frame(config, scene, program, 1);
     const FrameResult three = simulate_frame(config, scene, program, 3);

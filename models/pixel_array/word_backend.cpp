@@ -701,31 +701,60 @@ void WordBackend::for_each_span_row(F f) const {
   }
 }
 
+namespace {
+
+// qload_lane's and qcmp_lane's value at a pixel, as for_each_value gives it (modulo 2^64
+// the same sum: ((A X + (D + B Y)) X + (C Y^2 + E Y + F)), wrapped to result_bits, shifted
+// down by the fraction): the row's terms once per row, two adds and a multiply per pixel
+// (two multiplies with a square term).
+struct PixelValues {
+  PixelValues(const QuadraticCoefficients& c, int x0, int y0, int result_bits, int fraction_bits)
+      : A(static_cast<u64>(c.A)),
+        B(static_cast<u64>(c.B)),
+        C(static_cast<u64>(c.C)),
+        D(static_cast<u64>(c.D)),
+        E(static_cast<u64>(c.E)),
+        F(static_cast<u64>(c.F)),
+        X0(static_cast<u64>(static_cast<i64>(x0))),
+        y0(y0),
+        s(64 - result_bits),
+        shift(std::min(fraction_bits, 63)) {}
+  struct Row {
+    u64 row, linear;
+  };
+  Row row(int y) const {
+    const u64 Y = static_cast<u64>(static_cast<i64>(y0) + y);
+    return {C * Y * Y + E * Y + F, D + B * Y};
+  }
+  template <bool kSquare>
+  u64 at(const Row& r, int x) const {
+    const u64 X = X0 + static_cast<u64>(x);
+    u64 v = kSquare ? (A * X + r.linear) * X + r.row : r.linear * X + r.row;
+    v = static_cast<u64>(static_cast<i64>(v << s) >> s);
+    return static_cast<u64>(static_cast<i64>(v) >> shift);
+  }
+  u64 A, B, C, D, E, F, X0;
+  int y0, s, shift;
+};
+
+}  // namespace
+
 // The value as for_each_value computes it, merged into its lane under E as it is computed
 // (store() fused in). Only the field's low width bits are written, so its signedness does
 // not matter here.
 template <bool kSquare>
 void WordBackend::qload_lane(const Field& dst, const QuadraticCoefficients& c) {
-  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), C = static_cast<u64>(c.C),
-            D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
-  const u64 X0 = static_cast<u64>(static_cast<i64>(x0_));
-  const int s = 64 - evaluator_.result_bits;
-  const int shift = std::min(fraction_bits_, 63);
+  const PixelValues values(c, x0_, y0_, evaluator_.result_bits, fraction_bits_);
   const int off = dst.lo % 64;
   const u64 bits = low_mask(dst.width) << off;
   u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
   const std::uint8_t* e = enable_.data();
   for_each_span_row([=](int y, std::size_t row_start, int from, int to) {
-    const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
-    const u64 row = C * Y * Y + E * Y + F;
-    const u64 linear = D + B * Y;
+    const PixelValues::Row r = values.row(y);
     u64* m = lane + row_start;
     const std::uint8_t* en = e + row_start;
     for (int x = from; x < to; ++x) {
-      const u64 X = X0 + static_cast<u64>(x);
-      u64 v = kSquare ? (A * X + linear) * X + row : linear * X + row;
-      v = static_cast<u64>(static_cast<i64>(v << s) >> s);
-      v = static_cast<u64>(static_cast<i64>(v) >> shift);
+      const u64 v = values.at<kSquare>(r, x);
       const u64 k = bits & (u64{0} - en[x]);
       m[x] = (m[x] & ~k) | ((v << off) & k);
     }
@@ -737,11 +766,7 @@ void WordBackend::qload_lane(const Field& dst, const QuadraticCoefficients& c) {
 // as three flags: (less and lt) or (equal and eq), inverted when inv.
 template <bool kSquare, bool kSigned>
 void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, Compare cond) {
-  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), C = static_cast<u64>(c.C),
-            D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
-  const u64 X0 = static_cast<u64>(static_cast<i64>(x0_));
-  const int s = 64 - evaluator_.result_bits;
-  const int shift = std::min(fraction_bits_, 63);
+  const PixelValues values(c, x0_, y0_, evaluator_.result_bits, fraction_bits_);
   const int off = field.lo % 64;
   const int sw = 64 - field.width;
   const u64 mask = low_mask(field.width);
@@ -753,16 +778,11 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
       cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
   const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
   for_each_span_row([=](int y, std::size_t row_start, int from, int to) {
-    const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
-    const u64 row = C * Y * Y + E * Y + F;
-    const u64 linear = D + B * Y;
+    const PixelValues::Row r = values.row(y);
     const u64* m = lane + row_start;
     std::uint8_t* en = e + row_start;
     for (int x = from; x < to; ++x) {
-      const u64 X = X0 + static_cast<u64>(x);
-      u64 v = kSquare ? (A * X + linear) * X + row : linear * X + row;
-      v = static_cast<u64>(static_cast<i64>(v << s) >> s);
-      v = static_cast<u64>(static_cast<i64>(v) >> shift);
+      u64 v = values.at<kSquare>(r, x);
       u64 f = (m[x] >> off) & mask;
       if constexpr (kSigned) {
         v = static_cast<u64>(static_cast<i64>(v << sw) >> sw);
