@@ -701,13 +701,11 @@ void WordBackend::for_each_span_row(F f) const {
   }
 }
 
-namespace {
-
 // qload_lane's and qcmp_lane's value at a pixel, as for_each_value gives it (modulo 2^64
 // the same sum: ((A X + (D + B Y)) X + (C Y^2 + E Y + F)), wrapped to result_bits, shifted
 // down by the fraction): the row's terms once per row, two adds and a multiply per pixel
 // (two multiplies with a square term).
-struct PixelValues {
+struct WordBackend::PixelValues {
   PixelValues(const QuadraticCoefficients& c, int x0, int y0, int result_bits, int fraction_bits)
       : A(static_cast<u64>(c.A)),
         B(static_cast<u64>(c.B)),
@@ -737,7 +735,6 @@ struct PixelValues {
   int y0, s, shift;
 };
 
-}  // namespace
 
 // The value as for_each_value computes it, merged into its lane under E as it is computed
 // (store() fused in). Only the field's low width bits are written, so its signedness does

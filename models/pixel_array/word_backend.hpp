@@ -125,6 +125,7 @@ class WordBackend final : public PixelBackend {
   // shorter than the region is wide), and merged under E, or compared with the field in
   // place. Only a square term (kSquare: A != 0) and the field's signedness (kSigned) are
   // compiled in; the condition is applied without a branch per pixel.
+  struct PixelValues;  // their per-pixel arithmetic (word_backend.cpp)
   template <bool kSquare>
   void qload_lane(const Field& dst, const QuadraticCoefficients& c);
   template <bool kSquare, bool kSigned>
