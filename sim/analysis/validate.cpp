@@ -64,15 +64,15 @@ double measured_ring_bandwidth(const MachineConfig& c) {
   // Every GP sends to a Renderer, as bins do: more senders than channels.
   const int senders = std::max(c.gp.count, 2 * c.ring.channels);
   const int stops = senders + c.renderer.count + 1;
-  const int messages = 64;
+  constexpr int kMessages = 64;
   const auto words = static_cast<std::uint64_t>(c.renderer.queue_words);
   Ring ring("validate_ring", p, stops);
   sc_core::sc_time last;
   for (int s = 0; s < senders; ++s) {
     const int to = senders + s % c.renderer.count;
     sc_core::sc_spawn(
-        [&ring, &last, s, to, messages, words] {
-          for (int m = 0; m < messages; ++m) {
+        [&ring, &last, s, to, words] {
+          for (int m = 0; m < kMessages; ++m) {
             ring.transfer(s, to, words);
             last = std::max(last, sc_core::sc_time_stamp());
           }

@@ -77,13 +77,6 @@ int report_parse_error(const CLI::App& app, const CLI::ParseError& e, int argc, 
   return 2;
 }
 
-// Called from the executable's .preinit_array, which runs before any shared library's
-// initialisers: SystemC's own start-up allocation (3 MB, zeroed by its static constructor,
-// 768 page faults, about 15 ms of every run on the development machine) lands in the tuned
-// heap too. Only C library calls, which are ready by then. Not under the sanitizers, whose
-// runtimes own malloc and their own start-up.
-void preinit(int, char**, char**) { pp5::tune_host_memory(); }
-
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
     __has_feature(memory_sanitizer)
@@ -94,6 +87,13 @@ void preinit(int, char**, char**) { pp5::tune_host_memory(); }
 #define PP5_SANITIZED 1
 #endif
 #if defined(__linux__) && !defined(PP5_SANITIZED)
+// Called from the executable's .preinit_array, which runs before any shared library's
+// initialisers: SystemC's own start-up allocation (3 MB, zeroed by its static constructor,
+// 768 page faults, about 15 ms of every run on the development machine) lands in the tuned
+// heap too. Only C library calls, which are ready by then. Not under the sanitizers, whose
+// runtimes own malloc and their own start-up.
+void preinit(int, char**, char**) { pp5::tune_host_memory(); }
+
 __attribute__((section(".preinit_array"), used)) void (*const preinit_entry)(int, char**,
                                                                              char**) = preinit;
 #endif
