@@ -18,8 +18,11 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
   ring_ = std::make_unique<Ring>("ring", ring_params(config), plan_.ring_stops());
-  frame_buffer_ = std::make_unique<FrameBuffer>("frame_buffer", config.screen.width,
-                                                config.screen.height, config.regions());
+  // With fidelity.pixels=none no region's pixels arrive: the frame buffer holds no image
+  // (a 4096 x 4096 frame's 48 MB, cleared for nothing, at every point of a timing sweep).
+  frame_buffer_ = std::make_unique<FrameBuffer>(
+      "frame_buffer", config.screen.width, config.screen.height, config.regions(),
+      config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none);
   for (int k = 0; k < renderers; ++k) {
     renderers_.push_back(std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, *this));
   }

@@ -3,16 +3,19 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <stdexcept>
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
 
 namespace pp5 {
 
-FrameBuffer::FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions)
+FrameBuffer::FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions,
+                         bool image)
     : sc_module(name), arrival_(regions, sc_core::SC_ZERO_TIME) {
   image_.width = width;
   image_.height = height;
+  if (!image) return;
   const std::size_t bytes = static_cast<std::size_t>(width) * height * 3;
   image_.rgb.reserve(bytes);
 #if defined(__linux__)
@@ -36,6 +39,9 @@ void FrameBuffer::receive_region(const RegionArrival& region) {
 
 void FrameBuffer::store_region(int x0, int y0, int region_width, int region_height,
                                const std::vector<std::uint8_t>& rgb) {
+  if (image_.rgb.empty()) {
+    throw std::logic_error("frame buffer: a region's pixels arrived at a frame that holds none");
+  }
   const int w = std::min(region_width, image_.width - x0);
   const int h = std::min(region_height, image_.height - y0);
   for (int y = 0; y < h; ++y) {

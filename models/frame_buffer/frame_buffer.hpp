@@ -15,7 +15,9 @@ class Statistics;
 
 class FrameBuffer : public sc_core::sc_module, public RingEndpoint {
  public:
-  FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions);
+  // `image` false: timing only, no pixel arrives; the frame taken is width x height with no
+  // pixel bytes (as the analytic model's), and store_region is refused.
+  FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions, bool image = true);
 
   // A region's pixels arrive over the ring (timing; the arrival may lie in the future of the
   // sender, whose ring interface sends while its array works on).
