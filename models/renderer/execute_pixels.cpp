@@ -23,7 +23,7 @@ void execute_pixels(Machine& machine, const std::vector<const std::vector<Region
   const Program& program = machine.program();
   const MachineConfig& config = machine.config();
   using Pixels = MachineConfig::Fidelity::Pixels;
-  if (config.fidelity.pixels == Pixels::none) return;  // timing only: the frame stays black
+  if (config.fidelity.pixels == Pixels::none) return;  // timing only: the frame holds no pixels
   RendererBoardParams params = board_params(config);
   params.backend = name_of(config.fidelity.pixels);
   // Only the bits the program declares are allocated and processed: fields beyond them would

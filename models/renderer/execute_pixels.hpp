@@ -4,7 +4,7 @@
 //
 // Contract:
 //  - The level is the configuration's (fidelity.*): the boards' backend is fidelity.pixels
-//    ("bit" or "word"); with "none" nothing executes and the frame stays black; only the
+//    ("bit" or "word"); with "none" nothing executes and the frame holds no pixels; only the
 //    regions inside the fidelity window execute.
 //  - Deterministic: each board executes its own regions in order, whatever the thread count,
 //    so the image never depends on `threads`.

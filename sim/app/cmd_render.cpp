@@ -99,9 +99,9 @@ int run_render(RenderOptions o) {
   // All of the run's outputs, or none of them (sim/output/output_set.hpp).
   const fs::path dir(o.out_dir);
   OutputSet outputs;
-  // With fidelity.pixels=none no pixel executed: there is no image to write, and regions.png
-  // shows the regions' cycles on a black frame (the event model's frame buffer starts black;
-  // the analytic model builds none).
+  // With fidelity.pixels=none no pixel executed: there is no image to write (neither timing
+  // model's frame holds pixel bytes then), and regions.png shows the regions' cycles on a
+  // black frame made here.
   const bool heat_map = !result.regions.empty();
   if (heat_map && result.image.rgb.empty()) {
     result.image.width = config.screen.width;
