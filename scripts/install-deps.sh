@@ -12,7 +12,7 @@
 set -euo pipefail
 group="${1:-all}"
 run=(build-essential cmake ninja-build pkg-config
-     libsystemc-dev libglm-dev libfmt-dev nlohmann-json3-dev libcli11-dev libpng-dev libassimp-dev
+     libsystemc-dev libglm-dev libfmt-dev nlohmann-json3-dev libcli11-dev libpng-dev zlib1g-dev libassimp-dev
      gemmi-dev tao-pegtl-dev)
 test=(catch2 python3 gtkwave librsvg2-bin)
 fuzz=(clang libclang-rt-dev)

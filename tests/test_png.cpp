@@ -57,7 +57,11 @@ RgbImage pattern_image(int width, int height) {
 
 TEST_CASE("write_png and read_png round-trip the exact bytes", "[png]") {
   TempDir dir;
-  for (auto [w, h] : {std::pair{1, 1}, std::pair{7, 5}, std::pair{64, 3}, std::pair{3, 64}}) {
+  // The writer filters and compresses 256 KB of rows at a time, into an output buffer that
+  // starts at 64 KB: 1000 x 300 takes several strips and grows the buffer; a row of 100,000
+  // pixels is a strip of its own.
+  for (auto [w, h] : {std::pair{1, 1}, std::pair{7, 5}, std::pair{64, 3}, std::pair{3, 64},
+                      std::pair{1000, 300}, std::pair{100000, 3}}) {
     CAPTURE(w, h);
     const RgbImage image = pattern_image(w, h);
     const std::string path = dir.file("pattern.png");

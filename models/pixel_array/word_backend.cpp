@@ -735,7 +735,6 @@ struct WordBackend::PixelValues {
   int y0, s, shift;
 };
 
-
 // The value as for_each_value computes it, merged into its lane under E as it is computed
 // (store() fused in). Only the field's low width bits are written, so its signedness does
 // not matter here.

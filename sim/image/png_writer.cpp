@@ -110,6 +110,9 @@ std::string encode_png(int width, int height,
   // The PNG container written here, its zlib stream made by zlib directly (libpng reads):
   // the rows are filtered a strip at a time, without libpng's per-row calls.
   const std::size_t stride = static_cast<std::size_t>(width) * 3u;
+  if (stride + 1 > std::numeric_limits<uInt>::max()) {  // a row goes to zlib whole
+    fail(kWhat, what, fmt::format("a row of {} pixels is too wide to compress", width));
+  }
   std::vector<std::uint8_t> row(stride), above(stride, 0);  // row 0's Up is its bytes
   const std::size_t strip_rows = std::max<std::size_t>(1, kStripBytes / (stride + 1));
   std::vector<std::uint8_t> strip(strip_rows * (stride + 1));
