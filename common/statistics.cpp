@@ -1,14 +1,17 @@
 #include "common/statistics.hpp"
 
 #include <algorithm>
+#include <charconv>
+#include <cstdint>
 #include <stdexcept>
+#include <string_view>
 
 namespace pp5 {
 
 namespace {
 
 // An array index, written without leading zeros ("gp.01" would be a second name for gp.1).
-bool is_index(const std::string& component) {
+bool is_index(std::string_view component) {
   if (component.empty() || (component.size() > 1 && component[0] == '0')) return false;
   for (char c : component) {
     if (c < '0' || c > '9') return false;
@@ -16,20 +19,30 @@ bool is_index(const std::string& component) {
   return true;
 }
 
-std::vector<std::string> components(const std::string& name) {
-  std::vector<std::string> out;
+// A name's components, as views into it (this runs for every statistic of every frame).
+std::vector<std::string_view> components(std::string_view name) {
+  std::vector<std::string_view> out;
+  out.reserve(8);
   std::size_t start = 0;
   for (;;) {
     const std::size_t dot = name.find('.', start);
-    out.push_back(name.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
-    if (dot == std::string::npos) return out;
+    out.push_back(
+        name.substr(start, dot == std::string_view::npos ? std::string_view::npos : dot - start));
+    if (dot == std::string_view::npos) return out;
     start = dot + 1;
   }
 }
 
-// `parts` is components(name).
-void check_name(const std::string& name, const std::vector<std::string>& parts) {
-  for (const std::string& c : parts) {
+// An index component's value (is_index holds); SIZE_MAX when it does not fit.
+std::size_t index_value(std::string_view component) {
+  std::size_t v = 0;
+  const auto [end, error] =
+      std::from_chars(component.data(), component.data() + component.size(), v);
+  return error == std::errc() && end == component.data() + component.size() ? v : SIZE_MAX;
+}
+
+void check_name(const std::string& name, const std::vector<std::string_view>& parts) {
+  for (std::string_view c : parts) {
     bool ok = !c.empty();
     for (char ch : c)
       ok = ok && ((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_');
@@ -73,11 +86,15 @@ const char* stat_kind_name(StatKind kind) {
 
 namespace {
 
-std::string pattern_of(const std::vector<std::string>& parts) {
+std::string pattern_of(const std::vector<std::string_view>& parts) {
   std::string out;
-  for (const std::string& c : parts) {
+  for (std::string_view c : parts) {
     if (!out.empty()) out += '.';
-    out += is_index(c) ? std::string("N") : c;
+    if (is_index(c)) {
+      out += 'N';
+    } else {
+      out += c;
+    }
   }
   return out;
 }
@@ -106,29 +123,33 @@ void Statistics::add_text(const std::string& name, const char* unit, const char*
 
 void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
   const std::string& name = info.name;
-  // The name's components, split once (this runs for every statistic of every frame).
-  const std::vector<std::string> parts = components(name);
+  const std::vector<std::string_view> parts = components(name);
   check_name(name, parts);
   if (index_.count(name)) throw std::invalid_argument("statistic '" + name + "' registered twice");
   if (parents_.count(name)) {
     throw std::invalid_argument("statistic '" + name + "' is already a group of statistics");
   }
-  // Check everything before changing anything, so that a refused name leaves no trace.
-  std::string parent;
+  // Check everything before changing anything, so that a refused name leaves no trace. A
+  // parent is a prefix of the name; one already known as a group is not a value (add keeps
+  // the two apart), so only a new one is looked up among the values.
+  const std::string_view whole(name);
+  std::size_t end = 0;  // the parent's length
   for (std::size_t k = 0; k + 1 < parts.size(); ++k) {
-    parent += (k ? "." : "") + parts[k];
-    if (index_.count(parent)) {
-      throw std::invalid_argument("statistic '" + name + "': '" + parent + "' is a value");
+    end += (k ? 1 : 0) + parts[k].size();
+    const std::string_view parent = whole.substr(0, end);
+    const auto it = parents_.find(parent);
+    if (it == parents_.end() && index_.count(std::string(parent))) {
+      throw std::invalid_argument("statistic '" + name + "': '" + std::string(parent) +
+                                  "' is a value");
     }
     const bool index = is_index(parts[k + 1]);
-    const auto it = parents_.find(parent);
     if (it != parents_.end() && it->second.array != index) {
-      throw std::invalid_argument("statistic '" + name + "': '" + parent + "' is " +
+      throw std::invalid_argument("statistic '" + name + "': '" + std::string(parent) + "' is " +
                                   (it->second.array ? "an array" : "a group of names"));
     }
     const std::size_t have = it == parents_.end() ? 0 : it->second.elements;
-    if (index && std::stoull(parts[k + 1]) > have) {
-      throw std::invalid_argument("statistic '" + name + "': indices of '" + parent +
+    if (index && index_value(parts[k + 1]) > have) {
+      throw std::invalid_argument("statistic '" + name + "': indices of '" + std::string(parent) +
                                   "' must be registered from 0 without gaps");
     }
   }
@@ -143,14 +164,15 @@ void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
   } else {
     patterns_.emplace(pattern, entries_.size());
   }
-  parent.clear();
+  end = 0;
   for (std::size_t k = 0; k + 1 < parts.size(); ++k) {
-    parent += (k ? "." : "") + parts[k];
-    Group& group = parents_[parent];
+    end += (k ? 1 : 0) + parts[k].size();
+    const std::string_view parent = whole.substr(0, end);
+    auto it = parents_.find(parent);
+    if (it == parents_.end()) it = parents_.emplace(std::string(parent), Group{}).first;
+    Group& group = it->second;
     group.array = is_index(parts[k + 1]);
-    if (group.array) {
-      group.elements = std::max<std::size_t>(group.elements, std::stoull(parts[k + 1]) + 1);
-    }
+    if (group.array) group.elements = std::max(group.elements, index_value(parts[k + 1]) + 1);
   }
   index_.emplace(name, entries_.size());
   entries_.push_back({std::move(info), std::move(get), {}, false});
@@ -212,9 +234,9 @@ nlohmann::json Statistics::to_json() const {
   nlohmann::json doc = nlohmann::json::object();
   for (const Entry& e : entries_) {
     nlohmann::json* at = &doc;
-    for (const std::string& c : components(e.info.name)) {
+    for (std::string_view c : components(e.info.name)) {
       // Dense registration (checked by add) means an index is at most the array's size.
-      at = is_index(c) ? &(*at)[std::stoull(c)] : &(*at)[c];
+      at = is_index(c) ? &(*at)[index_value(c)] : &(*at)[c];
     }
     *at = json_of(read(e));
   }

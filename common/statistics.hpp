@@ -22,6 +22,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <unordered_map>
@@ -110,7 +111,7 @@ class Statistics {
     bool array = false;
     std::size_t elements = 0;
   };
-  std::unordered_map<std::string, Group> parents_;
+  std::map<std::string, Group, std::less<>> parents_;  // looked up by prefix (string_view)
   // The first statistic of each pattern.
   std::unordered_map<std::string, std::size_t> patterns_;
 };
