@@ -252,10 +252,13 @@ void GraphicsProcessor::run() {
   std::vector<std::size_t> next(static_cast<std::size_t>(passes) * n, 0);
   // An empty bin is not sent: the map has told its Renderer not to wait for it.
   std::vector<bool> done(next.size(), false);
-  std::size_t remaining = 0;
-  for (std::size_t s = 0; s < done.size(); ++s) {
-    done[s] = bins[s % n].empty();
-    if (!done[s]) ++remaining;
+  // The stages this GP still owes, ascending.
+  std::vector<int> owed;
+  for (int pass = 0, s = 0; pass < passes; ++pass) {
+    for (int r = 0; r < n; ++r, ++s) {
+      done[static_cast<std::size_t>(s)] = bins[static_cast<std::size_t>(r)].empty();
+      if (!done[static_cast<std::size_t>(s)]) owed.push_back(s);
+    }
   }
   // A message carries a header word and as many of the bin's next packets as fit in a queue
   // (packets of different kinds differ in size; each fits, checked by the Machine): its size
@@ -285,16 +288,29 @@ void GraphicsProcessor::run() {
   };
   // Each Renderer has at most one stage open, so the candidates are those stages, tried in
   // stage order: the lowest open stage this GP still owes something, whose queue has room.
+  // Found from whichever list is shorter: the Renderers' open stages, or the stages owed
+  // (the stage of a region is open only at the Renderer that claimed the region). A GP
+  // waiting on one region's queue is woken by every stage any Renderer opens: on a large
+  // screen of empty regions, most of its wake-ups.
   std::vector<int> open_stages;
   open_stages.reserve(static_cast<std::size_t>(machine_.renderer_count()));
-  while (remaining > 0) {
+  const auto renderers = static_cast<std::size_t>(machine_.renderer_count());
+  while (!owed.empty()) {
     open_stages.clear();
-    for (int k = 0; k < machine_.renderer_count(); ++k) {
-      const int s = machine_.renderer(k).open_stage(n);
-      // A region it claimed (its owner), of a pass whose packets exist.
-      if (s >= 0 && !done[s] && s / n < ready_passes) open_stages.push_back(s);
+    if (owed.size() <= renderers) {
+      for (const int s : owed) {
+        if (s / n >= ready_passes) break;
+        const int owner = machine_.scheduler().owner_of_region(s % n);
+        if (owner >= 0 && machine_.renderer(owner).open_stage(n) == s) open_stages.push_back(s);
+      }
+    } else {
+      for (int k = 0; k < machine_.renderer_count(); ++k) {
+        const int s = machine_.renderer(k).open_stage(n);
+        // A region it claimed (its owner), of a pass whose packets exist.
+        if (s >= 0 && !done[s] && s / n < ready_passes) open_stages.push_back(s);
+      }
+      std::sort(open_stages.begin(), open_stages.end());
     }
-    std::sort(open_stages.begin(), open_stages.end());
     int pick = -1;
     for (int s : open_stages) {
       if (machine_.renderer(machine_.scheduler().owner_of_region(s % n)).has_room(words_for(s))) {
@@ -336,7 +352,7 @@ void GraphicsProcessor::run() {
     machine_.renderer(machine_.scheduler().owner_of_region(pick % n)).reserve_room(m->words);
     if (m->last) {
       done[pick] = true;
-      --remaining;
+      owed.erase(std::lower_bound(owed.begin(), owed.end(), pick));
     }
     send(std::move(m));
   }
