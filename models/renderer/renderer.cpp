@@ -75,12 +75,35 @@ void Renderer::open_next_stage() {
   machine_.scheduler().input_changed().notify(sc_core::SC_ZERO_TIME);
 }
 
-void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values) {
+void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values,
+                      bool region_wide) {
   if (!procedure.defined) return;
   const MachineConfig& config = machine_.config();
   const TimingParams& timing = machine_.timing();
   ++stats_.packets;
   stats_.instructions += procedure.code.size();
+  RegionWideCost* memo = nullptr;
+  if (region_wide) {
+    for (RegionWideCost& c : region_wide_costs_) {
+      if (c.code == &procedure && c.expressions_begin == values.expressions.begin() &&
+          c.expressions_end == values.expressions.end() && c.parameters == &values.parameters) {
+        cursor_ += cycle_ * static_cast<double>(c.cycles.count);
+        stats_.busy += c.cycles;
+        return;
+      }
+    }
+    const bool port = config.renderer.backing_store_overlap &&
+                      std::any_of(procedure.code.begin(), procedure.code.end(), [](const auto& i) {
+                        return i.op == Opcode::bsld || i.op == Opcode::bsst;
+                      });
+    if (!port) {
+      memo = &region_wide_costs_.emplace_back(RegionWideCost{&procedure,
+                                                             values.expressions.begin(),
+                                                             values.expressions.end(),
+                                                             &values.parameters,
+                                                             {}});
+    }
+  }
   ArrayCycles cycles(config.renderer.packet_overhead_cycles);
   for (const Instruction& ins : procedure.code) {
     const ArrayCycles cost = instruction_cost(ins, timing, values);
@@ -114,6 +137,7 @@ void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values
   }
   cursor_ += cycle_ * static_cast<double>(cycles.count);
   stats_.busy += cycles;
+  if (memo != nullptr) memo->cycles = cycles;
 }
 
 void Renderer::load_coefficients(const Packet& packet, sc_core::sc_time arrival) {
@@ -200,7 +224,7 @@ void Renderer::run() {
   std::vector<std::uint64_t> step_start;
   auto charge_step = [&](const RegionStep& step) {
     step_start.push_back(cycle_now());
-    charge(step.code, step.values);
+    charge(step.code, step.values, true);
   };
   sc_core::sc_time region_start;
   std::uint64_t region_busy_start = 0;

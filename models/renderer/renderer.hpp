@@ -121,13 +121,24 @@ class Renderer : public sc_core::sc_module, public RingEndpoint {
   // Waits until every bin map has arrived; the wait is the GPs' (before the last map was
   // asked for) and the ring's (after).
   void wait_for_bin_maps();
-  // Adds one procedure's time at the array's cursor.
-  void charge(const ProcedureCode& procedure, const PacketValues& values);
+  // Adds one procedure's time at the array's cursor. A region-wide step (clear, pass, light,
+  // shade) binds values that are the same in every region (the frame's, or a light's): its
+  // cycles are summed once per frame and reused, unless it moves blocks through the
+  // backing-store port, whose timing depends on the port's state.
+  void charge(const ProcedureCode& procedure, const PacketValues& values, bool region_wide = false);
   // Loads a packet's coefficients into the evaluator before it runs.
   void load_coefficients(const Packet& packet, sc_core::sc_time arrival);
   // Advances simulated time to the cursor (one kernel event).
   void catch_up();
   void ship(int region);
+
+  struct RegionWideCost {
+    const ProcedureCode* code;
+    const QuadraticCoefficients *expressions_begin, *expressions_end;
+    const ParameterValues* parameters;
+    ArrayCycles cycles;  // the procedure's, packet overhead included
+  };
+  std::vector<RegionWideCost> region_wide_costs_;
 
   int index_;
   Machine& machine_;
