@@ -73,7 +73,7 @@ void BM_OneRegionScene(benchmark::State& state) {
     sim_seconds = r.frame_seconds;
     timing_ms += r.stats.real("host.timing_seconds") * 1e3;
     pixel_ms += r.stats.real("host.pixel_seconds") * 1e3;
-    benchmark::DoNotOptimize(r.image.rgb.data());
+    benchmark::DoNotOptimize(r.image);
   }
   state.counters["regions"] = config.regions();
   state.counters["sim_ms"] = sim_seconds * 1e3;
@@ -95,7 +95,7 @@ void BM_OneRegionRatio(benchmark::State& state) {
     for (const OneRegion* one : {&small, &big}) {
       const auto t0 = std::chrono::steady_clock::now();
       const pp5::FrameResult r = pp5::simulate_frame(one->config, one->scene, one->program, 1);
-      benchmark::DoNotOptimize(r.image.rgb.data());
+      benchmark::DoNotOptimize(r.image);
       const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       (one == &small ? small_sum : big_sum) += s;
       double& least = one == &small ? small_least : big_least;

@@ -31,7 +31,9 @@ void torus_frame(benchmark::State& state, const std::string& firmware, const cha
                            pp5::assembler_options(config));
     const pp5::FrameResult r = pp5::simulate_frame(config, scene, program, 2);
     const std::string frame = pp5::encode_png(r.image);
-    const std::string regions = pp5::encode_png(pp5::region_heat_map(r.image, r.regions));
+    const pp5::RegionHeatMap map(r.image, r.regions);
+    const std::string regions = pp5::encode_png(
+        map.width(), map.height(), [&map](int y, std::uint8_t* row) { map.row(y, row); });
     benchmark::DoNotOptimize(frame.data());
     benchmark::DoNotOptimize(regions.data());
     host += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

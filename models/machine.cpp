@@ -18,10 +18,10 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
   ring_ = std::make_unique<Ring>("ring", ring_params(config), plan_.ring_stops());
-  // With fidelity.pixels=none no region's pixels arrive: the frame buffer holds no image
-  // (a 4096 x 4096 frame's 48 MB, cleared for nothing, at every point of a timing sweep).
+  // With fidelity.pixels=none no region's pixels arrive: the frame buffer holds none.
   frame_buffer_ = std::make_unique<FrameBuffer>(
-      "frame_buffer", config.screen.width, config.screen.height, config.regions(),
+      "frame_buffer", config.screen.width, config.screen.height, config.renderer.region_width,
+      config.renderer.region_height, config.regions(),
       config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none);
   for (int k = 0; k < renderers; ++k) {
     renderers_.push_back(std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, *this));

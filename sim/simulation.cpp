@@ -387,6 +387,9 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
     for (const auto& w : regions) work.push_back(&w);
     execute_pixels(*machine, work, threads);
     result.image = machine->frame_buffer().take_image();
+  } else {
+    result.image = FrameImage(config.screen.width, config.screen.height,
+                              config.renderer.region_width, config.renderer.region_height, false);
   }
   for (std::size_t k = 0; k < a->regions.size(); ++k) {
     for (int r : a->regions[k]) {

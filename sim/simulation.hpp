@@ -20,7 +20,9 @@ class BoardObserver;
 class SetupMemo;
 
 struct FrameResult {
-  RgbImage image;
+  // The frame buffer's frame, region by region (image.flat() for one RgbImage). A timing-only
+  // frame (fidelity.pixels=none) holds no pixels: image.has_pixels() is false.
+  FrameImage image;
   // Every module's statistics, frozen at the end of the frame: read them by name as typed
   // values (stats.real("frame.simulated_seconds")); `pp5sim stats --describe` lists them.
   Statistics stats;

@@ -119,7 +119,7 @@ TEST_CASE("analytic timing with word pixels draws the event model's image", "[an
     const FrameResult event = run(config, "event", "bit", scene, program);
     const FrameResult analytic = run(config, "analytic", "word", scene, program);
     INFO("scene " << scene_name);
-    CHECK(analytic.image.rgb == event.image.rgb);
+    CHECK(analytic.image.flat().rgb == event.image.flat().rgb);
     // A window: only its regions are drawn, the others stay black.
     MachineConfig window = config;
     window.set({"fidelity.window_x=1", "fidelity.window_columns=1", "fidelity.window_rows=1"});
@@ -130,9 +130,9 @@ TEST_CASE("analytic timing with word pixels draws the event model's image", "[an
         const bool inside = x >= 128 && y < 128;
         for (int c = 0; c < 3; ++c) {
           if (inside) {
-            REQUIRE(corner.image.rgb[p + c] == event.image.rgb[p + c]);
+            REQUIRE(corner.image.flat().rgb[p + c] == event.image.flat().rgb[p + c]);
           } else {
-            REQUIRE(corner.image.rgb[p + c] == 0);
+            REQUIRE(corner.image.flat().rgb[p + c] == 0);
           }
         }
       }

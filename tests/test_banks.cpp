@@ -624,7 +624,7 @@ TEST_CASE("The transparency programs peel as many layers as frame.layers says", 
     const Program program =
         assemble_file(program_path("transparent_threshold"), assembler_options(config));
     const FrameResult r = simulate_frame(config, scene, program, 2);
-    return r.image.rgb;
+    return r.image.flat().rgb;
   };
   const auto one = image(1);
   const auto two = image(2);

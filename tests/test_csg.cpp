@@ -522,7 +522,7 @@ TEST_CASE("CSG with quadric spheres as solids agrees with the ray caster to the 
     // The machine's frame and the field readout walk the same plan.
     const FrameResult frame = simulate_frame(config, scene, program, 2);
     const FieldFrame field = render_field(config, scene, program, "z", 2);
-    CHECK(frame.image.rgb == field.image.rgb);
+    CHECK(frame.image.flat().rgb == field.image.rgb);
   }
   {
     // Each sphere of a solid is two packets per region it touches; out of its solid, one.
@@ -570,7 +570,7 @@ TEST_CASE("a CSG frame is the same image however the plan is walked", "[csg]") {
     const Scene scene = make_parity_scene(name);
     const FrameResult frame = simulate_frame(config, scene, program, 2);
     const FieldFrame field = render_field(config, scene, program, "z", 2);
-    CHECK(frame.image.rgb == field.image.rgb);
+    CHECK(frame.image.flat().rgb == field.image.rgb);
     CHECK(frame.stats.integer("renderers_total.busy_cycles") > 0);
   }
 }

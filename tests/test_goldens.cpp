@@ -116,7 +116,7 @@ void check_golden(const std::string& name, const MachineConfig& config, const Sc
   nlohmann::json got = {{"scene", scene.name},
                         {"firmware", program_name},
                         {"screen", {config.screen.width, config.screen.height}},
-                        {"image_fnv1a64", image_hash(r.image)},
+                        {"image_fnv1a64", image_hash(r.image.flat())},
                         {"stats", test::without_host(r.stats_json)}};
   // The program's name in the statistics is the path it was assembled from: keep the
   // golden independent of where the checkout lies.

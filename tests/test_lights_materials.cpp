@@ -208,11 +208,12 @@ TEST_CASE("a second light brightens the Phong image", "[lights]") {
   const FrameResult one = simulate_frame(config, scene, phong, 2);
   scene.lights.push_back({glm::normalize(glm::vec3(1, -0.3f, 0.5f)), 0.6f, 0.4f, 16.0f});
   const FrameResult two = simulate_frame(config, scene, phong, 2);
-  CHECK(two.image.rgb != one.image.rgb);
-  CHECK(brightness(two.image) > brightness(one.image) + 256 * 256);
+  CHECK(two.image.flat().rgb != one.image.flat().rgb);
+  CHECK(brightness(two.image.flat()) > brightness(one.image.flat()) + 256 * 256);
   // No pixel gets darker: light only adds.
-  for (std::size_t k = 0; k < one.image.rgb.size(); ++k) {
-    if (two.image.rgb[k] < one.image.rgb[k]) FAIL("pixel byte " << k << " got darker");
+  for (std::size_t k = 0; k < one.image.flat().rgb.size(); ++k) {
+    if (two.image.flat().rgb[k] < one.image.flat().rgb[k])
+      FAIL("pixel byte " << k << " got darker");
   }
 }
 
@@ -271,12 +272,12 @@ TEST_CASE("a half-transparent quad blends with the opaque one behind it", "[mate
   };
   const glm::ivec3 blended = composite({{glass, 128}, {wall, 256}});
   CHECK(blended == glm::ivec3(178, 127, 102));
-  CHECK(pixel(r.image, 64, 64) == blended);      // both quads
-  CHECK(pixel(r.image, 96, 64) == wall);         // only the opaque one
-  CHECK(pixel(r.image, 2, 2) == glm::ivec3(0));  // the background
+  CHECK(pixel(r.image.flat(), 64, 64) == blended);      // both quads
+  CHECK(pixel(r.image.flat(), 96, 64) == wall);         // only the opaque one
+  CHECK(pixel(r.image.flat(), 2, 2) == glm::ivec3(0));  // the background
   // Opacity ignored (gouraud): the glass hides the wall.
   const FrameResult opaque = simulate_frame(config, scene, load_program("gouraud", config), 1);
-  CHECK(pixel(opaque.image, 64, 64) == glass);
+  CHECK(pixel(opaque.image.flat(), 64, 64) == glass);
 }
 
 TEST_CASE("opaque surfaces through the transparency program equal Gouraud", "[materials]") {
@@ -293,7 +294,7 @@ TEST_CASE("opaque surfaces through the transparency program equal Gouraud", "[ma
     for (const char* program : {"transparent", "transparent_interval"}) {
       INFO(program);
       const FrameResult peeled = simulate_frame(config, scene, load_program(program, config), 2);
-      CHECK(peeled.image.rgb == gouraud.image.rgb);
+      CHECK(peeled.image.flat().rgb == gouraud.image.flat().rgb);
     }
   }
 }

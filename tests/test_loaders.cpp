@@ -224,7 +224,8 @@ TEST_CASE("a mesh file renders through the firmware", "[loaders]") {
   const glm::ivec3 bg = glm::ivec3(glm::round(scene.background * 255.0f));
   int covered = 0;
   for (int p = 0; p < 128 * 128; ++p) {
-    const glm::ivec3 c(r.image.rgb[3 * p], r.image.rgb[3 * p + 1], r.image.rgb[3 * p + 2]);
+    const glm::ivec3 c(r.image.flat().rgb[3 * p], r.image.flat().rgb[3 * p + 1],
+                       r.image.flat().rgb[3 * p + 2]);
     covered += c != bg;
   }
   // The framed cube fills a good part of the frame.

@@ -28,8 +28,8 @@ TEST_CASE("frames and statistics are identical across runs and host thread count
   const FrameResult one = simulate_frame(config, scene, program, 1);
   const FrameResult four = simulate_frame(config, scene, program, 4);
   const FrameResult again = simulate_frame(config, scene, program, 1);
-  CHECK(one.image.rgb == four.image.rgb);
-  CHECK(one.image.rgb == again.image.rgb);
+  CHECK(one.image.flat().rgb == four.image.flat().rgb);
+  CHECK(one.image.flat().rgb == again.image.flat().rgb);
   CHECK(without_host(one.stats_json) == without_host(four.stats_json));
   CHECK(without_host(one.stats_json) == without_host(again.stats_json));
   CHECK(one.stats.integer("frame.array_cycles") > 0);
@@ -61,11 +61,11 @@ end
     const Program program = assemble(source, "runs", assembler_options(config));
     const FrameResult one = simulate_frame(config, scene, program, 1);
     const FrameResult three = simulate_frame(config, scene, program, 3);
-    CHECK(one.image.rgb == three.image.rgb);
+    CHECK(one.image.flat().rgb == three.image.flat().rgb);
     // Renderer k's first region (region k) shows one run from a new board's zeros.
     for (int k = 0; k < config.renderer.count; ++k) {
       const std::size_t pixel = static_cast<std::size_t>(k) * 128;  // row 0, region k
-      CHECK(static_cast<int>(one.image.rgb[pixel * 3]) == 40);
+      CHECK(static_cast<int>(one.image.flat().rgb[pixel * 3]) == 40);
     }
   }
 }
@@ -204,11 +204,11 @@ end
   const FrameResult three = simulate_frame(config, scene, program, 2);
   const FrameResult one = simulate_frame(config, scene, single, 2);
   std::size_t covered = 0;
-  for (std::size_t p = 0; p < one.image.rgb.size(); p += 3) {
-    CHECK(int(three.image.rgb[p]) == 3 * int(one.image.rgb[p]));
-    CHECK(int(three.image.rgb[p + 1]) == 2);
-    CHECK(int(one.image.rgb[p + 1]) == 0);
-    covered += one.image.rgb[p] > 0;
+  for (std::size_t p = 0; p < one.image.flat().rgb.size(); p += 3) {
+    CHECK(int(three.image.flat().rgb[p]) == 3 * int(one.image.flat().rgb[p]));
+    CHECK(int(three.image.flat().rgb[p + 1]) == 2);
+    CHECK(int(one.image.flat().rgb[p + 1]) == 0);
+    covered += one.image.flat().rgb[p] > 0;
   }
   CHECK(covered > 1000);
   // Each pass's bins cross the ring again, so the multipass frame carries more words.

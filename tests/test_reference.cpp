@@ -162,10 +162,10 @@ void check_scene(const std::string& scene_name, const std::string& firmware, int
   const Program program = load_program(firmware, config);
   const FrameResult result = simulate_frame(config, scene, program, 2);
   const RgbImage expected = reference_frame(config, scene, program, firmware);
-  REQUIRE(result.image.width == expected.width);
-  REQUIRE(result.image.height == expected.height);
+  REQUIRE(result.image.width() == expected.width);
+  REQUIRE(result.image.height() == expected.height);
   INFO(scene_name << " with " << firmware << ", " << lights << " lights");
-  CHECK(differing_pixels(result.image, expected) == 0);
+  CHECK(differing_pixels(result.image.flat(), expected) == 0);
   // The scene must actually draw something, or the comparison proves nothing.
   std::size_t background = 0;
   for (std::size_t k = 0; k < expected.rgb.size(); k += 3) {

@@ -47,8 +47,7 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
                                                        {0, false},   {128, false}};
     RendererBoard reusing(board_params(config)), executing(board_params(config));
     RendererBoard donor(board_params(config));
-    std::vector<std::uint8_t> donor_rgb;
-    donor.run_empty_region(0, 0, program, values, donor_rgb);
+    donor.run_empty_region(0, 0, program, values);
     reusing.share_empty_region(donor);
     std::vector<std::uint8_t> a, b;
     for (const auto& [x0, busy] : regions) {
@@ -61,8 +60,7 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
         stream.for_each(packets, [&](const RegionStep& step) { reusing.run_step(step); });
         reusing.read_outputs(program, a);
       } else {
-        std::vector<std::uint8_t> scratch;
-        a = reusing.run_empty_region(x0, 0, program, values, scratch);
+        a = *reusing.run_empty_region(x0, 0, program, values);
       }
       CHECK(a == b);
       CHECK(reusing.array().same_state(executing.array()));

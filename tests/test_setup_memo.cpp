@@ -91,7 +91,7 @@ TEST_CASE("setup memo: the images and pixel statistics are the same as without i
     const Program program = load_program("phong", c);
     const FrameResult fresh = simulate_frame(c, scene, program, 2);
     const FrameResult replayed = simulate_frame(c, scene, program, 2, {}, nullptr, &memo);
-    CHECK(replayed.image.rgb == fresh.image.rgb);
+    CHECK(replayed.image.flat().rgb == fresh.image.flat().rgb);
     CHECK(without_host(replayed.stats_json) == without_host(fresh.stats_json));
   }
   CHECK(memo.reuses() == 2);
@@ -252,7 +252,7 @@ TEST_CASE("setup memo: filled in parts on several threads, it replays the frame 
     CHECK(without_host(replayed.stats_json) == without_host(fresh.stats_json));
     MachineConfig word = c;
     word.set(std::vector<std::string>{"fidelity.pixels=word"});
-    CHECK(simulate_frame(word, scene, program, 2, {}, nullptr, &memo).image.rgb ==
-          simulate_frame(word, scene, program, 1).image.rgb);
+    CHECK(simulate_frame(word, scene, program, 2, {}, nullptr, &memo).image.flat().rgb ==
+          simulate_frame(word, scene, program, 1).image.flat().rgb);
   }
 }

@@ -217,8 +217,8 @@ TEST_CASE("static and dynamic balancing render identical images - dynamic is det
   config.set("renderer.balancing=dynamic");
   const FrameResult dynamic = simulate_frame(config, scene, program, 1);
   const FrameResult again = simulate_frame(config, scene, program, 3);
-  CHECK(fixed.image.rgb == dynamic.image.rgb);
-  CHECK(dynamic.image.rgb == again.image.rgb);
+  CHECK(fixed.image.flat().rgb == dynamic.image.flat().rgb);
+  CHECK(dynamic.image.flat().rgb == again.image.flat().rgb);
   CHECK(without_host(dynamic.stats_json) == without_host(again.stats_json));
   // The same work, differently spread: the Renderers' total busy cycles agree.
   CHECK(fixed.stats.integer("renderers_total.busy_cycles") ==
@@ -238,7 +238,7 @@ TEST_CASE("a small instruction queue stalls the GPs, never changes the image",
   const FrameResult roomy = simulate_frame(config, scene, program, 2);
   config.set("renderer.queue_words=128");
   const FrameResult tight = simulate_frame(config, scene, program, 2);
-  CHECK(roomy.image.rgb == tight.image.rgb);
+  CHECK(roomy.image.flat().rgb == tight.image.flat().rgb);
   double stalled = 0;
   for (std::size_t k = 0; k < tight.stats.elements("gp"); ++k)
     stalled += tight.stats.real(fmt::format("gp.{}.waiting_for_queue_seconds", k));
@@ -271,7 +271,7 @@ TEST_CASE("overlapped backing-store transfers are faster and change no pixel",
   const FrameResult overlapped = simulate_frame(config, scene, program, 2);
   config.set("renderer.backing_store_overlap=0");
   const FrameResult serial = simulate_frame(config, scene, program, 2);
-  CHECK(overlapped.image.rgb == serial.image.rgb);
+  CHECK(overlapped.image.flat().rgb == serial.image.flat().rgb);
   CHECK(overlapped.frame_seconds < serial.frame_seconds);
   CHECK(overlapped.stats.integer("renderers_total.busy_cycles") <
         serial.stats.integer("renderers_total.busy_cycles"));
@@ -288,7 +288,7 @@ TEST_CASE("overlapped shipping lets a Renderer start its next region early", "[t
   const FrameResult overlapped = simulate_frame(config, scene, program, 1);
   config.set("renderer.overlap_shipping=0");
   const FrameResult blocking = simulate_frame(config, scene, program, 1);
-  CHECK(overlapped.image.rgb == blocking.image.rgb);
+  CHECK(overlapped.image.flat().rgb == blocking.image.flat().rgb);
   CHECK(overlapped.frame_seconds < blocking.frame_seconds);
   CHECK(blocking.stats.real("renderer.0.blocked_shipping_seconds") > 0);
   CHECK(overlapped.stats.real("renderer.0.blocked_shipping_seconds") == 0);
@@ -370,7 +370,7 @@ TEST_CASE("coefficient loading: hidden when double-buffered, charged in full whe
   const FrameResult buffered = simulate_frame(config, scene, program, 1);
   config.set("evaluator.double_buffered=0");
   const FrameResult serial = simulate_frame(config, scene, program, 1);
-  CHECK(buffered.image.rgb == serial.image.rgb);
+  CHECK(buffered.image.flat().rgb == serial.image.flat().rgb);
   const auto packets = test::count(buffered.stats, "setup.packets");
   const int expressions =
       static_cast<int>(program.procedure(Procedure::triangle).expressions.count());
@@ -426,7 +426,7 @@ TEST_CASE("a region no primitive touches waits for no bin message", "[timing]") 
     // Every region, empty or not, is still cleared, shaded and shipped: the far corner has
     // the background, the triangle its colour.
     const auto pixel_at = [&](int x, int y) {
-      return r.image.rgb[(static_cast<std::size_t>(y) * 512 + x) * 3];
+      return r.image.flat().rgb[(static_cast<std::size_t>(y) * 512 + x) * 3];
     };
     CHECK(pixel_at(511, 511) == std::lround(scene.background.r * 255));
     CHECK(pixel_at(20, 20) != pixel_at(511, 511));

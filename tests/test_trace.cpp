@@ -100,10 +100,10 @@ TEST_CASE("replaying a trace reconstructs the selected pixels' memory exactly", 
     }
     covered += static_cast<int>(state.value.at(t.field_index("covered")));
     // The frame's colour is the replayed output fields.
-    const auto i = static_cast<std::size_t>(px.second * frame.image.width + px.first) * 3;
-    CHECK(frame.image.rgb[i] == state.value.at(t.field_index("red")));
-    CHECK(frame.image.rgb[i + 1] == state.value.at(t.field_index("green")));
-    CHECK(frame.image.rgb[i + 2] == state.value.at(t.field_index("blue")));
+    const auto i = static_cast<std::size_t>(px.second * frame.image.width() + px.first) * 3;
+    CHECK(frame.image.flat().rgb[i] == state.value.at(t.field_index("red")));
+    CHECK(frame.image.flat().rgb[i + 1] == state.value.at(t.field_index("green")));
+    CHECK(frame.image.flat().rgb[i + 2] == state.value.at(t.field_index("blue")));
   }
   CHECK(bits_checked == 256 * p.resident_bits);
   CHECK(covered > 0);  // the patch is not all background
@@ -121,7 +121,7 @@ TEST_CASE("traces are identical for any number of host threads and do not change
   CHECK(file_bytes((temp_dir() / "t1.pp5t").string()) ==
         file_bytes((temp_dir() / "t3.pp5t").string()));
   const FrameResult plain = simulate_frame(c, torus(), p, 2);
-  CHECK(plain.image.rgb == traced.image.rgb);
+  CHECK(plain.image.flat().rgb == traced.image.flat().rgb);
 }
 
 TEST_CASE("windows and filters select exactly what they claim", "[trace]") {
@@ -459,8 +459,8 @@ TEST_CASE("programs that spill: resident fields are traced, spilled ones refused
   FrameResult frame;
   const trace::Trace t = record(c, p, sel, "spill.pp5t", 2, &frame);
   const auto st = trace::replay(t).at({190, 140});
-  const auto i = static_cast<std::size_t>(140 * frame.image.width + 190) * 3;
-  CHECK(frame.image.rgb[i] == st.value.at(t.field_index("red")));
-  CHECK(frame.image.rgb[i + 2] == st.value.at(t.field_index("blue")));
+  const auto i = static_cast<std::size_t>(140 * frame.image.width() + 190) * 3;
+  CHECK(frame.image.flat().rgb[i] == st.value.at(t.field_index("red")));
+  CHECK(frame.image.flat().rgb[i + 2] == st.value.at(t.field_index("blue")));
   CHECK_THAT(trace::bitmap_report(t), Catch::Contains("spilled to the backing store"));
 }

@@ -87,7 +87,7 @@ TEST_CASE("gp.multipass: retraversal costs one traversal per pass and changes no
   const FrameResult resend = simulate_frame(config, scene, program, 2);
   config.set("gp.multipass=retraverse");
   const FrameResult retraverse = simulate_frame(config, scene, program, 2);
-  CHECK(resend.image.rgb == retraverse.image.rgb);
+  CHECK(resend.image.flat().rgb == retraverse.image.flat().rgb);
   for (std::size_t k = 0; k < resend.stats.elements("gp"); ++k) {
     const std::string p = fmt::format("gp.{}.", k);
     const auto once = count(resend.stats, p + "geometry_clocks");

@@ -71,7 +71,7 @@ std::map<int, RegionMemory> frame_memory(MachineConfig config, const char* level
   for (auto& m : per_board) keepers.push_back(std::make_unique<Keeper>(m));
   FrameResult r = simulate_frame(config, scene, program, 2,
                                  [&](int k) -> BoardObserver* { return keepers[k].get(); });
-  image = std::move(r.image);
+  image = r.image.flat();
   std::map<int, RegionMemory> all;
   for (auto& m : per_board) all.insert(m.begin(), m.end());
   return all;

@@ -15,21 +15,21 @@ class Statistics;
 
 class FrameBuffer : public sc_core::sc_module, public RingEndpoint {
  public:
-  // `image` false: timing only, no pixel arrives; the frame taken is width x height with no
-  // pixel bytes (as the analytic model's), and store_region is refused.
-  FrameBuffer(sc_core::sc_module_name name, int width, int height, int regions, bool image = true);
+  // A width x height screen in regions of region_width x region_height. `image` false: timing
+  // only, no pixel arrives; the frame taken holds no pixels (as the analytic model's), and
+  // store_region is refused.
+  FrameBuffer(sc_core::sc_module_name name, int width, int height, int region_width,
+              int region_height, int regions, bool image = true);
 
   // A region's pixels arrive over the ring (timing; the arrival may lie in the future of the
   // sender, whose ring interface sends while its array works on).
   void receive_region(const RegionArrival& region) override;
-  // A region's pixel values (function): rgb is region_width x region_height, row-major;
-  // the part inside the screen is copied to the frame.
-  void store_region(int x0, int y0, int region_width, int region_height,
-                    const std::vector<std::uint8_t>& rgb);
+  // A region's pixel values (function), for the region whose top-left pixel is (x0, y0): kept
+  // by reference (FrameImage), not copied. Distinct regions may arrive from several threads.
+  void store_region(int x0, int y0, RegionPixels pixels);
 
-  // Hands the assembled frame over (a 4096 x 4096 frame is 48 MB: moved, not copied); the
-  // frame buffer is empty afterwards.
-  RgbImage take_image() { return std::move(image_); }
+  // Hands the assembled frame over; the frame buffer is empty afterwards.
+  FrameImage take_image() { return std::move(image_); }
   // Simulated time at which the last region arrived: the frame time.
   sc_core::sc_time frame_complete() const { return last_; }
   int regions_received() const { return received_; }
@@ -38,7 +38,7 @@ class FrameBuffer : public sc_core::sc_module, public RingEndpoint {
   void register_statistics(Statistics& stats) const;
 
  private:
-  RgbImage image_;
+  FrameImage image_;
   std::vector<sc_core::sc_time> arrival_;
   sc_core::sc_time last_;
   int received_ = 0;

@@ -1,6 +1,7 @@
 #pragma once
 // The frame as the frame buffer holds it.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace pp5 {
@@ -10,6 +11,56 @@ namespace pp5 {
 struct RgbImage {
   int width = 0, height = 0;
   std::vector<std::uint8_t> rgb;
+};
+
+// One region's pixels as a Renderer board read them out: region width x region height RGB,
+// row-major (RgbImage's layout). Shared, never copied, by every region of a frame that came
+// out the same (a board's empty regions give one).
+using RegionPixels = std::shared_ptr<const std::vector<std::uint8_t>>;
+
+// A frame as the frame buffer assembled it: a grid of regions, each holding its Renderer's
+// pixels by reference, so a frame is as large as its distinct regions, whatever the screen
+// (a 4096 x 4096 screen with one drawn region holds two regions' pixels, not 48 MB).
+// Regions that received no pixels (outside fidelity.regions, or every region of a timing-only
+// frame) are black. Regions at the right and bottom edges may reach past the screen; only
+// the part inside it is part of the frame.
+//
+// Readers take rows (row(): what the PNG writer and regions.png stream) or single pixels, or
+// the whole frame as one RgbImage (flat(): made on first use and kept; not for two threads at
+// once before that).
+class FrameImage {
+ public:
+  FrameImage() = default;
+  // A black frame of `width` x `height` pixels in regions of region_width x region_height.
+  // `pixels` false: a timing-only frame, to which no region's pixels may be given.
+  FrameImage(int width, int height, int region_width, int region_height, bool pixels = true);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // Whether the frame holds pixels at all (false: timing only; flat() is then width x height
+  // with no bytes).
+  bool has_pixels() const { return pixels_; }
+
+  // The pixels of the region whose top-left pixel is (x0, y0), a multiple of the region size.
+  // Distinct regions may be given from different threads at once, never after flat().
+  void set_region(int x0, int y0, RegionPixels pixels);
+
+  // Row y's width() * 3 bytes (RGB) into out.
+  void row(int y, std::uint8_t* out) const;
+  // The RGB of pixel (x, y), inside the frame.
+  const std::uint8_t* pixel(int x, int y) const;
+  // The whole frame as one image (no bytes for a timing-only frame).
+  const RgbImage& flat() const;
+  // The distinct region pixel blocks held (shared ones once).
+  std::size_t distinct_regions() const;
+
+ private:
+  int width_ = 0, height_ = 0;
+  int region_width_ = 1, region_height_ = 1;
+  int columns_ = 0;
+  bool pixels_ = false;
+  std::vector<RegionPixels> regions_;  // row-major, null: black
+  mutable std::shared_ptr<const RgbImage> flat_;
 };
 
 }  // namespace pp5

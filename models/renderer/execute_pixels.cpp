@@ -33,8 +33,7 @@ void execute_pixels(Machine& machine, const std::vector<const std::vector<Region
   // after clear matches it (RendererBoard::run_empty_region checks); the rest of the boards'
   // regions run as recorded.
   RendererBoard first(params);
-  std::vector<std::uint8_t> empty_rgb;
-  first.run_empty_region(0, 0, program, machine.frame_values(), empty_rgb);
+  first.run_empty_region(0, 0, program, machine.frame_values());
   // One board per host worker, made here on the calling thread and restarted, for each
   // Renderer after its first, in the state of a newly made board (`fresh`): the same results
   // as a new board per Renderer, whatever the thread count, without a worker thread's first

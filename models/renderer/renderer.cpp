@@ -333,15 +333,12 @@ void execute_regions(const std::vector<RegionWork>& work, RendererBoard& board,
                      const Program& program, FrameBuffer& frame_buffer, const FrameValues& values,
                      const std::function<bool(const RegionWork&)>& executes) {
   const RegionStream stream(program, values);
-  const auto& geometry = board.array().geometry();
-  std::vector<std::uint8_t> rgb;
   for (const RegionWork& w : work) {
     if (executes && !executes(w)) continue;
     // An empty region's stream is the same every time: executed once, then reused (a traced
     // board runs every instruction, so that the trace shows them).
     if (w.triangles.empty() && !board.observed()) {
-      frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height,
-                                board.run_empty_region(w.x0, w.y0, program, values, rgb));
+      frame_buffer.store_region(w.x0, w.y0, board.run_empty_region(w.x0, w.y0, program, values));
       continue;
     }
     board.begin_region(w.x0, w.y0);
@@ -353,8 +350,9 @@ void execute_regions(const std::vector<RegionWork>& work, RendererBoard& board,
       board.run_step(step, w.region, start);
     });
     board.end_region(w.region);
-    board.read_outputs(program, rgb);
-    frame_buffer.store_region(w.x0, w.y0, geometry.width, geometry.height, rgb);
+    auto rgb = std::make_shared<std::vector<std::uint8_t>>();
+    board.read_outputs(program, *rgb);
+    frame_buffer.store_region(w.x0, w.y0, std::move(rgb));
   }
 }
 

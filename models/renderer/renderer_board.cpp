@@ -34,17 +34,19 @@ void RendererBoard::run_rest_of_empty(const RegionStream& stream, const Program&
   read_outputs(program, rgb);
 }
 
-const std::vector<std::uint8_t>& RendererBoard::run_empty_region(int x0, int y0,
-                                                                 const Program& program,
-                                                                 const FrameValues& frame_values,
-                                                                 std::vector<std::uint8_t>& rgb) {
+RegionPixels RendererBoard::run_empty_region(int x0, int y0, const Program& program,
+                                             const FrameValues& frame_values) {
   const RegionStream stream(program, frame_values);
   auto clear = [&] { stream.before_pass(0, [&](const RegionStep& step) { run_step(step); }); };
+  auto executed = [&] {
+    auto rgb = std::make_shared<std::vector<std::uint8_t>>();
+    run_rest_of_empty(stream, program, *rgb);
+    return rgb;
+  };
   if (observer_) {  // a traced board shows every instruction: nothing is reused
     begin_region(x0, y0);
     clear();
-    run_rest_of_empty(stream, program, rgb);
-    return rgb;
+    return executed();
   }
   // The region's origin matters only if a step binds a non-zero expression.
   bool origin_free = true;
@@ -55,30 +57,26 @@ const std::vector<std::uint8_t>& RendererBoard::run_empty_region(int x0, int y0,
   });
   if (lazy_ && origin_free && clear_restores_.value_or(false)) {
     ++empty_reused_;
-    return *empty_rgb_;
+    return empty_rgb_;
   }
   begin_region(x0, y0);
   const bool was_kept_state = empty_after_shade_ && array_->same_state(*empty_after_shade_);
   clear();
-  if (!origin_free) {
-    run_rest_of_empty(stream, program, rgb);
-    return rgb;
-  }
+  if (!origin_free) return executed();
   if (empty_after_clear_ && array_->same_state(*empty_after_clear_)) {
     if (was_kept_state) clear_restores_ = true;
     lazy_ = true;
     ++empty_reused_;
-    return *empty_rgb_;
+    return empty_rgb_;
   }
   // Nothing kept, or a different state (fields the clear procedure leaves alone hold what an
   // earlier region put there): execute, and keep this region's states instead, since the
   // next empty region on this board will most likely start from them.
   keep_state(empty_after_clear_);
-  run_rest_of_empty(stream, program, rgb);
+  empty_rgb_ = executed();
   keep_state(empty_after_shade_);
-  empty_rgb_ = std::make_shared<const std::vector<std::uint8_t>>(rgb);
   clear_restores_.reset();
-  return rgb;
+  return empty_rgb_;
 }
 
 void RendererBoard::keep_state(std::shared_ptr<PixelBackend>& slot) const {

@@ -17,6 +17,7 @@
 #include "firmware/isa/interface.hpp"
 #include "firmware/isa/isa.hpp"
 #include "firmware/isa/types.hpp"
+#include "models/frame_buffer/image.hpp"
 #include "models/renderer/region_stream.hpp"
 
 namespace pp5 {
@@ -85,11 +86,10 @@ class RendererBoard {
   ArrayCycles run_step(const RegionStep& step, int region = 0, std::uint64_t start_cycle = 0);
   // A region no primitive touches: its stream (RegionStream::for_each_empty) and its outputs,
   // as executing it step by step would give them; see "Empty regions" below. Returns the
-  // outputs: `rgb` when the region was executed, the kept colours (not copied) when it was
-  // reused; valid until the next call.
-  const std::vector<std::uint8_t>& run_empty_region(int x0, int y0, const Program& program,
-                                                    const FrameValues& frame_values,
-                                                    std::vector<std::uint8_t>& rgb);
+  // outputs: new ones when the region was executed, the kept ones (shared, not copied) when
+  // it was reused.
+  RegionPixels run_empty_region(int x0, int y0, const Program& program,
+                                const FrameValues& frame_values);
   // Empty regions whose result was reused rather than executed again.
   std::uint64_t empty_regions_reused() const { return empty_reused_; }
   // Starts from another board's kept empty region (if it has one) instead of executing a
@@ -133,7 +133,7 @@ class RendererBoard {
   // only while it alone holds it (keep_state).
   std::shared_ptr<PixelBackend> empty_after_clear_;
   std::shared_ptr<PixelBackend> empty_after_shade_;
-  std::shared_ptr<const std::vector<std::uint8_t>> empty_rgb_;
+  RegionPixels empty_rgb_;
   std::optional<bool> clear_restores_;  // clear(after shade) == after clear
   std::uint64_t empty_reused_ = 0;
   mutable std::vector<std::uint64_t> field_values_;  // read_outputs' buffer

@@ -82,7 +82,8 @@ Drawn draw_flat(const MachineConfig& config, const Scene& scene, int threads) {
                                                      config.gp.depth_bits, "depth", "flat");
   const Program program = assemble(source, "extremes-flat", assembler_options(config));
   const FrameResult r = simulate_frame(config, scene, program, threads);
-  return {r.image, static_cast<std::uint64_t>(r.stats.integer("setup.coefficient_overflow"))};
+  return {r.image.flat(),
+          static_cast<std::uint64_t>(r.stats.integer("setup.coefficient_overflow"))};
 }
 
 std::string counts_text(const CoverageCheck& c) {
@@ -292,10 +293,10 @@ Coverage coverage_counts(const MachineConfig& config, const Scene& scene, int th
   const Program program = assemble_text(kCoverageFirmware.c_str(), "coverage", config);
   const FrameResult r = simulate_frame(config, scene, program, threads);
   Coverage c;
-  c.width = r.image.width;
-  c.height = r.image.height;
+  c.width = r.image.width();
+  c.height = r.image.height();
   c.count.resize(static_cast<std::size_t>(c.width) * c.height);
-  for (std::size_t p = 0; p < c.count.size(); ++p) c.count[p] = r.image.rgb[p * 3];
+  for (std::size_t p = 0; p < c.count.size(); ++p) c.count[p] = r.image.flat().rgb[p * 3];
   auto count = [&r](const char* name) {
     return static_cast<std::uint64_t>(r.stats.integer(std::string("setup.") + name));
   };

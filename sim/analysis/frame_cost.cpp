@@ -14,7 +14,7 @@ std::string FrameCost::cells() const {
 FrameCost frame_cost(const MachineConfig& config, const Scene& scene, const Program& program,
                      int threads, RgbImage* image) {
   const FrameResult r = simulate_frame(config, scene, program, threads);
-  if (image) *image = r.image;
+  if (image) *image = r.image.flat();
   return {r.stats.integer("renderers_total.busy_cycles"), r.stats.real("frame.simulated_seconds")};
 }
 

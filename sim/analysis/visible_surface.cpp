@@ -116,8 +116,8 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
   const FrameResult zr = simulate_frame(config, scene, zbuffer, threads);
   const FrameResult pr = simulate_frame(config, sorted, painter, threads);
   const FrameResult cr = simulate_frame(culling, scene, zbuffer, threads);
-  rep.zbuffer_frame = zr.image;
-  rep.painter_frame = pr.image;
+  rep.zbuffer_frame = zr.image.flat();
+  rep.painter_frame = pr.image.flat();
 
   // The visibility runs.
   const AssemblerOptions options = assembler_options(config);
@@ -135,11 +135,11 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
                               "visibility-eye-depth", options);
   const Program vp = assemble(kVisibilityPainterFirmware, "visibility-painter", options);
   const Scene ids = visibility_scene(scene, {});
-  const IdImage zid = decode_visibility(simulate_frame(config, ids, vz, threads).image);
-  const IdImage eid = decode_visibility(simulate_frame(config, ids, ve, threads).image);
-  const IdImage pid =
-      decode_visibility(simulate_frame(config, visibility_scene(scene, order), vp, threads).image);
-  const IdImage cid = decode_visibility(simulate_frame(culling, ids, vz, threads).image);
+  const IdImage zid = decode_visibility(simulate_frame(config, ids, vz, threads).image.flat());
+  const IdImage eid = decode_visibility(simulate_frame(config, ids, ve, threads).image.flat());
+  const IdImage pid = decode_visibility(
+      simulate_frame(config, visibility_scene(scene, order), vp, threads).image.flat());
+  const IdImage cid = decode_visibility(simulate_frame(culling, ids, vz, threads).image.flat());
 
   const double triangles = static_cast<double>(rep.triangles);
   AlgorithmRow z;

@@ -147,9 +147,10 @@ int run_fidelity(FidelityOptions o) {
         row.bottleneck_agrees = row.bottleneck == reference.stats.text("timing.bottleneck");
         row.has_pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
         if (row.has_pixels) {
-          for (std::size_t p = 0; p + 2 < best.image.rgb.size(); p += 3) {
-            if (!std::equal(best.image.rgb.begin() + p, best.image.rgb.begin() + p + 3,
-                            reference.image.rgb.begin() + p)) {
+          const std::vector<std::uint8_t>& a = best.image.flat().rgb;
+          const std::vector<std::uint8_t>& b = reference.image.flat().rgb;
+          for (std::size_t p = 0; p + 2 < a.size(); p += 3) {
+            if (!std::equal(a.begin() + p, a.begin() + p + 3, b.begin() + p)) {
               ++row.pixels_differing;
             }
           }

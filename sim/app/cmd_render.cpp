@@ -99,16 +99,9 @@ int run_render(RenderOptions o) {
   // All of the run's outputs, or none of them (sim/output/output_set.hpp).
   const fs::path dir(o.out_dir);
   OutputSet outputs;
-  // With fidelity.pixels=none no pixel executed: there is no image to write (neither timing
-  // model's frame holds pixel bytes then), and regions.png shows the regions' cycles on a
-  // black frame made here.
+  // With fidelity.pixels=none no pixel executed: there is no image to write, and regions.png
+  // shows the regions' cycles on a black frame (the frame holds no pixels).
   const bool heat_map = !result.regions.empty();
-  if (heat_map && result.image.rgb.empty()) {
-    result.image.width = config.screen.width;
-    result.image.height = config.screen.height;
-    result.image.rgb.assign(
-        static_cast<std::size_t>(config.screen.width) * config.screen.height * 3, 0);
-  }
   // The two images are independent: encoded at once on the run's host threads.
   std::string frame_png, regions_png;
   parallel_for(2, o.threads, [&](int image) {

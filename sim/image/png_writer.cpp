@@ -100,6 +100,13 @@ std::string encode_png(const RgbImage& image, const std::string& what) {
       what);
 }
 
+std::string encode_png(const FrameImage& frame, const std::string& what) {
+  if (!frame.has_pixels()) fail("cannot write PNG", what, "the frame holds no pixels");
+  return encode_png(
+      frame.width(), frame.height(), [&frame](int y, std::uint8_t* row) { frame.row(y, row); },
+      what);
+}
+
 std::string encode_png(int width, int height,
                        const std::function<void(int y, std::uint8_t* row)>& rows,
                        const std::string& what) {

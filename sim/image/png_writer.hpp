@@ -12,6 +12,10 @@ namespace pp5 {
 // image or a zlib error.
 std::string encode_png(const RgbImage& image, const std::string& what = "image");
 
+// A frame, streamed region row by region row (no whole-frame copy); a frame that holds no
+// pixels (timing only) is refused.
+std::string encode_png(const FrameImage& frame, const std::string& what = "image");
+
 // The same for an image made a row at a time: rows(y, out) writes row y's width * 3 bytes
 // (RGB) to out, for y = 0 .. height - 1 in order. Nothing holds the whole image.
 std::string encode_png(int width, int height,

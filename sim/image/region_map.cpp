@@ -6,6 +6,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace pp5 {
 
@@ -75,17 +76,48 @@ void heat_colour(double t, std::uint8_t rgb[3]) {
   }
 }
 
-RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions)
-    : frame_(frame), grey_(static_cast<std::size_t>(std::max(frame.width, 0))) {
+namespace {
+
+const RgbImage& checked(const RgbImage& frame) {
   if (frame.width <= 0 || frame.height <= 0 ||
       frame.rgb.size() != static_cast<std::size_t>(frame.width) * frame.height * 3) {
     throw std::invalid_argument("regions.png: the frame's pixel buffer does not match its size");
   }
+  return frame;
+}
+
+}  // namespace
+
+RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions)
+    : RegionHeatMap(
+          checked(frame).width, frame.height,
+          [&frame](int y, std::uint8_t* out) {
+            const std::size_t stride = static_cast<std::size_t>(frame.width) * 3;
+            std::memcpy(out, frame.rgb.data() + stride * static_cast<std::size_t>(y), stride);
+          },
+          regions) {}
+
+RegionHeatMap::RegionHeatMap(const FrameImage& frame, const std::vector<RegionLoad>& regions)
+    : RegionHeatMap(
+          frame.width(), frame.height(), [&frame](int y, std::uint8_t* out) { frame.row(y, out); },
+          regions) {}
+
+RegionHeatMap::RegionHeatMap(int width, int height,
+                             std::function<void(int y, std::uint8_t* out)> frame_row,
+                             const std::vector<RegionLoad>& regions)
+    : width_(width),
+      frame_height_(height),
+      frame_row_(std::move(frame_row)),
+      src_(static_cast<std::size_t>(std::max(width, 0)) * 3),
+      grey_(static_cast<std::size_t>(std::max(width, 0))) {
+  if (width <= 0 || height <= 0) {
+    throw std::invalid_argument("regions.png: the frame is empty");
+  }
   std::uint64_t peak = 0;
   std::map<int, std::uint64_t> per_renderer;
   for (const RegionLoad& r : regions) {
-    if (r.x0 < 0 || r.y0 < 0 || r.width <= 0 || r.height <= 0 || r.x0 + r.width > frame.width ||
-        r.y0 + r.height > frame.height) {
+    if (r.x0 < 0 || r.y0 < 0 || r.width <= 0 || r.height <= 0 || r.x0 + r.width > width ||
+        r.y0 + r.height > height) {
       throw std::invalid_argument("regions.png: region " + std::to_string(r.region) +
                                   " lies outside the frame");
     }
@@ -109,7 +141,7 @@ RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad
     tints_.push_back(t);
   }
   // The legend: "0", the colour bar, the peak's cycles.
-  legend_.width = frame.width;
+  legend_.width = width;
   legend_.height = kLegendHeight;
   legend_.rgb.assign(static_cast<std::size_t>(legend_.width) * legend_.height * 3, 0);
   const std::uint8_t white[3] = {255, 255, 255};
@@ -126,16 +158,17 @@ RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad
 }
 
 void RegionHeatMap::row(int y, std::uint8_t* out) const {
-  const int width = frame_.width;
-  if (y >= frame_.height) {
+  const int width = width_;
+  if (y >= frame_height_) {
     const std::size_t stride = static_cast<std::size_t>(width) * 3;
-    std::memcpy(out, legend_.rgb.data() + static_cast<std::size_t>(y - frame_.height) * stride,
+    std::memcpy(out, legend_.rgb.data() + static_cast<std::size_t>(y - frame_height_) * stride,
                 stride);
     return;
   }
   // The frame in grey, then the tint of each region on this row (in order), then the
   // busiest Renderer's outlines.
-  const std::uint8_t* src = frame_.rgb.data() + static_cast<std::size_t>(y) * width * 3;
+  frame_row_(y, src_.data());
+  const std::uint8_t* src = src_.data();
   std::uint8_t* grey = grey_.data();  // the row's grey, computed once
   for (int x = 0; x < width; ++x) {
     grey[x] = static_cast<std::uint8_t>(

@@ -14,6 +14,7 @@
 //    buffer does not match its size.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "models/frame_buffer/image.hpp"
@@ -37,26 +38,31 @@ RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& r
 
 // The same image a row at a time, for encode_png's row form: nothing holds the whole image
 // (a 1280 x 1024 frame's map is 4 MB). Keeps a reference to `frame`, which must outlive it;
-// throws as region_heat_map() does.
+// throws as region_heat_map() does. A FrameImage that holds no pixels (timing only) gives the
+// map on a black frame.
 class RegionHeatMap {
  public:
   RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions);
-  int width() const { return frame_.width; }
-  int height() const { return frame_.height + kLegendHeight; }
+  RegionHeatMap(const FrameImage& frame, const std::vector<RegionLoad>& regions);
+  int width() const { return width_; }
+  int height() const { return frame_height_ + kLegendHeight; }
   // Row y's width() * 3 bytes (RGB) into out. Not for two threads at once on one map.
   void row(int y, std::uint8_t* out) const;
 
  private:
+  RegionHeatMap(int width, int height, std::function<void(int y, std::uint8_t* out)> frame_row,
+                const std::vector<RegionLoad>& regions);
   struct Tint {
     RegionLoad load;
     std::array<std::array<std::uint8_t, 3>, 256> table;  // grey to tinted colour
   };
-  const RgbImage& frame_;
-  std::vector<Tint> tints_;  // in the order of the loads
-  int busiest_ = -1;         // the busiest Renderer
-  RgbImage legend_;          // the kLegendHeight rows below the frame
-  // row()'s grey of a frame row: row() is called from one thread at a time.
-  mutable std::vector<std::uint8_t> grey_;
+  int width_ = 0, frame_height_ = 0;
+  std::function<void(int y, std::uint8_t* out)> frame_row_;  // the frame's row y
+  std::vector<Tint> tints_;                                  // in the order of the loads
+  int busiest_ = -1;                                         // the busiest Renderer
+  RgbImage legend_;  // the kLegendHeight rows below the frame
+  // row()'s frame row and its grey: row() is called from one thread at a time.
+  mutable std::vector<std::uint8_t> src_, grey_;
 };
 
 }  // namespace pp5
