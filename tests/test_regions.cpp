@@ -68,3 +68,64 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
     CHECK(reusing.empty_regions_reused() >= 2);
   }
 }
+
+// A board that has executed nothing holds the state every new board holds: once a donor has
+// seen that clear takes a new board's state to the state it kept (and that clear after shade
+// does too), a board sharing the donor's empty region runs a new board's empty regions
+// without executing one instruction, before and after a restart, and ends where executing
+// them leaves a board. A program whose clear does not initialise (so that clear gives
+// another state on every region) still executes, and a restarted board starts anew.
+TEST_CASE("a new board's empty regions are reused from a donor without executing", "[regions]") {
+  MachineConfig config = MachineConfig::defaults();
+  const Scene scene = make_builtin_scene("two-triangles");
+  const GeometryEngine geometry(geometry_params(config), scene);
+  const FrameValues values = geometry.frame_values();
+  // Its clear counts the regions the board has run (a history the colour shows).
+  const std::string counting = R"(field runs 8
+output runs runs runs
+proc clear
+  eall
+  add runs, 40
+end
+proc triangle
+  eall
+end
+)";
+  for (const bool clears_all : {true, false}) {
+    INFO("clear initialises every field: " << clears_all);
+    const Program program =
+        clears_all ? assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/phong.pp5",
+                                   assembler_options(config))
+                   : assemble(counting, "counting", assembler_options(config));
+    RendererBoard donor(board_params(config)), fresh(board_params(config));
+    donor.run_empty_region(0, 0, program, values);
+    donor.run_empty_region(0, 0, program, values);
+    RendererBoard reusing(board_params(config)), executing(board_params(config));
+    const RegionStream stream(program, values);
+    for (int round = 0; round < 2; ++round) {
+      if (round == 1) {
+        reusing.restart(fresh);
+        executing.restart(fresh);
+      }
+      reusing.share_empty_region(donor);
+      const std::uint64_t before = reusing.instructions_executed();
+      for (int x0 : {0, 128, 256}) {
+        const RegionPixels a = reusing.run_empty_region(x0, 0, program, values);
+        std::vector<std::uint8_t> b;
+        executing.begin_region(x0, 0);
+        stream.for_each(std::vector<Packet>{},
+                        [&](const RegionStep& step) { executing.run_step(step); });
+        executing.read_outputs(program, b);
+        CHECK(*a == b);
+      }
+      if (clears_all) {
+        CHECK(reusing.instructions_executed() == before);
+      } else {
+        CHECK(reusing.instructions_executed() > before);
+      }
+      // Read through the const view: nothing here may change the board.
+      const RendererBoard& reused = reusing;
+      CHECK(reused.array().same_state(executing.array()));
+    }
+  }
+}

@@ -11,6 +11,7 @@ RendererBoard::RendererBoard(const RendererBoardParams& params)
 
 void RendererBoard::begin_region(int x0, int y0) {
   materialise();
+  untouched_ = false;
   array_->set_origin(x0, y0);
 }
 
@@ -20,6 +21,7 @@ void RendererBoard::materialise() const {
   if (!lazy_) return;
   array_->copy_state_from(*empty_after_shade_);
   lazy_ = false;
+  untouched_ = false;
 }
 
 ArrayCycles RendererBoard::run_step(const RegionStep& step, int region, std::uint64_t start_cycle) {
@@ -48,23 +50,33 @@ RegionPixels RendererBoard::run_empty_region(int x0, int y0, const Program& prog
     clear();
     return executed();
   }
-  // The region's origin matters only if a step binds a non-zero expression.
-  bool origin_free = true;
-  stream.for_each_empty([&](const RegionStep& step) {
-    for (const QuadraticCoefficients& c : step.values.expressions) {
-      origin_free = origin_free && c.A == 0 && c.B == 0 && c.C == 0 && c.D == 0 && c.E == 0;
-    }
-  });
-  if (lazy_ && origin_free && clear_restores_.value_or(false)) {
+  // The region's origin matters only if a step binds a non-zero expression (checked once
+  // per frame's values).
+  if (origin_free_for_ != &frame_values) {
+    origin_free_ = true;
+    stream.for_each_empty([&](const RegionStep& step) {
+      for (const QuadraticCoefficients& c : step.values.expressions) {
+        origin_free_ = origin_free_ && c.A == 0 && c.B == 0 && c.C == 0 && c.D == 0 && c.E == 0;
+      }
+    });
+    origin_free_for_ = &frame_values;
+  }
+  const bool origin_free = origin_free_;
+  if (origin_free && ((lazy_ && clear_restores_.value_or(false)) ||
+                      (fresh_ && clear_from_fresh_ && empty_after_clear_))) {
+    fresh_ = false;
+    lazy_ = true;
     ++empty_reused_;
     return empty_rgb_;
   }
+  const bool was_fresh = fresh_;
   begin_region(x0, y0);
   const bool was_kept_state = empty_after_shade_ && array_->same_state(*empty_after_shade_);
   clear();
   if (!origin_free) return executed();
   if (empty_after_clear_ && array_->same_state(*empty_after_clear_)) {
     if (was_kept_state) clear_restores_ = true;
+    if (was_fresh) clear_from_fresh_ = true;
     lazy_ = true;
     ++empty_reused_;
     return empty_rgb_;
@@ -76,6 +88,7 @@ RegionPixels RendererBoard::run_empty_region(int x0, int y0, const Program& prog
   empty_rgb_ = executed();
   keep_state(empty_after_shade_);
   clear_restores_.reset();
+  clear_from_fresh_ = was_fresh;
   return empty_rgb_;
 }
 
@@ -92,12 +105,18 @@ void RendererBoard::keep_state(std::shared_ptr<PixelBackend>& slot) const {
 }
 
 void RendererBoard::restart(const RendererBoard& fresh) {
-  array_->copy_state_from(fresh.array());
+  // A board whose array nothing has changed since it was new (its empty regions all reused)
+  // holds a new board's state already.
+  if (!untouched_) array_->copy_state_from(fresh.array());
+  untouched_ = true;
+  origin_free_for_ = nullptr;
   lazy_ = false;
   empty_after_clear_.reset();
   empty_after_shade_.reset();
   empty_rgb_.reset();
   clear_restores_.reset();
+  clear_from_fresh_ = false;
+  fresh_ = true;
   empty_reused_ = 0;
   observer_ = nullptr;
   packet_ = PacketContext{};
@@ -110,10 +129,13 @@ void RendererBoard::share_empty_region(const RendererBoard& other) {
   empty_after_clear_ = other.empty_after_clear_;
   empty_after_shade_ = other.empty_after_shade_;
   empty_rgb_ = other.empty_rgb_;
+  clear_restores_ = other.clear_restores_;
+  clear_from_fresh_ = other.clear_from_fresh_;
 }
 
 ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValues& values) {
   materialise();
+  fresh_ = untouched_ = false;
   ExecutionContext ctx{*array_, values};
   if (observer_) observer_->begin_packet(packet_, procedure, *this);
   ArrayCycles cycles{};

@@ -100,6 +100,7 @@ class RendererBoard {
   // The board's pixel array, as the backend that models it.
   PixelBackend& array() {
     materialise();
+    fresh_ = untouched_ = false;  // the caller may change it
     return *array_;
   }
   const PixelBackend& array() const {
@@ -122,6 +123,10 @@ class RendererBoard {
   // else runs. A run of empty regions then costs nothing once clear is known to map the
   // after-shade state onto the kept after-clear state. Exact: nothing is assumed that is not
   // checked on the array's full state; the simulated timing still charges every region.
+  // A board that has executed nothing (new, or restarted) starts from the one state every
+  // new board has, so when the kept after-clear state is what clear gave a new board (on
+  // the board that kept it: clear_from_fresh_), a new board's first empty region takes the
+  // kept outputs without executing either.
   void materialise() const;
   void run_rest_of_empty(const RegionStream& stream, const Program& program,
                          std::vector<std::uint8_t>& rgb);
@@ -135,6 +140,13 @@ class RendererBoard {
   std::shared_ptr<PixelBackend> empty_after_shade_;
   RegionPixels empty_rgb_;
   std::optional<bool> clear_restores_;  // clear(after shade) == after clear
+  bool clear_from_fresh_ = false;       // clear(a new board's state) == after clear
+  bool fresh_ = true;                   // the board's state is a new board's
+  mutable bool untouched_ = true;       // array_ itself holds a new board's state
+  // run_empty_region's check of the frame values it last saw (`origin_free_for_`): whether
+  // the empty stream binds no expression that depends on the region's origin.
+  const FrameValues* origin_free_for_ = nullptr;
+  bool origin_free_ = false;
   std::uint64_t empty_reused_ = 0;
   mutable std::vector<std::uint64_t> field_values_;  // read_outputs' buffer
   BoardObserver* observer_ = nullptr;
