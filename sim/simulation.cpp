@@ -228,7 +228,8 @@ double host_bytes_available() {
 // large for the host is refused with what to reduce instead of dying in an allocation:
 // each board in flight holds its pixel memory (and backing store, if the program uses it)
 // three times (the array and the two kept states of an empty region); each triangle's packet
-// holds every expression's coefficients; the frame is held as RGB.
+// holds every expression's coefficients; the frame is held as RGB, at most one block per
+// region, and may be flattened once more (FrameImage::flat).
 void check_memory(const MachineConfig& config, const Scene& scene, const Program& program,
                   int threads) {
   bool backing = false;

@@ -14,15 +14,17 @@ using namespace pp5;
 namespace {
 
 // A 4 x 2 region whose pixel (x, y) is (tag, x, y).
-RegionPixels region(std::uint8_t tag) {
-  auto p = std::make_shared<std::vector<std::uint8_t>>();
+std::vector<std::uint8_t> region_bytes(std::uint8_t tag) {
+  std::vector<std::uint8_t> p;
   for (int y = 0; y < 2; ++y) {
     for (int x = 0; x < 4; ++x) {
-      p->insert(p->end(), {tag, static_cast<std::uint8_t>(x), static_cast<std::uint8_t>(y)});
+      p.insert(p.end(), {tag, static_cast<std::uint8_t>(x), static_cast<std::uint8_t>(y)});
     }
   }
   return p;
 }
+
+RegionPixels region(std::uint8_t tag) { return region_pixels(region_bytes(tag)); }
 
 }  // namespace
 
@@ -33,10 +35,14 @@ TEST_CASE("a frame image holds regions by reference and reads as one image", "[f
   REQUIRE(frame.has_pixels());
   const RegionPixels shared = region(7);
   frame.set_region(0, 0, shared);
-  frame.set_region(8, 0, region(9));
+  // Region (2, 0) in the frame's own bytes.
+  const std::vector<std::uint8_t> nine = region_bytes(9);
+  std::copy(nine.begin(), nine.end(), frame.own_bytes(8, 0));
+  frame.set_region(8, 0, frame.own(8, 0));
   frame.set_region(4, 2, shared);  // the same pixels twice: held once
   CHECK(frame.distinct_regions() == 2);
   CHECK(shared.use_count() == 3);
+  CHECK(frame.pixel(9, 1) == frame.own_bytes(8, 0) + 3 * (1 * 4 + 1));
   // Region (1, 0) never arrived: black.
   CHECK(frame.pixel(5, 1)[0] == 0);
   CHECK(frame.pixel(9, 1)[0] == 9);
@@ -68,8 +74,7 @@ TEST_CASE("a frame image refuses what cannot be a region's pixels", "[frame]") {
   FrameImage frame(10, 3, 4, 2);
   CHECK_THROWS_AS(frame.set_region(2, 0, region(1)), std::logic_error);   // off the grid
   CHECK_THROWS_AS(frame.set_region(12, 0, region(1)), std::logic_error);  // off the screen
-  CHECK_THROWS_AS(frame.set_region(0, 0, std::make_shared<std::vector<std::uint8_t>>(5)),
-                  std::logic_error);
+  CHECK_THROWS_AS(frame.own_bytes(4, 1), std::logic_error);
   CHECK_THROWS_AS(frame.set_region(0, 0, nullptr), std::logic_error);
   CHECK_THROWS_AS(frame.pixel(10, 0), std::out_of_range);
   (void)frame.flat();
@@ -79,6 +84,7 @@ TEST_CASE("a frame image refuses what cannot be a region's pixels", "[frame]") {
   FrameImage timing(10, 3, 4, 2, false);
   CHECK_FALSE(timing.has_pixels());
   CHECK_THROWS_AS(timing.set_region(0, 0, region(1)), std::logic_error);
+  CHECK_THROWS_AS(timing.own_bytes(0, 0), std::logic_error);
   std::vector<std::uint8_t> row(30, 1);
   timing.row(0, row.data());
   CHECK(row == std::vector<std::uint8_t>(30, 0));

@@ -25,4 +25,13 @@ void FrameBuffer::store_region(int x0, int y0, RegionPixels pixels) {
   image_.set_region(x0, y0, std::move(pixels));
 }
 
+std::uint8_t* FrameBuffer::region_bytes(int x0, int y0) {
+  if (!image_.has_pixels()) {
+    throw std::logic_error("frame buffer: a region's pixels arrived at a frame that holds none");
+  }
+  return image_.own_bytes(x0, y0);
+}
+
+void FrameBuffer::store_region(int x0, int y0) { store_region(x0, y0, image_.own(x0, y0)); }
+
 }  // namespace pp5

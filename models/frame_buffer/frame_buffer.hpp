@@ -27,6 +27,10 @@ class FrameBuffer : public sc_core::sc_module, public RingEndpoint {
   // A region's pixel values (function), for the region whose top-left pixel is (x0, y0): kept
   // by reference (FrameImage), not copied. Distinct regions may arrive from several threads.
   void store_region(int x0, int y0, RegionPixels pixels);
+  // The frame's own bytes for that region (FrameImage::own_bytes): a board writes a region's
+  // pixels there, then store_region(x0, y0) stores them.
+  std::uint8_t* region_bytes(int x0, int y0);
+  void store_region(int x0, int y0);
 
   // Hands the assembled frame over; the frame buffer is empty afterwards.
   FrameImage take_image() { return std::move(image_); }

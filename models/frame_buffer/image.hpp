@@ -14,9 +14,12 @@ struct RgbImage {
 };
 
 // One region's pixels as a Renderer board read them out: region width x region height RGB,
-// row-major (RgbImage's layout). Shared, never copied, by every region of a frame that came
-// out the same (a board's empty regions give one).
-using RegionPixels = std::shared_ptr<const std::vector<std::uint8_t>>;
+// row-major (RgbImage's layout), from the first byte pointed to. Shared, never copied, by
+// every region of a frame that came out the same (a board's empty regions give one).
+using RegionPixels = std::shared_ptr<const std::uint8_t>;
+
+// Pixels held in a vector, as RegionPixels (the vector is kept alive by the pointer).
+RegionPixels region_pixels(std::vector<std::uint8_t> rgb);
 
 // A frame as the frame buffer assembled it: a grid of regions, each holding its Renderer's
 // pixels by reference, so a frame is as large as its distinct regions, whatever the screen
@@ -41,9 +44,16 @@ class FrameImage {
   // with no bytes).
   bool has_pixels() const { return pixels_; }
 
-  // The pixels of the region whose top-left pixel is (x0, y0), a multiple of the region size.
-  // Distinct regions may be given from different threads at once, never after flat().
+  // The pixels of the region whose top-left pixel is (x0, y0), a multiple of the region size:
+  // region width x region height x 3 bytes. Distinct regions may be given from different
+  // threads at once, never after flat().
   void set_region(int x0, int y0, RegionPixels pixels);
+  // The frame's own bytes for that region, to be written (by one thread) and then given
+  // with set_region(x0, y0, own(x0, y0)). Allocated with the frame, untouched until written,
+  // and made on the thread that made the frame: a worker thread that writes them pays no
+  // page faults in a malloc arena of its own.
+  std::uint8_t* own_bytes(int x0, int y0);
+  RegionPixels own(int x0, int y0) const;
 
   // Row y's width() * 3 bytes (RGB) into out.
   void row(int y, std::uint8_t* out) const;
@@ -59,7 +69,9 @@ class FrameImage {
   int region_width_ = 1, region_height_ = 1;
   int columns_ = 0;
   bool pixels_ = false;
-  std::vector<RegionPixels> regions_;  // row-major, null: black
+  std::size_t index(int x0, int y0) const;  // checked
+  std::vector<RegionPixels> regions_;       // row-major, null: black
+  std::shared_ptr<std::uint8_t> own_;       // a region's bytes for each region, row-major
   mutable std::shared_ptr<const RgbImage> flat_;
 };
 

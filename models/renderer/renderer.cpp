@@ -350,9 +350,8 @@ void execute_regions(const std::vector<RegionWork>& work, RendererBoard& board,
       board.run_step(step, w.region, start);
     });
     board.end_region(w.region);
-    auto rgb = std::make_shared<std::vector<std::uint8_t>>();
-    board.read_outputs(program, *rgb);
-    frame_buffer.store_region(w.x0, w.y0, std::move(rgb));
+    board.read_outputs(program, frame_buffer.region_bytes(w.x0, w.y0));
+    frame_buffer.store_region(w.x0, w.y0);
   }
 }
 

@@ -41,9 +41,9 @@ RegionPixels RendererBoard::run_empty_region(int x0, int y0, const Program& prog
   const RegionStream stream(program, frame_values);
   auto clear = [&] { stream.before_pass(0, [&](const RegionStep& step) { run_step(step); }); };
   auto executed = [&] {
-    auto rgb = std::make_shared<std::vector<std::uint8_t>>();
-    run_rest_of_empty(stream, program, *rgb);
-    return rgb;
+    std::vector<std::uint8_t> rgb;
+    run_rest_of_empty(stream, program, rgb);
+    return region_pixels(std::move(rgb));
   };
   if (observer_) {  // a traced board shows every instruction: nothing is reused
     begin_region(x0, y0);
@@ -156,9 +156,13 @@ ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValue
 }
 
 void RendererBoard::read_outputs(const Program& program, std::vector<std::uint8_t>& rgb) const {
+  rgb.resize(static_cast<std::size_t>(array().pixels()) * 3);
+  read_outputs(program, rgb.data());
+}
+
+void RendererBoard::read_outputs(const Program& program, std::uint8_t* rgb) const {
   materialise();
   const int n = array_->pixels();
-  rgb.resize(static_cast<std::size_t>(n) * 3);
   field_values_.resize(static_cast<std::size_t>(n));
   for (int c = 0; c < 3; ++c) {
     array_->read_field(program.outputs[c], field_values_.data());

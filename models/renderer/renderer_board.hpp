@@ -80,6 +80,8 @@ class RendererBoard {
   }
   // Reads the program's output fields of every pixel as 8-bit RGB, row-major.
   void read_outputs(const Program& program, std::vector<std::uint8_t>& rgb) const;
+  // The same into pixels() * 3 bytes at rgb.
+  void read_outputs(const Program& program, std::uint8_t* rgb) const;
 
   // One step of a region's stream (models/renderer/region_stream.hpp); an observer sees it
   // as a packet of `region` starting at simulated array cycle `start_cycle`.

@@ -107,10 +107,9 @@ int run_record(const RecordOptions& o) {
   if (recorder.pixel_count() == 1) {
     const auto& rects = sel.rects;
     if (!rects.empty()) {
-      const auto i = static_cast<std::size_t>(rects[0].y * result.image.width() + rects[0].x) * 3;
+      const std::uint8_t* c = result.image.pixel(rects[0].x, rects[0].y);
       std::cout << fmt::format("frame colour of pixel {},{}: ({}, {}, {})\n", rects[0].x,
-                               rects[0].y, result.image.flat().rgb[i],
-                               result.image.flat().rgb[i + 1], result.image.flat().rgb[i + 2]);
+                               rects[0].y, c[0], c[1], c[2]);
     }
   }
   std::cout << fmt::format("wrote {}\n", out);
