@@ -29,14 +29,13 @@ void execute_pixels(Machine& machine, const std::vector<const std::vector<Region
   // Only the bits the program declares are allocated and processed: fields beyond them would
   // be refused by the pixel array's bounds checks, never silently dropped.
   params.array.memory_bits = std::max(1, program.bits_used());
-  // An empty region executed before the boards start serves every board whose state after
-  // clear matches it (RendererBoard::run_empty_region checks); the rest of the boards'
-  // regions run as recorded. Two in a row on a new board show, where it holds, that clear
-  // gives the kept state both on a new board and after shade: then no board executes an
-  // empty region at all.
+  // An empty region executed on a new board before the boards start serves every board whose
+  // state after clear matches it (RendererBoard::run_empty_region checks), a new board's
+  // without a check; the rest of the boards' regions run as recorded. Where clear after
+  // shade gives the same state again (the probe), no board executes an empty region at all.
   RendererBoard first(params);
   first.run_empty_region(0, 0, program, machine.frame_values());
-  first.run_empty_region(0, 0, program, machine.frame_values());
+  first.probe_clear_after_shade(program, machine.frame_values());
   // One board per host worker, made here on the calling thread and restarted, for each
   // Renderer after its first, in the state of a newly made board (`fresh`): the same results
   // as a new board per Renderer, whatever the thread count, without a worker thread's first

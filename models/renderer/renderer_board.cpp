@@ -92,6 +92,17 @@ RegionPixels RendererBoard::run_empty_region(int x0, int y0, const Program& prog
   return empty_rgb_;
 }
 
+void RendererBoard::probe_clear_after_shade(const Program& program,
+                                            const FrameValues& frame_values) {
+  if (!empty_after_clear_ || !empty_after_shade_ || clear_restores_.has_value()) return;
+  materialise();
+  array_->copy_state_from(*empty_after_shade_);
+  lazy_ = fresh_ = untouched_ = false;
+  const RegionStream stream(program, frame_values);
+  stream.before_pass(0, [&](const RegionStep& step) { run_step(step); });
+  clear_restores_ = array_->same_state(*empty_after_clear_);
+}
+
 void RendererBoard::keep_state(std::shared_ptr<PixelBackend>& slot) const {
   // In place when this board alone holds the copy: no allocation and no fresh pages (a
   // clone per kept state was about 8% of a word-level frame's host time, perf on the Banks

@@ -92,6 +92,11 @@ class RendererBoard {
   // it was reused.
   RegionPixels run_empty_region(int x0, int y0, const Program& program,
                                 const FrameValues& frame_values);
+  // After a first empty region: executes clear on the kept after-shade state and records
+  // whether it gives the kept after-clear state, without replacing what is kept (which a
+  // new board's first empty region needs). Boards sharing from this one then reuse a run of
+  // empty regions without executing any.
+  void probe_clear_after_shade(const Program& program, const FrameValues& frame_values);
   // Empty regions whose result was reused rather than executed again.
   std::uint64_t empty_regions_reused() const { return empty_reused_; }
   // Starts from another board's kept empty region (if it has one) instead of executing a
