@@ -14,7 +14,7 @@ using namespace pp5;
 namespace {
 
 // A 4 x 2 region whose pixel (x, y) is (tag, x, y).
-std::vector<std::uint8_t> region_bytes(std::uint8_t tag) {
+std::vector<std::uint8_t> tagged_bytes(std::uint8_t tag) {
   std::vector<std::uint8_t> p;
   for (int y = 0; y < 2; ++y) {
     for (int x = 0; x < 4; ++x) {
@@ -24,7 +24,7 @@ std::vector<std::uint8_t> region_bytes(std::uint8_t tag) {
   return p;
 }
 
-RegionPixels region(std::uint8_t tag) { return region_pixels(region_bytes(tag)); }
+RegionPixels tagged_region(std::uint8_t tag) { return region_pixels(tagged_bytes(tag)); }
 
 }  // namespace
 
@@ -33,10 +33,10 @@ TEST_CASE("a frame image holds regions by reference and reads as one image", "[f
   // cut to 1).
   FrameImage frame(10, 3, 4, 2);
   REQUIRE(frame.has_pixels());
-  const RegionPixels shared = region(7);
+  const RegionPixels shared = tagged_region(7);
   frame.set_region(0, 0, shared);
   // Region (2, 0) in the frame's own bytes.
-  const std::vector<std::uint8_t> nine = region_bytes(9);
+  const std::vector<std::uint8_t> nine = tagged_bytes(9);
   std::copy(nine.begin(), nine.end(), frame.own_bytes(8, 0));
   frame.set_region(8, 0, frame.own(8, 0));
   frame.set_region(4, 2, shared);  // the same pixels twice: held once
@@ -72,18 +72,18 @@ TEST_CASE("a frame image holds regions by reference and reads as one image", "[f
 
 TEST_CASE("a frame image refuses what cannot be a region's pixels", "[frame]") {
   FrameImage frame(10, 3, 4, 2);
-  CHECK_THROWS_AS(frame.set_region(2, 0, region(1)), std::logic_error);   // off the grid
-  CHECK_THROWS_AS(frame.set_region(12, 0, region(1)), std::logic_error);  // off the screen
+  CHECK_THROWS_AS(frame.set_region(2, 0, tagged_region(1)), std::logic_error);   // off the grid
+  CHECK_THROWS_AS(frame.set_region(12, 0, tagged_region(1)), std::logic_error);  // off the screen
   CHECK_THROWS_AS(frame.own_bytes(4, 1), std::logic_error);
   CHECK_THROWS_AS(frame.set_region(0, 0, nullptr), std::logic_error);
   CHECK_THROWS_AS(frame.pixel(10, 0), std::out_of_range);
   (void)frame.flat();
-  CHECK_THROWS_AS(frame.set_region(0, 0, region(1)), std::logic_error);  // after flat()
+  CHECK_THROWS_AS(frame.set_region(0, 0, tagged_region(1)), std::logic_error);  // after flat()
 
   // Timing only: no pixels, black rows, a flat image with no bytes, no PNG.
   FrameImage timing(10, 3, 4, 2, false);
   CHECK_FALSE(timing.has_pixels());
-  CHECK_THROWS_AS(timing.set_region(0, 0, region(1)), std::logic_error);
+  CHECK_THROWS_AS(timing.set_region(0, 0, tagged_region(1)), std::logic_error);
   CHECK_THROWS_AS(timing.own_bytes(0, 0), std::logic_error);
   std::vector<std::uint8_t> row(30, 1);
   timing.row(0, row.data());

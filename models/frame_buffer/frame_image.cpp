@@ -13,7 +13,7 @@
 namespace pp5 {
 namespace {
 
-const std::uint8_t kBlack[3] = {0, 0, 0};
+const std::uint8_t kBlackPixel[3] = {0, 0, 0};
 
 }  // namespace
 
@@ -104,10 +104,10 @@ const std::uint8_t* FrameImage::pixel(int x, int y) const {
   if (x < 0 || y < 0 || x >= width_ || y >= height_) {
     throw std::out_of_range("frame image: pixel outside the frame");
   }
-  if (!pixels_) return kBlack;
+  if (!pixels_) return kBlackPixel;
   const RegionPixels& r =
       regions_[static_cast<std::size_t>(y / region_height_) * columns_ + x / region_width_];
-  if (!r) return kBlack;
+  if (!r) return kBlackPixel;
   return r.get() +
          (static_cast<std::size_t>(y % region_height_) * region_width_ + x % region_width_) * 3;
 }

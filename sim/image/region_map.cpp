@@ -78,7 +78,7 @@ void heat_colour(double t, std::uint8_t rgb[3]) {
 
 namespace {
 
-const RgbImage& checked(const RgbImage& frame) {
+const RgbImage& checked_frame(const RgbImage& frame) {
   if (frame.width <= 0 || frame.height <= 0 ||
       frame.rgb.size() != static_cast<std::size_t>(frame.width) * frame.height * 3) {
     throw std::invalid_argument("regions.png: the frame's pixel buffer does not match its size");
@@ -90,7 +90,7 @@ const RgbImage& checked(const RgbImage& frame) {
 
 RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions)
     : RegionHeatMap(
-          checked(frame).width, frame.height,
+          checked_frame(frame).width, frame.height,
           [&frame](int y, std::uint8_t* out) {
             const std::size_t stride = static_cast<std::size_t>(frame.width) * 3;
             std::memcpy(out, frame.rgb.data() + stride * static_cast<std::size_t>(y), stride);

@@ -16,9 +16,7 @@ namespace pp5 {
 namespace {
 
 constexpr double kTwoPi = 6.283185307179586;
-constexpr float kFovYDegrees = 40.0f;
 constexpr float kFrameMargin = 1.05f;
-const glm::vec3 kBackground(0.05f, 0.05f, 0.08f);
 
 constexpr int kMaxSegments = 2048;
 
@@ -46,9 +44,9 @@ Scene finish_scene(std::string name, std::string description, Mesh mesh, glm::ve
   scene.name = std::move(name);
   scene.description = std::move(description);
   scene.mesh = std::move(mesh);
-  scene.camera = frame_mesh(scene.mesh, view_dir, kFovYDegrees, kFrameMargin);
+  scene.camera = frame_mesh(scene.mesh, view_dir, kBuiltinFovYDegrees, kFrameMargin);
   scene.lights = {default_light(scene.camera)};
-  scene.background = kBackground;
+  scene.background = kBuiltinBackground;
   return scene;
 }
 
@@ -284,10 +282,14 @@ Scene make_receding_pairs() {
       "units), for depth quantities under perspective";
   scene.mesh = std::move(mesh);
   // The target is the middle pair's distance: epsilon_normal scales its slopes there.
-  scene.camera = {
-      {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, -11.25f}, {0.0f, 1.0f, 0.0f}, kFovYDegrees, 2.0f, 40.0f};
+  scene.camera = {{0.0f, 0.0f, 0.0f},
+                  {0.0f, 0.0f, -11.25f},
+                  {0.0f, 1.0f, 0.0f},
+                  kBuiltinFovYDegrees,
+                  2.0f,
+                  40.0f};
   scene.lights = {default_light(scene.camera)};
-  scene.background = kBackground;
+  scene.background = kBuiltinBackground;
   return scene;
 }
 

@@ -59,6 +59,10 @@ BoundingSphere bounding_sphere(const Mesh& mesh);
 Camera frame_mesh(const Mesh& mesh, glm::vec3 view_direction, float fov_y_degrees,
                   float margin = 1.05f);
 
+// The built-in scenes' vertical field of view and background.
+inline constexpr float kBuiltinFovYDegrees = 40.0f;
+inline const glm::vec3 kBuiltinBackground{0.05f, 0.05f, 0.08f};
+
 // The project's standard key light, from the upper left in front of `camera`: diffuse 0.8,
 // specular 0.3, shininess 16 (with the scene's default ambient 0.15).
 Light default_light(const Camera& camera);

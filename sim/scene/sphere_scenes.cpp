@@ -13,8 +13,6 @@ namespace pp5 {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr float kFovYDegrees = 40.0f;
-const glm::vec3 kBackground(0.05f, 0.05f, 0.08f);
 
 Scene finish(std::string name, std::string description, Mesh mesh, std::vector<Sphere> spheres,
              glm::vec3 view_direction) {
@@ -23,9 +21,9 @@ Scene finish(std::string name, std::string description, Mesh mesh, std::vector<S
   scene.description = std::move(description);
   scene.mesh = std::move(mesh);
   scene.spheres = std::move(spheres);
-  scene.camera = frame_scene(scene.mesh, scene.spheres, view_direction, kFovYDegrees);
+  scene.camera = frame_scene(scene.mesh, scene.spheres, view_direction, kBuiltinFovYDegrees);
   scene.lights = {default_light(scene.camera)};
-  scene.background = kBackground;
+  scene.background = kBuiltinBackground;
   return scene;
 }
 
