@@ -1,11 +1,12 @@
 #include "sim/host_memory.hpp"
 
 #include <malloc.h>
-#include <sys/mman.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+
+#include "common/huge_pages.hpp"
 
 namespace pp5 {
 namespace {
@@ -26,7 +27,7 @@ void tune_host_memory() {
   const std::uintptr_t to = (lo + kHeap) & ~(kHuge - 1);
   std::free(grown);  // stays in the heap (below the trim threshold) for what comes next
   if (to <= from) return;
-  madvise(reinterpret_cast<void*>(from), to - from, MADV_HUGEPAGE);
+  advise_huge_pages(reinterpret_cast<void*>(from), to - from);
   // The heap's start is wherever address-space randomisation put it: up to 2 MB below the
   // first huge page, whose 4 KB pages would each fault on first touch (SystemC's static
   // initialisers alone zero 3 MB). That head is taken by an allocation that is never used

@@ -4,11 +4,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "common/huge_pages.hpp"
 #include "models/frame_buffer/image.hpp"
-
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 namespace pp5 {
 namespace {
@@ -36,15 +33,7 @@ FrameImage::FrameImage(int width, int height, int region_width, int region_heigh
         regions_.size() * static_cast<std::size_t>(region_width) * region_height * 3;
     own_ = std::shared_ptr<std::uint8_t>(new std::uint8_t[bytes],
                                          std::default_delete<std::uint8_t[]>());
-#if defined(__linux__)
-    // Host speed only: with 2 MB pages the bytes written take 1/512 of the page faults. The
-    // advice may be ignored; nothing depends on it.
-    constexpr std::uintptr_t kHugePage = std::uintptr_t{2} << 20;
-    const auto begin = reinterpret_cast<std::uintptr_t>(own_.get());
-    const std::uintptr_t first = (begin + kHugePage - 1) & ~(kHugePage - 1);
-    const std::uintptr_t last = (begin + bytes) & ~(kHugePage - 1);
-    if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
-#endif
+    advise_huge_pages(own_.get(), bytes);
   }
 }
 
