@@ -60,6 +60,9 @@ struct StatisticInfo {
   std::string description;
 };
 
+// A hardware counter (an unsigned count) as an integer statistic's value.
+inline std::int64_t stat_count(std::uint64_t v) { return static_cast<std::int64_t>(v); }
+
 class Statistics {
  public:
   void add_integer(const std::string& name, const char* unit, const char* description,

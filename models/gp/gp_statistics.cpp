@@ -9,10 +9,6 @@
 
 namespace pp5 {
 
-namespace {
-std::int64_t integer(std::uint64_t v) { return static_cast<std::int64_t>(v); }
-}  // namespace
-
 void GraphicsProcessor::register_statistics(Statistics& stats, double frame_seconds) const {
   namespace u = stat_unit;
   const std::string p = "gp." + std::to_string(index_) + ".";
@@ -20,22 +16,22 @@ void GraphicsProcessor::register_statistics(Statistics& stats, double frame_seco
   const double clock_hz = machine_.config().gp.clock_hz;
   stats.add_integer(p + "busy_clocks", u::gp_clocks,
                     "Clocks computing: geometry, and starting its ring messages",
-                    [&g] { return integer(g.busy.count); });
+                    [&g] { return stat_count(g.busy.count); });
   stats.add_integer(p + "geometry_clocks", u::gp_clocks,
                     "Of busy_clocks, those of transform, clip, light, set-up and binning (every "
                     "traversal of its share: one, or one per pass with gp.multipass=retraverse)",
-                    [&g] { return integer(g.geometry.count); });
+                    [&g] { return stat_count(g.geometry.count); });
   stats.add_real(
       p + "utilisation", u::ratio, "busy_clocks as a fraction of the frame time",
       [&g, clock_hz, frame_seconds] { return g.busy.seconds(clock_hz) / frame_seconds; });
   stats.add_integer(p + "triangles_in", u::count, "Scene triangles this GP transformed",
-                    [&g] { return integer(g.triangles_in); });
+                    [&g] { return stat_count(g.triangles_in); });
   stats.add_integer(p + "packets", u::count,
                     "Triangle packets it sent (one per region a triangle touches)",
-                    [&g] { return integer(g.packets); });
+                    [&g] { return stat_count(g.packets); });
   stats.add_integer(p + "messages", u::count,
                     "Ring messages it sent: its bin map and its bins' messages",
-                    [&g] { return integer(g.messages); });
+                    [&g] { return stat_count(g.messages); });
   const std::pair<const char*, const std::uint64_t OpCounts::*> ops[] = {
       {"fadd", &OpCounts::fadd},    {"fmul", &OpCounts::fmul},       {"load", &OpCounts::load},
       {"store", &OpCounts::store},  {"integer", &OpCounts::integer}, {"branch", &OpCounts::branch},
@@ -51,7 +47,7 @@ void GraphicsProcessor::register_statistics(Statistics& stats, double frame_seco
   for (std::size_t k = 0; k < std::size(ops); ++k) {
     const auto field = ops[k].second;
     stats.add_integer(p + "operations." + ops[k].first, u::count, meaning[k],
-                      [&g, field] { return integer(g.ops.*field); });
+                      [&g, field] { return stat_count(g.ops.*field); });
   }
   stats.add_real(p + "waiting_for_stage_seconds", u::seconds,
                  "Waiting for a Renderer to open the (region, pass) stage of its next bin",
@@ -80,7 +76,7 @@ void register_setup_statistics(Statistics& stats, std::vector<const GpStats*> gp
     return [gps, get] {
       std::uint64_t total = 0;
       for (const GpStats* gp : gps) total += get(*gp);
-      return integer(total);
+      return stat_count(total);
     };
   };
   stats.add_integer("setup.packets", u::count,

@@ -8,10 +8,6 @@
 
 namespace pp5 {
 
-namespace {
-std::int64_t integer(std::uint64_t v) { return static_cast<std::int64_t>(v); }
-}  // namespace
-
 void Renderer::register_statistics(Statistics& stats, double frame_seconds) const {
   namespace u = stat_unit;
   const std::string p = "renderer." + std::to_string(index_) + ".";
@@ -20,10 +16,10 @@ void Renderer::register_statistics(Statistics& stats, double frame_seconds) cons
   stats.add_integer(p + "busy_cycles", u::array_cycles,
                     "Cycles executing micro-instructions, decoding packets and copying finished "
                     "colours to the backing store",
-                    [&st] { return integer(st.busy.count); });
+                    [&st] { return stat_count(st.busy.count); });
   stats.add_integer(p + "backing_store_stall_cycles", u::array_cycles,
                     "Cycles the array waited for the backing-store port",
-                    [&st] { return integer(st.stall.count); });
+                    [&st] { return stat_count(st.stall.count); });
   stats.add_real(
       p + "utilisation", u::ratio, "busy_cycles as a fraction of the frame time",
       [&st, array_hz, frame_seconds] { return st.busy.seconds(array_hz) / frame_seconds; });
@@ -40,19 +36,19 @@ void Renderer::register_statistics(Statistics& stats, double frame_seconds) cons
                  "Blocked shipping a finished region (renderer.overlap_shipping = 0)",
                  [&st] { return st.waiting_ship.to_seconds(); });
   stats.add_integer(p + "regions", u::count, "Screen regions it rendered",
-                    [&st] { return integer(st.regions); });
+                    [&st] { return stat_count(st.regions); });
   stats.add_integer(
       p + "packets", u::count,
       "Procedures it ran: the triangle packets of every pass, and clear, pass, light and "
       "shade",
-      [&st] { return integer(st.packets); });
+      [&st] { return stat_count(st.packets); });
   stats.add_integer(p + "messages", u::count, "Bin messages it received from the GPs",
-                    [&st] { return integer(st.messages); });
+                    [&st] { return stat_count(st.messages); });
   stats.add_integer(p + "queue_peak_words", u::ring_words,
                     "Most words its instruction queue held at once",
-                    [&st] { return integer(st.queue_peak_words); });
+                    [&st] { return stat_count(st.queue_peak_words); });
   stats.add_integer(p + "micro_instructions", u::count, "Micro-instructions issued to its array",
-                    [&st] { return integer(st.instructions); });
+                    [&st] { return stat_count(st.instructions); });
   stats.add_real(p + "computed_seconds", u::seconds, "When its array finished its last region",
                  [&st] { return st.computed.to_seconds(); });
   stats.add_real(p + "finished_seconds", u::seconds,
@@ -67,13 +63,13 @@ void register_renderer_totals(Statistics& stats, std::vector<const Renderer*> re
                     "busy_cycles summed over the Renderers", [renderers] {
                       std::uint64_t total = 0;
                       for (const Renderer* r : renderers) total += r->stats().busy.count;
-                      return integer(total);
+                      return stat_count(total);
                     });
   stats.add_integer("renderers_total.micro_instructions", u::count,
                     "micro_instructions summed over the Renderers", [renderers] {
                       std::uint64_t total = 0;
                       for (const Renderer* r : renderers) total += r->stats().instructions;
-                      return integer(total);
+                      return stat_count(total);
                     });
   // Counted once, on the first read, for every region at once.
   auto counts = std::make_shared<std::vector<std::uint64_t>>();
@@ -84,7 +80,7 @@ void register_renderer_totals(Statistics& stats, std::vector<const Renderer*> re
         for (const RegionWork& w : r->work()) (*counts)[w.region] = w.triangles.size();
       }
     }
-    return integer((*counts)[region]);
+    return stat_count((*counts)[region]);
   };
   for (int k = 0; k < regions; ++k) {
     stats.add_integer("primitives_per_region." + std::to_string(k), u::count,
