@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "models/evaluator/evaluator.hpp"
+#include "models/evaluator/linear_band.hpp"
 
 using namespace pp5;
 
@@ -485,4 +486,81 @@ TEST_CASE("linear fast path near 64-bit limits, and live words", "[evaluator]") 
   ev.test_plane(c, Condition::ge, all, with.data(), live.data());
   ev.test_plane(c, Condition::ge, all, without.data());
   for (int w = 0; w < ev.words(); ++w) CHECK(with[w] == (live[w] ? without[w] : 0));
+}
+
+TEST_CASE("linear_row_band never drops a row where some pixel passes every test",
+          "[evaluator][band]") {
+  // Against every pixel, exactly: runs of one to four half-plane tests (a triangle's edges),
+  // of every slope and size up to fits_64's limit, regions anywhere, and the hard cases for
+  // a band computed in doubles: slivers one pixel thick (a line and its opposite test, both
+  // holding only on pixel centres the line passes through), and lines grazing a single
+  // pixel centre at the region's corner.
+  std::mt19937_64 rng(20261126);
+  const Condition one_interval_conds[] = {Condition::lt, Condition::le, Condition::gt,
+                                          Condition::ge};
+  const int sizes[][2] = {{128, 128}, {64, 3}, {192, 40}};
+  int narrowed = 0, empty = 0, slivers_kept = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    const int width = sizes[trial % 3][0], height = sizes[trial % 3][1];
+    const int x0 = static_cast<int>(uniform(rng, -40, 40)) * 128;
+    const int y0 = static_cast<int>(uniform(rng, -40, 40)) * 128;
+    const int kind = trial % 4;  // 0, 1: crossing edges; 2: a sliver; 3: huge gradients
+    const int bits = kind == 3 ? 48 : 13;
+    auto coef = [&] { return uniform(rng, -(std::int64_t{1} << bits), std::int64_t{1} << bits); };
+    // A pixel near the region, through whose centre an edge passes (value 0 there).
+    auto through = [&](std::int64_t d, std::int64_t e, int spread) {
+      const std::int64_t px = x0 + uniform(rng, -spread, width + spread);
+      const std::int64_t py = y0 + uniform(rng, -spread, height + spread);
+      return -(d * px + e * py);
+    };
+    std::vector<LinearTest> tests;
+    const int n = kind == 2 ? 2 : static_cast<int>(uniform(rng, 1, 4));
+    for (int k = 0; k < n; ++k) {
+      LinearTest t;
+      if (kind == 2 && k == 1) {
+        t.c = tests[0].c;  // the opposite side of the same line: only the line itself passes
+        t.cond = tests[0].cond == Condition::ge ? Condition::le : Condition::ge;
+      } else {
+        const int zero = static_cast<int>(uniform(rng, 0, 9));
+        t.c.D = zero == 0 ? 0 : coef();
+        t.c.E = zero == 1 ? 0 : coef();
+        t.c.F = through(t.c.D, t.c.E, 16) + (kind == 2 ? 0 : coef() / 4);
+        t.cond = kind == 2 ? (uniform(rng, 0, 1) ? Condition::ge : Condition::le)
+                           : one_interval_conds[uniform(rng, 0, 3)];
+      }
+      REQUIRE(one_interval(t.cond));
+      if (!fits_64(t.c, y0, x0, width, height)) continue;
+      tests.push_back(t);
+    }
+    int lo = 0, hi = height - 1;
+    linear_row_band(tests.data(), tests.size(), x0, y0, width, height, lo, hi);
+    INFO("trial " << trial << ", " << tests.size() << " tests, region at " << x0 << "," << y0
+                  << ", band " << lo << ".." << hi);
+    REQUIRE(lo >= 0);
+    REQUIRE(hi <= height - 1);
+    int rows_passing = 0;
+    for (int y = 0; y < height; ++y) {
+      bool any = false;
+      for (int x = 0; x < width && !any; ++x) {
+        bool all = true;
+        for (const LinearTest& t : tests) {
+          const i128 v = i128(t.c.D) * (x0 + x) + i128(t.c.E) * (y0 + y) + t.c.F;
+          all = all && holds(t.cond, static_cast<std::int64_t>(v));  // below 2^63: fits_64
+        }
+        any = all;
+      }
+      if (!any) continue;
+      ++rows_passing;
+      INFO("row " << y << " has a pixel passing every test");
+      REQUIRE(lo <= y);
+      REQUIRE(y <= hi);
+    }
+    narrowed += hi - lo + 1 < height;
+    empty += lo > hi;
+    slivers_kept += kind == 2 && rows_passing > 0;
+  }
+  // The band is worth having (it leaves rows out), and the hard cases were reached.
+  CHECK(narrowed > 150);
+  CHECK(empty > 20);
+  CHECK(slivers_kept > 20);
 }

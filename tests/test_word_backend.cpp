@@ -406,12 +406,15 @@ TEST_CASE("the word backend's state: empty-region reuse and a bad geometry", "[w
   CHECK_THROWS_AS(make_pixel_backend("word", p), std::invalid_argument);
 }
 
-TEST_CASE("word and bit agree on runs of linear tests (the word backend applies them together)",
+TEST_CASE("word and bit agree on runs of linear tests (both backends apply them together)",
           "[word][backend]") {
-  // Runs of one to five half-plane tests after eall, as a triangle's edges (the word backend
-  // defers up to four and walks only the rows of their band), with every condition, edges of
-  // every slope (D or E zero too), regions anywhere on the screen; then a test it cannot
-  // defer (eq), a save, another run and a restore. E must be the same pixel for pixel.
+  // Runs of one to five half-plane tests after eall, as a triangle's edges (both backends
+  // defer up to four and test only the rows of their band, models/evaluator/linear_band.hpp),
+  // with every condition, edges of every slope (D or E zero too), regions anywhere on the
+  // screen; then a test they cannot defer (eq), a save, another run and a restore. E must be
+  // the same pixel for pixel, and the same as a bit backend's that applies each test on its
+  // own (`each`: reading E after every test makes it apply what it holds back), so that a
+  // fault in the band, which both deferring backends share, cannot hide.
   PixelBackendParams p;
   p.array.width = 128;
   p.array.height = 128;
@@ -422,6 +425,7 @@ TEST_CASE("word and bit agree on runs of linear tests (the word backend applies 
   p.fraction_bits = 8;
   auto word = make_pixel_backend("word", p);
   auto bit = make_pixel_backend("bit", p);
+  auto each = make_pixel_backend("bit", p);
   std::mt19937_64 rng(20261125);
   auto uniform = [&](std::int64_t lo, std::int64_t hi) {
     return std::uniform_int_distribution<std::int64_t>(lo, hi)(rng);
@@ -442,8 +446,13 @@ TEST_CASE("word and bit agree on runs of linear tests (the word backend applies 
   auto same_enable = [&](const char* when) {
     INFO(when);
     int differing = 0;
-    for (int px = 0; px < 128 * 128; ++px) differing += word->enabled(px) != bit->enabled(px);
+    int differing_each = 0;
+    for (int px = 0; px < 128 * 128; ++px) {
+      differing += word->enabled(px) != bit->enabled(px);
+      differing_each += bit->enabled(px) != each->enabled(px);
+    }
     REQUIRE(differing == 0);
+    REQUIRE(differing_each == 0);
     REQUIRE(word->count_enabled() == bit->count_enabled());
   };
   int narrowed = 0;
@@ -451,31 +460,32 @@ TEST_CASE("word and bit agree on runs of linear tests (the word backend applies 
     INFO("trial " << trial);
     x0 = static_cast<int>(uniform(-2, 30)) * 128;
     y0 = static_cast<int>(uniform(-2, 30)) * 128;
-    for (auto* b : {word.get(), bit.get()}) b->set_origin(x0, y0);
-    for (auto* b : {word.get(), bit.get()}) b->enable_all();
+    for (auto* b : {word.get(), bit.get(), each.get()}) b->set_origin(x0, y0);
+    for (auto* b : {word.get(), bit.get(), each.get()}) b->enable_all();
     const int run = static_cast<int>(uniform(1, 5));
     for (int k = 0; k < run; ++k) {
       const QuadraticCoefficients c = edge();
       const Compare cond = one_interval[uniform(0, 3)];
       word->qtest(c, cond);
       bit->qtest(c, cond);
+      each->qtest(c, cond);
+      (void)each->count_enabled();  // applies the test now
     }
     same_enable("after the run");
     const int left = word->count_enabled();
     narrowed += left > 0 && left < 128 * 128;
     const QuadraticCoefficients eq = edge();
-    word->push_enable();
-    bit->push_enable();
-    word->qtest(eq, Compare::ne);
-    bit->qtest(eq, Compare::ne);
+    for (auto* b : {word.get(), bit.get(), each.get()}) b->push_enable();
+    for (auto* b : {word.get(), bit.get(), each.get()}) b->qtest(eq, Compare::ne);
     for (int k = 0; k < 3; ++k) {
       const QuadraticCoefficients c = edge();
       word->qtest(c, Compare::ge);
       bit->qtest(c, Compare::ge);
+      each->qtest(c, Compare::ge);
+      (void)each->count_enabled();
     }
     same_enable("after a save and another run");
-    word->pop_enable();
-    bit->pop_enable();
+    for (auto* b : {word.get(), bit.get(), each.get()}) b->pop_enable();
     same_enable("after the restore");
   }
   CHECK(narrowed > 100);

@@ -18,6 +18,7 @@ Bits BitSlicedBackend::source_bits(const Source& src) const {
 }
 
 Bits BitSlicedBackend::expression_bits(const QuadraticCoefficients& expr, const Field& as) {
+  settle();
   // Disabled pixels' values are never used (assign keeps them, compare clears their E
   // anyway), so words whose E is zero are not evaluated.
   evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data(),
@@ -26,8 +27,40 @@ Bits BitSlicedBackend::expression_bits(const QuadraticCoefficients& expr, const 
 }
 
 void BitSlicedBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
-  evaluator_.test_plane(expr, cond, array_.active_words(), scratch_.data(), array_.enable());
+  // Held back when linear_row_band can take it: a one-interval condition on a linear value
+  // formed exactly in 64 bits, which wraps nowhere in the region (so that the wrapped value
+  // the hardware compares is the half-plane's).
+  const PixelArrayGeometry& g = geometry();
+  if (expr.is_linear() && one_interval(cond) && pending_count_ < pending_.size() &&
+      fits_64(expr, evaluator_.origin_y(), evaluator_.origin_x(), g.width, g.height) &&
+      evaluator_.linear_fast_path(expr, WordRange{0, array_.words()})) {
+    pending_[pending_count_++] = LinearTest{expr, cond};
+    return;
+  }
+  settle();
+  and_test(expr, cond);
+}
+
+void BitSlicedBackend::and_test(const QuadraticCoefficients& expr, Compare cond) {
+  const WordRange r = array_.active_words();
+  if (r.empty()) return;
+  evaluator_.test_plane(expr, cond, r, scratch_.data(), array_.enable());
   array_.and_enable(scratch_.data());
+}
+
+void BitSlicedBackend::apply_pending() {
+  const std::size_t n = pending_count_;
+  pending_count_ = 0;
+  const PixelArrayGeometry& g = geometry();
+  int lo = 0, hi = g.height - 1;
+  linear_row_band(pending_.data(), n, evaluator_.origin_x(), evaluator_.origin_y(), g.width,
+                  g.height, lo, hi);
+  // No pixel outside the band passes every test: E is 0 there. Inside it, each test is
+  // applied exactly, as qtest applies one, over what the tests before it left.
+  const int words_per_row = g.width / kWordBits;
+  const int first = std::min(lo, hi + 1) * words_per_row;
+  array_.clear_enable_outside(WordRange{first, std::max(first, (hi + 1) * words_per_row)});
+  for (std::size_t k = 0; k < n; ++k) and_test(pending_[k].c, pending_[k].cond);
 }
 
 void BitSlicedBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
@@ -41,30 +74,37 @@ void BitSlicedBackend::qcmp(const Field& field, const QuadraticCoefficients& exp
 }
 
 void BitSlicedBackend::mov(const Field& dst, const Source& src) {
+  settle();
   array_.assign(dst, source_bits(src));
 }
 
 void BitSlicedBackend::add(const Field& dst, const Source& src) {
+  settle();
   array_.add(dst, array_.bits_of(dst), source_bits(src));
 }
 
 void BitSlicedBackend::sub(const Field& dst, const Source& src) {
+  settle();
   array_.sub(dst, array_.bits_of(dst), source_bits(src));
 }
 
 void BitSlicedBackend::logic(const Field& dst, const Source& src, Logic op) {
+  settle();
   array_.logic(dst, array_.bits_of(dst), source_bits(src), op);
 }
 
 void BitSlicedBackend::compare(const Field& a, const Source& b, Compare cond) {
+  settle();
   array_.compare(array_.bits_of(a), source_bits(b), cond);
 }
 
 void BitSlicedBackend::multiply(const Field& dst, const Field& a, const Field& b) {
+  settle();
   array_.multiply(dst, array_.bits_of(a), array_.bits_of(b));
 }
 
 void BitSlicedBackend::multiply_accumulate(const Field& dst, const Field& a, std::int64_t k) {
+  settle();
   array_.multiply_accumulate(dst, array_.bits_of(a), k);
 }
 
@@ -113,12 +153,16 @@ void BitSlicedBackend::read_memory_planes(std::vector<std::uint64_t>& planes) co
 }
 
 std::unique_ptr<PixelBackend> BitSlicedBackend::clone() const {
+  settle();
   return std::make_unique<BitSlicedBackend>(*this);
 }
 
 bool BitSlicedBackend::same_state(const PixelBackend& other) const {
   const auto* o = dynamic_cast<const BitSlicedBackend*>(&other);
-  return o != nullptr && array_.same_state(o->array_);
+  if (o == nullptr) return false;
+  settle();
+  o->settle();
+  return array_.same_state(o->array_);
 }
 
 void BitSlicedBackend::copy_state_from(const PixelBackend& other) {
@@ -127,7 +171,9 @@ void BitSlicedBackend::copy_state_from(const PixelBackend& other) {
     throw std::invalid_argument(std::string("bit backend: cannot take the state of a '") +
                                 other.name() + "' backend of another kind or geometry");
   }
+  o->settle();
   array_ = o->array_;
+  pending_count_ = 0;
 }
 
 }  // namespace pp5

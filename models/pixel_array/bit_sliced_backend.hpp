@@ -6,13 +6,20 @@
 // PixelArray / ExpressionEvaluator operation the instruction maps to, over the words where
 // E has a set bit; a field operand becomes the field's planes, a constant a broadcast of the
 // zero and ones planes, an expression the evaluator's planes of its integer bits (in scratch
-// planes the backend owns). Beyond the interface, array() and evaluator() give the concrete
-// models to code that is about them (their tests and benchmarks).
+// planes the backend owns). One exception to "each call is one operation": a run of linear
+// half-plane qtests (a triangle's edges) is held back and applied together when anything
+// else is asked of the backend, over only the rows where all of them can hold
+// (models/evaluator/linear_band.hpp); E is then what the tests one by one would leave, and
+// every accessor, including array(), sees it applied. Beyond the interface, array() and evaluator()
+// give the concrete models to code that is about them (their tests and benchmarks).
+#include <array>
+#include <cstddef>
 #include <memory>
 #include <vector>
 
 #include "firmware/isa/backend.hpp"
 #include "models/evaluator/evaluator.hpp"
+#include "models/evaluator/linear_band.hpp"
 #include "models/pixel_array/pixel_array.hpp"
 
 namespace pp5 {
@@ -23,12 +30,27 @@ class BitSlicedBackend final : public PixelBackend {
 
   const char* name() const override { return "bit"; }
   const PixelArrayGeometry& geometry() const override { return array_.geometry(); }
-  void set_origin(int x0, int y0) override { evaluator_.set_origin(x0, y0); }
+  void set_origin(int x0, int y0) override {
+    settle();
+    evaluator_.set_origin(x0, y0);
+  }
 
-  void enable_all() override { array_.enable_all(); }
-  void push_enable() override { array_.push_enable(); }
-  void pop_enable() override { array_.pop_enable(); }
-  void else_enable() override { array_.else_enable(); }
+  void enable_all() override {
+    pending_count_ = 0;  // E becomes all 1: no test held back matters
+    array_.enable_all();
+  }
+  void push_enable() override {
+    settle();
+    array_.push_enable();
+  }
+  void pop_enable() override {
+    settle();
+    array_.pop_enable();
+  }
+  void else_enable() override {
+    settle();
+    array_.else_enable();
+  }
 
   void qtest(const QuadraticCoefficients& expr, Compare cond) override;
   void qload(const Field& dst, const QuadraticCoefficients& expr) override;
@@ -38,10 +60,15 @@ class BitSlicedBackend final : public PixelBackend {
   void add(const Field& dst, const Source& src) override;
   void sub(const Field& dst, const Source& src) override;
   void logic(const Field& dst, const Source& src, Logic op) override;
-  void invert(const Field& dst) override { array_.invert(dst); }
+  void invert(const Field& dst) override {
+    settle();
+    array_.invert(dst);
+  }
   void compare(const Field& a, const Source& b, Compare cond) override;
   void multiply(const Field& dst, const Field& a, const Field& b) override;
   void multiply_accumulate(const Field& dst, const Field& a, std::int64_t k) override;
+  // Backing-store transfers and scalar reads and writes of memory ignore E: what is held
+  // back stays held back.
   void store_to_backing(const Field& field, int block) override {
     array_.store_to_backing(field, block);
   }
@@ -54,8 +81,14 @@ class BitSlicedBackend final : public PixelBackend {
   }
   void read_field(const Field& field, std::uint64_t* out) const override;
   void read_memory_planes(std::vector<std::uint64_t>& planes) const override;
-  bool enabled(int pixel) const override { return array_.enabled(pixel); }
-  int count_enabled() const override { return array_.count_enabled(); }
+  bool enabled(int pixel) const override {
+    settle();
+    return array_.enabled(pixel);
+  }
+  int count_enabled() const override {
+    settle();
+    return array_.count_enabled();
+  }
   int enable_depth() const override { return array_.enable_depth(); }
   void write(int pixel, const Field& field, std::uint64_t value) override {
     array_.write(pixel, field, value);
@@ -65,16 +98,34 @@ class BitSlicedBackend final : public PixelBackend {
   bool same_state(const PixelBackend& other) const override;
   void copy_state_from(const PixelBackend& other) override;
 
-  PixelArray& array() { return array_; }
-  const PixelArray& array() const { return array_; }
+  PixelArray& array() {
+    settle();
+    return array_;
+  }
+  const PixelArray& array() const {
+    settle();
+    return array_;
+  }
   const ExpressionEvaluator& evaluator() const { return evaluator_; }
 
  private:
   Bits source_bits(const Source& src) const;
   // The integer bits [fraction_bits, fraction_bits + width) of an expression, as planes.
   Bits expression_bits(const QuadraticCoefficients& expr, const Field& as);
+  // E &= (expr <cond> 0), over the words where E has a set bit.
+  void and_test(const QuadraticCoefficients& expr, Compare cond);
+
+  // The linear tests held back (qtest): applied by settle(), which every operation that
+  // reads or writes E calls first. Logically const: E is the same before and after, only
+  // how it is held changes.
+  void settle() const {
+    if (pending_count_ != 0) const_cast<BitSlicedBackend*>(this)->apply_pending();
+  }
+  void apply_pending();
 
   PixelArray array_;
+  std::array<LinearTest, kMaxBandTests> pending_{};
+  std::size_t pending_count_ = 0;
   ExpressionEvaluator evaluator_;
   int fraction_bits_;
   std::vector<Word> scratch_;  // Bits::kMaxBits planes: the evaluator's output

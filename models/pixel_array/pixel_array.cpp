@@ -73,6 +73,13 @@ void PixelArray::enable_all() {
   mark_enable_changed();
 }
 
+void PixelArray::clear_enable_outside(WordRange keep) {
+  const WordRange r = active_words();
+  for (int w = r.begin; w < std::min(keep.begin, r.end); ++w) enable_[w] = 0;
+  for (int w = std::max(keep.end, r.begin); w < r.end; ++w) enable_[w] = 0;
+  mark_enable_changed();
+}
+
 void PixelArray::and_enable(const Word* mask) {
   const WordRange r = active_words();
   for (int w = r.begin; w < r.end; ++w) enable_[w] &= mask[w];

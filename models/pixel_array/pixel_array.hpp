@@ -62,7 +62,8 @@ class PixelArray {
 
   // Enable register and its stack.
   void enable_all();
-  void and_enable(const Word* mask);  // E &= mask
+  void and_enable(const Word* mask);          // E &= mask
+  void clear_enable_outside(WordRange keep);  // E = 0 in every word outside keep
   void push_enable();
   void pop_enable();
   void else_enable();  // E = (saved E) & ~E: the other branch of the innermost conditional

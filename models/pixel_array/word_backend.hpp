@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "firmware/isa/backend.hpp"
+#include "models/evaluator/linear_band.hpp"
 
 namespace pp5 {
 
@@ -179,13 +180,10 @@ class WordBackend final : public PixelBackend {
   // Linear half-plane tests (lt, le, gt, ge) not yet applied to spans_: consecutive ones (a
   // triangle's edge tests) are applied together, in one walk over only the rows where all of
   // them can hold, instead of one walk each over what the one before left. Every other
-  // operation applies them first; the result is the same as applying them one by one.
-  struct PendingTest {
-    QuadraticCoefficients c;
-    Compare cond;
-  };
-  static constexpr std::size_t kMaxPending = 4;
-  mutable std::vector<PendingTest> pending_;
+  // operation applies them first; the result is the same as applying them one by one
+  // (models/evaluator/linear_band.hpp).
+  static constexpr std::size_t kMaxPending = kMaxBandTests;
+  mutable std::vector<LinearTest> pending_;
   void materialize() const;
   // Scratch of pixels_ values each: operands, results, the evaluator's row tables (width
   // entries each). Not state: a new backend allocates it, on the thread that makes it (a
