@@ -13,7 +13,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
                  const Program& program)
     : sc_module(name),
       plan_(config, scene, program),
-      scheduler_(config.regions(), config.renderer.count,
+      scheduler_("scheduler", config.regions(), config.renderer.count, config.gp.count,
                  config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic) {
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
@@ -37,6 +37,12 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
     renderer_stops_.push_back(renderer_stop(k));
   }
   ring_->attach(frame_buffer_stop(), *frame_buffer_);
+  std::vector<std::vector<int>> hops(static_cast<std::size_t>(gps),
+                                     std::vector<int>(static_cast<std::size_t>(renderers)));
+  for (int g = 0; g < gps; ++g) {
+    for (int k = 0; k < renderers; ++k) hops[g][k] = ring_->hops(gp_stop(g), renderer_stop(k));
+  }
+  scheduler_.set_ring(std::move(hops));
 }
 
 Machine::~Machine() = default;

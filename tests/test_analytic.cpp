@@ -144,10 +144,11 @@ TEST_CASE("analytic frame time within its measured bound over a grid of machines
   // The bound is measured: the largest |analytic - event| / event over this grid, rounded up
   // (docs/timing.md "Analytic timing" gives the table). A change to either model that moves
   // the analytic error beyond it fails here and must say why.
-  // Measured on this grid: worst 29.4% (phong, 32 GPs, 2 Renderers, 1 ring channel: the
-  // ring and the Renderers take turns, the closed form overlaps them), mean 12.9%; the bottleneck
-  // agrees at 42 of the 48 points.
-  constexpr double kBound = 0.30;
+  // Measured on this grid: worst 31.8% (phong, 32 GPs, 2 Renderers, 1 ring channel: the
+  // ring and the Renderers take turns, the closed form overlaps them), mean 13.1%; the
+  // bottleneck agrees at 44 of the 48 points. (29.4%, 12.9% and 42 before the event model's
+  // GPs were woken nearest first, RegionScheduler, which moved that machine's frame 3.6%.)
+  constexpr double kBound = 0.33;
   const Scene scene = make_builtin_scene("torus");
   double worst = 0, sum = 0;
   std::string worst_at;

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <map>
 #define SC_INCLUDE_DYNAMIC_PROCESSES
 #include <systemc>
@@ -12,6 +13,7 @@
 #include "models/gp/expressions.hpp"
 #include "models/gp/i860.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/region_scheduler.hpp"
 #include "models/ring/ring.hpp"
 #include "sim/kernel.hpp"
 #include "sim/simulation.hpp"
@@ -431,4 +433,62 @@ TEST_CASE("a region no primitive touches waits for no bin message", "[timing]") 
     CHECK(pixel_at(511, 511) == std::lround(scene.background.r * 255));
     CHECK(pixel_at(20, 20) != pixel_at(511, 511));
   }
+}
+
+TEST_CASE("waiting GPs are woken only by a stage they owe, nearest the Renderer first",
+          "[timing][gp]") {
+  // The scheduler alone: four GPs wait, each owing some stages of an 8-region frame; Renderers
+  // change (a stage opens, or room frees) and the order the GPs run in is recorded. GP g's
+  // ring distance to Renderer k is hops[g][k], as the Machine sets it from the stops.
+  fresh_kernel();
+  constexpr int kRegions = 8, kRenderers = 2, kGps = 4;
+  RegionScheduler scheduler("scheduler", kRegions, kRenderers, kGps, false);
+  // GPs 0..3 at stops 0..3, the Renderers at 4 and 5 (GPs first on the ring, as in Machine).
+  std::vector<std::vector<int>> hops(kGps, std::vector<int>(kRenderers));
+  for (int g = 0; g < kGps; ++g)
+    for (int k = 0; k < kRenderers; ++k) hops[g][k] = ring_hops(g, kGps + k, kGps + kRenderers + 1);
+  scheduler.set_ring(hops);
+  const std::vector<std::vector<int>> owed = {{3, 5}, {3}, {5, 6}, {3, 6}};
+  for (int r = 0; r < kRegions; ++r) {
+    std::vector<int> senders;
+    for (const auto& o : owed)
+      if (std::find(o.begin(), o.end(), r) != o.end()) senders.push_back(r);
+    scheduler.add_bin_senders(senders);
+  }
+  std::vector<std::pair<long long, int>> runs;  // (time in ns, GP) in the order the GPs ran
+  for (int g = 0; g < kGps; ++g) {
+    sc_core::sc_spawn(
+        [&, g] {
+          // As many waits as the GP is woken below, so that every thread ends.
+          const int wakes[kGps] = {2, 1, 1, 2};
+          for (int k = 0; k < wakes[g]; ++k) {
+            scheduler.wait_for_input(g, owed[g]);
+            runs.emplace_back(std::llround(sc_core::sc_time_stamp().to_seconds() * 1e9), g);
+          }
+        },
+        sc_core::sc_gen_unique_name("gp"));
+  }
+  sc_core::sc_spawn(
+      [&] {
+        sc_core::wait(10, sc_core::SC_NS);
+        scheduler.input_changed(0, 0);  // region 0: nobody owes it, nobody wakes
+        sc_core::wait(10, sc_core::SC_NS);
+        scheduler.input_changed(1, 3);  // region 3: GPs 0, 1 and 3, nearest (3) first
+        sc_core::wait(10, sc_core::SC_NS);
+        // Two Renderers change at one instant: GPs 0 and 2 owe 5, GPs 2 and 3 owe 6. Each GP
+        // is woken once, by its nearest: GP 2 (2 hops to Renderer 0) and GP 3 (2 hops to
+        // Renderer 1) tie, the lower first; then GP 0 (4 hops).
+        scheduler.input_changed(0, 5);
+        scheduler.input_changed(1, 6);
+        sc_core::wait(10, sc_core::SC_NS);
+        scheduler.input_changed(0, -1);  // no stage open: nobody
+      },
+      "renderers");
+  run_kernel();
+  const std::vector<std::pair<long long, int>> expected = {{20, 3}, {20, 1}, {20, 0},
+                                                           {30, 2}, {30, 3}, {30, 0}};
+  std::string got;
+  for (const auto& [t, g] : runs) got += fmt::format(" {}:{}", t, g);
+  INFO("ran:" << got);
+  CHECK(runs == expected);
 }

@@ -290,8 +290,8 @@ void GraphicsProcessor::run() {
   // stage order: the lowest open stage this GP still owes something, whose queue has room.
   // Found from whichever list is shorter: the Renderers' open stages, or the stages owed
   // (the stage of a region is open only at the Renderer that claimed the region). A GP
-  // waiting on one region's queue is woken by every stage any Renderer opens: on a large
-  // screen of empty regions, most of its wake-ups.
+  // with nothing it can send waits until a stage it owes opens or frees room
+  // (RegionScheduler::wait_for_input, which says in what order waiting GPs go).
   std::vector<int> open_stages;
   open_stages.reserve(static_cast<std::size_t>(machine_.renderer_count()));
   const auto renderers = static_cast<std::size_t>(machine_.renderer_count());
@@ -333,7 +333,7 @@ void GraphicsProcessor::run() {
     if (pick < 0) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();
       begin(GpActivity::renderer);
-      wait(machine_.scheduler().input_changed());
+      machine_.scheduler().wait_for_input(index_, owed);
       (open_stages.empty() ? stats_.waiting_stage : stats_.waiting_queue) +=
           sc_core::sc_time_stamp() - t0;
       continue;

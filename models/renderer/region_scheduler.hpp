@@ -1,6 +1,7 @@
 #pragma once
-// Which Renderer renders which screen region, and which GPs send each region packets: the
-// state the GPs and the Renderers share while bins flow, kept out of Machine.
+// Which Renderer renders which screen region, which GPs send each region packets, and which
+// waiting GP goes next: the state the GPs and the Renderers share while bins flow, kept out
+// of Machine.
 //
 // Contract:
 //  - claim_region(k) gives Renderer k its next region: statically region r to Renderer
@@ -9,33 +10,65 @@
 //  - owner_of_region(r) is -1 until some Renderer has claimed r.
 //  - add_bin_senders is called by each GP, once, before its bin map is sent; bin_senders(r)
 //    is final once every busy GP's map has reached the Renderer that reads it.
-//  - input_changed() is notified whenever a Renderer opens a stage for input or frees room in
-//    its queue: what a GP with nothing to send waits for.
+//  - wait_for_input(gp, owed) is where a GP with nothing it can send waits (from its
+//    thread): `owed` is the stages (pass * regions + region) it still owes, ascending, and
+//    stays as it is while it waits.
+//  - input_changed(k, stage) is called by Renderer k whenever it opens a stage for input or
+//    frees room in its queue; `stage` is the stage it has open then (-1: none).
+//  - Arbitration: one delta after Renderers change, the GPs waiting for a stage that a
+//    changed Renderer has open are woken, and only those (a GP can send again only when a
+//    stage it owes opens or its queue frees room). They are woken nearest first: by the hops
+//    from the GP's ring stop to that Renderer's (set_ring), ties to the lower GP. A GP woken
+//    first runs first, and so takes room in a queue first when several want it at one
+//    instant: as on the machine, where of messages sent at one instant the one with the
+//    fewest hops to go arrives first. The order is this rule's (an assumption, stated in
+//    docs/timing.md), not the SystemC kernel's order of waking the processes of one event.
+#include <memory>
 #include <systemc>
 #include <vector>
 
 namespace pp5 {
 
-class RegionScheduler {
+class RegionScheduler : public sc_core::sc_module {
  public:
-  RegionScheduler(int regions, int renderers, bool dynamic);
+  SC_HAS_PROCESS(RegionScheduler);
+  RegionScheduler(sc_core::sc_module_name name, int regions, int renderers, int gps, bool dynamic);
 
   int claim_region(int renderer);
   int owner_of_region(int region) const { return owner_[region]; }
   void add_bin_senders(const std::vector<int>& regions);
   int bin_senders(int region) const { return bin_senders_[region]; }
   bool dynamic_balancing() const { return dynamic_; }
-  sc_core::sc_event& input_changed() { return input_changed_; }
+
+  // hops[g][k]: ring hops from GP g's stop to Renderer k's (the arbitration's order).
+  void set_ring(std::vector<std::vector<int>> hops) { hops_ = std::move(hops); }
+  void wait_for_input(int gp, const std::vector<int>& owed);
+  void input_changed(int renderer, int stage);
 
  private:
+  void arbitrate();  // SC_METHOD on changed_
+
   int regions_;
   int renderers_;
+  int gps_;
   bool dynamic_;
   std::vector<int> owner_;        // region -> Renderer, -1 until claimed
   std::vector<int> bin_senders_;  // region -> GPs with packets for it
   int next_region_ = 0;           // dynamic: the next unclaimed region
   std::vector<int> claimed_;      // static: regions each Renderer has claimed so far
-  sc_core::sc_event input_changed_;
+
+  // Renderers changed since the last arbitration, and the stage each has open.
+  std::vector<int> changed_;
+  std::vector<char> is_changed_;
+  std::vector<int> open_stage_;
+  sc_core::sc_event changed_event_;
+  // Waiting GPs: what each owes (null when it is not waiting) and its wake-up.
+  std::vector<const std::vector<int>*> owed_;
+  std::unique_ptr<sc_core::sc_event[]> woken_;
+  int waiting_ = 0;
+  std::vector<std::vector<int>> hops_;
+  std::vector<int> nearest_;  // per GP: its fewest hops to a Renderer that woke it, or -1
+  std::vector<int> wake_order_;
 };
 
 }  // namespace pp5

@@ -72,7 +72,7 @@ void Renderer::open_next_stage() {
     open_pass_ = open_region_ >= 0 ? 0 : -1;
   }
   if (open_region_ >= 0) stages_.push_back({open_region_, open_pass_});
-  machine_.scheduler().input_changed().notify(sc_core::SC_ZERO_TIME);
+  machine_.scheduler().input_changed(index_, open_stage(machine_.config().regions()));
 }
 
 void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values,
@@ -297,7 +297,7 @@ void Renderer::run() {
             t0, cursor_);
       }
       queued_words_ -= m->words;
-      machine_.scheduler().input_changed().notify(sc_core::SC_ZERO_TIME);
+      machine_.scheduler().input_changed(index_, open_stage(machine_.config().regions()));
       if (m->last) ++lasts;
     }
     if (stage.pass + 1 < stream.passes()) continue;
