@@ -146,10 +146,15 @@ TEST_CASE("setup memo: its summary counts what the GPs' geometry passes make", "
   for (int k = 0; k < gps; ++k) {
     const int first = n * k / gps, last = n * (k + 1) / gps;
     blocks.emplace_back(first, last);
-    std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
+    RegionBins bins;
     geometry_pass(plan, first, last, stats[static_cast<std::size_t>(k)], &bins);
-    for (std::size_t r = 0; r < bins.size(); ++r)
-      all[r].insert(all[r].end(), bins[r].begin(), bins[r].end());
+    REQUIRE(std::is_sorted(bins.regions().begin(), bins.regions().end()));
+    for (int r = 0; r < c.regions(); ++r) {
+      const RegionBins::Bin& bin = bins.bin(r);
+      CHECK((bins.slot(r) >= 0) == !bin.empty());
+      all[static_cast<std::size_t>(r)].insert(all[static_cast<std::size_t>(r)].end(), bin.begin(),
+                                              bin.end());
+    }
   }
   REQUIRE(memo.complete());
   const SetupMemo::Summary& s = memo.summary(c.regions());

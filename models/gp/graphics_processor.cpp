@@ -6,6 +6,7 @@
 
 #include "common/parallel_for.hpp"
 #include "models/gp/primitive_kind.hpp"
+#include "models/gp/region_bins.hpp"
 #include "models/gp/setup_memo.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
@@ -86,8 +87,7 @@ namespace {
 
 // geometry_pass into `memo` (null for none).
 void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats& stats,
-                        std::vector<std::vector<std::shared_ptr<const Packet>>>* bins,
-                        SetupMemo* memo) {
+                        RegionBins* bins, SetupMemo* memo) {
   const MachineConfig& config = machine.config();
   const GeometryEngine& geometry = machine.geometry();
   const DisplayList& display_list = geometry.display_list();
@@ -116,7 +116,7 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
 
   // A bin per region: the packets this GP sends it, in display-list order. With a multipass
   // program the same packets go out once per pass.
-  if (bins != nullptr) bins->assign(static_cast<std::size_t>(config.regions()), {});
+  if (bins != nullptr) bins->reset(config.regions());
   std::vector<int> regions;
   for (int i = first; i < last; ++i) {
     const PrimitiveRef ref = display_list.at(i);
@@ -133,7 +133,7 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
         const SetupMemo::Placed& placed = memo->placed(p);
         for (std::uint32_t q = placed.first; bins != nullptr && q < placed.first + placed.count;
              ++q) {
-          (*bins)[static_cast<std::size_t>(memo->region(q))].push_back(placed.packet);
+          bins->add(static_cast<int>(memo->region(q)), placed.packet);
         }
         stats.packets += placed.count;
       }
@@ -157,7 +157,7 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
         k.worker->bin(result, regions);
         packet->values = std::move(result.values);
         for (int r : regions) {
-          if (bins != nullptr) (*bins)[static_cast<std::size_t>(r)].push_back(packet);
+          if (bins != nullptr) bins->add(r, packet);
           ++stats.packets;
           ++tally.regions;
         }
@@ -170,12 +170,13 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
     stats.ops += cost.ops;
     stats.geometry += cost.clocks;
   }
+  if (bins != nullptr) bins->finish();
 }
 
 }  // namespace
 
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
-                   std::vector<std::vector<std::shared_ptr<const Packet>>>* bins) {
+                   RegionBins* bins) {
   geometry_pass_with(machine, first, last, stats, bins, machine.setup_memo());
 }
 
@@ -217,7 +218,7 @@ void GraphicsProcessor::run() {
     return;
   }
   const MachineConfig& config = machine_.config();
-  std::vector<std::vector<std::shared_ptr<const Packet>>> bins;
+  RegionBins bins;
   geometry_pass(machine_.plan(), first_, last_, stats_, &bins);
   // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
   stats_.busy += stats_.geometry;
@@ -227,11 +228,7 @@ void GraphicsProcessor::run() {
 
   // The bin map goes first, in one message that passes every Renderer: which regions this
   // GP has packets for.
-  std::vector<int> nonempty;
-  for (int r = 0; r < config.regions(); ++r) {
-    if (!bins[r].empty()) nonempty.push_back(r);
-  }
-  machine_.scheduler().add_bin_senders(nonempty);
+  machine_.scheduler().add_bin_senders(bins.regions());
   send_bin_map();
 
   // Bins go out as their Renderers open (pass, region) stages: each message goes to the
@@ -249,16 +246,21 @@ void GraphicsProcessor::run() {
   int ready_passes = retraverse ? 1 : passes;
   const int n = config.regions();
   const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
-  std::vector<std::size_t> next(static_cast<std::size_t>(passes) * n, 0);
-  // An empty bin is not sent: the map has told its Renderer not to wait for it.
+  // An empty bin is not sent: the map has told its Renderer not to wait for it. So the
+  // stages this GP owes are (pass, region) for the regions it has packets for, and what it
+  // keeps per stage is kept per owed stage, at its slot: pass * (those regions) + the
+  // region's index among them (a large screen's other regions cost it nothing).
+  const std::vector<int>& held = bins.regions();
+  const auto slot = [&bins, n, h = static_cast<int>(held.size())](int s) {
+    return static_cast<std::size_t>((s / n) * h + bins.slot(s % n));
+  };
+  std::vector<std::size_t> next(static_cast<std::size_t>(passes) * held.size(), 0);
   std::vector<bool> done(next.size(), false);
   // The stages this GP still owes, ascending.
   std::vector<int> owed;
-  for (int pass = 0, s = 0; pass < passes; ++pass) {
-    for (int r = 0; r < n; ++r, ++s) {
-      done[static_cast<std::size_t>(s)] = bins[static_cast<std::size_t>(r)].empty();
-      if (!done[static_cast<std::size_t>(s)]) owed.push_back(s);
-    }
+  owed.reserve(next.size());
+  for (int pass = 0; pass < passes; ++pass) {
+    for (const int r : held) owed.push_back(pass * n + r);
   }
   // A message carries a header word and as many of the bin's next packets as fit in a queue
   // (packets of different kinds differ in size; each fits, checked by the Machine): its size
@@ -268,24 +270,20 @@ void GraphicsProcessor::run() {
   std::vector<std::uint64_t> chunk_words(next.size(), 0);
   std::vector<std::size_t> chunk_from(next.size(), SIZE_MAX);
   auto chunk = [&](int s) {
-    if (chunk_from[s] != next[s]) {
-      const auto& bin = bins[s % n];
+    const std::size_t k = slot(s);
+    if (chunk_from[k] != next[k]) {
+      const RegionBins::Bin& bin = bins.bin(s % n);
       std::uint64_t used = 1;
-      std::size_t i = next[s];
+      std::size_t i = next[k];
       for (; i < bin.size() && used + bin[i]->words <= capacity; ++i) used += bin[i]->words;
-      chunk_packets[s] = i - next[s];
-      chunk_words[s] = used;
-      chunk_from[s] = next[s];
+      chunk_packets[k] = i - next[k];
+      chunk_words[k] = used;
+      chunk_from[k] = next[k];
     }
+    return k;
   };
-  auto packets_for = [&](int s) {
-    chunk(s);
-    return chunk_packets[s];
-  };
-  auto words_for = [&](int s) {
-    chunk(s);
-    return chunk_words[s];
-  };
+  auto packets_for = [&](int s) { return chunk_packets[chunk(s)]; };
+  auto words_for = [&](int s) { return chunk_words[chunk(s)]; };
   // Each Renderer has at most one stage open, so the candidates are those stages, tried in
   // stage order: the lowest open stage this GP still owes something, whose queue has room.
   // Found from whichever list is shorter: the Renderers' open stages, or the stages owed
@@ -307,7 +305,8 @@ void GraphicsProcessor::run() {
       for (int k = 0; k < machine_.renderer_count(); ++k) {
         const int s = machine_.renderer(k).open_stage(n);
         // A region it claimed (its owner), of a pass whose packets exist.
-        if (s >= 0 && !done[s] && s / n < ready_passes) open_stages.push_back(s);
+        if (s >= 0 && bins.slot(s % n) >= 0 && !done[slot(s)] && s / n < ready_passes)
+          open_stages.push_back(s);
       }
       std::sort(open_stages.begin(), open_stages.end());
     }
@@ -338,20 +337,21 @@ void GraphicsProcessor::run() {
           sc_core::sc_time_stamp() - t0;
       continue;
     }
-    const auto& bin = bins[pick % n];
+    const RegionBins::Bin& bin = bins.bin(pick % n);
+    const std::size_t k = slot(pick);
     auto m = std::make_shared<BinMessage>();
     m->region = pick % n;
     m->pass = pick / n;
     m->gp = index_;
     m->words = words_for(pick);
-    const std::size_t first = next[pick];
-    next[pick] += packets_for(pick);
+    const std::size_t first = next[k];
+    next[k] += packets_for(pick);
     m->packets.assign(bin.begin() + static_cast<std::ptrdiff_t>(first),
-                      bin.begin() + static_cast<std::ptrdiff_t>(next[pick]));
-    m->last = next[pick] == bin.size();
+                      bin.begin() + static_cast<std::ptrdiff_t>(next[k]));
+    m->last = next[k] == bin.size();
     machine_.renderer(machine_.scheduler().owner_of_region(pick % n)).reserve_room(m->words);
     if (m->last) {
-      done[pick] = true;
+      done[k] = true;
       owed.erase(std::lower_bound(owed.begin(), owed.end(), pick));
     }
     send(std::move(m));

@@ -16,6 +16,7 @@
 
 #include "common/units.hpp"
 #include "models/gp/primitive_kind.hpp"
+#include "models/gp/region_bins.hpp"
 #include "models/machine.hpp"
 #include "models/ring/ring.hpp"
 
@@ -95,13 +96,13 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
 
 // A GP's geometry phase as plain C++ (no simulated time): transforms, clips, sets up and
 // bins the display-list range [first, last), adding its operations, i860 geometry clocks,
-// packets and set-up counts to `stats` and leaving one bin per region in `*bins`, each in
-// display-list order (no bins when `bins` is null: the analytic timing model fills the
-// plan's set-up memo and reads the bins from its summary). GraphicsProcessor::run and the
+// packets and set-up counts to `stats` and leaving a bin per region it has packets for in
+// `*bins`, each in display-list order (no bins when `bins` is null: the analytic timing model fills
+// the plan's set-up memo and reads the bins from its summary). GraphicsProcessor::run and the
 // analytic timing model (models/renderer/analytic.hpp) both use it, so both see the same
 // packets and clocks.
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
-                   std::vector<std::vector<std::shared_ptr<const Packet>>>* bins);
+                   RegionBins* bins);
 
 // The parts fill_setup_memo splits the display list into: one per thread, each of
 // `least_part` primitives at least. On the development machine (a virtual machine) a

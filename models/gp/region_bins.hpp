@@ -1,0 +1,78 @@
+#pragma once
+// A GP's packets binned by screen region, each bin in display-list order, holding only the
+// regions the GP has packets for: on a 4096 x 4096 screen a share of the display list
+// touches a few of 1,024 regions, and what a GP keeps and walks per frame follows those
+// regions, not the screen.
+//
+// Contract:
+//  - reset(regions) empties it for a screen of `regions` regions.
+//  - add(r, p) appends p to region r's bin.
+//  - finish() orders the bins by region; after it, regions() lists the regions with a
+//    packet in ascending order, slot(r) is r's index in regions() (-1 for a region without
+//    one) and bin(r) its packets (empty for a region without one). add() after finish()
+//    needs another finish().
+#include <algorithm>
+#include <cstddef>
+#include <memory>
+#include <numeric>
+#include <vector>
+
+#include "models/renderer/packet.hpp"
+
+namespace pp5 {
+
+class RegionBins {
+ public:
+  using Bin = std::vector<std::shared_ptr<const Packet>>;
+
+  explicit RegionBins(int regions = 0) { reset(regions); }
+
+  void reset(int regions) {
+    slot_.assign(static_cast<std::size_t>(regions), -1);
+    regions_.clear();
+    bins_.clear();
+  }
+  int region_count() const { return static_cast<int>(slot_.size()); }
+
+  void add(int region, std::shared_ptr<const Packet> packet) {
+    int& s = slot_[static_cast<std::size_t>(region)];
+    if (s < 0) {
+      s = static_cast<int>(bins_.size());
+      bins_.emplace_back();
+      regions_.push_back(region);
+    }
+    bins_[static_cast<std::size_t>(s)].push_back(std::move(packet));
+  }
+
+  void finish() {
+    if (std::is_sorted(regions_.begin(), regions_.end())) return;
+    std::vector<std::size_t> order(regions_.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(),
+              [this](std::size_t a, std::size_t b) { return regions_[a] < regions_[b]; });
+    std::vector<int> regions(order.size());
+    std::vector<Bin> bins(order.size());
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      regions[k] = regions_[order[k]];
+      bins[k] = std::move(bins_[order[k]]);
+      slot_[static_cast<std::size_t>(regions[k])] = static_cast<int>(k);
+    }
+    regions_ = std::move(regions);
+    bins_ = std::move(bins);
+  }
+
+  const std::vector<int>& regions() const { return regions_; }
+  int slot(int region) const { return slot_[static_cast<std::size_t>(region)]; }
+  const Bin& bin(int region) const {
+    const int s = slot(region);
+    return s < 0 ? empty_ : bins_[static_cast<std::size_t>(s)];
+  }
+
+ private:
+  std::vector<int> slot_;     // region -> index in regions_ and bins_, -1 for none
+  std::vector<int> regions_;  // regions with a packet
+  std::vector<Bin> bins_;
+  Bin empty_;
+};
+
+}  // namespace pp5
