@@ -14,7 +14,8 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
     : sc_module(name),
       plan_(config, scene, program),
       scheduler_("scheduler", config.regions(), config.renderer.count, config.gp.count,
-                 config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic) {
+                 config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic,
+                 config.gp.send_order) {
   const int gps = config.gp.count;
   const int renderers = config.renderer.count;
   ring_ = std::make_unique<Ring>("ring", ring_params(config), plan_.ring_stops());

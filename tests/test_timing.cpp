@@ -435,60 +435,91 @@ TEST_CASE("a region no primitive touches waits for no bin message", "[timing]") 
   }
 }
 
-TEST_CASE("waiting GPs are woken only by a stage they owe, nearest the Renderer first",
+TEST_CASE("waiting GPs are woken only by a stage they owe, in gp.send_order's order",
           "[timing][gp]") {
   // The scheduler alone: four GPs wait, each owing some stages of an 8-region frame; Renderers
-  // change (a stage opens, or room frees) and the order the GPs run in is recorded. GP g's
-  // ring distance to Renderer k is hops[g][k], as the Machine sets it from the stops.
-  fresh_kernel();
+  // change (a stage opens, or room frees) and the order the GPs run in is recorded, for each
+  // rule. GP g's ring distance to Renderer k is hops[g][k], as the Machine sets it from the
+  // stops: GPs 0..3 at stops 0..3, the Renderers at 4 and 5, so a higher GP is nearer.
+  using Order = MachineConfig::Gp::SendOrder;
   constexpr int kRegions = 8, kRenderers = 2, kGps = 4;
-  RegionScheduler scheduler("scheduler", kRegions, kRenderers, kGps, false);
-  // GPs 0..3 at stops 0..3, the Renderers at 4 and 5 (GPs first on the ring, as in Machine).
-  std::vector<std::vector<int>> hops(kGps, std::vector<int>(kRenderers));
-  for (int g = 0; g < kGps; ++g)
-    for (int k = 0; k < kRenderers; ++k) hops[g][k] = ring_hops(g, kGps + k, kGps + kRenderers + 1);
-  scheduler.set_ring(hops);
-  const std::vector<std::vector<int>> owed = {{3, 5}, {3}, {5, 6}, {3, 6}};
-  for (int r = 0; r < kRegions; ++r) {
-    std::vector<int> senders;
-    for (const auto& o : owed)
-      if (std::find(o.begin(), o.end(), r) != o.end()) senders.push_back(r);
-    scheduler.add_bin_senders(senders);
-  }
-  std::vector<std::pair<long long, int>> runs;  // (time in ns, GP) in the order the GPs ran
-  for (int g = 0; g < kGps; ++g) {
+  const std::vector<std::vector<int>> owed = {{3, 5}, {3, 4}, {5, 6}, {3, 6}};
+  using Runs = std::vector<std::pair<long long, int>>;  // (time in ns, GP) as the GPs ran
+  // 15 ns: stage 4, GP 1 alone. 20 ns: stage 3, GPs 0, 1 and 3. 30 ns: two Renderers at one
+  // instant, stages 5 (GPs 0 and 2) and 6 (GPs 2 and 3): each GP woken once, by its nearest
+  // (GP 2 two hops from Renderer 0 and GP 3 two from Renderer 1 tie, the lower first).
+  // Round-robin begins after the GP woken last: GP 2 at 20 ns (after GP 1), GP 2 at 30 ns
+  // (after GP 1 again).
+  const std::pair<Order, Runs> cases[] = {
+      {Order::nearest, {{15, 1}, {20, 3}, {20, 1}, {20, 0}, {30, 2}, {30, 3}, {30, 0}}},
+      {Order::lowest, {{15, 1}, {20, 0}, {20, 1}, {20, 3}, {30, 0}, {30, 2}, {30, 3}}},
+      {Order::round_robin, {{15, 1}, {20, 3}, {20, 0}, {20, 1}, {30, 2}, {30, 3}, {30, 0}}},
+  };
+  for (const auto& [order, expected] : cases) {
+    INFO("gp.send_order=" << name_of(order));
+    fresh_kernel();
+    RegionScheduler scheduler("scheduler", kRegions, kRenderers, kGps, false, order);
+    std::vector<std::vector<int>> hops(kGps, std::vector<int>(kRenderers));
+    for (int g = 0; g < kGps; ++g) {
+      for (int k = 0; k < kRenderers; ++k)
+        hops[g][k] = ring_hops(g, kGps + k, kGps + kRenderers + 1);
+    }
+    scheduler.set_ring(hops);
+    for (const auto& o : owed) scheduler.add_bin_senders(o);
+    Runs runs;
+    for (int g = 0; g < kGps; ++g) {
+      sc_core::sc_spawn(
+          [&, g] {
+            // As many waits as the GP is woken below, so that every thread ends.
+            const int wakes[kGps] = {2, 2, 1, 2};
+            for (int k = 0; k < wakes[g]; ++k) {
+              scheduler.wait_for_input(g, owed[static_cast<std::size_t>(g)]);
+              runs.emplace_back(std::llround(sc_core::sc_time_stamp().to_seconds() * 1e9), g);
+            }
+          },
+          sc_core::sc_gen_unique_name("gp"));
+    }
     sc_core::sc_spawn(
-        [&, g] {
-          // As many waits as the GP is woken below, so that every thread ends.
-          const int wakes[kGps] = {2, 1, 1, 2};
-          for (int k = 0; k < wakes[g]; ++k) {
-            scheduler.wait_for_input(g, owed[g]);
-            runs.emplace_back(std::llround(sc_core::sc_time_stamp().to_seconds() * 1e9), g);
-          }
+        [&] {
+          sc_core::wait(10, sc_core::SC_NS);
+          scheduler.input_changed(0, 0);  // region 0: nobody owes it, nobody wakes
+          sc_core::wait(5, sc_core::SC_NS);
+          scheduler.input_changed(0, 4);
+          sc_core::wait(5, sc_core::SC_NS);
+          scheduler.input_changed(1, 3);
+          sc_core::wait(10, sc_core::SC_NS);
+          scheduler.input_changed(0, 5);
+          scheduler.input_changed(1, 6);
+          sc_core::wait(10, sc_core::SC_NS);
+          scheduler.input_changed(0, -1);  // no stage open: nobody
         },
-        sc_core::sc_gen_unique_name("gp"));
+        "renderers");
+    run_kernel();
+    std::string got;
+    for (const auto& [t, g] : runs) got += fmt::format(" {}:{}", t, g);
+    INFO("ran:" << got);
+    CHECK(runs == expected);
   }
-  sc_core::sc_spawn(
-      [&] {
-        sc_core::wait(10, sc_core::SC_NS);
-        scheduler.input_changed(0, 0);  // region 0: nobody owes it, nobody wakes
-        sc_core::wait(10, sc_core::SC_NS);
-        scheduler.input_changed(1, 3);  // region 3: GPs 0, 1 and 3, nearest (3) first
-        sc_core::wait(10, sc_core::SC_NS);
-        // Two Renderers change at one instant: GPs 0 and 2 owe 5, GPs 2 and 3 owe 6. Each GP
-        // is woken once, by its nearest: GP 2 (2 hops to Renderer 0) and GP 3 (2 hops to
-        // Renderer 1) tie, the lower first; then GP 0 (4 hops).
-        scheduler.input_changed(0, 5);
-        scheduler.input_changed(1, 6);
-        sc_core::wait(10, sc_core::SC_NS);
-        scheduler.input_changed(0, -1);  // no stage open: nobody
-      },
-      "renderers");
-  run_kernel();
-  const std::vector<std::pair<long long, int>> expected = {{20, 3}, {20, 1}, {20, 0},
-                                                           {30, 2}, {30, 3}, {30, 0}};
-  std::string got;
-  for (const auto& [t, g] : runs) got += fmt::format(" {}:{}", t, g);
-  INFO("ran:" << got);
-  CHECK(runs == expected);
+}
+
+TEST_CASE("gp.send_order changes the frame time, never the image", "[timing][gp]") {
+  // The paper's machine on the torus (the word backend, for speed): 32 GPs contend for the
+  // Renderers' queues, so who goes first moves the frame (24.753, 25.534 and 25.698 ms).
+  MachineConfig config = MachineConfig::defaults();
+  config.set("fidelity.pixels=word");
+  const Scene scene = make_builtin_scene("torus");
+  const Program program = load_program("phong", config);
+  std::vector<double> frames;
+  std::vector<std::uint8_t> first;
+  for (const char* order : {"nearest", "lowest", "round_robin"}) {
+    INFO(order);
+    config.set(std::string("gp.send_order=") + order);
+    const FrameResult r = simulate_frame(config, scene, program, 2);
+    if (first.empty()) first = r.image.flat().rgb;
+    CHECK(r.image.flat().rgb == first);
+    frames.push_back(r.frame_seconds);
+  }
+  CHECK(frames[0] != frames[1]);
+  CHECK(frames[0] != frames[2]);
+  CHECK(frames[1] != frames[2]);
 }

@@ -241,6 +241,18 @@ const std::vector<Entry>& parameter_table() {
           "memory, retraverse repeats the geometry every pass (docs/timing.md, Multipass)",
           "gp.multipass=resend", "gp.multipass=retraverse"),
       assumed(
+          {"gp.send_order", "rule", "A", 0, 0, 0,
+           "Which of several GPs waiting to send takes a Renderer's queue room first, when a "
+           "stage they owe opens or frees room at one instant: 'nearest' (the fewest ring hops "
+           "to the Renderer, ties to the lower GP: its message would arrive first), 'lowest' "
+           "(the lowest-numbered GP) or 'round_robin' (in turn: the GP after the one woken last "
+           "goes first). The image is identical; only the time differs.",
+           [](MachineConfig& c) -> Ref { return choice(&c.gp.send_order); },
+           "nearest|lowest|round_robin"},
+          "the machine's flow control between GPs and Renderers is not published; nearest "
+          "follows from the ring, the others are arbiters it might have had",
+          "gp.send_order=lowest", "gp.send_order=round_robin"),
+      assumed(
           {"ring.channels", "channels", "A", 8, 1, 64,
            "Parallel channels of the ring; 8 x 32 bits x 20 MHz = 5.12 Gb/s matches the paper's "
            "5 Gb/s, but 4 x 40 MHz fits as well.",
@@ -785,6 +797,10 @@ std::string name_of(MachineConfig::Renderer::Balancing balancing) {
 std::string name_of(MachineConfig::Gp::Multipass multipass) {
   return split_choices(
       find_parameter("gp.multipass")->choices)[static_cast<std::size_t>(multipass)];
+}
+
+std::string name_of(MachineConfig::Gp::SendOrder order) {
+  return split_choices(find_parameter("gp.send_order")->choices)[static_cast<std::size_t>(order)];
 }
 
 const char* calibration_name(Calibration c) {

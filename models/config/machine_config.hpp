@@ -52,6 +52,10 @@ struct MachineConfig {
     // packets it kept again, or traverse and transform its share of the display list again.
     enum class Multipass { resend, retraverse };
     Multipass multipass = Multipass::resend;
+    // Which of several GPs waiting to send takes a Renderer's queue room first
+    // (RegionScheduler): the nearest it on the ring, the lowest-numbered, or each in turn.
+    enum class SendOrder { nearest, lowest, round_robin };
+    SendOrder send_order = SendOrder::nearest;
   } gp;
   struct Ring {
     int channels = 0;
@@ -142,6 +146,7 @@ struct MachineConfig {
 std::string name_of(MachineConfig::Gp::Code code);
 std::string name_of(MachineConfig::Renderer::Balancing balancing);
 std::string name_of(MachineConfig::Gp::Multipass multipass);
+std::string name_of(MachineConfig::Gp::SendOrder order);
 
 // How a timing constant's value was obtained (docs/timing.md, "Calibration"):
 //  - fitted: chosen so that the simulator reproduces a published figure, which the entry

@@ -5,12 +5,13 @@
 namespace pp5 {
 
 RegionScheduler::RegionScheduler(sc_core::sc_module_name name, int regions, int renderers, int gps,
-                                 bool dynamic)
+                                 bool dynamic, Order order)
     : sc_module(name),
       regions_(regions),
       renderers_(renderers),
       gps_(gps),
       dynamic_(dynamic),
+      order_(order),
       owner_(regions, -1),
       bin_senders_(regions, 0),
       claimed_(renderers, 0),
@@ -77,9 +78,24 @@ void RegionScheduler::arbitrate() {
     }
   }
   changed_.clear();
-  std::sort(wake_order_.begin(), wake_order_.end(), [this](int a, int b) {
-    return nearest_[a] != nearest_[b] ? nearest_[a] < nearest_[b] : a < b;
-  });
+  switch (order_) {
+    case Order::nearest:
+      std::sort(wake_order_.begin(), wake_order_.end(), [this](int a, int b) {
+        return nearest_[a] != nearest_[b] ? nearest_[a] < nearest_[b] : a < b;
+      });
+      break;
+    case Order::lowest:
+      std::sort(wake_order_.begin(), wake_order_.end());
+      break;
+    case Order::round_robin: {
+      // Each GP's place in the turn: the GP at next_turn_ first, then the ones after it.
+      const auto place = [this](int g) { return (g - next_turn_ + gps_) % gps_; };
+      std::sort(wake_order_.begin(), wake_order_.end(),
+                [&place](int a, int b) { return place(a) < place(b); });
+      if (!wake_order_.empty()) next_turn_ = (wake_order_.back() + 1) % gps_;
+      break;
+    }
+  }
   for (const int g : wake_order_) {
     nearest_[g] = -1;
     owed_[g] = nullptr;

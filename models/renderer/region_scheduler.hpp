@@ -17,22 +17,28 @@
 //    frees room in its queue; `stage` is the stage it has open then (-1: none).
 //  - Arbitration: one delta after Renderers change, the GPs waiting for a stage that a
 //    changed Renderer has open are woken, and only those (a GP can send again only when a
-//    stage it owes opens or its queue frees room). They are woken nearest first: by the hops
-//    from the GP's ring stop to that Renderer's (set_ring), ties to the lower GP. A GP woken
-//    first runs first, and so takes room in a queue first when several want it at one
-//    instant: as on the machine, where of messages sent at one instant the one with the
-//    fewest hops to go arrives first. The order is this rule's (an assumption, stated in
-//    docs/timing.md), not the SystemC kernel's order of waking the processes of one event.
+//    stage it owes opens or its queue frees room). They are woken in the order of `order`
+//    (gp.send_order): nearest first, by the hops from the GP's ring stop to that Renderer's
+//    (set_ring), ties to the lower GP (of messages sent at one instant the one with the
+//    fewest hops to go arrives first); lowest-numbered first; or round-robin, beginning with
+//    the GP after the one woken last. A GP woken first runs first, and so takes room in a
+//    queue first when several want it at one instant. The order is the rule's (an
+//    assumption, docs/timing.md "Who goes first"), not the SystemC kernel's order of waking
+//    the processes of one event.
 #include <memory>
 #include <systemc>
 #include <vector>
+
+#include "models/config/machine_config.hpp"
 
 namespace pp5 {
 
 class RegionScheduler : public sc_core::sc_module {
  public:
   SC_HAS_PROCESS(RegionScheduler);
-  RegionScheduler(sc_core::sc_module_name name, int regions, int renderers, int gps, bool dynamic);
+  using Order = MachineConfig::Gp::SendOrder;
+  RegionScheduler(sc_core::sc_module_name name, int regions, int renderers, int gps, bool dynamic,
+                  Order order = Order::nearest);
 
   int claim_region(int renderer);
   int owner_of_region(int region) const { return owner_[region]; }
@@ -52,6 +58,7 @@ class RegionScheduler : public sc_core::sc_module {
   int renderers_;
   int gps_;
   bool dynamic_;
+  Order order_;
   std::vector<int> owner_;        // region -> Renderer, -1 until claimed
   std::vector<int> bin_senders_;  // region -> GPs with packets for it
   int next_region_ = 0;           // dynamic: the next unclaimed region
@@ -69,6 +76,7 @@ class RegionScheduler : public sc_core::sc_module {
   std::vector<std::vector<int>> hops_;
   std::vector<int> nearest_;  // per GP: its fewest hops to a Renderer that woke it, or -1
   std::vector<int> wake_order_;
+  int next_turn_ = 0;  // round_robin: the GP whose turn comes first
 };
 
 }  // namespace pp5
