@@ -32,7 +32,6 @@ class RegionBins {
     regions_.clear();
     bins_.clear();
   }
-  int region_count() const { return static_cast<int>(slot_.size()); }
 
   void add(int region, std::shared_ptr<const Packet> packet) {
     int& s = slot_[static_cast<std::size_t>(region)];
