@@ -11,7 +11,10 @@
 #include <fstream>
 #include <string>
 
+#include "common/checked_number.hpp"
+#include "common/escape.hpp"
 #include "common/read_file.hpp"
+#include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "sim/scene/mesh_loader.hpp"
 #include "sim/scene/scene.hpp"
@@ -226,4 +229,70 @@ TEST_CASE("a tessellation is refused where it does not apply", "[inputs]") {
   CHECK_THROWS_WITH(load_scene(PP5_SOURCE_DIR "/examples/meshes/knot.obj", options),
                     Catch::Contains("is a file, whose geometry is its own"));
   CHECK_NOTHROW(make_builtin_scene("sphere", options));
+}
+
+TEST_CASE("untrusted text in messages is escaped and cut short", "[inputs]") {
+  CHECK(escape_for_message("plain name.obj") == "plain name.obj");
+  CHECK(escape_for_message(std::string("a\0b", 3)) == "a\\x00b");
+  CHECK(escape_for_message("x\xff\xfey") == "x\\xff\\xfey");
+  CHECK(escape_for_message("line\nnext\t\x1b[31m") == "line\\nnext\\t\\x1b[31m");
+  CHECK(escape_for_message("back\\slash") == "back\\\\slash");
+  CHECK(escape_for_message("caf\xc3\xa9 \xe2\x80\x94") ==
+        "caf\xc3\xa9 \xe2\x80\x94");                               // UTF-8 kept
+  CHECK(escape_for_message("\xc0\xaf") == "\\xc0\\xaf");           // an overlong '/' is not UTF-8
+  CHECK(escape_for_message("\xed\xa0\x80") == "\\xed\\xa0\\x80");  // a surrogate either
+  const std::string huge(1 << 20, 'n');
+  const std::string cut = escape_for_message(huge);
+  CHECK(cut.size() < 120);
+  CHECK_THAT(cut, Catch::EndsWith("... (1048576 bytes)"));
+  // A cut never splits a UTF-8 sequence.
+  CHECK(escape_for_message("abc\xc3\xa9", 4) == "abc... (5 bytes)");
+}
+
+TEST_CASE("numbers are parsed into a checked width, never wrapped", "[inputs]") {
+  CHECK(parse_integer<int>("42", "--n") == 42);
+  CHECK(parse_integer<int>("-7", "--n") == -7);
+  CHECK_THROWS_WITH(parse_integer<int>("4294967301", "--pixel X"),
+                    "--pixel X '4294967301': is out of range, expected an integer from "
+                    "-2147483648 to 2147483647");
+  CHECK_THROWS_WITH(parse_integer<std::uint32_t>("-1", "--n"),
+                    Catch::Contains("is out of range, expected an integer from 0 to 4294967295"));
+  CHECK_THROWS_WITH(parse_integer<int>("99999999999999999999999", "--n"),
+                    Catch::Contains("is out of range"));
+  for (const char* bad : {"", " 1", "1 ", "+1", "0x10", "1e3", "1.0", "12abc", "--1"}) {
+    CHECK_THROWS_WITH(parse_integer<int>(bad, "--n", 0, 100),
+                      Catch::Contains("expected an integer from 0 to 100"));
+  }
+  CHECK_THROWS_WITH(parse_integer<int>(std::string("1\n\xff"), "--n", 0, 9),
+                    "--n '1\\n\\xff': expected an integer from 0 to 9");
+  CHECK(json_integer<int>(nlohmann::json(5), "k", 0, 9) == 5);
+  CHECK_THROWS_WITH(json_integer<int>(nlohmann::json((std::int64_t{1} << 32) + 5), "k"),
+                    "k = 4294967301: is out of range, expected an integer from -2147483648 to "
+                    "2147483647");
+  CHECK_THROWS_WITH(json_integer<int>(nlohmann::json(std::uint64_t{1} << 63), "k", 0, 9),
+                    Catch::Contains("is out of range"));
+  CHECK_THROWS_WITH(json_integer<int>(nlohmann::json(2.5), "k", 0, 9),
+                    "k = 2.5: expected an integer from 0 to 9");
+  CHECK_THROWS_WITH(json_integer<int>(nlohmann::json("3"), "k", 0, 9),
+                    "k = \"3\": expected an integer from 0 to 9");
+}
+
+TEST_CASE("JSON nesting is bounded before the parser's memory grows with it", "[inputs]") {
+  // 200 KB of '[' (and of '{"k":') once took gigabytes: one path string per level.
+  const std::string arrays(200'000, '[');
+  const auto t0 = std::chrono::steady_clock::now();
+  CHECK_THROWS_WITH(parse_strict_json(arrays, "deep.json"),
+                    Catch::Contains("deep.json: containers nested more than 256 deep"));
+  std::string objects;
+  for (int k = 0; k < 40'000; ++k) objects += "{\"" + std::string(40, 'k') + "\":";
+  CHECK_THROWS_WITH(parse_strict_json(objects, "keys.json"),
+                    Catch::Contains("nested more than 256 deep"));
+  CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(5));
+  // Up to the limit, documents parse as before.
+  const std::string ok = std::string(255, '[') + std::string(255, ']');
+  CHECK(parse_strict_json(ok, "ok.json") == nlohmann::json::parse(ok));
+  // nlohmann's "[json.exception...]" tag does not reach the user.
+  CHECK_THROWS_WITH(
+      parse_strict_json("{\"a\": }", "s.json"),
+      !Catch::Contains("json.exception") && Catch::StartsWith("s.json: not valid JSON"));
 }

@@ -265,15 +265,36 @@ TEST_CASE("truncated and corrupted trace files are rejected with a message", "[t
     nlohmann::json h = t.header;
     h["firmware"]["fields"][0]["lo"] = 5000;
     CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
+                      Catch::Contains("field 'z' lo = 5000: is out of range, expected an integer "
+                                      "from -1 to"));
+    h = t.header;
+    h["firmware"]["fields"][0]["lo"] = 200;
+    h["firmware"]["fields"][0]["width"] = 60;
+    CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
                       Catch::Contains("outside the") && Catch::Contains("bits of pixel memory"));
     h = t.header;
     h["firmware"]["fields"][0]["width"] = 65;
     CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
-                      Catch::Contains("a field is 1..64 bits wide"));
+                      Catch::Contains("width = 65: is out of range, expected an integer from 1 "
+                                      "to 64"));
     h = t.header;
     h["firmware"]["memory_bits"] = 1 << 30;
     CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
-                      Catch::Contains("expected 1..1024"));
+                      Catch::Contains("firmware.memory_bits = 1073741824: is out of range, "
+                                      "expected an integer from 1 to 1024"));
+    // Numbers that an int would wrap into a valid one (2^32 + 190 -> 190) are refused.
+    h = t.header;
+    h["pixels"][0][0] = (std::int64_t{1} << 32) + 190;
+    CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
+                      Catch::Contains("pixel x = 4294967486: is out of range"));
+    h = t.header;
+    h["firmware"]["memory_bits"] = (std::int64_t{1} << 32) + 208;
+    CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
+                      Catch::Contains("memory_bits = 4294967504: is out of range"));
+    h = t.header;
+    h["firmware"]["fields"][0]["width"] = 24.5;
+    CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
+                      Catch::Contains("width = 24.5: expected an integer from 1 to 64"));
   }
 
   // Records with a valid checksum but impossible contents.
@@ -426,17 +447,28 @@ TEST_CASE("snapshots: a region's memory at a chosen point, files and images", "[
   };
   CHECK_THROWS_WITH(trace::read_snapshot(
                         forged([](nlohmann::json& h) { h["firmware"]["fields"][0]["lo"] = 200; })),
+                    Catch::Contains("lo = 200: is out of range"));
+  CHECK_THROWS_WITH(trace::read_snapshot(forged([](nlohmann::json& h) {
+                      h["firmware"]["fields"][0]["lo"] = 150;
+                      h["firmware"]["fields"][0]["width"] = 24;
+                    })),
                     Catch::Contains("outside the") && Catch::Contains("bits of pixel memory"));
-  CHECK_THROWS_WITH(trace::read_snapshot(forged(
-                        [](nlohmann::json& h) { h["firmware"]["fields"][0]["width"] = 1000; })),
-                    Catch::Contains("outside the"));
+  CHECK_THROWS_WITH(
+      trace::read_snapshot(
+          forged([](nlohmann::json& h) { h["firmware"]["fields"][0]["width"] = 1000; })),
+      Catch::Contains("width = 1000: is out of range, expected an integer from 1 to 64"));
   CHECK_THROWS_WITH(trace::read_snapshot(forged(
                         [](nlohmann::json& h) { h["firmware"]["fields"][0]["lo"] = "low"; })),
-                    Catch::Contains("bad field map"));
+                    Catch::Contains("lo = \"low\": expected an integer"));
   CHECK_THROWS_WITH(trace::read_snapshot(forged([](nlohmann::json& h) { h["width"] = 1 << 30; })),
-                    Catch::Contains("outside what a Renderer can be"));
+                    Catch::Contains("width = 1073741824: is out of range, expected an integer "
+                                    "from 64 to 1024"));
   CHECK_THROWS_WITH(trace::read_snapshot(forged([](nlohmann::json& h) { h["memory_bits"] = -3; })),
-                    Catch::Contains("outside what a Renderer can be"));
+                    Catch::Contains("memory_bits = -3: is out of range"));
+  // 2^32 + 128 would be 128 as an int: refused, not read as a 128-pixel-wide region.
+  CHECK_THROWS_WITH(trace::read_snapshot(forged(
+                        [](nlohmann::json& h) { h["width"] = (std::int64_t{1} << 32) + 128; })),
+                    Catch::Contains("width = 4294967424: is out of range"));
   CHECK_NOTHROW(trace::read_snapshot(forged([](nlohmann::json&) {})));
 
   trace::SnapshotTaker never(c, p, static_cast<int>(e.ins.region), 999999999);

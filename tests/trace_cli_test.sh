@@ -37,6 +37,14 @@ expect_error "outside the 1280 x 1024 screen" trace record --pixel 1280,0 -o "$t
 expect_error "'zz' is not a field" trace record --pixel 1,1 --fields z,zz -o "$tmp/bad2.pp5t"
 expect_error "empty range" trace record --pixel 1,1 --instructions 9:3 -o "$tmp/bad3.pp5t"
 expect_error "choose one of those" trace snapshot --pixel 500,400 --after 3 -o "$tmp/bad4.pp5m"
-for f in bad1.pp5t bad2.pp5t bad3.pp5t bad4.pp5m; do [ -e "$tmp/$f" ] && fail "partial output $f"; done
+# Numbers that an int would wrap are refused, naming the argument (2^32 + 5 is not pixel 5).
+expect_error "--pixel X '4294967301': is out of range, expected an integer from 0 to" \
+  trace record --pixel 4294967301,5 -o "$tmp/bad5.pp5t"
+expect_error "--rect WIDTH '2147483647': is out of range" trace record \
+  --rect 0,0,2147483647,2147483647 -o "$tmp/bad6.pp5t"
+expect_error "--instructions '9223372036854775807': is out of range" trace record --pixel 1,1 \
+  --instructions 9223372036854775807 -o "$tmp/bad7.pp5t"
+expect_error "--pixel X '4294967301': is out of range" trace why "$tmp/phong.pp5t" --pixel 4294967301,5
+for f in bad1.pp5t bad2.pp5t bad3.pp5t bad4.pp5m bad5.pp5t bad6.pp5t bad7.pp5t; do [ -e "$tmp/$f" ] && fail "partial output $f"; done
 ls "$tmp" | grep -q '\.tmp$' && fail "temporary file left behind"
 echo "trace cli: passed"

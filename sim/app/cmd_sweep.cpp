@@ -85,8 +85,14 @@ std::vector<Axis> parse_grid(const std::vector<std::string>& grid) {
     }
     std::stringstream values(g.substr(eq + 1));
     std::string v;
+    std::set<std::string> given;
     while (std::getline(values, v, ',')) {
       if (v.empty()) throw std::runtime_error(fmt::format("--grid {}: empty value", g));
+      // Two equal values would be two runs into one folder.
+      if (!given.insert(v).second) {
+        throw std::runtime_error(
+            fmt::format("--grid {}: value '{}' is given twice for '{}'", g, v, a.key));
+      }
       // Each value must be valid on its own: the error names the key.
       MachineConfig probe = MachineConfig::defaults();
       try {
@@ -107,17 +113,6 @@ std::string run_name(const std::vector<Axis>& axes, const std::vector<std::strin
     name += (k ? "_" : "") + axes[k].key + "-" + values[k];
   }
   return name;
-}
-
-std::string shell_quote(const std::string& s) {
-  if (s.find_first_not_of(
-          "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-/=,+") ==
-      std::string::npos) {
-    return s;
-  }
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
 }
 
 // The most points one sweep may have: a million runs is days of host time already, and the
@@ -151,9 +146,13 @@ int write_slurm_job(const SweepOptions& o, const std::string& program_path, std:
   const fs::path commands = out / "commands.txt";
   std::string lines;
   for (std::uint64_t i = 0; i < points; ++i) lines += command(i) + "\n";
-  const std::string q_out = shell_quote(out.string());
-  const std::string q_commands = shell_quote(commands.string());
-  const std::string q_cwd = shell_quote(cwd.string());
+  // Every string that reaches the script is quoted for the place it reaches (a comment, a
+  // shell word, an sbatch file-name pattern), and one that no quoting makes safe (a control
+  // character, which would end a comment or a line of commands.txt) is refused.
+  const std::string q_out = shell_quote(out.string(), "--out");
+  const std::string q_commands = shell_quote(commands.string(), "--out");
+  const std::string q_cwd = shell_quote(cwd.string(), "the current folder");
+  const std::string q_out_pattern = shell_quote(slurm_pattern_literal(out.string()), "--out");
   std::string script = fmt::format(
       R"(#!/bin/bash
 # Written by `pp5sim sweep --slurm`: submits the sweep in {out} to Slurm.
@@ -168,7 +167,7 @@ int write_slurm_job(const SweepOptions& o, const std::string& program_path, std:
 set -euo pipefail
 read -r -a extra <<< "${{PP5_SBATCH_OPTIONS:-}}"
 array=$(sbatch --parsable "${{extra[@]}}" --job-name=pp5-sweep --array=0-{last} \
-  --ntasks=1 --cpus-per-task=1 --chdir={cwd} --output={out}/slurm-%A_%a.out <<'TASK'
+  --ntasks=1 --cpus-per-task=1 --chdir={cwd} --output={out_pattern}/slurm-%A_%a.out <<'TASK'
 #!/bin/bash
 set -euo pipefail
 line=$(sed -n "$((SLURM_ARRAY_TASK_ID + 1))p" {commands})
@@ -179,17 +178,20 @@ TASK
 array=${{array%%;*}}
 aggregate=$(sbatch --parsable "${{extra[@]}}" --job-name=pp5-sweep-aggregate \
   --dependency=afterok:"$array" --kill-on-invalid-dep=yes --ntasks=1 --cpus-per-task=1 \
-  --chdir={cwd} --output={out}/slurm-aggregate-%j.out \
+  --chdir={cwd} --output={out_pattern}/slurm-aggregate-%j.out \
   --wrap={aggregate})
 aggregate=${{aggregate%%;*}}
 echo "submitted job array $array ({points} tasks) and aggregate job $aggregate"
 echo "$array $aggregate" > {out}/slurm-jobs.txt
 )",
-      fmt::arg("out", q_out), fmt::arg("self", shell_quote(o.slurm)), fmt::arg("points", points),
+      fmt::arg("out", q_out), fmt::arg("out_pattern", q_out_pattern),
+      fmt::arg("self", shell_quote(o.slurm, "--slurm")), fmt::arg("points", points),
       fmt::arg("commands", q_commands), fmt::arg("last", points - 1), fmt::arg("cwd", q_cwd),
       fmt::arg("aggregate",
-               shell_quote(fmt::format("{} sweep aggregate {} -o {}", shell_quote(program_path),
-                                       q_out, shell_quote((out / "sweep.csv").string())))));
+               shell_quote(fmt::format("{} sweep aggregate {} -o {}",
+                                       shell_quote(program_path, "the pp5sim executable's path"),
+                                       q_out, shell_quote((out / "sweep.csv").string(), "--out")),
+                           "--out")));
   OutputSet outputs;
   outputs.add(commands.string(), lines);
   outputs.add(o.slurm, script);
@@ -253,7 +255,37 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
   };
   for (std::uint64_t i = 0; i < points; ++i) program_of(config_of(i));
 
-  fs::create_directories(o.out_dir);
+  // Point i's `pp5sim render` command, the same for GNU parallel and Slurm.
+  auto command = [&](const std::vector<std::string>& values, const fs::path& dir) {
+    std::string line =
+        fmt::format("{} render --scene {} --firmware {}",
+                    shell_quote(program_path, "the pp5sim executable's path"),
+                    shell_quote(o.scene_name, "--scene"), shell_quote(firmware, "--firmware"));
+    if (!o.config_path.empty()) line += " --config " + shell_quote(o.config_path, "--config");
+    if (o.tessellation.size() == 2) {
+      line += fmt::format(" --tessellation {} {}", o.tessellation[0], o.tessellation[1]);
+    }
+    for (const std::string& s : o.sets) line += " --set " + shell_quote(s, "--set");
+    for (std::size_t k = 0; k < axes.size(); ++k) {
+      line += " --set " + shell_quote(axes[k].key + "=" + values[k], "--grid");
+    }
+    return line + " --threads 1 --out " + shell_quote(dir.string(), "--out");
+  };
+  // Every string that will reach a command line or the Slurm script is checked before
+  // anything is written (shell_quote refuses a control character, naming the option).
+  if (o.print_commands || !o.slurm.empty()) {
+    for (const Axis& a : axes) {
+      for (const std::string& v : a.values) shell_quote(a.key + "=" + v, "--grid");
+    }
+    const std::vector<std::string> first = point(axes, 0);
+    (void)command(first, fs::path(o.out_dir) / run_name(axes, first));
+  }
+  if (!o.slurm.empty()) {
+    shell_quote(fs::absolute(o.out_dir).string(), "--out");
+    shell_quote(o.slurm, "--slurm");
+    shell_quote(fs::current_path().string(), "the current folder");
+  }
+  prepare_output_folder(o.out_dir, "--out");
   nlohmann::json grid = nlohmann::json::object();
   for (const Axis& a : axes) grid[a.key] = a.values;
   write_file_atomically((fs::path(o.out_dir) / "sweep.json").string(),
@@ -268,20 +300,6 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
                                        {"firmware", firmware}}
                                 .dump(2) +
                             "\n");
-  // Point i's `pp5sim render` command, the same for GNU parallel and Slurm.
-  auto command = [&](const std::vector<std::string>& values, const fs::path& dir) {
-    std::string line = fmt::format("{} render --scene {} --firmware {}", shell_quote(program_path),
-                                   shell_quote(o.scene_name), shell_quote(firmware));
-    if (!o.config_path.empty()) line += " --config " + shell_quote(o.config_path);
-    if (o.tessellation.size() == 2) {
-      line += fmt::format(" --tessellation {} {}", o.tessellation[0], o.tessellation[1]);
-    }
-    for (const std::string& s : o.sets) line += " --set " + shell_quote(s);
-    for (std::size_t k = 0; k < axes.size(); ++k) {
-      line += " --set " + shell_quote(axes[k].key + "=" + values[k]);
-    }
-    return line + " --threads 1 --out " + shell_quote(dir.string());
-  };
   if (!o.slurm.empty()) {
     return write_slurm_job(o, program_path, points, [&](std::uint64_t i) {
       const std::vector<std::string> values = point(axes, i);
@@ -301,7 +319,7 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
     const MachineConfig config = config_of(i);
     const FrameResult r =
         simulate_frame(config, scene, program_of(config), o.threads, {}, nullptr, &setup_memo);
-    fs::create_directories(dir);
+    prepare_output_folder(dir.string(), "--out");
     // A run's two files together, or neither (sim/output).
     OutputSet outputs;
     outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");

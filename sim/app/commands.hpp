@@ -80,6 +80,14 @@ void add_fidelity_option(CLI::App& command, std::vector<std::string>& sets);
 // caller then exits with status 2).
 bool refuse_below_bit_level(const MachineConfig& config, const std::string& what);
 
+// One word for a POSIX shell (a generated script, a line of commands.txt): returned as it is
+// when it holds only [A-Za-z0-9._-/=,+], else in single quotes (a quote inside as '\''). A
+// string with a control character (a newline above all, which would end a comment of the
+// script or split a line of commands.txt) is refused with an error naming `what`.
+std::string shell_quote(const std::string& s, const std::string& what);
+// A path as a literal in an sbatch --output/--error file-name pattern: '%' doubled.
+std::string slurm_pattern_literal(const std::string& s);
+
 // Markdown table cells must not contain a bare '|'.
 std::string markdown_cell(const std::string& text);
 

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "common/escape.hpp"
 #include "sim/app/commands.hpp"
 
 namespace fs = std::filesystem;
@@ -208,6 +209,32 @@ bool refuse_below_bit_level(const MachineConfig& config, const std::string& what
       "timing={}{} (drop --fidelity, or use --fidelity bit,window=all)\n",
       what, name_of(f.pixels), name_of(f.timing), whole ? "" : " and a window of regions");
   return true;
+}
+
+std::string shell_quote(const std::string& s, const std::string& what) {
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7F) {
+      throw std::runtime_error(fmt::format(
+          "{} '{}': holds a control character ({}), which cannot be written into a shell script "
+          "or a list of one command per line; choose a name without one",
+          what, escape_for_message(s),
+          c == '\n' ? "a newline" : fmt::format("byte 0x{:02x}", static_cast<unsigned>(c))));
+    }
+  }
+  if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                        "0123456789._-/=,+") == std::string::npos) {
+    return s;
+  }
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string slurm_pattern_literal(const std::string& s) {
+  std::string out;
+  for (char c : s) out += c == '%' ? std::string("%%") : std::string(1, c);
+  return out;
 }
 
 std::string markdown_cell(const std::string& text) {

@@ -1,17 +1,22 @@
 #include "sim/output/output_set.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <climits>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <set>
+#include <thread>
 
 namespace fs = std::filesystem;
 
@@ -19,36 +24,81 @@ namespace pp5 {
 
 namespace {
 
-// Temporaries the signal handler removes: fixed storage, written before a slot is marked in
-// use and read by the handler only through async-signal-safe calls.
+// Temporaries the signal handler removes, and folders it removes if they are still empty:
+// fixed storage, written before a slot is marked in use and read by the handler only through
+// async-signal-safe calls.
 constexpr int kSlots = 64;
 struct Slot {
   std::atomic<bool> used{false};
   char path[PATH_MAX + 1] = {};
 };
 std::array<Slot, kSlots> g_slots;
+std::array<Slot, kSlots> g_folder_slots;  // outermost first
+// While a commit moves a run's files into place, a signal waits for it to finish (the
+// handler records it and returns), so that a run's files appear together or not at all.
+std::atomic<bool> g_committing{false};
+std::atomic<int> g_pending_signal{0};
 
-int register_temporary(const std::string& path) {
+int register_path(std::array<Slot, kSlots>& slots, const std::string& path) {
   if (path.size() > PATH_MAX) return -1;
   for (int k = 0; k < kSlots; ++k) {
-    if (g_slots[k].used.load()) continue;
-    std::memcpy(g_slots[k].path, path.c_str(), path.size() + 1);
-    g_slots[k].used.store(true);
+    if (slots[k].used.load()) continue;
+    std::memcpy(slots[k].path, path.c_str(), path.size() + 1);
+    slots[k].used.store(true);
     return k;
   }
   return -1;  // more than kSlots at once: not removed on a signal, still removed on failure
 }
 
+int register_temporary(const std::string& path) { return register_path(g_slots, path); }
+
 void release_temporary(int slot) {
   if (slot >= 0) g_slots[slot].used.store(false);
 }
 
-extern "C" void remove_temporaries_and_reraise(int signal) {
+// Removes the registered temporaries, then the registered folders innermost first (rmdir
+// removes only an empty folder, so never one that holds another run's files).
+void remove_registered() {
   for (Slot& s : g_slots) {
     if (s.used.load()) ::unlink(s.path);
   }
-  // SA_RESETHAND has restored the default action: end the process as the signal would.
+  for (int k = kSlots; k-- > 0;) {
+    if (g_folder_slots[k].used.load()) ::rmdir(g_folder_slots[k].path);
+  }
+}
+
+extern "C" void remove_temporaries_and_reraise(int signal) {
+  if (g_committing.load()) {
+    g_pending_signal.store(signal);
+    return;
+  }
+  remove_registered();
+  // End the process as the signal would have.
+  struct sigaction action {};
+  action.sa_handler = SIG_DFL;
+  sigemptyset(&action.sa_mask);
+  ::sigaction(signal, &action, nullptr);
   ::raise(signal);
+}
+
+void forget_created_folders() {
+  for (Slot& s : g_folder_slots) s.used.store(false);
+}
+
+// After a commit: a signal that came during it now takes effect (the run's files are all in
+// place, so only folders and temporaries of later outputs are removed).
+void end_commit() {
+  g_committing.store(false);
+  const int signal = g_pending_signal.exchange(0);
+  if (signal != 0) remove_temporaries_and_reraise(signal);
+}
+
+// Test hook: PP5_TEST_COMMIT_PAUSE_MS=N pauses N ms between two renames of a commit, so that
+// tests can send a signal, or run a second commit, exactly there. Unset in normal use.
+void test_pause_between_renames() {
+  static const char* pause = std::getenv("PP5_TEST_COMMIT_PAUSE_MS");
+  if (pause == nullptr) return;
+  std::this_thread::sleep_for(std::chrono::milliseconds(std::atoi(pause)));
 }
 
 std::string reason(int err) { return std::strerror(err); }
@@ -94,6 +144,80 @@ std::string write_temporary(const std::string& path, const std::string& bytes, i
   return tmpl;
 }
 
+// Where an output's bytes go. A regular file, or a name not yet taken, is replaced through a
+// temporary and a rename. A symbolic link is followed (as a shell's '>' would) and its final
+// target is treated the same way, so the link stays a link. Anything else (a FIFO, a device
+// such as /dev/null, a terminal) is written in place: renaming over it would replace the
+// node the user named with a regular file.
+struct Target {
+  std::string path;       // the file to write or replace
+  bool in_place = false;  // write into the existing node rather than rename over it
+};
+
+Target resolve_output_target(const std::string& named) {
+  fs::path p(named);
+  for (int hops = 0;; ++hops) {
+    struct stat st {};
+    if (::lstat(p.c_str(), &st) != 0) {
+      if (errno == ENOENT) return {p.string(), false};
+      throw OutputError(named + ": cannot look at the file (" + reason(errno) + ")");
+    }
+    if (S_ISREG(st.st_mode)) return {p.string(), false};
+    if (S_ISDIR(st.st_mode)) throw OutputError(named + ": is a folder, expected a file to write");
+    if (!S_ISLNK(st.st_mode)) {
+      if (S_ISSOCK(st.st_mode))
+        throw OutputError(named + ": is a socket, expected a file, a FIFO or a device to write");
+      return {p.string(), true};
+    }
+    if (hops == 40) throw OutputError(named + ": too many levels of symbolic links");
+    std::error_code ec;
+    const fs::path link = fs::read_symlink(p, ec);
+    if (ec) throw OutputError(named + ": cannot read the link (" + ec.message() + ")");
+    p = link.is_absolute() ? link : p.parent_path() / link;
+  }
+}
+
+// Writes `bytes` into the existing node `path` (a FIFO or a device). No temporary: opening a
+// FIFO waits for a reader, as a shell's '>' does.
+void write_in_place(const std::string& named, const std::string& path, const std::string& bytes) {
+  int fd;
+  do {
+    fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC | O_NOCTTY);
+  } while (fd < 0 && errno == EINTR);
+  if (fd < 0) throw OutputError(named + ": cannot open for writing (" + reason(errno) + ")");
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = n < 0 ? errno : EIO;
+      ::close(fd);
+      throw OutputError(named + ": cannot write (" + reason(err) + ")");
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::close(fd) != 0 && errno != EINTR) {
+    throw OutputError(named + ": cannot write (" + reason(errno) + ")");
+  }
+}
+
+// An exclusive lock on a folder, held while a commit moves its files into place: two runs
+// writing the same folder move their sets one after the other, never interleaved.
+struct FolderLock {
+  int fd = -1;
+  explicit FolderLock(const std::string& dir) {
+    fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return;  // no lock (e.g. no read permission): the rename is still atomic
+    while (::flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+    }
+  }
+  ~FolderLock() {
+    if (fd >= 0) ::close(fd);  // releases the lock
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+};
+
 }  // namespace
 
 void OutputSet::add(const std::string& path, std::string bytes) {
@@ -103,6 +227,7 @@ void OutputSet::add(const std::string& path, std::string bytes) {
 void OutputSet::commit() {
   // Every destination is checked before anything is written.
   std::set<std::string> seen;
+  std::vector<Target> targets;
   for (const Output& o : outputs_) {
     const fs::path dest(o.path);
     if (dest.filename().empty()) throw OutputError(o.path + ": expected a file name, not a folder");
@@ -115,42 +240,80 @@ void OutputSet::commit() {
     if (fs::is_directory(fs::status(dest, ec))) {
       throw OutputError(o.path + ": is a folder, expected a file to write");
     }
-    const std::string key = fs::weakly_canonical(dest, ec).string();
-    if (!seen.insert(ec ? o.path : key).second) {
+    targets.push_back(resolve_output_target(o.path));
+    const Target& t = targets.back();
+    if (!t.in_place) {
+      const fs::path tdir =
+          fs::path(t.path).parent_path().empty() ? fs::path(".") : fs::path(t.path).parent_path();
+      if (!fs::is_directory(tdir, ec)) {
+        throw OutputError(o.path + ": links to " + t.path + ", whose folder does not exist");
+      }
+    }
+    const std::string key = fs::weakly_canonical(t.path, ec).string();
+    if (!t.in_place && !seen.insert(ec ? t.path : key).second) {
       throw OutputError(o.path + ": named twice among this run's outputs");
     }
   }
-  std::vector<std::string> temporaries;
-  std::vector<int> slots;
+  std::vector<std::string> temporaries(outputs_.size());
+  std::vector<int> slots(outputs_.size(), -1);
   auto discard = [&] {
     for (std::size_t k = 0; k < temporaries.size(); ++k) {
-      ::unlink(temporaries[k].c_str());
+      if (!temporaries[k].empty()) ::unlink(temporaries[k].c_str());
       release_temporary(slots[k]);
     }
   };
   try {
-    for (const Output& o : outputs_) {
-      int slot = -1;
-      temporaries.push_back(write_temporary(o.path, o.bytes, slot));
-      slots.push_back(slot);
+    for (std::size_t k = 0; k < outputs_.size(); ++k) {
+      if (targets[k].in_place) continue;
+      temporaries[k] = write_temporary(targets[k].path, outputs_[k].bytes, slots[k]);
+    }
+    // Outputs that cannot be replaced atomically (a FIFO, a device) are written once every
+    // other one is ready, so that a failure among the others writes none of them.
+    for (std::size_t k = 0; k < outputs_.size(); ++k) {
+      if (targets[k].in_place) write_in_place(outputs_[k].path, targets[k].path, outputs_[k].bytes);
     }
   } catch (...) {
     discard();
     throw;
   }
-  // Every output is written: now they replace the old ones. rename() within a folder is
-  // atomic, and the checks above leave only rare failures here (the destination made a
-  // folder meanwhile); then the remaining temporaries are removed and the error names it.
+  // Every output is written: now they replace the old ones, under a lock on each folder
+  // (taken in one order, so two commits cannot deadlock) and with signals held until the
+  // last rename. rename() within a folder is atomic, and the checks above leave only rare
+  // failures here (the destination made a folder meanwhile); then the remaining temporaries
+  // are removed and the error names it.
+  std::set<std::string> folders;
   for (std::size_t k = 0; k < outputs_.size(); ++k) {
-    if (std::rename(temporaries[k].c_str(), outputs_[k].path.c_str()) != 0) {
+    if (targets[k].in_place) continue;
+    const fs::path dir = fs::path(targets[k].path).parent_path();
+    std::error_code ec;
+    const fs::path canonical = fs::weakly_canonical(dir.empty() ? fs::path(".") : dir, ec);
+    folders.insert(ec ? dir.string() : canonical.string());
+  }
+  std::vector<std::unique_ptr<FolderLock>> locks;
+  for (const std::string& dir : folders) locks.push_back(std::make_unique<FolderLock>(dir));
+  g_committing.store(true);
+  bool paused = false;
+  for (std::size_t k = 0; k < outputs_.size(); ++k) {
+    if (targets[k].in_place) continue;
+    if (paused) test_pause_between_renames();
+    paused = true;
+    if (std::rename(temporaries[k].c_str(), targets[k].path.c_str()) != 0) {
       const int err = errno;
-      for (std::size_t j = k; j < temporaries.size(); ++j) ::unlink(temporaries[j].c_str());
+      for (std::size_t j = k; j < temporaries.size(); ++j) {
+        if (!temporaries[j].empty()) ::unlink(temporaries[j].c_str());
+      }
       for (int s : slots) release_temporary(s);
+      locks.clear();
+      end_commit();
       throw OutputError(outputs_[k].path + ": cannot move into place (" + reason(err) + ")");
     }
     release_temporary(slots[k]);
   }
+  locks.clear();
   outputs_.clear();
+  // The run's files are in place: its folders hold them and are no longer a signal's to remove.
+  forget_created_folders();
+  end_commit();
 }
 
 void write_file_atomically(const std::string& path, const std::string& text) {
@@ -188,6 +351,11 @@ bool prepare_output_folder(const std::string& dir, const std::string& option) {
       missing.push_back(p);
       if (p == p.parent_path()) break;
     }
+    // Registered before they exist, so that a signal at any moment from here to the run's
+    // commit removes them (rmdir: only if still empty).
+    for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+      register_path(g_folder_slots, fs::absolute(*it, ec).string());
+    }
     fs::create_directories(dir, ec);
     if (ec)
       throw OutputError(option + " " + dir + ": cannot create the folder (" + ec.message() + ")");
@@ -205,7 +373,7 @@ void install_signal_cleanup() {
     struct sigaction action {};
     action.sa_handler = remove_temporaries_and_reraise;
     sigemptyset(&action.sa_mask);
-    action.sa_flags = SA_RESETHAND;
+    action.sa_flags = 0;  // the handler restores the default action itself
     ::sigaction(signal, &action, nullptr);
   }
 }
@@ -217,6 +385,7 @@ void remove_created_folders() {
     if (fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);  // never one that holds a file
   }
   folders.clear();
+  forget_created_folders();
 }
 
 }  // namespace pp5

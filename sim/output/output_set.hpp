@@ -8,10 +8,18 @@
 //    named uniquely for this process and file (mkstemp), and only when every one is written
 //    renames them all into place. A failure before the renames removes every temporary and
 //    leaves every destination as it was; its message names the file and the OS reason
-//    ("No space left on device", "Is a directory", ...). Two runs writing the same folder
-//    at once never share a temporary, and each leaves a complete set of its own.
+//    ("No space left on device", "Is a directory", ...).
+//  - What the user named is what is written: a symbolic link is followed and its target
+//    replaced (the link stays); a FIFO or a device (/dev/null, /dev/stdout, a terminal) is
+//    written in place, after every temporary is ready and before the renames, never renamed
+//    over. A socket is refused.
+//  - The renames of one commit happen under an exclusive lock (flock) on each destination
+//    folder, so two runs writing the same folder at once leave one run's complete set, never
+//    a mix; SIGINT, SIGTERM or SIGHUP arriving during the renames takes effect after the last.
 //  - While temporaries exist they are registered for removal on SIGINT, SIGTERM and SIGHUP
-//    (install_signal_cleanup), so an interrupted run leaves no partial file behind.
+//    (install_signal_cleanup), so an interrupted run leaves no partial file behind; so are
+//    the folders prepare_output_folder created, removed on a signal if still empty, until a
+//    commit puts files in them.
 #include <stdexcept>
 #include <string>
 #include <vector>

@@ -3,8 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <set>
 
+#include "common/checked_number.hpp"
+#include "common/escape.hpp"
 #include "sim/trace/trace_file.hpp"
 
 namespace pp5::trace {
@@ -17,19 +20,17 @@ std::string Range::text() const {
 
 namespace {
 
-std::int64_t parse_int(const std::string& s, const std::string& what) {
-  std::size_t used = 0;
-  long long v = 0;
+constexpr std::int64_t kMaxCoordinate = 1 << 30;
+
+// Every number of a selection is checked against its width (common/checked_number.hpp):
+// nothing wraps into another pixel or a negative size.
+std::int64_t parse_int(const std::string& s, const std::string& what,
+                       std::int64_t max = std::numeric_limits<std::int64_t>::max()) {
   try {
-    v = std::stoll(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
+    return parse_integer<std::int64_t>(s, what, 0, max);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
   }
-  if (used == 0 || used != s.size() || v < 0) {
-    throw std::runtime_error(
-        fmt::format("{} '{}': expected a non-negative integer, got '{}'", what, s, s));
-  }
-  return v;
 }
 
 std::vector<std::string> split(const std::string& s, char sep) {
@@ -49,7 +50,7 @@ Range parse_range(const std::string& text, const std::string& what) {
   Range r;
   const auto colon = text.find(':');
   if (colon == std::string::npos) {
-    r.first = parse_int(text, what);
+    r.first = parse_int(text, what, std::numeric_limits<std::int64_t>::max() - 1);
     r.last = r.first + 1;
     return r;
   }
@@ -58,7 +59,8 @@ Range parse_range(const std::string& text, const std::string& what) {
   if (!b.empty()) r.last = parse_int(b, what);
   if (r.last <= r.first) {
     throw std::runtime_error(
-        fmt::format("{} '{}': empty range (expected A:B with A < B, A:, :B or N)", what, text));
+        fmt::format("{} '{}': empty range (expected A:B with A < B, A:, :B or N)", what,
+                    escape_for_message(text)));
   }
   return r;
 }
@@ -66,16 +68,20 @@ Range parse_range(const std::string& text, const std::string& what) {
 Rect parse_rect(const std::string& text, const std::string& what) {
   const auto parts = split(text, ',');
   if (parts.size() != 2 && parts.size() != 4) {
-    throw std::runtime_error(fmt::format("{} '{}': expected X,Y or X,Y,WIDTH,HEIGHT", what, text));
+    throw std::runtime_error(
+        fmt::format("{} '{}': expected X,Y or X,Y,WIDTH,HEIGHT", what, escape_for_message(text)));
   }
+  // Coordinates and sizes fit in half an int, so that X + WIDTH cannot overflow; the screen
+  // check then names the rectangle.
   Rect r;
-  r.x = static_cast<int>(parse_int(parts[0], what));
-  r.y = static_cast<int>(parse_int(parts[1], what));
+  r.x = static_cast<int>(parse_int(parts[0], what + " X", kMaxCoordinate));
+  r.y = static_cast<int>(parse_int(parts[1], what + " Y", kMaxCoordinate));
   if (parts.size() == 4) {
-    r.width = static_cast<int>(parse_int(parts[2], what));
-    r.height = static_cast<int>(parse_int(parts[3], what));
+    r.width = static_cast<int>(parse_int(parts[2], what + " WIDTH", kMaxCoordinate));
+    r.height = static_cast<int>(parse_int(parts[3], what + " HEIGHT", kMaxCoordinate));
     if (r.width < 1 || r.height < 1) {
-      throw std::runtime_error(fmt::format("{} '{}': width and height must be >= 1", what, text));
+      throw std::runtime_error(
+          fmt::format("{} '{}': width and height must be >= 1", what, escape_for_message(text)));
     }
   }
   return r;

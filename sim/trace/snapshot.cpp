@@ -6,8 +6,12 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 
+#include "common/checked_number.hpp"
+#include "common/escape.hpp"
 #include "common/read_file.hpp"
+#include "common/strict_json.hpp"
 #include "sim/simulation.hpp"
 #include "sim/trace/recorder.hpp"
 #include "sim/trace/trace_file.hpp"
@@ -175,12 +179,21 @@ Snapshot parse_snapshot(const std::string& bytes, const std::string& path) {
   try {
     s.header =
         nlohmann::json::parse(bytes.begin() + 16, bytes.begin() + 16 + static_cast<long>(hl));
-    s.region = s.header.at("region");
-    s.width = s.header.at("width");
-    s.height = s.header.at("height");
-    s.memory_bits = s.header.at("memory_bits");
+    // Each number checked against its width (common/checked_number.hpp): a forged
+    // 2^32 + 64 is refused, never read as 64.
+    auto integer = [&](const char* key, int min, int max) {
+      try {
+        return json_integer<int>(s.header.at(key), std::string("header: ") + key, min, max);
+      } catch (const std::invalid_argument& e) {
+        throw TraceError(fmt::format("{}: {}", path, e.what()));
+      }
+    };
+    s.region = integer("region", 0, std::numeric_limits<int>::max());
+    s.width = integer("width", 64, 1024);
+    s.height = integer("height", 1, 1024);
+    s.memory_bits = integer("memory_bits", 1, 1024);
   } catch (const nlohmann::json::exception& e) {
-    throw TraceError(fmt::format("{}: bad header at byte 16: {}", path, e.what()));
+    throw TraceError(fmt::format("{}: bad header at byte 16: {}", path, json_error_text(e)));
   }
   // The header's meaning, not only its bytes: a forged header (with its checksum
   // recomputed) must not make a reader index past the planes.
@@ -202,18 +215,24 @@ Snapshot parse_snapshot(const std::string& bytes, const std::string& path) {
     for (std::size_t k = 0; k < fields.size(); ++k) {
       const nlohmann::json& f = fields[k];
       const std::string name = f.at("name").get<std::string>();
-      const int lo = f.at("lo").get<int>();
-      const int width = f.at("width").get<int>();
+      const std::string what = fmt::format("header: field {} ('{}')", k, escape_for_message(name));
+      int lo = 0, width = 0;
+      try {
+        lo = json_integer<int>(f.at("lo"), what + " lo", -1, s.memory_bits - 1);
+        width = json_integer<int>(f.at("width"), what + " width", 1, 64);
+      } catch (const std::invalid_argument& e) {
+        throw TraceError(fmt::format("{}: {}", path, e.what()));
+      }
       f.at("signed").get<bool>();
       if (width < 1 || width > 64 || lo < -1 || (lo >= 0 && lo + width > s.memory_bits)) {
         throw TraceError(fmt::format(
             "{}: header's field {} ('{}') has bits [{}, {}), outside the {} bits of pixel memory "
             "(and a field is 1..64 bits wide; lo -1 marks a spilled field)",
-            path, k, name, lo, lo + width, s.memory_bits));
+            path, k, escape_for_message(name), lo, lo + width, s.memory_bits));
       }
     }
   } catch (const nlohmann::json::exception& e) {
-    throw TraceError(fmt::format("{}: bad field map in the header: {}", path, e.what()));
+    throw TraceError(fmt::format("{}: bad field map in the header: {}", path, json_error_text(e)));
   }
   s.planes.resize(payload / 8);
   for (std::size_t i = 0; i < s.planes.size(); ++i) s.planes[i] = get(d + at + 8 * i, 8);

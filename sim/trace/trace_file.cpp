@@ -5,9 +5,13 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <set>
 
+#include "common/checked_number.hpp"
+#include "common/escape.hpp"
 #include "common/read_file.hpp"
+#include "common/strict_json.hpp"
 #include "firmware/isa/interface.hpp"
 #include "sim/simulation.hpp"
 
@@ -170,40 +174,54 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
     t.header = nlohmann::json::parse(bytes.begin() + kPreambleBytes, bytes.begin() + header_end);
     // The field map's meaning, not only its syntax: a forged header (checksum recomputed)
     // must not make a reader shift or index out of range.
-    const int memory_bits = t.header.at("firmware").at("memory_bits").get<int>();
-    if (memory_bits < 1 || memory_bits > 1024) {
-      throw TraceError(fmt::format("{}: header: firmware.memory_bits = {}, expected 1..1024", name,
-                                   memory_bits));
-    }
-    for (const auto& f : t.header.at("firmware").at("fields")) {
-      t.fields.push_back({f.at("name").get<std::string>(), f.at("lo").get<int>(),
-                          f.at("width").get<int>(), f.at("signed").get<bool>(),
-                          f.at("traced").get<bool>()});
+    // Every number is checked against its width (common/checked_number.hpp): a forged
+    // 2^32 + 5 is refused, never read as 5.
+    auto integer = [&](const nlohmann::json& v, const std::string& what, int min, int max) {
+      try {
+        return json_integer<int>(v, "header: " + what, min, max);
+      } catch (const std::invalid_argument& e) {
+        throw TraceError(fmt::format("{}: {}", name, e.what()));
+      }
+    };
+    const nlohmann::json& firmware = t.header.at("firmware");
+    const int memory_bits = integer(firmware.at("memory_bits"), "firmware.memory_bits", 1, 1024);
+    for (const auto& f : firmware.at("fields")) {
+      const std::string field_name = f.at("name").get<std::string>();
+      const std::string what = "field '" + escape_for_message(field_name) + "'";
+      t.fields.push_back({field_name, integer(f.at("lo"), what + " lo", -1, memory_bits - 1),
+                          integer(f.at("width"), what + " width", 1, 64),
+                          f.at("signed").get<bool>(), f.at("traced").get<bool>()});
       const FieldInfo& fi = t.fields.back();
-      if (fi.width < 1 || fi.width > 64 || fi.lo < -1 ||
-          (fi.lo >= 0 && fi.lo + fi.width > memory_bits)) {
+      if (fi.lo >= 0 && fi.lo + fi.width > memory_bits) {
         throw TraceError(fmt::format(
             "{}: header: field '{}' has bits [{}, {}), outside the {} bits of pixel memory (a "
             "field is 1..64 bits wide; lo -1 marks a spilled field)",
-            name, fi.name, fi.lo, fi.lo + fi.width, memory_bits));
+            name, escape_for_message(fi.name), fi.lo, fi.lo + fi.width, memory_bits));
       }
     }
     for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
       std::vector<InstructionText> code;
       // Traces written before the `light` procedure existed do not list it.
-      const auto& procedures = t.header.at("firmware").at("procedures");
+      const auto& procedures = firmware.at("procedures");
       if (!procedures.contains(kProcedureNames[p])) {
         t.procedures.emplace_back();
         continue;
       }
       for (const auto& i : procedures.at(kProcedureNames[p])) {
-        code.push_back({i.at("text").get<std::string>(), i.at("line").get<int>()});
+        code.push_back(
+            {i.at("text").get<std::string>(),
+             integer(i.at("line"), "instruction line", 0, std::numeric_limits<int>::max())});
       }
       t.procedures.push_back(std::move(code));
     }
-    for (const auto& p : t.header.at("pixels")) t.pixels.emplace_back(p.at(0), p.at(1));
+    // Value records hold a pixel's x and y in 16 bits.
+    for (const auto& p : t.header.at("pixels")) {
+      t.pixels.emplace_back(integer(p.at(0), "pixel x", 0, 65535),
+                            integer(p.at(1), "pixel y", 0, 65535));
+    }
   } catch (const nlohmann::json::exception& e) {
-    throw TraceError(fmt::format("{}: bad header at byte {}: {}", name, kPreambleBytes, e.what()));
+    throw TraceError(
+        fmt::format("{}: bad header at byte {}: {}", name, kPreambleBytes, json_error_text(e)));
   }
 
   const std::set<std::pair<int, int>> selected(t.pixels.begin(), t.pixels.end());
