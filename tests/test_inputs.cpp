@@ -296,3 +296,43 @@ TEST_CASE("JSON nesting is bounded before the parser's memory grows with it", "[
       parse_strict_json("{\"a\": }", "s.json"),
       !Catch::Contains("json.exception") && Catch::StartsWith("s.json: not valid JSON"));
 }
+
+TEST_CASE("real mesh files: what the formats allow is read", "[inputs]") {
+  const std::string dir = std::string(PP5_SOURCE_DIR) + "/tests/data/meshes/";
+  auto area = [](const Mesh& m) {
+    double sum = 0;
+    for (const glm::uvec3& t : m.triangles) {
+      const glm::dvec3 a(m.vertices[t.x].position), b(m.vertices[t.y].position),
+          c(m.vertices[t.z].position);
+      sum += glm::length(glm::cross(b - a, c - a)) / 2;
+    }
+    return sum;
+  };
+  // A UTF-8 byte-order mark before an OBJ: one triangle, not "vertex index 3 out of range".
+  const Mesh bom = load_mesh(dir + "bom.obj");
+  CHECK(bom.triangles.size() == 1);
+  CHECK(bom.vertices.size() == 3);
+  // OFF with comments among the vertices and faces: the tetrahedron of tetra.off.
+  const Mesh off = load_mesh(dir + "comments.off");
+  const Mesh tetra = load_mesh(dir + "tetra.off");
+  REQUIRE(off.triangles.size() == 4);
+  CHECK(off.vertices.size() == 4);
+  CHECK(area(off) == Approx(area(tetra)));
+  // A triangle 1e-5 across beside a unit one: kept (assimp's merge collapsed it), the same
+  // two triangles as the OFF file gives.
+  const Mesh cad = load_mesh(dir + "tiny_cad.obj");
+  const Mesh cad_off = load_mesh(dir + "tiny_cad.off");
+  CHECK(cad.triangles.size() == 2);
+  CHECK(cad_off.triangles.size() == 2);
+  CHECK(area(cad) == Approx(area(cad_off)).epsilon(1e-12));
+  // A concave ten-corner star: triangulated to exactly its own area (shoelace formula).
+  const Mesh star = load_mesh(dir + "star.obj");
+  double shoelace = 0;
+  for (std::size_t k = 0; k < star.vertices.size(); ++k) {
+    const glm::vec3 p = star.vertices[k].position;
+    const glm::vec3 q = star.vertices[(k + 1) % star.vertices.size()].position;
+    shoelace += (static_cast<double>(p.x) * q.y - static_cast<double>(q.x) * p.y) / 2;
+  }
+  CHECK(star.triangles.size() == 8);
+  CHECK(area(star) == Approx(std::abs(shoelace)).epsilon(1e-6));
+}

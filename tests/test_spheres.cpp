@@ -271,10 +271,19 @@ TEST_CASE("molecule files: PDB and mmCIF through gemmi, bad files name file and 
   fails("bad_coordinate.pdb", "bad_coordinate.pdb:3: y coordinate");
   fails("short_record.pdb", "short_record.pdb:2:");
   fails("no_atoms.pdb", "no atoms");
-  fails("far_atom.pdb", "coordinates are limited to +-1e+06 angstroms");
+  // PDB's columns hold F8.3 decimals: an exponent is refused as the format's, not as far.
+  fails("far_atom.pdb", "x coordinate '   1e+30' (columns 31-38) is not a decimal number");
   fails("bad_syntax.cif", "bad_syntax.cif");
   // gemmi 0.5 would overflow an int reading it (fuzzing found it); refused with its place.
-  fails("long_seq_id.cif", "long_seq_id.cif:21: a number with more than 9 digits at column 22");
+  fails("long_seq_id.cif",
+        "long_seq_id.cif:21: the value at column 22 starts with a number larger than 2147483647");
+  // Real files: a modern wwPDB mmCIF (ten-digit deposition ids), a PDB with UTF-8 names in
+  // its AUTHOR and REMARK records. Both hold the tripeptide.
+  CHECK(read_molecule_file(dir + "modern_deposition.cif").size() == pdb.size());
+  CHECK(read_molecule_file(dir + "utf8_remark.pdb").size() == pdb.size());
+  // A hexadecimal float passed strtod and gemmi read it as 0.
+  fails("hex_coordinate.pdb",
+        "hex_coordinate.pdb:6: x coordinate '  0x1p3 ' (columns 31-38) is not a decimal number");
   fails("missing.pdb", "missing.pdb");
 }
 

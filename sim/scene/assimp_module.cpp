@@ -54,21 +54,6 @@ class Reader : public AssimpReader {
     }
   }
 
-  bool join_identical_vertices(std::string& error) override {
-    try {
-      importer_.SetPropertyInteger(AI_CONFIG_PP_RVC_FLAGS, aiComponent_NORMALS |
-                                                               aiComponent_TANGENTS_AND_BITANGENTS |
-                                                               aiComponent_TEXCOORDS);
-      scene_ = importer_.ApplyPostProcessing(aiProcess_RemoveComponent |
-                                             aiProcess_JoinIdenticalVertices);
-      if (!scene_) error = message();
-      return scene_ != nullptr;
-    } catch (const std::exception& e) {
-      error = e.what();
-      return false;
-    }
-  }
-
   std::vector<ImportedMesh> meshes() const override {
     std::vector<ImportedMesh> out;
     if (!scene_) return out;

@@ -12,10 +12,11 @@
 //    bin/../lib/pp5sim, PP5_MODULE_FROM_BIN), beside it as a build tree lays it out
 //    (lib/pp5sim), and then in the build tree it was built in; the
 //    environment variable PP5_ASSIMP_MODULE, if set, names the one file to load instead.
-//  - A reader reads one file: read(), then optionally join_identical_vertices(), then
-//    meshes(). It throws nothing; failures come back as false with assimp's message.
+//  - A reader reads one file: read(), then meshes(). It throws nothing; failures come back
+//    as false with assimp's message.
 //  - The meshes are what assimp made, unchecked: the caller (mesh_loader.cpp) checks every
-//    index and number before it uses them, and before it asks for the join.
+//    index and number before it uses them, and joins identical corners itself (exactly:
+//    assimp's JoinIdenticalVertices merges within an epsilon).
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
@@ -40,9 +41,6 @@ class AssimpReader {
   // opening no other file. False, with `error` set, if assimp refuses it; its in-memory file
   // is called "the file" in the message.
   virtual bool read(std::string_view data, const std::string& format, std::string& error) = 0;
-  // assimp's JoinIdenticalVertices, after dropping normals, tangents and texture coordinates:
-  // identical corners (position and colour) become one vertex.
-  virtual bool join_identical_vertices(std::string& error) = 0;
   virtual std::vector<ImportedMesh> meshes() const = 0;
 };
 

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -73,6 +74,24 @@ bool is_number(const std::string& t) {
 // face line whose size is not 1 to 9, clamps indices out of range to the last vertex, and
 // overruns its line buffer on lines of 4096 characters or more. So the lines are checked: the
 // vertex lines are counted, each face line must be a size from 3 to 9 and that many indices.
+// Each line's '#' comment and the spaces before it removed; a line that held only a comment
+// (or spaces) becomes empty, which both check_off and assimp skip.
+std::string strip_off_comments(std::string_view data) {
+  std::string out;
+  out.reserve(data.size());
+  std::size_t pos = 0;
+  while (pos < data.size()) {
+    const std::size_t end = std::min(data.find_first_of("\r\n", pos), data.size());
+    std::string_view line = data.substr(pos, end - pos);
+    line = line.substr(0, line.find('#'));
+    const std::size_t last = line.find_last_not_of(" \t");
+    out.append(last == std::string_view::npos ? std::string_view() : line.substr(0, last + 1));
+    if (end < data.size()) out += data[end];
+    pos = end + 1;
+  }
+  return out;
+}
+
 void check_off(std::string_view data, const std::string& origin, const LoadLimits& limits) {
   data = data.substr(0, data.find('\0'));  // assimp reads the text up to a NUL
   std::istringstream in{std::string(data)};
@@ -579,6 +598,54 @@ std::string non_finite(const glm::vec3& p) {
 
 }  // namespace
 
+// Corners with the same position and colour bits become one vertex, in the order of their
+// first use; the faces are renumbered.
+void join_exactly_identical_corners(ImportedMesh& mesh) {
+  struct Key {
+    std::array<std::uint32_t, 7> bits;
+    bool operator==(const Key& o) const { return bits == o.bits; }
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = 1469598103934665603ull;
+      for (std::uint32_t b : k.bits) h = (h ^ b) * 1099511628211ull;
+      return static_cast<std::size_t>(h);
+    }
+  };
+  auto key_of = [&](std::size_t i) {
+    Key k{};
+    const float values[7] = {mesh.positions[i].x,
+                             mesh.positions[i].y,
+                             mesh.positions[i].z,
+                             mesh.colors.empty() ? 0.0f : mesh.colors[i].r,
+                             mesh.colors.empty() ? 0.0f : mesh.colors[i].g,
+                             mesh.colors.empty() ? 0.0f : mesh.colors[i].b,
+                             mesh.colors.empty() ? 0.0f : mesh.colors[i].a};
+    for (int c = 0; c < 7; ++c) {
+      // +0 and -0 are one position.
+      const float v = values[c] == 0.0f ? 0.0f : values[c];
+      std::memcpy(&k.bits[static_cast<std::size_t>(c)], &v, sizeof v);
+    }
+    return k;
+  };
+  std::unordered_map<Key, std::uint32_t, KeyHash> index_of;
+  index_of.reserve(mesh.positions.size());
+  std::vector<std::uint32_t> renumber(mesh.positions.size());
+  ImportedMesh joined;
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    const auto [it, added] =
+        index_of.emplace(key_of(i), static_cast<std::uint32_t>(joined.positions.size()));
+    if (added) {
+      joined.positions.push_back(mesh.positions[i]);
+      if (!mesh.colors.empty()) joined.colors.push_back(mesh.colors[i]);
+    }
+    renumber[i] = it->second;
+  }
+  for (std::uint32_t& i : mesh.indices) i = renumber[i];
+  mesh.positions = std::move(joined.positions);
+  mesh.colors = std::move(joined.colors);
+}
+
 bool is_mesh_file(const std::string& path) {
   const std::string ext = extension_of(path);
   return ext == "obj" || ext == "ply" || ext == "stl" || ext == "off";
@@ -674,6 +741,19 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
                     "byte-order mark?); save it as UTF-8 or ASCII",
                     origin));
   }
+  // A UTF-8 byte-order mark (Windows editors write one) is not part of a text format.
+  if ((format == "obj" || format == "off" || format == "ply") && data.size() >= 3 &&
+      data.substr(0, 3) == "\xEF\xBB\xBF") {
+    data.remove_prefix(3);
+  }
+  // OFF allows a comment, '#' to the end of the line, on any line; assimp's reader takes
+  // them only in the header. They are blanked here (the lines stay, so line numbers in
+  // messages are the file's).
+  std::string off_text;
+  if (format == "off") {
+    off_text = strip_off_comments(data);
+    data = off_text;
+  }
   std::size_t empty_faces = 0;
   if (format == "off") check_off(data, origin, limits);
   if (format == "ply") check_ply(data, origin, limits);
@@ -741,11 +821,10 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   }
   // OBJ and STL come with a vertex per face corner: identical positions (and colours) become
   // one vertex, so faces share their corners and the normals come out smooth.
+  // Exactly identical, bit for bit: assimp's JoinIdenticalVertices merges corners closer
+  // than an epsilon, which collapsed CAD triangles about 1e-5 across to nothing.
   if (per_face) {
-    if (!reader->join_identical_vertices(error)) {
-      throw MeshError(fmt::format("{}: {}", origin, printable(error, 300)));
-    }
-    meshes = reader->meshes();
+    for (ImportedMesh& mesh : meshes) join_exactly_identical_corners(mesh);
   }
 
   MeshLoadReport r;

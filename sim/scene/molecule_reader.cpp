@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 
+#include "common/escape.hpp"
 #include "common/read_file.hpp"
 #include "sim/scene/scene_loader.hpp"
 #include "sim/scene/sphere_scenes.hpp"
@@ -32,15 +33,31 @@ bool ends_with(const std::string& s, const char* suffix) {
   return tail == v;
 }
 
-// A PDB coordinate field: optional blanks, then a decimal number filling the rest.
+// A PDB coordinate field (Fortran F8.3): optional blanks, then an optional sign, digits and
+// at most one decimal point. strtod alone also took "0x1p3" (a hexadecimal float, which
+// gemmi then read as 0), "1e5" and "infinity".
 bool pdb_number(std::string_view field) {
   while (!field.empty() && field.front() == ' ') field.remove_prefix(1);
   while (!field.empty() && field.back() == ' ') field.remove_suffix(1);
-  if (field.empty()) return false;
-  const std::string s(field);
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  return end == s.c_str() + s.size() && std::isfinite(v);
+  if (!field.empty() && (field.front() == '-' || field.front() == '+')) field.remove_prefix(1);
+  bool digits = false, point = false;
+  for (const char c : field) {
+    if (c >= '0' && c <= '9') {
+      digits = true;
+    } else if (c == '.' && !point) {
+      point = true;
+    } else {
+      return false;
+    }
+  }
+  return digits;
+}
+
+// The records a space-filling model reads: the only ones given to gemmi.
+bool reaches_gemmi(std::string_view rec) {
+  const std::string_view name = rec.substr(0, 6);
+  return name == "ATOM  " || name == "HETATM" || name.substr(0, 5) == "MODEL" ||
+         name.substr(0, 6) == "ENDMDL";
 }
 
 void check_pdb_records(const std::string& text, const std::string& path) {
@@ -51,13 +68,20 @@ void check_pdb_records(const std::string& text, const std::string& path) {
     std::string_view rec(text.data() + start, end - start);
     if (!rec.empty() && rec.back() == '\r') rec.remove_suffix(1);
     ++line;
-    // PDB is ASCII text; gemmi 0.5 shifts a record name's bytes as signed chars, which a
-    // byte past 0x7F turns into undefined behaviour (found by fuzzing).
+    // Only the records that reach gemmi (below) must be ASCII: gemmi 0.5 shifts a record
+    // name's bytes as signed chars, which a byte past 0x7F turns into undefined behaviour
+    // (found by fuzzing). Other records (a REMARK or an AUTHOR with UTF-8 names) are
+    // blanked before gemmi reads the file.
+    if (!reaches_gemmi(rec)) {
+      start = end + 1;
+      continue;
+    }
     for (std::size_t k = 0; k < rec.size(); ++k) {
       const auto c = static_cast<unsigned char>(rec[k]);
       if (c > 0x7E || (c < 0x20 && c != '\t')) {
-        throw SceneError(fmt::format("{}:{}: byte 0x{:02X} in column {}; a PDB file is ASCII text",
-                                     path, line, c, k + 1));
+        throw SceneError(
+            fmt::format("{}:{}: byte 0x{:02X} in column {} of an {} record, which is ASCII text",
+                        path, line, c, k + 1, escape_for_message(rec.substr(0, 6))));
       }
     }
     if (rec.substr(0, 6) == "ATOM  " || rec.substr(0, 6) == "HETATM") {
@@ -70,9 +94,10 @@ void check_pdb_records(const std::string& text, const std::string& path) {
       for (int k = 0; k < 3; ++k) {
         const std::string_view f = rec.substr(30 + 8 * static_cast<std::size_t>(k), 8);
         if (!pdb_number(f)) {
-          throw SceneError(fmt::format("{}:{}: {} coordinate '{}' (columns {}-{}) is not a number",
-                                       path, line, kAxes[k], std::string(f), 31 + 8 * k,
-                                       38 + 8 * k));
+          throw SceneError(fmt::format(
+              "{}:{}: {} coordinate '{}' (columns {}-{}) is not a decimal number (expected "
+              "digits with an optional sign and point, as in -12.345)",
+              path, line, kAxes[k], escape_for_message(f), 31 + 8 * k, 38 + 8 * k));
         }
       }
     }
@@ -80,31 +105,45 @@ void check_pdb_records(const std::string& text, const std::string& path) {
   }
 }
 
-// gemmi 0.5 reads mmCIF integers (sequence ids, model numbers, serials) with an int that a
-// run of ten or more digits overflows (found by fuzzing: undefined behaviour). No field of a
-// real file needs such a run before a decimal point, so it is refused with its place; digits
-// after a '.' (a coordinate's fraction) may run on.
-void check_cif_digit_runs(const std::string& text, const std::string& path) {
-  constexpr std::size_t kMaxDigits = 9;
-  std::size_t line = 1, column = 0, run = 0;
-  bool fraction = false;
-  for (std::size_t k = 0; k < text.size(); ++k) {
-    const char c = text[k];
-    ++column;
-    if (c >= '0' && c <= '9') {
-      if (run == 0) fraction = k > 0 && text[k - 1] == '.';
-      if (++run > kMaxDigits && !fraction) {
-        throw SceneError(fmt::format(
-            "{}:{}: a number with more than {} digits at column {}; no mmCIF field of a "
-            "molecule needs one (it would overflow the reader's integers)",
-            path, line, kMaxDigits, column - run + 1));
-      }
+// gemmi 0.5 reads mmCIF integers (sequence ids, model numbers, serials, charges) with an
+// int that a larger number overflows (found by fuzzing: undefined behaviour). Its reader
+// takes an integer from the digits at the start of a value (after an optional quote and
+// sign), so only such a run whose value exceeds 2^31 - 1 is refused, with its place. Digits
+// inside a value (a ten-digit deposition id "D_1292123456", a date, a DOI) never reach an
+// integer and are left alone; so are text fields (between lines starting with ';') and
+// comments.
+void check_cif_integers(const std::string& text, const std::string& path) {
+  constexpr unsigned long long kIntMax = 2147483647;
+  std::size_t line = 1;
+  bool text_field = false;
+  for (std::size_t start = 0; start < text.size(); ++line) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view rec(text.data() + start, end - start);
+    start = end + 1;
+    if (!rec.empty() && rec[0] == ';') {
+      text_field = !text_field;
       continue;
     }
-    run = 0;
-    if (c == '\n') {
-      ++line;
-      column = 0;
+    if (text_field) continue;
+    for (std::size_t k = 0; k < rec.size(); ++k) {
+      if (k > 0 && rec[k - 1] != ' ' && rec[k - 1] != '\t') continue;  // not a value's start
+      if (rec[k] == '#') break;                                        // a comment
+      std::size_t j = k;
+      if (j < rec.size() && (rec[j] == '\'' || rec[j] == '"')) ++j;
+      if (j < rec.size() && (rec[j] == '-' || rec[j] == '+')) ++j;
+      unsigned long long value = 0;
+      const std::size_t first = j;
+      for (; j < rec.size() && rec[j] >= '0' && rec[j] <= '9' && value <= kIntMax; ++j) {
+        value = value * 10 + static_cast<unsigned>(rec[j] - '0');
+      }
+      if (value > kIntMax) {
+        throw SceneError(fmt::format(
+            "{}:{}: the value at column {} starts with a number larger than {} ('{}'); an "
+            "mmCIF integer field (a sequence id, serial or model number) cannot hold it",
+            path, line, first + 1, kIntMax,
+            escape_for_message(rec.substr(k, rec.find_first_of(" \t", k) - k), 40)));
+      }
     }
   }
 }
@@ -125,7 +164,7 @@ std::vector<Sphere> parse_molecule(const std::string& text, const std::string& p
   gemmi::Structure st;
   try {
     if (cif) {
-      check_cif_digit_runs(text, path);
+      check_cif_integers(text, path);
       st = gemmi::make_structure(gemmi::cif::read_memory(text.data(), text.size(), path.c_str()));
     } else {
       check_pdb_records(text, path);
@@ -138,11 +177,7 @@ std::vector<Sphere> parse_molecule(const std::string& text, const std::string& p
         std::size_t end = text.find('\n', start);
         if (end == std::string::npos) end = text.size();
         const std::string_view rec(text.data() + start, end - start);
-        const std::string_view name = rec.substr(0, 6);
-        if (name == "ATOM  " || name == "HETATM" || name.substr(0, 5) == "MODEL" ||
-            name.substr(0, 6) == "ENDMDL") {
-          atoms.append(rec);
-        }
+        if (reaches_gemmi(rec)) atoms.append(rec);
         atoms += '\n';
         start = end + 1;
       }
@@ -151,9 +186,13 @@ std::vector<Sphere> parse_molecule(const std::string& text, const std::string& p
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception& e) {
-    // gemmi's messages name the file and line ("FILE:12:...") for syntax errors.
-    const std::string what = e.what();
-    throw SceneError(what.rfind(path, 0) == 0 ? what : fmt::format("{}: {}", path, what));
+    // gemmi's messages name the file and line ("FILE:12:...") for syntax errors; its others
+    // (a column the _atom_site table needs is missing) are said to be the reader's.
+    const std::string what = escape_for_message(e.what(), 300);
+    throw SceneError(what.rfind(path, 0) == 0
+                         ? what
+                         : fmt::format("{}: the {} reader (gemmi) cannot read it: {}", path,
+                                       cif ? "mmCIF" : "PDB", what));
   }
   std::vector<Sphere> spheres;
   if (!st.models.empty()) {
