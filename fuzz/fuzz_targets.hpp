@@ -7,11 +7,13 @@
 // with a message; anything else (another exception, a crash, a sanitizer report, a hang,
 // running out of memory) is a bug. The targets catch only the documented error types, so an
 // unexpected std::exception escapes and libFuzzer reports it as a crash.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
@@ -103,11 +105,24 @@ inline void assembler(const std::uint8_t* data, std::size_t size) {
   }
 }
 
-// A trace file's bytes (.pp5t): preamble, JSON header, records, checksum. Inputs with a
-// valid checksum reach the header's meaning and the records; libFuzzer's comparison tracing
-// finds the checksum of small ones.
+// A trace file's bytes (.pp5t): preamble, JSON header, records, checksum. An input that
+// starts with '{' is framed here instead: the JSON header up to the first NUL, then a
+// record count byte and the records; the target writes the preamble, lengths and checksum
+// (encode_trace), so every input reaches the header's fields (their widths and ranges) and
+// the records, rather than stopping at the checksum.
 inline void trace(const std::uint8_t* data, std::size_t size) {
-  const std::string bytes(reinterpret_cast<const char*>(data), size);
+  std::string bytes(reinterpret_cast<const char*>(data), size);
+  if (!bytes.empty() && bytes[0] == '{') {
+    const std::size_t nul = std::min(bytes.find('\0'), bytes.size());
+    const nlohmann::json header =
+        nlohmann::json::parse(bytes.substr(0, nul), nullptr, /*allow_exceptions=*/false);
+    if (header.is_discarded()) return;
+    std::vector<std::uint8_t> records(bytes.begin() + static_cast<long>(std::min(nul + 1, size)),
+                                      bytes.end());
+    const std::uint64_t count = records.empty() ? 0 : records[0];
+    if (!records.empty()) records.erase(records.begin());
+    bytes = trace::encode_trace(header, records, count);
+  }
   try {
     (void)trace::parse_trace(bytes, "fuzz.pp5t");
   } catch (const trace::TraceError&) {
@@ -115,15 +130,49 @@ inline void trace(const std::uint8_t* data, std::size_t size) {
 }
 
 // A snapshot file's bytes (.pp5m); a snapshot that parses is also turned into a field image,
-// which reads every field the header names.
+// which reads every field the header names. An input that starts with '{' is a header alone:
+// the target adds planes of the size the header's geometry gives (when it is small) and the
+// checksum (encode_snapshot), so every input reaches the header's fields.
 inline void snapshot(const std::uint8_t* data, std::size_t size) {
-  const std::string bytes(reinterpret_cast<const char*>(data), size);
+  std::string bytes(reinterpret_cast<const char*>(data), size);
+  if (!bytes.empty() && bytes[0] == '{') {
+    trace::Snapshot s;
+    s.header = nlohmann::json::parse(bytes, nullptr, /*allow_exceptions=*/false);
+    if (s.header.is_discarded()) return;
+    auto small = [&](const char* key) -> std::uint64_t {
+      const auto* v = s.header.is_object() && s.header.contains(key)
+                          ? s.header.at(key).get_ptr<const nlohmann::json::number_unsigned_t*>()
+                          : nullptr;
+      return v && *v <= 1024 ? *v : 0;
+    };
+    const std::uint64_t words = small("memory_bits") * small("width") * small("height") / 64;
+    if (words <= (1u << 17)) s.planes.assign(words, 0x5555aaaa5555aaaaull);
+    bytes = trace::encode_snapshot(s);
+  }
   try {
     const trace::Snapshot s = trace::parse_snapshot(bytes, "fuzz.pp5m");
     for (const auto& f : s.header.at("firmware").at("fields")) {
       if (f.at("lo").get<int>() >= 0) (void)trace::field_image(s, f.at("name").get<std::string>());
     }
   } catch (const trace::TraceError&) {
+  }
+}
+
+// A scene file's "csg" expression: the input is the expression's JSON, set in a scene of
+// four one-triangle meshes named a, b, c and d; normalisation (sim/scene/csg_expression.hpp)
+// must stay within its bounds however the operators nest.
+inline void csg(const std::uint8_t* data, std::size_t size) {
+  const std::string expression(reinterpret_cast<const char*>(data), size);
+  std::string text = R"({"meshes": [)";
+  for (const char* name : {"a", "b", "c", "d"}) {
+    text += std::string(name[0] == 'a' ? "" : ",") + R"({"name": ")" + name +
+            R"(", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "triangles": [[0, 1, 2]]})";
+  }
+  text += R"(], "csg": )" + expression + "}";
+  try {
+    parse_scene_json(text, "fuzz.json", "/nonexistent-pp5-fuzz", fuzz_limits());
+  } catch (const SceneError&) {
+  } catch (const MeshError&) {
   }
 }
 

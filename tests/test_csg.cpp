@@ -221,6 +221,35 @@ TEST_CASE("CSG expressions normalise to a sum of products", "[csg]") {
   CHECK(s.solids[1].last == 24);
 }
 
+TEST_CASE("a CSG expression's expansion is bounded before the products are built", "[csg]") {
+  // An intersection of a union of 200 solids with a union of 100,000: 2 x 10^7 products of
+  // two literals were built before the count was checked (gigabytes).
+  const int many = 100'000;
+  std::vector<std::string> names(static_cast<std::size_t>(many));
+  for (int k = 0; k < many; ++k) names[static_cast<std::size_t>(k)] = "s" + std::to_string(k);
+  auto union_of = [](int first, int count) {
+    CsgNode u;
+    u.op = CsgNode::Op::union_;
+    for (int k = 0; k < count; ++k) {
+      CsgNode leaf;
+      leaf.solid = first + k;
+      u.operands.push_back(leaf);
+    }
+    return u;
+  };
+  CsgNode tree;
+  tree.op = CsgNode::Op::intersection;
+  tree.operands = {union_of(0, 200), union_of(0, many)};
+  // (Before, the products were built and then counted: "more than 64 products".)
+  CHECK_THROWS_WITH(normalise_csg(tree, names),
+                    Catch::Contains("expands to more than 256 products (before duplicates"));
+  // A union of many equal operands is as small as its distinct products.
+  CsgNode copies;
+  copies.op = CsgNode::Op::union_;
+  for (int k = 0; k < 1000; ++k) copies.operands.push_back(union_of(0, 3));
+  CHECK(normalise_csg(copies, names).size() == 3);
+}
+
 TEST_CASE("bad CSG expressions in scene files are refused naming the file and key", "[csg]") {
   auto refused = [](const std::string& csg, const std::string& what) {
     INFO(csg);

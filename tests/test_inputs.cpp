@@ -280,14 +280,12 @@ TEST_CASE("numbers are parsed into a checked width, never wrapped", "[inputs]") 
 TEST_CASE("JSON nesting is bounded before the parser's memory grows with it", "[inputs]") {
   // 200 KB of '[' (and of '{"k":') once took gigabytes: one path string per level.
   const std::string arrays(200'000, '[');
-  const auto t0 = std::chrono::steady_clock::now();
   CHECK_THROWS_WITH(parse_strict_json(arrays, "deep.json"),
                     Catch::Contains("deep.json: containers nested more than 256 deep"));
   std::string objects;
   for (int k = 0; k < 40'000; ++k) objects += "{\"" + std::string(40, 'k') + "\":";
   CHECK_THROWS_WITH(parse_strict_json(objects, "keys.json"),
                     Catch::Contains("nested more than 256 deep"));
-  CHECK(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(5));
   // Up to the limit, documents parse as before.
   const std::string ok = std::string(255, '[') + std::string(255, ']');
   CHECK(parse_strict_json(ok, "ok.json") == nlohmann::json::parse(ok));

@@ -236,9 +236,9 @@ TEST_CASE("the fuzz corpus and every kept crasher run cleanly through the fuzz t
           "[loaders][fuzz]") {
   namespace fs = std::filesystem;
   const std::pair<const char*, void (*)(const std::uint8_t*, std::size_t)> targets[] = {
-      {"mesh", fuzz::mesh},        {"scene", fuzz::scene}, {"config", fuzz::config},
-      {"asm", fuzz::assembler},    {"trace", fuzz::trace}, {"snapshot", fuzz::snapshot},
-      {"molecule", fuzz::molecule}};
+      {"mesh", fuzz::mesh},         {"scene", fuzz::scene}, {"config", fuzz::config},
+      {"asm", fuzz::assembler},     {"trace", fuzz::trace}, {"snapshot", fuzz::snapshot},
+      {"molecule", fuzz::molecule}, {"csg", fuzz::csg}};
   int inputs = 0;
   for (const auto& [name, run] : targets) {
     for (const char* set : {"corpus", "regressions"}) {

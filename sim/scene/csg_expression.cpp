@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <set>
+#include <utility>
 
 namespace pp5 {
 
@@ -20,10 +22,33 @@ CsgProducts sum_of_products(const CsgNode& node, bool negate) {
     terms.push_back({&node.operands[k], complement != negate});
   }
   const bool is_union = (node.op == Op::union_) != negate;
+  // Every bound is checked before the products it limits are built: a union's count is the
+  // sum of its operands', an intersection's the product, so a small expression (an
+  // intersection of unions) cannot expand to millions of products first.
+  const std::size_t bound = kMaxCsgIntermediateProducts;
   CsgProducts out;
   if (is_union) {
+    // A product already in the union adds nothing: dropped as it comes, so that a union of
+    // many equal operands stays as small as its distinct products.
+    auto key = [](const std::vector<CsgLiteral>& product) {
+      std::vector<std::pair<int, bool>> k;
+      k.reserve(product.size());
+      for (const CsgLiteral& l : product) k.emplace_back(l.solid, l.negated);
+      return k;
+    };
+    std::set<std::vector<std::pair<int, bool>>> seen;
     for (const auto& [n, c] : terms) {
       CsgProducts p = sum_of_products(*n, c);
+      p.erase(std::remove_if(
+                  p.begin(), p.end(),
+                  [&](const std::vector<CsgLiteral>& q) { return !seen.insert(key(q)).second; }),
+              p.end());
+      if (p.size() > bound - out.size()) {
+        throw CsgError(
+            fmt::format("the expression expands to more than {} products (before "
+                        "duplicates are removed); at most {} can be drawn",
+                        bound, kMaxCsgProducts));
+      }
       out.insert(out.end(), p.begin(), p.end());
     }
     return out;
@@ -31,6 +56,12 @@ CsgProducts sum_of_products(const CsgNode& node, bool negate) {
   out = {{}};
   for (const auto& [n, c] : terms) {
     const CsgProducts p = sum_of_products(*n, c);
+    if (!p.empty() && out.size() > bound / p.size()) {
+      throw CsgError(
+          fmt::format("the expression expands to more than {} products (before "
+                      "duplicates are removed); at most {} can be drawn",
+                      bound, kMaxCsgProducts));
+    }
     CsgProducts next;
     for (const auto& a : out) {
       for (const auto& b : p) {
@@ -40,10 +71,6 @@ CsgProducts sum_of_products(const CsgNode& node, bool negate) {
       }
     }
     out = std::move(next);
-    if (out.size() > 4 * kMaxCsgProducts) {
-      throw CsgError(
-          fmt::format("the expression expands to more than {} products", kMaxCsgProducts));
-    }
   }
   return out;
 }

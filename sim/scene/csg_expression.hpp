@@ -14,7 +14,8 @@
 //  - A product with no positive literal is unbounded (everything outside some solids): it
 //    cannot be rendered from the solids' faces, and normalise_csg throws CsgError saying
 //    which. More than kMaxCsgProducts products throws CsgError too (the passes grow with
-//    them). Deterministic.
+//    them), and so does a node that would expand to more than kMaxCsgIntermediateProducts
+//    before simplification, checked before those products are built. Deterministic.
 //  - csg_contains(products, inside) evaluates the sum of products given each solid's
 //    membership.
 #include <stdexcept>
@@ -37,6 +38,10 @@ struct CsgNode {
 };
 
 inline constexpr std::size_t kMaxCsgProducts = 64;
+// The most products any node may expand to before duplicates and empty products are
+// removed; checked before they are built, so that the work is bounded by it and by the
+// expression's size.
+inline constexpr std::size_t kMaxCsgIntermediateProducts = 4 * kMaxCsgProducts;
 
 // `names` are the solids' names, for messages.
 CsgProducts normalise_csg(const CsgNode& tree, const std::vector<std::string>& names);
