@@ -775,9 +775,12 @@ Program assemble_file(const std::string& path, const AssemblerOptions& options) 
   return assemble(source, path, options);
 }
 
-std::string listing(const Program& program, const TimingParams& timing) {
-  std::string out = fmt::format("program {}\n\nfield map ({} of {} bits used", program.name,
-                                program.bits_used(), program.memory_bits);
+std::string listing(const Program& program, const TimingParams& timing,
+                    const ParameterValues& parameters, const std::string& priced_for) {
+  std::string out = fmt::format(
+      "program {}\ncycles as the Renderer charges them with the frame parameters of {}\n\nfield "
+      "map ({} of {} bits used",
+      program.name, priced_for, program.bits_used(), program.memory_bits);
   if (program.overlay_bits)
     out += fmt::format(", {} of them scratch overlay", program.overlay_bits);
   if (program.staging_bits) out += fmt::format(", {} of them spill staging", program.staging_bits);
@@ -826,7 +829,8 @@ std::string listing(const Program& program, const TimingParams& timing) {
                        f.cold ? "marked cold" : "among the least used", f.weight,
                        terms.empty() ? "" : " = ", fmt::format("{}", fmt::join(terms, " + ")));
   }
-  const OwnedValues values{};
+  OwnedValues values{};
+  values.parameters = parameters;
   for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
     const ProcedureCode& code = program.procedures[p];
     if (!code.defined) continue;
@@ -839,7 +843,7 @@ std::string listing(const Program& program, const TimingParams& timing) {
                          ins.line ? std::to_string(ins.line) : "", disassemble(ins), cycles,
                          ins.line ? "" : " (spill)");
     }
-    out += fmt::format("  total {} cycles (mac costs shown for a zero constant)\n", total);
+    out += fmt::format("  total {} cycles\n", total);
   }
   return out;
 }

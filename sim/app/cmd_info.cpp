@@ -14,6 +14,7 @@
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/scene/scene.hpp"
+#include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
 
 namespace pp5 {
@@ -143,11 +144,20 @@ Command add_asm_command(CLI::App& app) {
                   "A built-in program's name, or a path (with a '/' or ending in .pp5) to a file")
       ->required();
   add_config_options(*cmd, o->path, o->sets);
-  return {cmd, [o] {
+  auto scene = std::make_shared<std::string>("torus");
+  cmd->add_option("--scene", *scene,
+                  "Built-in scene or scene file whose frame parameters (lights, and any it sets) "
+                  "price the listing: a `mac` by a frame parameter costs what that value's set "
+                  "bits cost")
+      ->capture_default_str();
+  return {cmd, [o, scene] {
             const MachineConfig config = load_config(o->path, o->sets);
+            const Scene s = load_scene(*scene);
+            const auto parameters = GeometryEngine(geometry_params(config), s).frame_parameters();
             const Program program =
                 assemble_file(resolve_firmware(o->program), assembler_options(config));
-            std::cout << listing(program, timing_params(config));
+            std::cout << listing(program, timing_params(config), parameters,
+                                 fmt::format("scene '{}'", s.name));
             return 0;
           }};
 }
