@@ -32,6 +32,17 @@ std::uint64_t magnitude(std::int64_t k) {
   return k < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(k) : static_cast<std::uint64_t>(k);
 }
 
+// The unpublished properties some costs rest on (InstructionInfo::basis).
+constexpr const char* kEvaluatorOrder =
+    "the evaluator's bit order and latency (assumed: the fraction bits stream first, LSB first, "
+    "after evaluator.latency_cycles; not published)";
+constexpr const char* kMultiplyMicrocode =
+    "the multiply's microcode (a choice of the simulator: shift-and-add, one pass per multiplier "
+    "bit over the destination from that bit up; mac skips a constant's zero bits; not published)";
+constexpr const char* kBackingStore =
+    "the backing-store transfer time per block (assumed: "
+    "renderer.backing_store_cycles_per_block)";
+
 std::vector<InstructionInfo> make_table() {
   using I = Instruction;
   using T = TimingParams;
@@ -57,7 +68,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.qtest(expression_of(i.operands[0], c.values), i.condition);
-       }},
+       },
+       kEvaluatorOrder},
       {Opcode::qload, "qload", false, "FE", "qload dst, expr",
        "dst <- floor(expr) modulo 2^width(dst)",
        "evaluator.fraction_bits + width(dst) + evaluator.latency_cycles",
@@ -66,7 +78,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.qload(i.operands[0].field, expression_of(i.operands[1], c.values));
-       }},
+       },
+       kEvaluatorOrder},
       {Opcode::qcmp, "qcmp", true, "RE", "qcmp.cond field, expr",
        "E <- E & (floor(expr) cond field), expr taken to width(field) with field's signedness",
        "evaluator.fraction_bits + width(field) + evaluator.latency_cycles + 1",
@@ -75,7 +88,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.qcmp(i.operands[0].field, expression_of(i.operands[1], c.values), i.condition);
-       }},
+       },
+       kEvaluatorOrder},
 
       {Opcode::mov, "mov", false, "FV", "mov dst, src", "dst <- src", "width(dst)", dst_width,
        [](const I& i, X& c) {
@@ -130,7 +144,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.multiply(i.operands[0].field, i.operands[1].field, i.operands[2].field);
-       }},
+       },
+       kMultiplyMicrocode},
       {Opcode::mac, "mac", false, "FRK", "mac dst, a, k",
        "dst <- dst + a * k modulo 2^width(dst), k a broadcast constant; dst must not overlap a",
        "1 + sum over the set bits j of |k| below width(dst) of (width(dst) - j)",
@@ -146,7 +161,8 @@ std::vector<InstructionInfo> make_table() {
        [](const I& i, X& c) {
          c.pixels.multiply_accumulate(i.operands[0].field, i.operands[1].field,
                                       constant_value(i.operands[2], c.values));
-       }},
+       },
+       kMultiplyMicrocode},
 
       {Opcode::bsld, "bsld", false, "FB", "bsld dst, block",
        "dst <- backing store from block `block` on (every pixel, ignoring E)",
@@ -157,7 +173,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.load_from_backing(i.operands[0].field, static_cast<int>(i.operands[1].literal));
-       }},
+       },
+       kBackingStore},
       {Opcode::bsst, "bsst", false, "RB", "bsst src, block",
        "backing store from block `block` on <- src (every pixel, ignoring E)",
        "ceil(width(src) / renderer.block_bits) * renderer.backing_store_cycles_per_block",
@@ -167,7 +184,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.store_to_backing(i.operands[0].field, static_cast<int>(i.operands[1].literal));
-       }},
+       },
+       kBackingStore},
   };
 }
 

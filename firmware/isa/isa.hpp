@@ -214,6 +214,9 @@ struct InstructionInfo {
   const char* cycles;  // the cost formula in words
   ArrayCycles (*cost)(const Instruction&, const TimingParams&, const PacketValues&);
   void (*execute)(const Instruction&, ExecutionContext&);
+  // What the cost formula rests on beyond one array cycle per bit (Fuchs et al. 1989): the
+  // unpublished property of the machine it assumes, or "" where it needs none.
+  const char* basis = "";
 };
 
 const std::vector<InstructionInfo>& instruction_table();
