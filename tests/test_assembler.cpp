@@ -323,8 +323,9 @@ TEST_CASE("errors name the file, the line and what was expected", "[assembler]")
   }
   SECTION("undeclared field") {
     check_error_here(with_triangle("  mov q, 1 ; HERE\n"), "must be a declared field, got 'q'");
-    check_error_here(with_triangle("  mov z, q ; HERE\n"),
-                     "must be a field, an integer or a frame parameter, got 'q'");
+    check_error_here(
+        with_triangle("  mov z, q ; HERE\n"),
+        "must be a field, a constant expression, an integer or a frame parameter, got 'q'");
     check_error_here(with_triangle("  mul z, s, 3 ; HERE\n"), "must be a declared field, got '3'");
     check_error_here(with_triangle("  mac z, s, red ; HERE\n"),
                      "must be an integer or a frame parameter, got 'red'");
@@ -925,4 +926,31 @@ TEST_CASE("the listing prices every procedure of every shipped program as the si
     }
   }
   CHECK(compared > 0);
+}
+
+TEST_CASE("a constant expression is broadcast as an operand, priced as a literal", "[assembler]") {
+  const std::string head =
+      "field z 24\nfield a 16 signed\nfield red 8\nfield green 8\nfield blue 8\n"
+      "output red green blue\n";
+  const Program p = assemble(
+      head + "proc triangle\n  mov a, slope_x\n  sub a, slope_y\n  cmp.lt a, flat_red\nend\n",
+      "ok.pp5", AssemblerOptions{});
+  const auto& code = p.procedure(Procedure::triangle).code;
+  REQUIRE(code.size() == 3);
+  CHECK(code[0].operands[1].kind == Operand::Kind::expression);
+  CHECK(expression_names(p.procedure(Procedure::triangle).expressions) ==
+        std::set<std::string>{"slope_x", "slope_y", "flat_red"});
+  // A V operand's cost is the destination's width, whatever it broadcasts.
+  OwnedValues values;
+  values.expressions[static_cast<int>(Expression::slope_x)].F = -37 * 4096 + 5;
+  CHECK(instruction_cost(code[0], TimingParams{}, values).count == 16);
+  CHECK(broadcast_value(code[0].operands[1], values, 12) == -37);  // floor, as qload takes it
+  // An interpolated expression must go through the evaluator; none outside a primitive's
+  // procedures; and no constant expression where the cost would depend on its value (mac).
+  check_error_here(head + "proc triangle\n  mov z, depth ; HERE\nend\n",
+                   "expression 'depth' varies across the primitive: load it with qload");
+  check_error_here(head + "proc shade\n  mov a, slope_x ; HERE\nend\n",
+                   "expression 'slope_x' is only available in procedure 'triangle'");
+  check_error_here(head + "proc triangle\n  mac z, a, slope_x ; HERE\nend\n",
+                   "must be an integer or a frame parameter, got 'slope_x'");
 }

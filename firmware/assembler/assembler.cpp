@@ -285,6 +285,21 @@ class Assembler {
     parsed_[current_].push_back(p);
   }
 
+  // Expressions come with a primitive's packet: only its kind's procedures see them.
+  void require_primitive_procedure(const std::string& expression) {
+    if (current_ != static_cast<int>(Procedure::triangle) &&
+        current_ != static_cast<int>(Procedure::sphere) &&
+        current_ != static_cast<int>(Procedure::parity) &&
+        current_ != static_cast<int>(Procedure::surface) &&
+        current_ != static_cast<int>(Procedure::sphere_surface) &&
+        current_ != static_cast<int>(Procedure::sphere_parity)) {
+      fail(
+          "expression '{}' is only available in procedure 'triangle', 'sphere', 'parity', "
+          "'surface', 'sphere_surface' or 'sphere_parity'",
+          expression);
+    }
+  }
+
   void operand(const std::string& text, char kind, ParsedInstruction& p, int k, ProcedureCode& proc,
                const std::string& mnemonic) {
     Operand& o = p.ins.operands[k];
@@ -313,26 +328,30 @@ class Assembler {
         proc.parameters.set(i);
         return;
       }
+      // A constant expression (one value per primitive) is broadcast like a literal; only
+      // where the cost does not depend on its value ('V'), so a listing prices it.
+      if (const int i = expression_index(text); kind == 'V' && i >= 0) {
+        if (!kExpressions[i].constant) {
+          fail(
+              "'{}': expression '{}' varies across the primitive: load it with qload (only a "
+              "constant expression is broadcast as an operand)",
+              mnemonic, text);
+        }
+        require_primitive_procedure(text);
+        o.kind = Operand::Kind::expression;
+        o.index = i;
+        proc.expressions.set(i);
+        return;
+      }
       fail("'{}': operand {} must be {}an integer or a frame parameter, got '{}'", mnemonic, k + 1,
-           kind == 'V' ? "a field, " : "", text);
+           kind == 'V' ? "a field, a constant expression, " : "", text);
     }
     if (kind == 'E') {
       const int i = expression_index(text);
       if (i < 0)
         fail("'{}': '{}' is not an expression the GP supplies (pp5sim isa lists them)", mnemonic,
              text);
-      // Expressions come with a primitive's packet: only its kind's procedure sees them.
-      if (current_ != static_cast<int>(Procedure::triangle) &&
-          current_ != static_cast<int>(Procedure::sphere) &&
-          current_ != static_cast<int>(Procedure::parity) &&
-          current_ != static_cast<int>(Procedure::surface) &&
-          current_ != static_cast<int>(Procedure::sphere_surface) &&
-          current_ != static_cast<int>(Procedure::sphere_parity)) {
-        fail(
-            "expression '{}' is only available in procedure 'triangle', 'sphere', 'parity', "
-            "'surface', 'sphere_surface' or 'sphere_parity'",
-            text);
-      }
+      require_primitive_procedure(text);
       o.kind = Operand::Kind::expression;
       o.index = i;
       proc.expressions.set(i);

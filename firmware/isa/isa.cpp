@@ -11,10 +11,14 @@ namespace {
 
 int width_of(const Operand& o) { return o.kind == Operand::Kind::field ? o.field.width : 0; }
 
-// The ALU source an operand stands for: a field, or a literal or frame parameter broadcast.
-Source source_of(const Operand& o, const PacketValues& values) {
+// The ALU source an operand stands for: a field, or a literal, frame parameter or constant
+// expression broadcast.
+Source source_of(const Operand& o, const ExecutionContext& c) {
   if (o.kind == Operand::Kind::field) return Source::of(o.field);
-  return Source::of(constant_value(o, values));
+  if (o.kind == Operand::Kind::expression) {
+    return Source::of(broadcast_value(o, c.values, c.fraction_bits));
+  }
+  return Source::of(constant_value(o, c.values));
 }
 
 const QuadraticCoefficients& expression_of(const Operand& o, const PacketValues& values) {
@@ -92,40 +96,34 @@ std::vector<InstructionInfo> make_table() {
        kEvaluatorOrder},
 
       {Opcode::mov, "mov", false, "FV", "mov dst, src", "dst <- src", "width(dst)", dst_width,
-       [](const I& i, X& c) {
-         c.pixels.mov(i.operands[0].field, source_of(i.operands[1], c.values));
-       }},
+       [](const I& i, X& c) { c.pixels.mov(i.operands[0].field, source_of(i.operands[1], c)); }},
       {Opcode::add, "add", false, "FV", "add dst, src", "dst <- dst + src modulo 2^width(dst)",
        "width(dst)", dst_width,
-       [](const I& i, X& c) {
-         c.pixels.add(i.operands[0].field, source_of(i.operands[1], c.values));
-       }},
+       [](const I& i, X& c) { c.pixels.add(i.operands[0].field, source_of(i.operands[1], c)); }},
       {Opcode::sub, "sub", false, "FV", "sub dst, src", "dst <- dst - src modulo 2^width(dst)",
        "width(dst)", dst_width,
-       [](const I& i, X& c) {
-         c.pixels.sub(i.operands[0].field, source_of(i.operands[1], c.values));
-       }},
+       [](const I& i, X& c) { c.pixels.sub(i.operands[0].field, source_of(i.operands[1], c)); }},
       {Opcode::cmp, "cmp", true, "RV", "cmp.cond a, b",
        "E <- E & (a cond b), exact for any widths and signedness", "max(width(a), width(b)) + 1",
        [](const I& i, const T&, const P&) {
          return ArrayCycles(std::max(width_of(i.operands[0]), width_of(i.operands[1])) + 1);
        },
        [](const I& i, X& c) {
-         c.pixels.compare(i.operands[0].field, source_of(i.operands[1], c.values), i.condition);
+         c.pixels.compare(i.operands[0].field, source_of(i.operands[1], c), i.condition);
        }},
       {Opcode::and_, "and", false, "FV", "and dst, src", "dst <- dst & src", "width(dst)",
        dst_width,
        [](const I& i, X& c) {
-         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::and_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c), Logic::and_);
        }},
       {Opcode::or_, "or", false, "FV", "or dst, src", "dst <- dst | src", "width(dst)", dst_width,
        [](const I& i, X& c) {
-         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::or_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c), Logic::or_);
        }},
       {Opcode::xor_, "xor", false, "FV", "xor dst, src", "dst <- dst ^ src", "width(dst)",
        dst_width,
        [](const I& i, X& c) {
-         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::xor_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c), Logic::xor_);
        }},
       {Opcode::not_, "not", false, "F", "not dst", "dst <- ~dst", "width(dst)", dst_width,
        [](const I& i, X& c) { c.pixels.invert(i.operands[0].field); }},
@@ -234,6 +232,13 @@ bool parse_condition(const std::string& text, Compare& out) {
 std::int64_t constant_value(const Operand& operand, const PacketValues& values) {
   if (operand.kind == Operand::Kind::parameter) return values.parameters[operand.index];
   return operand.literal;
+}
+
+std::int64_t broadcast_value(const Operand& operand, const PacketValues& values,
+                             int fraction_bits) {
+  const std::int64_t v = values.expressions[operand.index].F;
+  const std::int64_t one = std::int64_t{1} << fraction_bits;
+  return v >= 0 ? v / one : -((-v + one - 1) / one);  // floor
 }
 
 ArrayCycles instruction_cost(const Instruction& ins, const TimingParams& timing,

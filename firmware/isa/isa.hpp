@@ -201,6 +201,7 @@ struct FrameValues {
 struct ExecutionContext {
   PixelBackend& pixels;
   const PacketValues& values;
+  int fraction_bits;  // evaluator.fraction_bits: a broadcast expression's integer part
 };
 
 struct InstructionInfo {
@@ -228,6 +229,9 @@ bool parse_condition(const std::string& text, Compare& out);
 
 // The constant an operand stands for in a packet (a literal or a frame parameter).
 std::int64_t constant_value(const Operand& operand, const PacketValues& values);
+// The integer a constant expression broadcasts: floor(value / 2^fraction_bits), as qload
+// would load it at any pixel (ExpressionInfo::constant).
+std::int64_t broadcast_value(const Operand& operand, const PacketValues& values, int fraction_bits);
 
 ArrayCycles instruction_cost(const Instruction& ins, const TimingParams& timing,
                              const PacketValues& values);
