@@ -100,7 +100,7 @@ inline void assembler(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
     const Program p = assemble(text, "fuzz.pp5", AssemblerOptions{});
-    (void)listing(p, TimingParams{});
+    (void)listing(p, TimingParams{}, ParameterValues{}, "no scene");
   } catch (const AssemblyError&) {
   }
 }

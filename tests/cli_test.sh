@@ -10,6 +10,10 @@ expect_error "unknown key 'renderer.cont'" render --config "$tmp/bad.json" --out
 printf '{"gp": {"count": "many"}}' > "$tmp/bad2.json"
 expect_error "'gp.count' must be an integer" render --config "$tmp/bad2.json" --out "$tmp/c"
 expect_error "out of range" render --set renderer.count=99 --out "$tmp/c"
+expect_error "not BEFORE:AFTER" asm --rewrites epsilon_folded
+expect_error "give a program, or --rewrites" asm
+expect_error "give a program, or --rewrites" asm phong --rewrites epsilon_folded_squares:epsilon_folded
+expect_error "unknown scene 'nope'" asm phong --scene nope
 printf 'field z 24\nproc triangle\n  qload z, nowhere\nend\n' > "$tmp/bad.pp5"
 expect_error "bad.pp5:3:" render --firmware "$tmp/bad.pp5" --out "$tmp/d"
 expect_error "no frame parameter 'nope'" highlight --param nope=1 --out "$tmp/e"

@@ -2,15 +2,22 @@
 // what was expected), and spilling, which must be invisible in the pixels a program computes.
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <filesystem>
 #include <fstream>
+#include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
+#include "models/gp/geometry.hpp"
 #include "models/renderer/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "sim/analysis/csg.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
 #include "support.hpp"
 
 using namespace pp5;
@@ -316,8 +323,9 @@ TEST_CASE("errors name the file, the line and what was expected", "[assembler]")
   }
   SECTION("undeclared field") {
     check_error_here(with_triangle("  mov q, 1 ; HERE\n"), "must be a declared field, got 'q'");
-    check_error_here(with_triangle("  mov z, q ; HERE\n"),
-                     "must be a field, an integer or a frame parameter, got 'q'");
+    check_error_here(
+        with_triangle("  mov z, q ; HERE\n"),
+        "must be a field, a constant expression, an integer or a frame parameter, got 'q'");
     check_error_here(with_triangle("  mul z, s, 3 ; HERE\n"), "must be a declared field, got '3'");
     check_error_here(with_triangle("  mac z, s, red ; HERE\n"),
                      "must be an integer or a frame parameter, got 'red'");
@@ -494,7 +502,8 @@ TEST_CASE("spilled fields are bracketed by backing-store transfers", "[assembler
   CHECK(p.resident_bits == 136);
   CHECK(p.staging_bits == 64);
   // The listing says why.
-  CHECK(listing(p, TimingParams{}).find("spilled s1: marked cold") != std::string::npos);
+  CHECK(listing(p, TimingParams{}, ParameterValues{}, "no scene").find("spilled s1: marked cold") !=
+        std::string::npos);
 
   int total_transfers = 0;
   for (int proc = 0; proc < static_cast<int>(Procedure::count); ++proc) {
@@ -638,7 +647,7 @@ TEST_CASE("without cold fields the least used spill first, weighted by procedure
   for (const char* name : {"a", "d", "e", "red", "green", "blue"})
     CHECK_FALSE(p.find_field(name)->spilled);
   CHECK(p.bits_used() == 216 - 64 + 32);
-  CHECK(listing(p, TimingParams{})
+  CHECK(listing(p, TimingParams{}, ParameterValues{}, "no scene")
             .find("spilled c: among the least used (weighted uses 3 = 2 in clear x 1 + 1 in shade "
                   "x 1)") != std::string::npos);
 }
@@ -656,7 +665,7 @@ TEST_CASE("output fields never spill, cold fields spill first", "[assembler]") {
   CHECK_FALSE(p.find_field("b")->spilled);
   CHECK_FALSE(p.find_field("c")->spilled);
   for (const char* name : {"red", "green", "blue"}) CHECK_FALSE(p.find_field(name)->spilled);
-  const std::string text = listing(p, TimingParams{});
+  const std::string text = listing(p, TimingParams{}, ParameterValues{}, "no scene");
   CHECK(text.find("spilled a: marked cold (weighted uses 512 = 2 in triangle x 256)") !=
         std::string::npos);
   // Without room for the outputs themselves, the error says so.
@@ -711,7 +720,7 @@ TEST_CASE("spilled fields do not share blocks with explicit transfers", "[assemb
 TEST_CASE("the listing shows every field and instruction", "[assembler]") {
   for (const char* file : {"phong.pp5", "flat.pp5"}) {
     const Program p = assemble_file(test::kProgramsDir + file, AssemblerOptions{});
-    const std::string text = listing(p, TimingParams{});
+    const std::string text = listing(p, TimingParams{}, ParameterValues{}, "no scene");
     CHECK(text.find(p.name) != std::string::npos);
     for (const FieldDecl& f : p.fields) {
       CHECK(text.find("  " + f.name + " ") != std::string::npos);
@@ -724,7 +733,7 @@ TEST_CASE("the listing shows every field and instruction", "[assembler]") {
     }
   }
   const Program spilled = assemble(read_text(kSpillProgram), "spill.pp5", AssemblerOptions{});
-  const std::string text = listing(spilled, TimingParams{});
+  const std::string text = listing(spilled, TimingParams{}, ParameterValues{}, "no scene");
   CHECK(text.find("spill staging") != std::string::npos);
   CHECK(text.find("backing store block") != std::string::npos);
   CHECK(text.find("(spill)") != std::string::npos);
@@ -759,7 +768,7 @@ TEST_CASE("scratch fields share bits unless one procedure needs both at once", "
   CHECK(p.resident_bits == 96);
   CHECK(p.bits_used() == 96);
   for (const FieldDecl& f : p.fields) CHECK(f.scratch == (f.name.size() == 1 && f.name != "z"));
-  const std::string text = listing(p, TimingParams{});
+  const std::string text = listing(p, TimingParams{}, ParameterValues{}, "no scene");
   CHECK(text.find("overlay (triangle)") != std::string::npos);
   CHECK(text.find("scratch: 60 bits of scratch fields in 32 bits past the fields") !=
         std::string::npos);
@@ -805,4 +814,143 @@ TEST_CASE("a scratch field read before it is written in a procedure is refused",
   check_error_here("scratch t 8 cold ; HERE\n", "a scratch field never spills");
   CHECK_NOTHROW(assemble(head + "proc triangle\n  mov t, 1\n  add t, 2\n  mov z, t\nend\n",
                          "ok.pp5", AssemblerOptions{}));
+}
+
+namespace {
+
+// Each procedure's cycles as `pp5sim asm` lists them: the sum of its instruction lines'
+// "; N cycles" (and the "total" line must say the same).
+std::map<std::string, std::uint64_t> listed_procedure_cycles(const std::string& text) {
+  std::map<std::string, std::uint64_t> cycles;
+  std::istringstream in(text);
+  std::string line, current;
+  std::uint64_t sum = 0;
+  const std::regex proc_line(R"(^proc (\w+)$)");
+  const std::regex cost_line(R"(; +(\d+) cycles)");
+  const std::regex total_line(R"(^  total (\d+) cycles$)");
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (std::regex_match(line, m, proc_line)) {
+      current = m[1];
+      sum = 0;
+    } else if (!current.empty() && std::regex_match(line, m, total_line)) {
+      CHECK(std::stoull(m[1]) == sum);
+      cycles[current] = sum;
+      current.clear();
+    } else if (!current.empty() && std::regex_search(line, m, cost_line)) {
+      sum += std::stoull(m[1]);
+    }
+  }
+  return cycles;
+}
+
+// What the simulator charges each packet, summed from the cost of each instruction it runs.
+class PacketCycles : public BoardObserver {
+ public:
+  struct Charged {
+    Procedure procedure;
+    int light;
+    std::size_t instructions;  // the procedure's length, to check it is the one named
+    std::uint64_t cycles;
+  };
+  std::vector<Charged> packets;
+  void begin_packet(const PacketContext& packet, const ProcedureCode& procedure,
+                    const RendererBoard&) override {
+    // A packet of a group the pass does not draw runs no procedure: nothing to price.
+    skipping_ = !procedure.defined;
+    if (!skipping_) packets.push_back({packet.procedure, packet.light, procedure.code.size(), 0});
+  }
+  void after_instruction(int, const Instruction&, ArrayCycles cost, const RendererBoard&) override {
+    if (!skipping_) packets.back().cycles += cost.count;
+  }
+  void end_region(int, const RendererBoard&) override {}
+
+ private:
+  bool skipping_ = false;
+};
+
+}  // namespace
+
+TEST_CASE("the listing prices every procedure of every shipped program as the simulator charges",
+          "[assembler][listing]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=128", "screen.height=128", "gp.count=1", "renderer.count=1"});
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(test::kProgramsDir)) {
+    if (entry.path().extension() == ".pp5") names.push_back(entry.path().stem().string());
+  }
+  std::sort(names.begin(), names.end());
+  REQUIRE(names.size() >= 20);
+  int compared = 0;
+  for (const std::string& name : names) {
+    INFO("program " << name);
+    const Program program = test::load_program(name, config);
+    // Scenes that run the program's procedures: a CSG expression for those that draw one
+    // (one with quadric spheres for those that draw spheres), solids for the parity programs,
+    // sphere primitives for `sphere`, and a plain scene for the rest.
+    std::vector<Scene> scenes;
+    auto defines = [&](Procedure p) { return program.procedure(p).defined; };
+    if (defines(Procedure::sphere_surface))
+      scenes.push_back(make_parity_scene("box-minus-quadric"));
+    if (defines(Procedure::surface)) scenes.push_back(make_parity_scene("box-minus-ball"));
+    if (defines(Procedure::parity) && !defines(Procedure::surface)) {
+      scenes.push_back(
+          make_parity_scene(program.find_field("lo") ? "boxes-overlap" : "plane-sphere"));
+    }
+    if (defines(Procedure::sphere)) scenes.push_back(make_builtin_scene("spheres-and-triangles"));
+    if (defines(Procedure::triangle)) scenes.push_back(make_builtin_scene("crossing-quads"));
+    std::set<std::string> checked;
+    for (const Scene& scene : scenes) {
+      INFO("scene " << scene.name);
+      const auto parameters = GeometryEngine(geometry_params(config), scene).frame_parameters();
+      const auto listed = listed_procedure_cycles(
+          listing(program, timing_params(config), parameters, "scene " + scene.name));
+      PacketCycles charged;
+      simulate_frame(config, scene, program, 1, [&](int) -> BoardObserver* { return &charged; });
+      for (const auto& packet : charged.packets) {
+        if (packet.light > 0) continue;  // the listing prices the first light's parameters
+        const std::string proc = kProcedureNames[static_cast<int>(packet.procedure)];
+        INFO("procedure " << proc);
+        REQUIRE(listed.count(proc) == 1);
+        REQUIRE(program.procedure(packet.procedure).code.size() == packet.instructions);
+        CHECK(listed.at(proc) == packet.cycles);
+        checked.insert(proc);
+        ++compared;
+      }
+    }
+    // Every procedure the program defines was charged and compared in some scene.
+    for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
+      if (!program.procedures[p].defined) continue;
+      INFO("procedure " << kProcedureNames[p]);
+      CHECK(checked.count(kProcedureNames[p]) == 1);
+    }
+  }
+  CHECK(compared > 0);
+}
+
+TEST_CASE("a constant expression is broadcast as an operand, priced as a literal", "[assembler]") {
+  const std::string head =
+      "field z 24\nfield a 16 signed\nfield red 8\nfield green 8\nfield blue 8\n"
+      "output red green blue\n";
+  const Program p = assemble(
+      head + "proc triangle\n  mov a, slope_x\n  sub a, slope_y\n  cmp.lt a, flat_red\nend\n",
+      "ok.pp5", AssemblerOptions{});
+  const auto& code = p.procedure(Procedure::triangle).code;
+  REQUIRE(code.size() == 3);
+  CHECK(code[0].operands[1].kind == Operand::Kind::expression);
+  CHECK(expression_names(p.procedure(Procedure::triangle).expressions) ==
+        std::set<std::string>{"slope_x", "slope_y", "flat_red"});
+  // A V operand's cost is the destination's width, whatever it broadcasts.
+  OwnedValues values;
+  values.expressions[static_cast<int>(Expression::slope_x)].F = -37 * 4096 + 5;
+  CHECK(instruction_cost(code[0], TimingParams{}, values).count == 16);
+  CHECK(broadcast_value(code[0].operands[1], values, 12) == -37);  // floor, as qload takes it
+  // An interpolated expression must go through the evaluator; none outside a primitive's
+  // procedures; and no constant expression where the cost would depend on its value (mac).
+  check_error_here(head + "proc triangle\n  mov z, depth ; HERE\nend\n",
+                   "expression 'depth' varies across the primitive: load it with qload");
+  check_error_here(head + "proc shade\n  mov a, slope_x ; HERE\nend\n",
+                   "expression 'slope_x' is only available in procedure 'triangle'");
+  check_error_here(head + "proc triangle\n  mac z, a, slope_x ; HERE\nend\n",
+                   "must be an integer or a frame parameter, got 'slope_x'");
 }

@@ -229,13 +229,18 @@ TEST_CASE("epsilon is zero for parallel planes and near-parallel planes do not o
        plane(0.5, 0.004 + 64 * px, 0.0005)},
       {"crossing steeply", plane(0.5, 0.003, -0.001), plane(0.5, -0.002, 0.0004)},
   };
-  for (const char* name : {"epsilon", "epsilon_folded"}) {
+  const std::int64_t delta = k[static_cast<int>(Parameter::delta)];
+  for (const char* name : {"epsilon", "epsilon_folded_squares", "epsilon_folded"}) {
     const Program program = b.load(name);
+    // epsilon_folded takes the slope difference's length as max + 3/8 min of its components.
+    const bool alpha_max_beta_min = std::string(name) == "epsilon_folded";
     for (const Case& c : cases) {
       const auto stream = b.packets(program, {c.a, c.b});
       REQUIRE(stream.size() == 2);
       const auto flags = b.flags(program, stream);
-      // The integer model of the test: dz^2 < epsilon_scale * ((a2-a1)^2 + (b2-b1)^2).
+      // The integer model of the test: dz^2 < epsilon_scale * ((a2-a1)^2 + (b2-b1)^2), or
+      // for max + 3/8 min, with h = delta * (8 max + 3 min) / 2 (floored), -h <= dz < h for
+      // dz = depth - z: |dz| < 4 delta (max + 3/8 min), as epsilon_scale = 16 delta^2.
       auto slope = [&](const Packet& v, Expression e) {
         return v.values.expressions[static_cast<int>(e)].F >> frac;
       };
@@ -244,11 +249,15 @@ TEST_CASE("epsilon is zero for parallel planes and near-parallel planes do not o
       const __int128 db =
           slope(stream[1], Expression::slope_y) - slope(stream[0], Expression::slope_y);
       const __int128 m2 = da * da + db * db;
+      const __int128 big = std::max(da < 0 ? -da : da, db < 0 ? -db : db);
+      const __int128 small = std::min(da < 0 ? -da : da, db < 0 ? -db : db);
+      const __int128 h = (static_cast<__int128>(delta) * (8 * big + 3 * small)) >> 1;
       std::size_t expected_count = 0;
       for (int y = 0; y < 128; ++y) {
         for (int x = 0; x < 128; ++x) {
           const __int128 dz = depth_at(stream[0], x, y, frac) - depth_at(stream[1], x, y, frac);
-          const bool expected = dz * dz < static_cast<__int128>(scale) * m2;
+          const bool expected = alpha_max_beta_min ? (-dz < h && dz - 1 < h)
+                                                   : dz * dz < static_cast<__int128>(scale) * m2;
           expected_count += expected;
           INFO(name << ": " << c.what << " at " << x << "," << y);
           REQUIRE((flags[y * 128 + x] == 1) == expected);

@@ -30,6 +30,7 @@ namespace {
 const char* const kGoldenPrograms[] = {"accurate",
                                        "epsilon",
                                        "epsilon_folded",
+                                       "epsilon_folded_squares",
                                        "epsilon_normal",
                                        "exactmatch",
                                        "exactmatch_n",

@@ -360,8 +360,10 @@ struct Reference {
         fraction_bits(p.fraction_bits),
         scratch(static_cast<std::size_t>(Bits::kMaxBits) * array.words()) {}
 
-  Bits source(const Operand& o, const PacketValues& v) const {
+  Bits source(const Operand& o, const PacketValues& v) {
     if (o.kind == Operand::Kind::field) return array.bits_of(o.field);
+    // A broadcast constant expression: what the evaluator would deliver at every pixel.
+    if (o.kind == Operand::Kind::expression) return expression(o, Field{0, 62, true}, v);
     return array.bits_of_constant(constant_value(o, v));
   }
   Bits expression(const Operand& e, const Field& as, const PacketValues& v) {
@@ -450,6 +452,10 @@ class StreamMaker {
   OwnedValues values() {
     OwnedValues v;
     for (auto& e : v.expressions) {
+      if (kExpressions[&e - v.expressions.data()].constant) {
+        e.F = pick(-(std::int64_t{1} << 30), std::int64_t{1} << 30);  // one value, as the GP sends
+        continue;
+      }
       const bool quadratic = pick(0, 3) == 0;
       e.D = pick(-(1 << 14), 1 << 14);
       e.E = pick(-(1 << 14), 1 << 14);
@@ -491,7 +497,8 @@ class StreamMaker {
       case Opcode::or_:
       case Opcode::xor_:
         o[0] = field(1, 40);
-        o[1] = pick(0, 2) == 0 ? constant() : field(1, 40);
+        o[1] =
+            pick(0, 2) == 0 ? (pick(0, 2) == 0 ? constant_expression() : constant()) : field(1, 40);
         break;
       case Opcode::not_:
         o[0] = field(1, 40);
@@ -540,6 +547,17 @@ class StreamMaker {
     Operand o;
     o.kind = Operand::Kind::expression;
     o.index = static_cast<int>(pick(0, static_cast<int>(Expression::count) - 1));
+    return o;
+  }
+  // A constant expression broadcast as a 'V' operand (slope_x, flat_red, ...).
+  Operand constant_expression() {
+    std::vector<int> constants;
+    for (int e = 0; e < static_cast<int>(Expression::count); ++e) {
+      if (kExpressions[e].constant) constants.push_back(e);
+    }
+    Operand o;
+    o.kind = Operand::Kind::expression;
+    o.index = constants[static_cast<std::size_t>(pick(0, static_cast<int>(constants.size()) - 1))];
     return o;
   }
   Operand constant() {
@@ -615,7 +633,7 @@ TEST_CASE("every registered backend runs the instruction table as the bit-sliced
           const Instruction ins = make.next(ref.array.enable_depth());
           INFO("packet " << packet << " instruction " << n << ": " << ins.operands[0].field.lo
                          << " " << static_cast<int>(ins.op));
-          ExecutionContext ctx{*backend, values};
+          ExecutionContext ctx{*backend, values, params.fraction_bits};
           instruction_info(ins.op).execute(ins, ctx);
           ref.execute(ins, values);
           ++ops[static_cast<std::size_t>(ins.op)];

@@ -153,8 +153,8 @@ class Scoreboard {
         const Instruction ins = next();
         const std::string what =
             fmt::format("packet {} instruction {}: {}", k, n, disassemble(ins));
-        ExecutionContext cb{*bit_, values};
-        ExecutionContext cw{*word_, values};
+        ExecutionContext cb{*bit_, values, p_.fraction_bits};
+        ExecutionContext cw{*word_, values, p_.fraction_bits};
         instruction_info(ins.op).execute(ins, cb);
         instruction_info(ins.op).execute(ins, cw);
         ++executed_[static_cast<std::size_t>(ins.op)];

@@ -285,6 +285,21 @@ class Assembler {
     parsed_[current_].push_back(p);
   }
 
+  // Expressions come with a primitive's packet: only its kind's procedures see them.
+  void require_primitive_procedure(const std::string& expression) {
+    if (current_ != static_cast<int>(Procedure::triangle) &&
+        current_ != static_cast<int>(Procedure::sphere) &&
+        current_ != static_cast<int>(Procedure::parity) &&
+        current_ != static_cast<int>(Procedure::surface) &&
+        current_ != static_cast<int>(Procedure::sphere_surface) &&
+        current_ != static_cast<int>(Procedure::sphere_parity)) {
+      fail(
+          "expression '{}' is only available in procedure 'triangle', 'sphere', 'parity', "
+          "'surface', 'sphere_surface' or 'sphere_parity'",
+          expression);
+    }
+  }
+
   void operand(const std::string& text, char kind, ParsedInstruction& p, int k, ProcedureCode& proc,
                const std::string& mnemonic) {
     Operand& o = p.ins.operands[k];
@@ -313,26 +328,30 @@ class Assembler {
         proc.parameters.set(i);
         return;
       }
+      // A constant expression (one value per primitive) is broadcast like a literal; only
+      // where the cost does not depend on its value ('V'), so a listing prices it.
+      if (const int i = expression_index(text); kind == 'V' && i >= 0) {
+        if (!kExpressions[i].constant) {
+          fail(
+              "'{}': expression '{}' varies across the primitive: load it with qload (only a "
+              "constant expression is broadcast as an operand)",
+              mnemonic, text);
+        }
+        require_primitive_procedure(text);
+        o.kind = Operand::Kind::expression;
+        o.index = i;
+        proc.expressions.set(i);
+        return;
+      }
       fail("'{}': operand {} must be {}an integer or a frame parameter, got '{}'", mnemonic, k + 1,
-           kind == 'V' ? "a field, " : "", text);
+           kind == 'V' ? "a field, a constant expression, " : "", text);
     }
     if (kind == 'E') {
       const int i = expression_index(text);
       if (i < 0)
         fail("'{}': '{}' is not an expression the GP supplies (pp5sim isa lists them)", mnemonic,
              text);
-      // Expressions come with a primitive's packet: only its kind's procedure sees them.
-      if (current_ != static_cast<int>(Procedure::triangle) &&
-          current_ != static_cast<int>(Procedure::sphere) &&
-          current_ != static_cast<int>(Procedure::parity) &&
-          current_ != static_cast<int>(Procedure::surface) &&
-          current_ != static_cast<int>(Procedure::sphere_surface) &&
-          current_ != static_cast<int>(Procedure::sphere_parity)) {
-        fail(
-            "expression '{}' is only available in procedure 'triangle', 'sphere', 'parity', "
-            "'surface', 'sphere_surface' or 'sphere_parity'",
-            text);
-      }
+      require_primitive_procedure(text);
       o.kind = Operand::Kind::expression;
       o.index = i;
       proc.expressions.set(i);
@@ -775,9 +794,12 @@ Program assemble_file(const std::string& path, const AssemblerOptions& options) 
   return assemble(source, path, options);
 }
 
-std::string listing(const Program& program, const TimingParams& timing) {
-  std::string out = fmt::format("program {}\n\nfield map ({} of {} bits used", program.name,
-                                program.bits_used(), program.memory_bits);
+std::string listing(const Program& program, const TimingParams& timing,
+                    const ParameterValues& parameters, const std::string& priced_for) {
+  std::string out = fmt::format(
+      "program {}\ncycles as the Renderer charges them with the frame parameters of {}\n\nfield "
+      "map ({} of {} bits used",
+      program.name, priced_for, program.bits_used(), program.memory_bits);
   if (program.overlay_bits)
     out += fmt::format(", {} of them scratch overlay", program.overlay_bits);
   if (program.staging_bits) out += fmt::format(", {} of them spill staging", program.staging_bits);
@@ -826,7 +848,8 @@ std::string listing(const Program& program, const TimingParams& timing) {
                        f.cold ? "marked cold" : "among the least used", f.weight,
                        terms.empty() ? "" : " = ", fmt::format("{}", fmt::join(terms, " + ")));
   }
-  const OwnedValues values{};
+  OwnedValues values{};
+  values.parameters = parameters;
   for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
     const ProcedureCode& code = program.procedures[p];
     if (!code.defined) continue;
@@ -839,7 +862,7 @@ std::string listing(const Program& program, const TimingParams& timing) {
                          ins.line ? std::to_string(ins.line) : "", disassemble(ins), cycles,
                          ins.line ? "" : " (spill)");
     }
-    out += fmt::format("  total {} cycles (mac costs shown for a zero constant)\n", total);
+    out += fmt::format("  total {} cycles\n", total);
   }
   return out;
 }

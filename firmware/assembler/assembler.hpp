@@ -108,7 +108,12 @@ Program assemble(const std::string& source, const std::string& name,
                  const AssemblerOptions& options);
 Program assemble_file(const std::string& path, const AssemblerOptions& options);
 
-// A human-readable listing: the field map and every procedure's instructions with costs.
-std::string listing(const Program& program, const TimingParams& timing);
+// A human-readable listing: the field map and every procedure's instructions with costs, each
+// priced by the instruction table as the Renderer charges it for a packet whose frame
+// parameters are `parameters` (a `mac` costs what its constant's set bits cost, so the price
+// of `mac dst, a, epsilon_scale` depends on the frame). `priced_for` names where those
+// values come from (a scene and configuration), printed in the listing's head.
+std::string listing(const Program& program, const TimingParams& timing,
+                    const ParameterValues& parameters, const std::string& priced_for);
 
 }  // namespace pp5

@@ -125,6 +125,10 @@ inline constexpr int kSlopeLimit = 32767;
 struct ExpressionInfo {
   const char* name;
   const char* meaning;
+  // One value per primitive (the GP sends it as one coefficient): besides `qload`, firmware
+  // may name it where an instruction takes a constant (a 'V' operand), and the Renderer
+  // broadcasts its integer part as it broadcasts a literal, without the evaluator.
+  bool constant = false;
 };
 inline constexpr ExpressionInfo kExpressions[] = {
     {"edge0", "first edge function: >= 0 inside the triangle (top-left rule folded in)"},
@@ -137,16 +141,17 @@ inline constexpr ExpressionInfo kExpressions[] = {
     {"nx", "eye-space normal x times 127, interpolated (Phong)"},
     {"ny", "eye-space normal y times 127, interpolated"},
     {"nz", "eye-space normal z times 127, interpolated"},
-    {"flat_red", "red of the triangle lit with its face normal, 0..255, constant"},
-    {"flat_green", "face-lit green, 0..255, constant"},
-    {"flat_blue", "face-lit blue, 0..255, constant"},
+    {"flat_red", "red of the triangle lit with its face normal, 0..255, constant", true},
+    {"flat_green", "face-lit green, 0..255, constant", true},
+    {"flat_blue", "face-lit blue, 0..255, constant", true},
     {"base_red", "unlit material red, 0..255, interpolated (for deferred shading)"},
     {"base_green", "unlit material green, 0..255, interpolated"},
     {"base_blue", "unlit material blue, 0..255, interpolated"},
     {"slope_x",
      "the depth plane's d(depth)/dx, depth units per pixel / 64, clamped to +-32767, constant "
-     "(intersection width, epsilon)"},
-    {"slope_y", "d(depth)/dy (y down), same units, constant"},
+     "(intersection width, epsilon)",
+     true},
+    {"slope_y", "d(depth)/dy (y down), same units, constant", true},
     {"eye_depth",
      "eye-space depth (distance along the view axis), 0 at the near plane to 2^gp.depth_bits - "
      "1 at the far plane, interpolated linearly in screen space through the three vertices: "
@@ -175,9 +180,9 @@ inline constexpr ExpressionInfo kExpressions[] = {
     {"sphere_nx", "a sphere's eye-space normal x times 127, least-squares quadratic"},
     {"sphere_ny", "a sphere's normal y times 127, least-squares quadratic"},
     {"sphere_nz", "a sphere's normal z times 127, least-squares quadratic"},
-    {"sphere_red", "a sphere's unlit material red, 0..255, constant"},
-    {"sphere_green", "a sphere's material green, 0..255, constant"},
-    {"sphere_blue", "a sphere's material blue, 0..255, constant"},
+    {"sphere_red", "a sphere's unlit material red, 0..255, constant", true},
+    {"sphere_green", "a sphere's material green, 0..255, constant", true},
+    {"sphere_blue", "a sphere's material blue, 0..255, constant", true},
 };
 static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
               static_cast<std::size_t>(Expression::count));

@@ -11,10 +11,14 @@ namespace {
 
 int width_of(const Operand& o) { return o.kind == Operand::Kind::field ? o.field.width : 0; }
 
-// The ALU source an operand stands for: a field, or a literal or frame parameter broadcast.
-Source source_of(const Operand& o, const PacketValues& values) {
+// The ALU source an operand stands for: a field, or a literal, frame parameter or constant
+// expression broadcast.
+Source source_of(const Operand& o, const ExecutionContext& c) {
   if (o.kind == Operand::Kind::field) return Source::of(o.field);
-  return Source::of(constant_value(o, values));
+  if (o.kind == Operand::Kind::expression) {
+    return Source::of(broadcast_value(o, c.values, c.fraction_bits));
+  }
+  return Source::of(constant_value(o, c.values));
 }
 
 const QuadraticCoefficients& expression_of(const Operand& o, const PacketValues& values) {
@@ -31,6 +35,17 @@ ArrayCycles dst_width(const Instruction& i, const TimingParams&, const PacketVal
 std::uint64_t magnitude(std::int64_t k) {
   return k < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(k) : static_cast<std::uint64_t>(k);
 }
+
+// The unpublished properties some costs rest on (InstructionInfo::basis).
+constexpr const char* kEvaluatorOrder =
+    "the evaluator's bit order and latency (assumed: the fraction bits stream first, LSB first, "
+    "after evaluator.latency_cycles; not published)";
+constexpr const char* kMultiplyMicrocode =
+    "the multiply's microcode (a choice of the simulator: shift-and-add, one pass per multiplier "
+    "bit over the destination from that bit up; mac skips a constant's zero bits; not published)";
+constexpr const char* kBackingStore =
+    "the backing-store transfer time per block (assumed: "
+    "renderer.backing_store_cycles_per_block)";
 
 std::vector<InstructionInfo> make_table() {
   using I = Instruction;
@@ -57,7 +72,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.qtest(expression_of(i.operands[0], c.values), i.condition);
-       }},
+       },
+       kEvaluatorOrder},
       {Opcode::qload, "qload", false, "FE", "qload dst, expr",
        "dst <- floor(expr) modulo 2^width(dst)",
        "evaluator.fraction_bits + width(dst) + evaluator.latency_cycles",
@@ -66,7 +82,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.qload(i.operands[0].field, expression_of(i.operands[1], c.values));
-       }},
+       },
+       kEvaluatorOrder},
       {Opcode::qcmp, "qcmp", true, "RE", "qcmp.cond field, expr",
        "E <- E & (floor(expr) cond field), expr taken to width(field) with field's signedness",
        "evaluator.fraction_bits + width(field) + evaluator.latency_cycles + 1",
@@ -75,43 +92,38 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.qcmp(i.operands[0].field, expression_of(i.operands[1], c.values), i.condition);
-       }},
+       },
+       kEvaluatorOrder},
 
       {Opcode::mov, "mov", false, "FV", "mov dst, src", "dst <- src", "width(dst)", dst_width,
-       [](const I& i, X& c) {
-         c.pixels.mov(i.operands[0].field, source_of(i.operands[1], c.values));
-       }},
+       [](const I& i, X& c) { c.pixels.mov(i.operands[0].field, source_of(i.operands[1], c)); }},
       {Opcode::add, "add", false, "FV", "add dst, src", "dst <- dst + src modulo 2^width(dst)",
        "width(dst)", dst_width,
-       [](const I& i, X& c) {
-         c.pixels.add(i.operands[0].field, source_of(i.operands[1], c.values));
-       }},
+       [](const I& i, X& c) { c.pixels.add(i.operands[0].field, source_of(i.operands[1], c)); }},
       {Opcode::sub, "sub", false, "FV", "sub dst, src", "dst <- dst - src modulo 2^width(dst)",
        "width(dst)", dst_width,
-       [](const I& i, X& c) {
-         c.pixels.sub(i.operands[0].field, source_of(i.operands[1], c.values));
-       }},
+       [](const I& i, X& c) { c.pixels.sub(i.operands[0].field, source_of(i.operands[1], c)); }},
       {Opcode::cmp, "cmp", true, "RV", "cmp.cond a, b",
        "E <- E & (a cond b), exact for any widths and signedness", "max(width(a), width(b)) + 1",
        [](const I& i, const T&, const P&) {
          return ArrayCycles(std::max(width_of(i.operands[0]), width_of(i.operands[1])) + 1);
        },
        [](const I& i, X& c) {
-         c.pixels.compare(i.operands[0].field, source_of(i.operands[1], c.values), i.condition);
+         c.pixels.compare(i.operands[0].field, source_of(i.operands[1], c), i.condition);
        }},
       {Opcode::and_, "and", false, "FV", "and dst, src", "dst <- dst & src", "width(dst)",
        dst_width,
        [](const I& i, X& c) {
-         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::and_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c), Logic::and_);
        }},
       {Opcode::or_, "or", false, "FV", "or dst, src", "dst <- dst | src", "width(dst)", dst_width,
        [](const I& i, X& c) {
-         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::or_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c), Logic::or_);
        }},
       {Opcode::xor_, "xor", false, "FV", "xor dst, src", "dst <- dst ^ src", "width(dst)",
        dst_width,
        [](const I& i, X& c) {
-         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c.values), Logic::xor_);
+         c.pixels.logic(i.operands[0].field, source_of(i.operands[1], c), Logic::xor_);
        }},
       {Opcode::not_, "not", false, "F", "not dst", "dst <- ~dst", "width(dst)", dst_width,
        [](const I& i, X& c) { c.pixels.invert(i.operands[0].field); }},
@@ -130,7 +142,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.multiply(i.operands[0].field, i.operands[1].field, i.operands[2].field);
-       }},
+       },
+       kMultiplyMicrocode},
       {Opcode::mac, "mac", false, "FRK", "mac dst, a, k",
        "dst <- dst + a * k modulo 2^width(dst), k a broadcast constant; dst must not overlap a",
        "1 + sum over the set bits j of |k| below width(dst) of (width(dst) - j)",
@@ -146,7 +159,8 @@ std::vector<InstructionInfo> make_table() {
        [](const I& i, X& c) {
          c.pixels.multiply_accumulate(i.operands[0].field, i.operands[1].field,
                                       constant_value(i.operands[2], c.values));
-       }},
+       },
+       kMultiplyMicrocode},
 
       {Opcode::bsld, "bsld", false, "FB", "bsld dst, block",
        "dst <- backing store from block `block` on (every pixel, ignoring E)",
@@ -157,7 +171,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.load_from_backing(i.operands[0].field, static_cast<int>(i.operands[1].literal));
-       }},
+       },
+       kBackingStore},
       {Opcode::bsst, "bsst", false, "RB", "bsst src, block",
        "backing store from block `block` on <- src (every pixel, ignoring E)",
        "ceil(width(src) / renderer.block_bits) * renderer.backing_store_cycles_per_block",
@@ -167,7 +182,8 @@ std::vector<InstructionInfo> make_table() {
        },
        [](const I& i, X& c) {
          c.pixels.store_to_backing(i.operands[0].field, static_cast<int>(i.operands[1].literal));
-       }},
+       },
+       kBackingStore},
   };
 }
 
@@ -216,6 +232,13 @@ bool parse_condition(const std::string& text, Compare& out) {
 std::int64_t constant_value(const Operand& operand, const PacketValues& values) {
   if (operand.kind == Operand::Kind::parameter) return values.parameters[operand.index];
   return operand.literal;
+}
+
+std::int64_t broadcast_value(const Operand& operand, const PacketValues& values,
+                             int fraction_bits) {
+  const std::int64_t v = values.expressions[operand.index].F;
+  const std::int64_t one = std::int64_t{1} << fraction_bits;
+  return v >= 0 ? v / one : -((-v + one - 1) / one);  // floor
 }
 
 ArrayCycles instruction_cost(const Instruction& ins, const TimingParams& timing,

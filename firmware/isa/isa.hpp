@@ -201,6 +201,7 @@ struct FrameValues {
 struct ExecutionContext {
   PixelBackend& pixels;
   const PacketValues& values;
+  int fraction_bits;  // evaluator.fraction_bits: a broadcast expression's integer part
 };
 
 struct InstructionInfo {
@@ -214,6 +215,9 @@ struct InstructionInfo {
   const char* cycles;  // the cost formula in words
   ArrayCycles (*cost)(const Instruction&, const TimingParams&, const PacketValues&);
   void (*execute)(const Instruction&, ExecutionContext&);
+  // What the cost formula rests on beyond one array cycle per bit (Fuchs et al. 1989): the
+  // unpublished property of the machine it assumes, or "" where it needs none.
+  const char* basis = "";
 };
 
 const std::vector<InstructionInfo>& instruction_table();
@@ -225,6 +229,9 @@ bool parse_condition(const std::string& text, Compare& out);
 
 // The constant an operand stands for in a packet (a literal or a frame parameter).
 std::int64_t constant_value(const Operand& operand, const PacketValues& values);
+// The integer a constant expression broadcasts: floor(value / 2^fraction_bits), as qload
+// would load it at any pixel (ExpressionInfo::constant).
+std::int64_t broadcast_value(const Operand& operand, const PacketValues& values, int fraction_bits);
 
 ArrayCycles instruction_cost(const Instruction& ins, const TimingParams& timing,
                              const PacketValues& values);

@@ -147,7 +147,7 @@ void RendererBoard::share_empty_region(const RendererBoard& other) {
 ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValues& values) {
   materialise();
   fresh_ = untouched_ = false;
-  ExecutionContext ctx{*array_, values};
+  ExecutionContext ctx{*array_, values, params_.timing.fraction_bits};
   if (observer_) observer_->begin_packet(packet_, procedure, *this);
   ArrayCycles cycles{};
   int index = 0;

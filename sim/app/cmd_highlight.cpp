@@ -26,11 +26,17 @@ namespace {
 struct HighlightOptions {
   std::vector<std::string> scenes = {"two-triangles", "crossing-quads", "figure-eight", "torus",
                                      "receding-pairs"};
-  std::vector<std::string> programs = {
-      "exactmatch",           "exactmatch_n",   "threshold",
-      "threshold_keep",       "threshold_eyez", "epsilon",
-      "epsilon_normal",       "epsilon_folded", "transparent_exactmatch",
-      "transparent_threshold"};
+  std::vector<std::string> programs = {"exactmatch",
+                                       "exactmatch_n",
+                                       "threshold",
+                                       "threshold_keep",
+                                       "threshold_eyez",
+                                       "epsilon",
+                                       "epsilon_normal",
+                                       "epsilon_folded",
+                                       "epsilon_folded_squares",
+                                       "transparent_exactmatch",
+                                       "transparent_threshold"};
   std::string speed_scene = "torus";
   std::string config_path;
   std::vector<std::string> sets;

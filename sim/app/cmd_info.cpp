@@ -2,6 +2,9 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -14,6 +17,7 @@
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/scene/scene.hpp"
+#include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
 
 namespace pp5 {
@@ -26,9 +30,24 @@ std::string isa_reference() {
     out += fmt::format("| `{}` | {} | {} | {} |\n", i.syntax, i.operands[0] ? i.operands : "-",
                        markdown_cell(i.effect), markdown_cell(i.cycles));
   }
+  // Which costs rest on an unpublished property of the machine, grouped by property.
+  std::vector<std::pair<std::string, std::vector<std::string>>> bases;
+  for (const auto& i : instruction_table()) {
+    if (i.basis[0] == '\0') continue;
+    auto at =
+        std::find_if(bases.begin(), bases.end(), [&](const auto& b) { return b.first == i.basis; });
+    if (at == bases.end()) at = bases.insert(bases.end(), {i.basis, {}});
+    at->second.push_back(fmt::format("`{}`", i.mnemonic));
+  }
+  out += "\nEvery cost is one array cycle per bit walked (bit-serial ALU); beyond that:\n\n";
+  for (const auto& [basis, names] : bases) {
+    out += fmt::format("- {}: {}.\n", fmt::join(names, ", "), basis);
+  }
   out +=
       "\nOperand letters: F field (written), R field (read), V field or constant, K constant "
-      "(integer or frame parameter), E expression, B backing-store block.\n"
+      "(integer or frame parameter), E expression, B backing-store block. A V operand may also be "
+      "a constant expression (slope_x, flat_red, ...) in a primitive's procedure: its integer part "
+      "is broadcast as a literal is, without the evaluator.\n"
       "Conditions: lt le eq ne ge gt.\n\nExpressions (procedure triangle only):\n\n";
   for (const auto& e : kExpressions) out += fmt::format("- `{}`: {}\n", e.name, e.meaning);
   out +=
@@ -124,6 +143,120 @@ std::string calibration_table(const MachineConfig& config) {
   return out;
 }
 
+// 1234567 -> "1,234,567".
+std::string grouped(std::uint64_t v) {
+  std::string digits = std::to_string(v);
+  for (int k = static_cast<int>(digits.size()) - 3; k > 0; k -= 3) digits.insert(k, ",");
+  return digits;
+}
+
+// What a rewrite that broadcasts a constant expression (ExpressionInfo::constant) rests on.
+constexpr const char* kBroadcastBasis =
+    "the Renderer's sequencer broadcasting a packet's constant coefficient as an instruction's "
+    "immediate operand, as it broadcasts a literal (assumed; not published)";
+
+// The rewrites table: for each BEFORE:AFTER pair of programs, bits, cycles per triangle
+// packet (the triangle procedure priced by the instruction table with the scene's frame
+// parameters, as the listing and the Renderer price it), the projected polygons/s on the
+// scene with hand-coded (assembly) and compiled GP code, and where the cycles went, by
+// instruction, each instruction whose cost rests on an unpublished property marked.
+std::string rewrites_table(const MachineConfig& config, const Scene& scene,
+                           const std::vector<std::string>& pairs) {
+  MachineConfig assembly = config;
+  assembly.set(std::vector<std::string>{"gp.code=assembly"});
+  MachineConfig compiled = config;
+  compiled.set(std::vector<std::string>{"gp.code=compiled"});
+  const TimingParams timing = timing_params(config);
+  OwnedValues values{};
+  values.parameters = GeometryEngine(geometry_params(config), scene).frame_parameters();
+  struct Measured {
+    int bits = 0;
+    std::uint64_t cycles = 0;
+    std::array<std::uint64_t, static_cast<int>(Opcode::count)> by_op{};
+    double assembly = 0, compiled = 0;
+    bool broadcasts = false;  // names a constant expression as a broadcast operand
+  };
+  auto measure = [&](const std::string& name) {
+    const Program program = assemble_file(resolve_firmware(name), assembler_options(config));
+    const ProcedureCode& code = program.procedure(Procedure::triangle);
+    if (!code.defined) {
+      throw std::runtime_error(fmt::format("asm --rewrites: {} defines no triangle", name));
+    }
+    Measured m;
+    m.bits = program.bits_used();
+    for (const Instruction& ins : code.code) {
+      const char* letters = instruction_info(ins.op).operands;
+      for (int k = 0; letters[k] != '\0'; ++k) {
+        m.broadcasts |= letters[k] == 'V' && ins.operands[k].kind == Operand::Kind::expression;
+      }
+      const std::uint64_t c = instruction_cost(ins, timing, values).count;
+      m.cycles += c;
+      m.by_op[static_cast<int>(ins.op)] += c;
+    }
+    m.assembly = project_frame(assembly, scene, program).triangles_per_second;
+    m.compiled = project_frame(compiled, scene, program).triangles_per_second;
+    return m;
+  };
+  std::string out = fmt::format(
+      "| program, before -> after | bits of {} | cycles per triangle packet | {} polygons/s, "
+      "hand-coded GP code | {} polygons/s, compiled GP code | cycles saved, by instruction |\n"
+      "|---|---|---|---|---|---|\n",
+      config.renderer.memory_bits, scene.name, scene.name);
+  std::vector<const char*> notes;
+  for (const std::string& pair : pairs) {
+    const auto colon = pair.find(':');
+    if (colon == std::string::npos || colon == 0 || colon + 1 == pair.size()) {
+      throw std::runtime_error(
+          fmt::format("asm --rewrites: '{}' is not BEFORE:AFTER (two program names)", pair));
+    }
+    const Measured a = measure(pair.substr(0, colon));
+    const Measured b = measure(pair.substr(colon + 1));
+    std::vector<std::pair<std::int64_t, int>> deltas;
+    for (int op = 0; op < static_cast<int>(Opcode::count); ++op) {
+      const auto d =
+          static_cast<std::int64_t>(a.by_op[op]) - static_cast<std::int64_t>(b.by_op[op]);
+      if (d != 0) deltas.emplace_back(d, op);
+    }
+    std::stable_sort(deltas.begin(), deltas.end(), [](const auto& x, const auto& y) {
+      return std::abs(x.first) > std::abs(y.first);
+    });
+    std::vector<std::string> saved;
+    for (const auto& [d, op] : deltas) {
+      const InstructionInfo& info = instruction_info(static_cast<Opcode>(op));
+      std::string mark;
+      if (info.basis[0] != '\0') {
+        auto at = std::find(notes.begin(), notes.end(), info.basis);
+        if (at == notes.end()) at = notes.insert(notes.end(), info.basis);
+        mark = std::string(static_cast<std::size_t>(at - notes.begin()) + 1, '*');
+      }
+      saved.push_back(fmt::format("{} {}{}", info.mnemonic,
+                                  d > 0 ? grouped(static_cast<std::uint64_t>(d))
+                                        : "-" + grouped(static_cast<std::uint64_t>(-d)),
+                                  mark));
+    }
+    if (b.broadcasts && !a.broadcasts) {
+      const char* note = kBroadcastBasis;
+      auto at = std::find(notes.begin(), notes.end(), note);
+      if (at == notes.end()) at = notes.insert(notes.end(), note);
+      saved.push_back(
+          fmt::format("(constant expressions broadcast{})",
+                      std::string(static_cast<std::size_t>(at - notes.begin()) + 1, '*')));
+    }
+    out += fmt::format(
+        "| {} -> {} | {} -> {} | {} -> {} | {} -> {} | {} -> {} | {} |\n", pair.substr(0, colon),
+        pair.substr(colon + 1), a.bits, b.bits, grouped(a.cycles), grouped(b.cycles),
+        grouped(static_cast<std::uint64_t>(std::llround(a.assembly))),
+        grouped(static_cast<std::uint64_t>(std::llround(b.assembly))),
+        grouped(static_cast<std::uint64_t>(std::llround(a.compiled))),
+        grouped(static_cast<std::uint64_t>(std::llround(b.compiled))),
+        saved.empty() ? std::string("-") : fmt::format("{}", fmt::join(saved, ", ")));
+  }
+  for (std::size_t k = 0; k < notes.size(); ++k) {
+    out += fmt::format("\n`{}` the figure rests on {}.\n", std::string(k + 1, '*'), notes[k]);
+  }
+  return out;
+}
+
 }  // namespace
 
 Command add_isa_command(CLI::App& app) {
@@ -140,14 +273,34 @@ Command add_asm_command(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("asm", "Assemble a firmware program and print its field map and listing");
   cmd->add_option("program", o->program,
-                  "A built-in program's name, or a path (with a '/' or ending in .pp5) to a file")
-      ->required();
+                  "A built-in program's name, or a path (with a '/' or ending in .pp5) to a file");
   add_config_options(*cmd, o->path, o->sets);
-  return {cmd, [o] {
+  auto scene = std::make_shared<std::string>("torus");
+  auto rewrites = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("--rewrites", *rewrites,
+                  "Instead of a listing, a table comparing programs given as BEFORE:AFTER: bits, "
+                  "cycles per triangle packet, projected polygons/s on the scene with hand-coded "
+                  "and compiled GP code, and the cycles saved by instruction");
+  cmd->add_option("--scene", *scene,
+                  "Built-in scene or scene file whose frame parameters (lights, and any it sets) "
+                  "price the listing: a `mac` by a frame parameter costs what that value's set "
+                  "bits cost")
+      ->capture_default_str();
+  return {cmd, [o, scene, rewrites] {
             const MachineConfig config = load_config(o->path, o->sets);
+            const Scene s = load_scene(*scene);
+            if (rewrites->empty() == o->program.empty()) {
+              throw std::runtime_error("asm: give a program, or --rewrites, not both");
+            }
+            if (!rewrites->empty()) {
+              std::cout << rewrites_table(config, s, *rewrites);
+              return 0;
+            }
+            const auto parameters = GeometryEngine(geometry_params(config), s).frame_parameters();
             const Program program =
                 assemble_file(resolve_firmware(o->program), assembler_options(config));
-            std::cout << listing(program, timing_params(config));
+            std::cout << listing(program, timing_params(config), parameters,
+                                 fmt::format("scene '{}'", s.name));
             return 0;
           }};
 }
