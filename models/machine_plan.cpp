@@ -19,7 +19,7 @@ GeometryParams geometry_params(const MachineConfig& c) {
   g.region_width = c.renderer.region_width;
   g.region_height = c.renderer.region_height;
   g.subpixel_bits = c.gp.subpixel_bits;
-  g.edge_significand_bits = c.gp.edge_significand_bits;
+  g.significand_bits = c.gp.significand_bits;
   g.depth_bits = c.gp.depth_bits;
   g.fraction_bits = c.evaluator.fraction_bits;
   g.coefficient_bits = c.evaluator.coefficient_bits;

@@ -18,11 +18,11 @@ using namespace pp5;
 
 namespace {
 
-MachineConfig machine(int subpixel_bits, int edge_significand_bits = 62) {
+MachineConfig machine(int subpixel_bits, int significand_bits = 62) {
   MachineConfig config = MachineConfig::defaults();
   config.set({"screen.width=256", "screen.height=256", "gp.count=2", "renderer.count=2",
               "gp.subpixel_bits=" + std::to_string(subpixel_bits),
-              "gp.edge_significand_bits=" + std::to_string(edge_significand_bits)});
+              "gp.significand_bits=" + std::to_string(significand_bits)});
   return config;
 }
 
@@ -195,22 +195,39 @@ TEST_CASE("accurate: coarse edge coefficients make the standard program misclass
   // exact coefficients do not. Those pixels are in neither bound (parity_errors counts them).
   CHECK(e.standard.parity_errors == 0);
   CHECK(c.standard.parity_errors > 0);
-  // Accurate's classification does not use the rounded edges (its enlarged area is moved out
-  // by the rounding's reach): no hidden surface, its own plane everywhere.
-  CHECK(c.accurate.show_through == 0);
-  CHECK(c.accurate.edge_max_error <= kDepthResolution);
-  CHECK(c.accurate.interior_max_error <= kDepthResolution);
-  CHECK(c.accurate.parity_errors == 0);
-  CHECK(c.accurate.missing == 0);
+  // The GP's arithmetic rounds the accurate program's side tests and planes too
+  // (gp.significand_bits reaches every value it sends): at 10 bits it is no longer exact, and
+  // it loses its guarantee (its depth error exceeds the z-buffer's resolution).
+  CHECK(e.accurate.edge_max_error <= kDepthResolution);
+  CHECK(c.accurate.edge_max_error > 100.0 * kDepthResolution);
+}
+
+TEST_CASE("accurate: at the i860's single precision the accurate program still wins",
+          "[accurate]") {
+  // 24 significant bits for every value the GP sends (edges, planes, side tests): the
+  // accurate program's error grows from the z-buffer's resolution but stays far below the
+  // standard program's, and no hidden surface shows through it.
+  const MachineConfig single = machine(4, 24);
+  for (const char* name : {"folded-slab", "torus"}) {
+    INFO(name);
+    const ScanConversionReport r = measure(single, make_builtin_scene(name));
+    REQUIRE(r.closed);
+    CHECK(r.standard.show_through > 0);
+    CHECK(r.accurate.show_through == 0);
+    CHECK(r.accurate.parity_errors == 0);
+    CHECK(r.accurate.edge_max_error < 100.0 * kDepthResolution);
+    CHECK(100.0 * r.accurate.edge_max_error < r.standard.shared_edge_max_error);
+  }
 }
 
 TEST_CASE("accurate: the standard program's worst error is within the bound at each round-off",
           "[accurate]") {
-  // Three configured round-offs: the snap alone (a quarter pixel), and coarse edge
-  // coefficients on the sixteenth-pixel snap.
-  const auto [subpixel_bits, edge_bits] =
-      GENERATE(std::make_pair(2, 62), std::make_pair(4, 12), std::make_pair(4, 9));
-  INFO("gp.subpixel_bits = " << subpixel_bits << ", gp.edge_significand_bits = " << edge_bits);
+  // Configured round-offs: the snap alone (a quarter pixel), and the GP's arithmetic at IEEE
+  // single on the sixteenth-pixel snap. (The paper's bound counts the edges' round-off only;
+  // below about 16 significant bits the planes' own rounding, which the GP's arithmetic
+  // applies too, exceeds it: README's scan conversion table by precision.)
+  const auto [subpixel_bits, edge_bits] = GENERATE(std::make_pair(2, 62), std::make_pair(4, 24));
+  INFO("gp.subpixel_bits = " << subpixel_bits << ", gp.significand_bits = " << edge_bits);
   const MachineConfig config = machine(subpixel_bits, edge_bits);
   for (const char* name : {"folded-slab", "torus"}) {
     INFO(name);
@@ -224,7 +241,7 @@ TEST_CASE("accurate: the standard program's worst error is within the bound at e
     CHECK(r.standard.layer_pixels > 0);
     CHECK(r.standard.layer_bound_ratio <= 1.0);
     CHECK(r.standard.edge_max_error > r.standard.layer_max_error);
-    CHECK(r.accurate.edge_max_error <= kDepthResolution);
+    CHECK(r.accurate.edge_max_error < 100.0 * kDepthResolution);
   }
 }
 
@@ -260,11 +277,10 @@ TEST_CASE("accurate: boundary and non-manifold edges are classified by their own
   scene.mesh = mesh;
   scene.name = "hinge";
   scene.camera = frame_mesh(scene.mesh, glm::vec3(0.2f, 0.3f, 1.0f), 40.0f);
-  // At exact edge coefficients and at coarse ones (10 significant bits move an edge by up to
-  // 0.7 pixel here): the side tests do not use the rounded edges, and the enlarged area is
-  // moved out by the rounding's reach.
-  const int edge_bits = GENERATE(62, 10);
-  INFO("gp.edge_significand_bits = " << edge_bits);
+  // Exact, and at the i860's single precision (24 significant bits for every value sent, the
+  // side tests' planes included).
+  const int edge_bits = GENERATE(62, 24);
+  INFO("gp.significand_bits = " << edge_bits);
   const MachineConfig config = machine(4, edge_bits);
   const MeshAdjacency adjacency = build_mesh_adjacency(scene.mesh);
   CHECK(adjacency.non_manifold_edges == 1);
@@ -318,6 +334,15 @@ TEST_CASE("accurate: the expressions in the registry", "[accurate]") {
 
 TEST_CASE("accurate: edge coefficients kept to n significant bits", "[accurate]") {
   CHECK(round_significand(0b101101, 62) == 0b101101);
+  // The GP's arithmetic on reals and wide integers: the same rounding.
+  GeometryParams p3;
+  p3.significand_bits = 3;
+  CHECK(gp_round(11.0, p3) == 12.0);  // 1011: to 110 x 2
+  CHECK(gp_round(13.0, p3) == 12.0);  // 1101: a tie (110.1), to even
+  CHECK(gp_round(-11.0, p3) == -12.0);
+  CHECK(gp_round(0.15625, p3) == 0.15625);  // 101 x 2^-5 already fits
+  CHECK(gp_round(static_cast<__int128>(0b101101) << 70, p3) == static_cast<__int128>(0b110) << 73);
+  CHECK(gp_round(0.1, GeometryParams{}) == 0.1);  // 62 bits: exact
   CHECK(round_significand(0b101101, 3) == 0b110000);
   CHECK(round_significand(-0b101101, 3) == -0b110000);
   CHECK(round_significand(0b101000, 3) == 0b101000);

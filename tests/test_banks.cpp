@@ -358,6 +358,34 @@ TEST_CASE("The truth finds the two triangles' crossing and the highlight command
   CHECK_FALSE(triangle_intersection(p, q, a, b2));
 }
 
+TEST_CASE(
+    "The highlight truth's recall ceiling is what a flag on every doubly covered pixel "
+    "reaches",
+    "[banks]") {
+  // The crossing ends where the triangles do: its band of half-width delta spills past them,
+  // onto pixels one surface (or none) reaches, which no depth test can flag. threshold_keep
+  // with a threshold spanning the whole depth range and no silhouette cut flags every pixel
+  // two triangles reach, so its recall is the ceiling (to the pixels whose centre lies on an
+  // edge, where the machine's edge test and the truth's barycentric test may differ).
+  MachineConfig config = MachineConfig::defaults();
+  config.set(std::vector<std::string>{"screen.width=256", "screen.height=256"});
+  Scene scene = make_builtin_scene("two-triangles");
+  scene.parameters["threshold"] = 0xFFFFFF;
+  scene.parameters["silhouette"] = 0;
+  const IntersectionTruth truth = intersection_truth(scene, 256, 256, 1.5);
+  REQUIRE(truth.pixels > 200);
+  CHECK(truth.reachable < truth.pixels);
+  CHECK(truth.reachable > truth.pixels / 2);
+  const Program program = assemble_file(program_path("threshold_keep"), assembler_options(config));
+  const FieldFrame frame = render_field(config, scene, program, "iflag", 2);
+  const std::vector<std::uint8_t> flagged(frame.values.begin(), frame.values.end());
+  const Accuracy a = measure_accuracy(truth, flagged);
+  INFO("truth " << truth.pixels << ", reachable " << truth.reachable << ", hits " << a.hits);
+  CHECK(a.ceiling == Approx(static_cast<double>(truth.reachable) / truth.pixels));
+  CHECK(a.recall <= a.ceiling + 4.0 / truth.pixels);
+  CHECK(std::abs(static_cast<long>(a.hits) - static_cast<long>(truth.reachable)) <= 4);
+}
+
 TEST_CASE("Unknown or derived frame parameters are rejected by name", "[banks]") {
   Scene scene = make_builtin_scene("two-triangles");
   const MachineConfig config = MachineConfig::defaults();
@@ -618,6 +646,40 @@ TEST_CASE("threshold is the paper's figure 1 with line (4''), threshold_keep kee
   for (const char* name : {"threshold", "threshold_keep"}) {
     CHECK(count(name, {near, distant}) == 0);
     CHECK(count(name, {distant, near}) == 0);
+  }
+}
+
+TEST_CASE("threshold's line (3): a new frontmost sample lowers a flag raised behind it",
+          "[banks]") {
+  // The near/far pair flags its overlap (line (4'')); then a third triangle arrives well in
+  // front of both (beyond the threshold) over part of it. Where it covers, the pixel now
+  // shows a surface that crosses nothing: line (3) must lower the flag there, and only
+  // there. Without line (3) the flag raised behind would survive under the new front.
+  Bench b;
+  const ScreenTriangle near = Bench::triangle({0, 0}, {200, 0}, {0, 200}, 0.5, 0.5, 0.5);
+  const ScreenTriangle far =
+      Bench::triangle({20, 20}, {220, 20}, {20, 220}, 0.5005, 0.5005, 0.5005);
+  const ScreenTriangle front = Bench::triangle({0, 0}, {60, 0}, {0, 128}, 0.3, 0.3, 0.3);
+  for (const char* name : {"threshold", "threshold_keep"}) {
+    INFO(name);
+    const Program program = b.load(name);
+    const auto packets = b.packets(program, {near, far, front});
+    REQUIRE(packets.size() == 3);
+    const auto flags = b.flags(program, packets);
+    long pair = 0, lowered = 0, wrong = 0;
+    for (int y = 0; y < 128; ++y) {
+      for (int x = 0; x < 128; ++x) {
+        const bool both = covers(packets[0], x, y) && covers(packets[1], x, y);
+        const bool under = covers(packets[2], x, y);
+        const bool expect = both && !under;
+        pair += both;
+        lowered += both && under;
+        wrong += (flags[static_cast<std::size_t>(y) * 128 + x] == 1) != expect;
+      }
+    }
+    REQUIRE(pair > 1000);
+    REQUIRE(lowered > 500);
+    CHECK(wrong == 0);
   }
 }
 

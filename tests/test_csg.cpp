@@ -2,7 +2,9 @@
 // pass, point in solid by parity against a double-precision ray caster.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -250,6 +252,109 @@ TEST_CASE("a CSG expression's expansion is bounded before the products are built
   CHECK(normalise_csg(copies, names).size() == 3);
 }
 
+namespace {
+
+// A random CSG tree over `solids` solids: operators with two to four operands, at most
+// `depth` levels.
+CsgNode random_csg_tree(std::mt19937& rng, int solids, int depth) {
+  CsgNode n;
+  if (depth == 0 || std::uniform_int_distribution<int>(0, 3)(rng) == 0) {
+    n.solid = std::uniform_int_distribution<int>(0, solids - 1)(rng);
+    return n;
+  }
+  static constexpr CsgNode::Op kOps[] = {CsgNode::Op::union_, CsgNode::Op::intersection,
+                                         CsgNode::Op::difference};
+  n.op = kOps[std::uniform_int_distribution<int>(0, 2)(rng)];
+  const int count = std::uniform_int_distribution<int>(2, 4)(rng);
+  for (int k = 0; k < count; ++k) n.operands.push_back(random_csg_tree(rng, solids, depth - 1));
+  return n;
+}
+
+// The tree itself, evaluated on one classification of the point (no normalisation).
+bool evaluate_csg_tree(const CsgNode& n, const std::vector<bool>& inside) {
+  switch (n.op) {
+    case CsgNode::Op::solid:
+      return inside.at(static_cast<std::size_t>(n.solid));
+    case CsgNode::Op::union_:
+      for (const CsgNode& o : n.operands)
+        if (evaluate_csg_tree(o, inside)) return true;
+      return false;
+    case CsgNode::Op::intersection:
+      for (const CsgNode& o : n.operands)
+        if (!evaluate_csg_tree(o, inside)) return false;
+      return true;
+    case CsgNode::Op::difference:
+      if (!evaluate_csg_tree(n.operands.front(), inside)) return false;
+      for (std::size_t k = 1; k < n.operands.size(); ++k)
+        if (evaluate_csg_tree(n.operands[k], inside)) return false;
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("CSG normalisation equals the tree on random trees and point classifications", "[csg]") {
+  // 5,000 seeded trees over 1..6 solids, up to 3 levels; each normalised sum of products is
+  // evaluated on 64 random classifications of a point (each solid: inside or not) and
+  // compared with the tree evaluated directly. A tree the normaliser refuses must be empty
+  // (false everywhere: checked on every classification) or expand past kMaxCsgProducts.
+  std::mt19937 rng(20261127);
+  std::vector<std::string> names;
+  for (int k = 0; k < 6; ++k) names.push_back(fmt::format("s{}", k));
+  int normalised = 0, empty = 0, too_many = 0, classifications = 0;
+  for (int t = 0; t < 5000; ++t) {
+    const int solids = std::uniform_int_distribution<int>(1, 6)(rng);
+    const CsgNode tree = random_csg_tree(rng, solids, 3);
+    CsgProducts products;
+    try {
+      products = normalise_csg(tree, names);
+    } catch (const CsgError& e) {
+      const std::string what = e.what();
+      if (what.find("expands") != std::string::npos) {
+        ++too_many;
+        continue;
+      }
+      INFO("tree " << t << ": " << what);
+      REQUIRE(what.find("empty") != std::string::npos);
+      for (unsigned bits = 0; bits < (1u << solids); ++bits) {
+        std::vector<bool> inside(static_cast<std::size_t>(solids));
+        for (int s = 0; s < solids; ++s) inside[s] = (bits >> s) & 1u;
+        REQUIRE_FALSE(evaluate_csg_tree(tree, inside));
+      }
+      ++empty;
+      continue;
+    }
+    ++normalised;
+    INFO("tree " << t << " normalised to " << format_csg(products, names));
+    REQUIRE(!products.empty());
+    REQUIRE(products.size() <= kMaxCsgProducts);
+    for (std::size_t p = 0; p < products.size(); ++p) {
+      const auto& product = products[p];
+      // The contract's form: a positive literal, no literal twice, no solid with its
+      // complement, no product twice.
+      REQUIRE(std::any_of(product.begin(), product.end(),
+                          [](const CsgLiteral& l) { return !l.negated; }));
+      for (std::size_t a = 0; a < product.size(); ++a)
+        for (std::size_t b = a + 1; b < product.size(); ++b)
+          REQUIRE(product[a].solid != product[b].solid);
+      for (std::size_t q = 0; q < p; ++q) REQUIRE(products[q] != product);
+    }
+    std::bernoulli_distribution coin(0.5);
+    for (int c = 0; c < 64; ++c) {
+      std::vector<bool> inside(static_cast<std::size_t>(solids));
+      for (int s = 0; s < solids; ++s) inside[s] = coin(rng);
+      REQUIRE(csg_contains(products, inside) == evaluate_csg_tree(tree, inside));
+      ++classifications;
+    }
+  }
+  // The generator reaches every outcome, and mostly trees that normalise.
+  CHECK(normalised > 3000);
+  CHECK(empty > 0);
+  CHECK(too_many > 0);
+  CHECK(classifications == 64 * normalised);
+}
+
 TEST_CASE("bad CSG expressions in scene files are refused naming the file and key", "[csg]") {
   auto refused = [](const std::string& csg, const std::string& what) {
     INFO(csg);
@@ -340,15 +445,21 @@ TEST_CASE("interference is found exactly when two solids overlap, and as epsilon
         measure_interference(config, make_parity_scene("boxes-overlap"), program, 2);
     CHECK(overlap.truth > 2000);
     CHECK(overlap.disagree == 0);
+    // The table's counts are of one pixel set: with no disagreement they are equal.
+    CHECK(overlap.flagged == overlap.truth);
+    CHECK(overlap.flagged_uncertain > 0);
     CHECK(overlap.lo > 0);
     CHECK(overlap.lo < overlap.hi);
-    CHECK(measure_interference(exact, make_parity_scene("boxes-apart"), program, 2).flagged == 0);
-    CHECK(measure_interference(config, make_parity_scene("boxes-apart"), program, 2).flagged == 0);
+    for (const MachineConfig& c : {exact, config}) {
+      const InterferenceMeasure apart =
+          measure_interference(c, make_parity_scene("boxes-apart"), program, 2);
+      CHECK(apart.flagged + apart.flagged_uncertain == 0);
+    }
     // 0.0002 apart: no overlap (the ray caster finds none), but within the default epsilon.
     const InterferenceMeasure near =
         measure_interference(config, make_parity_scene("boxes-touching"), program, 2);
     CHECK(near.truth == 0);
-    CHECK(near.flagged > 100);
+    CHECK(near.flagged + near.flagged_uncertain > 100);
   }
   // With epsilon 0, the accurate program's unsnapped planes find no overlap in the
   // near-touching pair (at this screen the standard one's snapped steep faces flag 337
@@ -356,7 +467,7 @@ TEST_CASE("interference is found exactly when two solids overlap, and as epsilon
   const InterferenceMeasure accurate =
       measure_interference(exact, make_parity_scene("boxes-touching"),
                            program_named("interference_accurate", config), 2);
-  CHECK(accurate.flagged == 0);
+  CHECK(accurate.flagged + accurate.flagged_uncertain == 0);
 }
 
 TEST_CASE("the CSG pass plan: a surface pass per literal, a parity pass per other literal",

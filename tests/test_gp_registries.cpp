@@ -186,6 +186,61 @@ TEST_CASE("primitive kinds: the triangle kind runs the triangle procedure on the
   CHECK(k.chains == t.chains);
 }
 
+TEST_CASE("the GP's arithmetic reaches every expression of every primitive kind", "[gp_registry]") {
+  // gp.significand_bits is said to round every value the GP sends. Walk both registries:
+  // every expression a kind supplies must have some coefficient, on some primitive of a
+  // scene, that changes when the GP keeps 6 significant bits instead of all of them (62, the
+  // default: exact; the goldens hold the default's results). A new expression whose set-up
+  // forgets the GP's arithmetic fails here.
+  Scene scene = make_builtin_scene("torus", {32, 8});
+  const glm::vec3 centre = scene.camera.target;
+  // Colours and opacities of more than 6 significant bits (255 x 0.35 = 89: 1011001).
+  scene.spheres = {{centre + glm::vec3(0.3f, 0.2f, 0.4f), 0.45f, glm::vec3(0.9f, 0.4f, 0.35f)},
+                   {centre + glm::vec3(-0.5f, -0.3f, 0.2f), 0.3f, glm::vec3(0.37f, 0.7f, 0.5f)}};
+  for (std::size_t v = 0; v < scene.mesh.vertices.size(); ++v)
+    scene.mesh.vertices[v].opacity = 0.3f + 0.5f * static_cast<float>(v % 7) / 7.0f;
+  MachineConfig exact = MachineConfig::defaults();
+  exact.set(std::vector<std::string>{"screen.width=256", "screen.height=256"});
+  MachineConfig coarse = exact;
+  coarse.set(std::vector<std::string>{"gp.significand_bits=6"});
+  MachineConfig alias = exact;
+  alias.set(std::vector<std::string>{"gp.edge_significand_bits=6"});
+  CHECK(geometry_params(alias).significand_bits == 6);
+  CHECK(geometry_params(exact).significand_bits == 62);
+  const GeometryEngine e_exact(geometry_params(exact), scene);
+  const GeometryEngine e_coarse(geometry_params(coarse), scene);
+  for (const PrimitiveKind* kind : primitive_kinds()) {
+    INFO("kind " << kind->name());
+    std::unique_ptr<PrimitiveWorker> a = kind->start(e_exact);
+    std::unique_ptr<PrimitiveWorker> b = kind->start(e_coarse);
+    std::vector<int> moved(static_cast<std::size_t>(Expression::count), 0);
+    int both = 0;
+    SetupCounts ca, cb;
+    for (int i = 0; i < kind->count(scene); ++i) {
+      const int pieces = a->transform(i, ca);
+      REQUIRE(pieces == b->transform(i, cb));
+      for (int p = 0; p < pieces; ++p) {
+        SetupResult x, y;
+        if (!a->setup(p, all_expressions(), x, ca) || !b->setup(p, all_expressions(), y, cb))
+          continue;
+        ++both;
+        for (int k = 0; k < static_cast<int>(Expression::count); ++k) {
+          const auto& q = x.values.expressions[static_cast<std::size_t>(k)];
+          const auto& r = y.values.expressions[static_cast<std::size_t>(k)];
+          moved[static_cast<std::size_t>(k)] +=
+              q.A != r.A || q.B != r.B || q.C != r.C || q.D != r.D || q.E != r.E || q.F != r.F;
+        }
+      }
+    }
+    CHECK(both > 1);
+    for (const ExpressionEntry& e : expression_registry()) {
+      if (!kind->supplies(e.id)) continue;
+      INFO("expression " << e.name());
+      CHECK(moved[static_cast<std::size_t>(e.id)] > 0);
+    }
+  }
+}
+
 TEST_CASE("packet words follow the forms: a header, then 1, 3 or 6 coefficients each",
           "[gp_registry]") {
   ExpressionSet edges;

@@ -147,7 +147,9 @@ TEST_CASE("spheres and triangles share one z-buffer, z-correct against a ray cas
   for (const ScreenSphere& s : screen) sphere_bound = std::max(sphere_bound, s.depth_bound);
   const RayCast truth = ray_cast(config, scene);
   const DrawnSpheres drawn = draw_spheres(config, scene, test::load_program("phong", config), 2);
-  std::uint64_t spheres_seen = 0, triangles_seen = 0;
+  const std::vector<int> shown = shown_spheres(config, scene, {}, 2);
+  std::uint64_t spheres_seen = 0, triangles_seen = 0, triangles_lost = 0;
+  double worst_triangle = 0;
   for (int y = 1; y + 1 < truth.height; ++y) {
     for (int x = 1; x + 1 < truth.width; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * truth.width + x;
@@ -159,16 +161,98 @@ TEST_CASE("spheres and triangles share one z-buffer, z-correct against a ray cas
         }
       }
       if (!inside) continue;
-      INFO("pixel " << x << ", " << y << " shows " << truth.what[i]);
+      INFO("pixel " << x << ", " << y << " shows " << truth.what[i] << ", the firmware "
+                    << shown[i]);
       REQUIRE(drawn.covered[i] == 1);
-      // Triangles: plane depth rounded at 12 fraction bits, a few units; spheres: the bound.
       const double error = std::fabs(static_cast<double>(drawn.z[i]) - truth.depth[i]);
-      REQUIRE(error <= sphere_bound + 8.0);
-      (truth.what[i] >= 0 ? spheres_seen : triangles_seen) += 1;
+      // The ray cast sees the same triangle at the pixel and its eight neighbours (away from
+      // its edges, where the snapped edges may hand a centre to its neighbour).
+      bool one_triangle = truth.what[i] < -1;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          one_triangle =
+              one_triangle &&
+              truth.what[i + static_cast<std::size_t>(dy * truth.width + dx)] == truth.what[i];
+        }
+      }
+      if (one_triangle && shown[i] == -2) {
+        // A triangle shown where the ray cast sees a triangle: the triangle's tolerance, not the
+        // spheres' bound. The plane depth is rounded at 12 fraction bits (a few units) and runs
+        // through vertices snapped by up to 2^-(subpixel_bits + 1) pixel in x and in y, which
+        // moves it by up to that times its gradient (taken from the ray cast's neighbours),
+        // doubled for margin.
+        const double gx = std::fabs(truth.depth[i + 1] - truth.depth[i - 1]) / 2.0;
+        const double gy = std::fabs(truth.depth[i + static_cast<std::size_t>(truth.width)] -
+                                    truth.depth[i - static_cast<std::size_t>(truth.width)]) /
+                          2.0;
+        const double tolerance = 8.0 + (gx + gy) * std::ldexp(1.0, -config.gp.subpixel_bits);
+        INFO("triangle tolerance " << tolerance);
+        REQUIRE(error <= tolerance);
+        worst_triangle = std::max(worst_triangle, error);
+        ++triangles_seen;
+      } else if (truth.what[i] < -1 && shown[i] == -2) {
+        REQUIRE(error <= sphere_bound + 8.0);  // a triangle's edge
+      } else if (truth.what[i] < -1) {
+        // A sphere's approximate depth in front of the visible triangle: counted below.
+        ++triangles_lost;
+      } else {
+        REQUIRE(error <= sphere_bound + 8.0);
+        ++spheres_seen;
+      }
     }
   }
   CHECK(spheres_seen > 1000);
   CHECK(triangles_seen > 1000);
+  // Where a sphere passes through a triangle, its quadratic depth (up to sphere_bound off)
+  // may win pixels the triangle owns: few, next to the intersection curves (1 at 256 x 256).
+  WARN("triangle pixels a sphere covers wrongly: " << triangles_lost << "; worst triangle error "
+                                                   << worst_triangle << " of bound "
+                                                   << sphere_bound);
+  CHECK(worst_triangle < sphere_bound / 100.0);
+  CHECK(triangles_lost <= 10);
+}
+
+TEST_CASE("the visible sphere where spheres meet, read from firmware, within a stated count",
+          "[spheres]") {
+  // The four interpenetrating spheres at 256 x 256: which primitive each pixel shows is read
+  // from firmware (shown_spheres) and compared with the ray cast. The quadric's depth (a line
+  // in Q: up to about an eighth of a sphere's depth extent off) shows the wrong sphere at
+  // 141 of the 5,019 pixels where two spheres overlap and at 104 of the 375 pixels on the
+  // intersection curves; a 64 x 32 tessellation at 6 and 5. Away from the overlaps every
+  // pixel shows its sphere.
+  const MachineConfig config = small();
+  const Scene scene = make_builtin_scene("spheres");
+  const RayCast truth = ray_cast(config, scene);
+  const Program phong = test::load_program("phong", config);
+  const std::vector<int> shown = shown_spheres(config, scene, {}, 2);
+  const SphereAccuracy a =
+      measure_spheres(config, scene, truth, draw_spheres(config, scene, phong, 2), shown);
+  CHECK(a.overlap_pixels == 5019);
+  CHECK(a.curve_pixels == 375);
+  CHECK(a.overlap_shown_wrong <= 160);
+  CHECK(a.overlap_shown_wrong >= 100);  // the depth approximation's cost is real
+  CHECK(a.curve_shown_wrong <= 120);
+  CHECK(a.curve_shown_wrong < a.overlap_shown_wrong);
+  std::uint64_t single = 0, single_wrong = 0;
+  for (std::size_t i = 0; i < shown.size(); ++i) {
+    if (truth.what[i] < 0 || truth.spheres[i] != 1) continue;
+    ++single;
+    single_wrong += shown[i] != truth.what[i];
+  }
+  CHECK(single > 15000);
+  CHECK(single_wrong == 0);
+  // A fine tessellation of the same spheres, its triangles standing for their spheres.
+  Scene tess = scene;
+  tess.spheres.clear();
+  append_tessellated_spheres(scene.spheres, 64, 32, tess.mesh);
+  std::vector<int> stands_for;
+  for (std::size_t k = 0; k < scene.spheres.size(); ++k)
+    stands_for.insert(stands_for.end(), 2 * 64 * 31, static_cast<int>(k));
+  const SphereAccuracy t =
+      measure_spheres(config, scene, truth, draw_spheres(config, tess, phong, 2),
+                      shown_spheres(config, tess, stands_for, 2));
+  CHECK(t.overlap_shown_wrong <= 10);
+  CHECK(t.curve_shown_wrong <= 10);
 }
 
 TEST_CASE("sphere extremes: near plane, behind the eye, far plane, clipped, counted", "[spheres]") {

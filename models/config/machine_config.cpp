@@ -155,16 +155,27 @@ const std::vector<Entry>& parameter_table() {
        "Vertex positions are snapped to 1/2^n pixel before edge set-up, so that edge "
        "coefficients are exact integers and shared edges own each pixel exactly once.",
        [](MachineConfig& c) -> Ref { return &c.gp.subpixel_bits; }},
+      derived({"gp.significand_bits", "bits", "A", 62, 4, 62,
+               "The GP's arithmetic: significant bits it keeps of every value it computes and "
+               "sends, rounded to nearest (ties to even) like a float's significand: each "
+               "coefficient of the edges (edge0..2, wide0..2), the attribute and depth planes "
+               "(before they are reduced modulo the coefficient width), the accurate program's "
+               "side tests (and the planes they are differenced from), the sphere's conic, depth "
+               "and normal quadratics, and constants. 24 is IEEE single (the i860's, which the "
+               "machine's set-up code used), 53 IEEE double, 62 exact (nothing is rounded). "
+               "Fewer bits move an edge by up to 2^-n times twice the farthest pixel's distance "
+               "from the origin (Rossignac 9.3.3) and a plane by 2^-n of its magnitude there. "
+               "Only the values sent are rounded: the vertex transform stays in double and the "
+               "vertices are snapped to gp.subpixel_bits.",
+               [](MachineConfig& c) -> Ref { return &c.gp.significand_bits; }},
+              "exact by default, so that a figure shows the method's own error: every coefficient "
+              "is an integer below 2^61 (evaluator.coefficient_bits <= 62), so 62 keeps them "
+              "all; the machine's i860 set-up code computed in single precision, 24"),
       derived({"gp.edge_significand_bits", "bits", "A", 62, 4, 62,
-               "Significant bits the GP keeps of each edge-function coefficient it sends (A, B, C "
-               "of the snapped edges: edge0..2, wide0..2, a clipped piece's side0..2), rounded to "
-               "nearest like a float's significand. Fewer bits move an edge by up to 2^-n times "
-               "twice the farthest pixel's distance from the origin, so centres near it fall on "
-               "the wrong side (Rossignac 9.3.3). At 62 nothing is rounded.",
-               [](MachineConfig& c) -> Ref { return &c.gp.edge_significand_bits; }},
-              "exact: every edge coefficient is an integer below 2^61 (evaluator.coefficient_bits "
-              "<= 62), so 62 keeps them all, the model without this key; the i860's single "
-              "precision keeps 24"),
+               "The same key as gp.significand_bits (its earlier name, when only the edges were "
+               "rounded): setting either sets the GP's arithmetic for every value it sends.",
+               [](MachineConfig& c) -> Ref { return &c.gp.significand_bits; }},
+              "an alias of gp.significand_bits"),
       {"gp.depth_bits", "bits", "A", 24, 8, 32,
        "Range of the depth expression: 0 at the near plane to 2^n - 1 at the far plane.",
        [](MachineConfig& c) -> Ref { return &c.gp.depth_bits; }},

@@ -35,7 +35,7 @@ struct MachineConfig {
     int count = 0;
     double clock_hz = 0;
     int subpixel_bits = 0;
-    int edge_significand_bits = 0;
+    int significand_bits = 0;  // the GP's arithmetic (gp.significand_bits)
     int depth_bits = 0;
     enum class Code { assembly, compiled };
     Code code = Code::assembly;

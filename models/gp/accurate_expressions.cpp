@@ -51,12 +51,15 @@ struct Plane {
   double a = 0, b = 0, k = 0;
   double at(double u, double w) const { return a * u + b * w + k; }
 };
-bool plane_through(const Projected& p0, const Projected& p1, const Projected& p2, Plane& out) {
+// Its coefficients are kept to the GP's arithmetic (gp_round), as the side test's difference
+// of two planes then is.
+bool plane_through(const GeometryParams& params, const Projected& p0, const Projected& p1,
+                   const Projected& p2, Plane& out) {
   const double det = (p1.u - p0.u) * (p2.w - p0.w) - (p2.u - p0.u) * (p1.w - p0.w);
   if (!(std::fabs(det) > 1e-9)) return false;
-  out.a = ((p1.z - p0.z) * (p2.w - p0.w) - (p2.z - p0.z) * (p1.w - p0.w)) / det;
-  out.b = ((p2.z - p0.z) * (p1.u - p0.u) - (p1.z - p0.z) * (p2.u - p0.u)) / det;
-  out.k = p0.z - out.a * p0.u - out.b * p0.w;
+  out.a = gp_round(((p1.z - p0.z) * (p2.w - p0.w) - (p2.z - p0.z) * (p1.w - p0.w)) / det, params);
+  out.b = gp_round(((p2.z - p0.z) * (p1.u - p0.u) - (p1.z - p0.z) * (p2.u - p0.u)) / det, params);
+  out.k = gp_round(p0.z - out.a * p0.u - out.b * p0.w, params);
   return true;
 }
 
@@ -109,11 +112,15 @@ int fitting_bits(const SetupContext& c, const Plane& d, double& rounding) {
   return bits;
 }
 
-// sign * (d - tie) in the evaluator's integers, d scaled by 2^bits.
-QuadraticCoefficients fixed(const Plane& d, int bits, int sign, std::int64_t tie) {
-  const auto A = static_cast<std::int64_t>(std::nearbyint(std::ldexp(d.a, bits)));
-  const auto B = static_cast<std::int64_t>(std::nearbyint(std::ldexp(d.b, bits)));
-  const auto C = static_cast<std::int64_t>(std::nearbyint(std::ldexp(d.k, bits)));
+// sign * (d - tie) in the evaluator's integers, d scaled by 2^bits, each coefficient kept to
+// the GP's arithmetic before the tie-break (which then decides a centre exactly on the line).
+QuadraticCoefficients fixed(const GeometryParams& params, const Plane& d, int bits, int sign,
+                            std::int64_t tie) {
+  auto keep = [&](double v) {
+    return static_cast<std::int64_t>(
+        gp_round(static_cast<__int128>(std::nearbyint(std::ldexp(v, bits))), params));
+  };
+  const std::int64_t A = keep(d.a), B = keep(d.b), C = keep(d.k);
   return QuadraticCoefficients::linear(sign * A, sign * B, sign * C - tie);
 }
 
@@ -157,26 +164,27 @@ SidePlane side_plane(const SetupContext& c, int e) {
     r.kind = why;
     const Projected& a = p < q ? pf[e] : pf[(e + 1) % 3];
     const Projected& b = p < q ? pf[(e + 1) % 3] : pf[e];
-    Plane line{-(b.w - a.w), b.u - a.u, 0.0};
-    line.k = -(line.a * a.u + line.b * a.w);
+    Plane line{gp_round(-(b.w - a.w), c.params), gp_round(b.u - a.u, c.params), 0.0};
+    line.k = gp_round(-(line.a * a.u + line.b * a.w), c.params);
     const double at_f = line.at(cf.u, cf.w);
     r.sign = at_f < 0 ? -1 : 1;
     r.silhouette = third >= 0 && (line.at(pn[third].u, pn[third].w) < 0 ? -1 : 1) == r.sign;
     const std::int64_t tie = (third >= 0 && !r.silhouette && f > n) ? 1 : 0;
     double rounding = 0;
     r.fraction_bits = fitting_bits(c, line, rounding);
-    r.coefficients = fixed(line, r.fraction_bits, r.sign, tie);
+    r.coefficients = fixed(c.params, line, r.fraction_bits, r.sign, tie);
     return r;
   };
   if (n == MeshAdjacency::kBoundary) return edge_line(SideKind::boundary);
   if (n == MeshAdjacency::kNonManifold) return edge_line(SideKind::non_manifold);
   Plane zf, zn;
-  if (third < 0 || !plane_through(pf[0], pf[1], pf[2], zf) ||
-      !plane_through(pn[0], pn[1], pn[2], zn))
+  if (third < 0 || !plane_through(c.params, pf[0], pf[1], pf[2], zf) ||
+      !plane_through(c.params, pn[0], pn[1], pn[2], zn))
     return edge_line(SideKind::degenerate);
   // D = Z - Z_n, formed so that the neighbour, asking about the same edge, gets exactly the
   // negated coefficients and values (IEEE subtraction and products are sign-symmetric).
-  const Plane d{zf.a - zn.a, zf.b - zn.b, zf.k - zn.k};
+  const Plane d{gp_round(zf.a - zn.a, c.params), gp_round(zf.b - zn.b, c.params),
+                gp_round(zf.k - zn.k, c.params)};
   const Projected& cn = pn[third];
   const double at_f = d.at(cf.u, cf.w);
   const double at_n = d.at(cn.u, cn.w);
@@ -185,13 +193,16 @@ SidePlane side_plane(const SetupContext& c, int e) {
   // D is small where the planes nearly coincide, and then it is mostly the double-precision
   // error of the two planes themselves: a plane of a face nearly edge-on to the eye is
   // ill-conditioned (its gradient is huge), and D of two such coplanar faces is noise. The
-  // bound 2^-30 of the planes' magnitude over the screen is generous (double carries 2^-52).
+  // bound 2^-30 of the planes' magnitude over the screen is generous in double (2^-52);
+  // with the GP's arithmetic at n significant bits (gp.significand_bits) each plane
+  // coefficient and each difference carries 2^-n, so the bound is 2^-(n - 3) when that is
+  // larger (a careful set-up program sizes its tolerance to its own arithmetic).
   const double width = c.params.screen_width;
   const double height = c.params.screen_height;
   const double noise =
       std::ldexp(std::fabs(zf.a) * width + std::fabs(zf.b) * height + std::fabs(zf.k) +
                      std::fabs(zn.a) * width + std::fabs(zn.b) * height + std::fabs(zn.k),
-                 -30);
+                 -std::min(30, c.params.significand_bits - 3));
   const double error = rounding + noise;
   // The error moves the crossing line by at most error / |grad D| pixels: planes too nearly
   // coplanar to place it within kLineTolerance are classified by the edge's line instead (the
@@ -208,7 +219,7 @@ SidePlane side_plane(const SetupContext& c, int e) {
   r.silhouette = (at_f > 0) == (at_n > 0);
   const std::int64_t tie = (!r.silhouette && f > n) ? 1 : 0;
   r.fraction_bits = bits;
-  r.coefficients = fixed(d, bits, r.sign, tie);
+  r.coefficients = fixed(c.params, d, bits, r.sign, tie);
   return r;
 }
 
@@ -226,13 +237,17 @@ bool plane_depth_expression(const SetupContext& c, QuadraticCoefficients& out) {
   const double a = ((f[1] - f[0]) * (w[2] - w[0]) - (f[2] - f[0]) * (w[1] - w[0])) / det;
   const double b = ((f[2] - f[0]) * (u[1] - u[0]) - (f[1] - f[0]) * (u[2] - u[0])) / det;
   const int cb = c.params.coefficient_bits;
-  const double A = std::nearbyint(a * c.f_scale);
-  const double B = std::nearbyint(b * c.f_scale);
+  const double A0 = std::nearbyint(a * c.f_scale);
+  const double B0 = std::nearbyint(b * c.f_scale);
+  if (!(fits(A0, cb) && fits(B0, cb))) return false;
+  // Kept to the GP's arithmetic (gp_round), C before it is reduced modulo the width.
+  const auto A = static_cast<double>(gp_round(static_cast<__int128>(A0), c.params));
+  const auto B = static_cast<double>(gp_round(static_cast<__int128>(B0), c.params));
   if (!(fits(A, cb) && fits(B, cb))) return false;
   const long double num = static_cast<long double>(f[0]) * c.f_scale -
                           static_cast<long double>(A) * u[0] - static_cast<long double>(B) * w[0];
   if (!(std::fabs(num) < std::ldexp(1.0L, 100))) return false;
-  __int128 C = static_cast<__int128>(std::nearbyintl(num));
+  __int128 C = gp_round(static_cast<__int128>(std::nearbyintl(num)), c.params);
   const __int128 span = static_cast<__int128>(1) << cb;
   if (c.params.result_bits <= cb) {
     C = ((C % span) + span) % span;

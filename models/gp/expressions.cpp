@@ -195,18 +195,50 @@ constexpr bool in_enum_order() {
 
 }  // namespace
 
-std::int64_t round_significand(std::int64_t v, int bits) {
+namespace {
+
+// |v| of a 128-bit integer, and the bit width of a magnitude.
+unsigned __int128 magnitude128(__int128 v) {
+  return v < 0 ? 0 - static_cast<unsigned __int128>(v) : static_cast<unsigned __int128>(v);
+}
+int width128(unsigned __int128 m) {
+  const auto hi = static_cast<std::uint64_t>(m >> 64);
+  if (hi != 0) return 128 - __builtin_clzll(hi);
+  const auto lo = static_cast<std::uint64_t>(m);
+  return lo == 0 ? 0 : 64 - __builtin_clzll(lo);
+}
+
+__int128 round_significand128(__int128 v, int bits) {
   if (bits >= 62 || v == 0) return v;
-  const std::uint64_t m = v < 0 ? 0 - static_cast<std::uint64_t>(v) : static_cast<std::uint64_t>(v);
-  const int width = 64 - __builtin_clzll(m);
+  const unsigned __int128 m = magnitude128(v);
+  const int width = width128(m);
   if (width <= bits) return v;
   const int drop = width - bits;
-  const std::uint64_t unit = std::uint64_t{1} << drop;
-  std::uint64_t q = m >> drop;
-  const std::uint64_t r = m & (unit - 1);
+  const unsigned __int128 unit = static_cast<unsigned __int128>(1) << drop;
+  unsigned __int128 q = m >> drop;
+  const unsigned __int128 r = m & (unit - 1);
   if (r > unit / 2 || (r == unit / 2 && (q & 1) != 0)) ++q;
-  const auto rounded = static_cast<std::int64_t>(q << drop);
+  const auto rounded = static_cast<__int128>(q << drop);
   return v < 0 ? -rounded : rounded;
+}
+
+}  // namespace
+
+std::int64_t round_significand(std::int64_t v, int bits) {
+  return static_cast<std::int64_t>(round_significand128(v, bits));
+}
+
+__int128 gp_round(__int128 v, const GeometryParams& params) {
+  return round_significand128(v, params.significand_bits);
+}
+
+double gp_round(double v, const GeometryParams& params) {
+  const int bits = params.significand_bits;
+  if (bits >= 62 || v == 0 || !std::isfinite(v)) return v;
+  int e = 0;
+  const double m = std::frexp(v, &e);  // v = m 2^e, 0.5 <= |m| < 1
+  // Nearest, ties to even (the default rounding mode), at `bits` bits of m.
+  return std::ldexp(std::nearbyint(std::ldexp(m, bits)), e - bits);
 }
 
 const char* expression_form_name(ExpressionForm form) {
@@ -245,8 +277,10 @@ bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& 
   const double B = std::nearbyint(b * f_scale);
   const double limit = std::ldexp(1.0, cb - 1);
   if (!(std::fabs(A) < limit && std::fabs(B) < limit)) return false;
-  const auto Ai = static_cast<std::int64_t>(A);
-  const auto Bi = static_cast<std::int64_t>(B);
+  // The GP's arithmetic keeps params.significand_bits of each coefficient (gp_round).
+  const auto Ai = static_cast<std::int64_t>(gp_round(static_cast<__int128>(A), params));
+  const auto Bi = static_cast<std::int64_t>(gp_round(static_cast<__int128>(B), params));
+  if (!fits(Ai, cb) || !fits(Bi, cb)) return false;
   // C makes the value exact (to rounding) at the first vertex: C = f0 - A u0 - B v0, with
   // the products formed exactly in integers.
   const __int128 f0 = static_cast<__int128>(std::llround(f[0] * f_scale)) * scale;
@@ -258,7 +292,7 @@ bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& 
   if ((scale & (scale - 1)) != 0) throw std::logic_error("SetupContext: scale is not 2^n");
   const int shift = __builtin_ctzll(static_cast<unsigned long long>(scale));
   const __int128 rounded = num >= 0 ? num + scale / 2 : num - scale / 2;
-  __int128 C = rounded >= 0 ? rounded >> shift : -((-rounded) >> shift);
+  __int128 C = gp_round(rounded >= 0 ? rounded >> shift : -((-rounded) >> shift), params);
   // C is sent modulo 2^coefficient_bits when the evaluator's sums wrap at no more bits than
   // that: every pixel then still gets A x + B y + C exactly modulo 2^result_bits, and inside
   // the triangle, where the attribute lies within its range, that is its exact value. A
@@ -288,12 +322,12 @@ bool SetupContext::edge(int e, std::int64_t outward, bool top_left_rule,
   std::int64_t A = -sigma * dy * scale;
   std::int64_t B = sigma * dx * scale;
   std::int64_t C = sigma * (dx * (half - ys[a]) - dy * (half - xs[a])) + outward;
-  // The GP keeps params.edge_significand_bits of each coefficient (round_significand): the
+  // The GP keeps params.significand_bits of each coefficient (gp_round): the
   // line moves, by at most 2^-n (|A| x + |B| y + |C|) value units at pixel (x, y). Rounding
   // is symmetric about 0, so the neighbour's function stays exactly the negation. A line
   // moved outward (an enlarged area, which must hold every centre the unsnapped edge does)
   // is first moved out by that much more over the whole screen, then rounded.
-  const int n = params.edge_significand_bits;
+  const int n = params.significand_bits;
   if (n < 62) {
     if (outward > 0) {
       const double u = std::ldexp(1.0, -n);
@@ -303,9 +337,9 @@ bool SetupContext::edge(int e, std::int64_t outward, bool top_left_rule,
       if (!(reach < std::ldexp(1.0, 61))) return false;
       C += static_cast<std::int64_t>(std::ceil(reach));
     }
-    A = round_significand(A, n);
-    B = round_significand(B, n);
-    C = round_significand(C, n);
+    A = static_cast<std::int64_t>(gp_round(static_cast<__int128>(A), params));
+    B = static_cast<std::int64_t>(gp_round(static_cast<__int128>(B), params));
+    C = static_cast<std::int64_t>(gp_round(static_cast<__int128>(C), params));
   }
   // Top-left rule: a pixel centre exactly on the edge belongs to this triangle only if the
   // edge is a left edge (inside lies to its right) or a top edge.
@@ -318,8 +352,9 @@ bool SetupContext::edge(int e, std::int64_t outward, bool top_left_rule,
 
 QuadraticCoefficients SetupContext::constant(double value) const {
   // A multiplication, not a shift: constants may be negative.
-  return QuadraticCoefficients::constant(std::llround(value) *
-                                         (std::int64_t{1} << params.fraction_bits));
+  return QuadraticCoefficients::constant(static_cast<std::int64_t>(gp_round(
+      static_cast<__int128>(std::llround(value)) * (std::int64_t{1} << params.fraction_bits),
+      params)));
 }
 
 double SetupContext::depth(int k) const {

@@ -78,17 +78,19 @@ struct SetupContext {
 
   // The gradient (per pixel in x and y) of the plane through the three vertices' values f.
   std::pair<double, double> gradient(const std::array<double, 3>& f) const;
-  // The fixed-point plane through the vertices' values f, exact (to rounding) at vertex 0;
-  // false if a coefficient does not fit.
+  // The fixed-point plane through the vertices' values f, exact (to rounding) at vertex 0,
+  // each coefficient kept to the GP's arithmetic (gp_round) before C is reduced modulo the
+  // coefficient width; false if a coefficient does not fit.
   bool plane(const std::array<double, 3>& f, QuadraticCoefficients& out) const;
   // Edge e's function (from vertex e to vertex (e + 1) % 3) on the snapped vertices: exact
   // integers, >= 0 inside. `outward` (value units, >= 0) moves the line outward; with
   // top_left_rule a centre exactly on the (unmoved) edge belongs to the triangle only on a
-  // left or top edge. Each coefficient is then kept to params.edge_significand_bits (a
+  // left or top edge. Each coefficient is then kept to params.significand_bits (gp_round; a
   // moved-out line first moved out by the rounding's reach too). False if a coefficient
   // does not fit.
   bool edge(int e, std::int64_t outward, bool top_left_rule, QuadraticCoefficients& out) const;
-  // A constant in fixed point (value * 2^fraction_bits; value is an integer).
+  // A constant in fixed point (value * 2^fraction_bits; value is an integer), kept to the GP's
+  // arithmetic.
   QuadraticCoefficients constant(double value) const;
   // Vertex k's depth in depth units, clamped half a unit inside the range.
   double depth(int k) const;
@@ -121,8 +123,13 @@ bool needs_adjacency(const ExpressionSet& set);
 bool widens_bounds(const ExpressionSet& set);
 
 // v rounded to `bits` significant bits (to nearest, ties to even, symmetric about 0): what
-// the GP keeps of an edge coefficient (gp.edge_significand_bits); v itself at 62 or more.
+// the GP keeps of a coefficient it sends (gp.significand_bits); v itself at 62 or more.
 std::int64_t round_significand(std::int64_t v, int bits);
+// The GP's arithmetic, the one rounding every path applies to what it computes: an integer
+// coefficient (before any reduction modulo the coefficient width), or a real intermediate
+// (the accurate program's planes), kept to params.significand_bits significant bits.
+__int128 gp_round(__int128 v, const GeometryParams& params);
+double gp_round(double v, const GeometryParams& params);
 
 // Ring words of one coefficient: coefficient_bits rounded up to whole ring words.
 int coefficient_words(int coefficient_bits, int word_bits);

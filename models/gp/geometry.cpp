@@ -69,7 +69,7 @@ static_assert(sizeof(SetupCounts) == 15 * sizeof(std::uint64_t),
 bool operator==(const GeometryParams& a, const GeometryParams& b) {
   return a.screen_width == b.screen_width && a.screen_height == b.screen_height &&
          a.region_width == b.region_width && a.region_height == b.region_height &&
-         a.subpixel_bits == b.subpixel_bits && a.edge_significand_bits == b.edge_significand_bits &&
+         a.subpixel_bits == b.subpixel_bits && a.significand_bits == b.significand_bits &&
          a.depth_bits == b.depth_bits && a.fraction_bits == b.fraction_bits &&
          a.coefficient_bits == b.coefficient_bits && a.result_bits == b.result_bits &&
          a.cull_back_faces == b.cull_back_faces && a.frame == b.frame;

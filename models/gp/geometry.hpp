@@ -8,9 +8,13 @@
 //  - Vertices are snapped to 1/2^subpixel_bits of a pixel. Edge coefficients are then exact
 //    integers, so two triangles sharing an edge give exactly opposite edge functions and
 //    every pixel centre on the edge belongs to exactly one of them (the top-left rule).
-//    With edge_significand_bits below 62 each coefficient is then rounded to that many
-//    significant bits, symmetrically about 0, so the two functions stay exactly opposite
-//    (and parity exact) while the line they describe moves (SetupContext::edge).
+//  - The GP's arithmetic (significand_bits, gp.significand_bits): below 62 every coefficient
+//    of every expression the GP sends is kept to that many significant bits, rounded to
+//    nearest, symmetrically about 0 (gp_round, models/gp/expressions.hpp). Each path that
+//    forms a coefficient rounds it where it is formed (SetupContext::edge, plane, constant;
+//    the side tests; the sphere's quadratics), before any reduction modulo the coefficient
+//    width; a test walks the registry to check that every expression's coefficients move.
+//    Edge functions stay exactly opposite (parity exact) while the line they describe moves.
 //  - Attribute expressions carry fraction_bits fraction bits, are anchored at the first
 //    vertex (so rounding error grows with distance from it), and are clamped at the
 //    vertices to half a unit inside their range, so that floor() of the value never wraps
@@ -37,9 +41,9 @@ struct GeometryParams {
   int region_width = 128;
   int region_height = 128;
   int subpixel_bits = 4;
-  // Significant bits kept of each edge-function coefficient (SetupContext::edge); 62 or more
-  // keeps every coefficient exact.
-  int edge_significand_bits = 62;
+  // The GP's arithmetic: significant bits kept of every coefficient it sends (gp_round); 62 or
+  // more keeps every coefficient exact, 24 is IEEE single, 53 IEEE double.
+  int significand_bits = 62;
   int depth_bits = 24;
   int fraction_bits = 12;
   int coefficient_bits = 40;

@@ -320,7 +320,10 @@ bool sphere_fixed_point(const CentredQuadratic& q, double scale, std::int64_t x0
   i128 r[6];
   for (int k = 0; k < 6; ++k) {
     if (!std::isfinite(v[k]) || std::fabs(v[k]) > 1e36) return false;
-    r[k] = static_cast<i128>(std::nearbyint(v[k]));
+    // The GP's arithmetic (gp_round) keeps n significant bits of each coefficient about the
+    // anchor, and of each expanded to the screen's origin (before the reduction modulo the
+    // coefficient width).
+    r[k] = gp_round(static_cast<i128>(std::nearbyint(v[k])), params);
   }
   const i128 X = x0, Y = y0;
   // a dx^2 + b dx dy + c dy^2 + d dx + e dy + f with dx = X - x0, expanded exactly.
@@ -334,7 +337,7 @@ bool sphere_fixed_point(const CentredQuadratic& q, double scale, std::int64_t x0
   const i128 span = static_cast<i128>(1) << cb;
   std::int64_t o[6];
   for (int k = 0; k < 6; ++k) {
-    i128 x = c6[k];
+    i128 x = gp_round(c6[k], params);
     if (params.result_bits <= cb) {
       x = ((x % span) + span) % span;
       if (x >= span / 2) x -= span;

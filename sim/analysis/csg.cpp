@@ -845,7 +845,6 @@ InterferenceMeasure measure_interference(const MachineConfig& config, const Scen
       const std::size_t i = static_cast<std::size_t>(y) * caster.width + x;
       const bool machine = flag.values[i] != 0;
       if (machine) {
-        ++m.flagged;
         m.lo = std::min(m.lo, static_cast<double>(lo.values[i]) / depth_max);
         m.hi = std::max(m.hi, static_cast<double>(hi.values[i]) / depth_max);
       }
@@ -858,10 +857,12 @@ InterferenceMeasure measure_interference(const MachineConfig& config, const Scen
       std::uint8_t shade = 0;
       if (differs) {
         ++m.uncertain;
+        m.flagged_uncertain += machine;
         shade = 96;
       } else {
         ++m.compared;
         m.truth += truth;
+        m.flagged += machine;
         if (machine != truth) {
           ++m.disagree;
           shade = 255;
@@ -870,7 +871,7 @@ InterferenceMeasure measure_interference(const MachineConfig& config, const Scen
       for (int k = 0; k < 3; ++k) m.difference.rgb[i * 3 + k] = shade;
     }
   }
-  if (m.flagged == 0) m.lo = m.hi = 0;
+  if (m.flagged + m.flagged_uncertain == 0) m.lo = m.hi = 0;
   m.passes = static_cast<int>(make_pass_plan(program, scene).size());
   m.bits = program.bits_used();
   m.cost = frame_cost(config, scene, program, threads);
@@ -879,15 +880,18 @@ InterferenceMeasure measure_interference(const MachineConfig& config, const Scen
 
 std::string format_interference(const std::vector<InterferenceMeasure>& rows) {
   std::string out =
-      "| application | scene | program | pixels compared | interfering (ray caster) | flagged "
-      "(machine) | disagreeing | near an edge (not compared) | overlap depth range | passes | "
-      "bits | Renderer cycles | frame ms | frames/s |\n"
-      "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
+      "| application | scene | program | pixels compared | of those, interfering (ray caster) | "
+      "of those, flagged (machine) | of those, disagreeing | near an edge (not compared) | of "
+      "those, flagged | overlap depth range | passes | bits | Renderer cycles | frame ms | "
+      "frames/s |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
   for (const InterferenceMeasure& m : rows) {
-    out += fmt::format("| interference | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                       m.scene, m.program, m.compared, m.truth, m.flagged, m.disagree, m.uncertain,
-                       m.flagged ? fmt::format("{:.5f} .. {:.5f}", m.lo, m.hi) : std::string("-"),
-                       m.passes, m.bits, m.cost.cells());
+    out += fmt::format(
+        "| interference | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", m.scene,
+        m.program, m.compared, m.truth, m.flagged, m.disagree, m.uncertain, m.flagged_uncertain,
+        m.flagged + m.flagged_uncertain ? fmt::format("{:.5f} .. {:.5f}", m.lo, m.hi)
+                                        : std::string("-"),
+        m.passes, m.bits, m.cost.cells());
   }
   return out;
 }

@@ -2,6 +2,13 @@
 // Parity and depth-interval applications (issue 15), measured against a CPU ray caster in
 // double precision.
 //
+// Where each comes from in Rossignac's "Accurate scan conversion of triangulated surfaces"
+// (seeds/rossignac-accurate-scanconversion.md): the point-in-primitive test by parity, the
+// products of the disjunctive form and the epsilon tolerance (the point tested slightly
+// behind the scan-converted one, figure 9.4, and the epsilon-regularisation it amounts to,
+// figure 9.5) are section 9.2.3, Shading from CSG; cross-sections and interference are
+// 9.2.4; the depth-interval buffer for transparency is 9.2.2.
+//
 // Point in solid by parity: the machine runs a program that defines `parity` (parity.pp5,
 // parity_accurate.pp5) under the point-in-solid pass plan (models/gp/pass_plan.hpp); its
 // `inside` field is read back (sim/analysis/field_render.hpp) and compared pixel by pixel
@@ -74,12 +81,15 @@ std::string format_parity(const std::vector<ParityMeasure>& rows);
 // Interference of an assembly's first two solids (interference.pp5 under the same pass plan):
 // the machine's flag, lo and hi fields read back; the truth is the ray caster's: a pixel
 // interferes where the intersection of the two solids has a surface on its ray. Pixels
-// where the truth changes within `margin` are not compared.
+// where the truth changes within `margin` are not compared. `truth`, `flagged` and
+// `disagree` count the compared pixels only (the same set); `flagged_uncertain` counts the
+// machine's flags among the pixels not compared.
 std::vector<std::string> interference_scene_names();  // also made by make_parity_scene
 struct InterferenceMeasure {
   std::string scene, program;
   std::int64_t compared = 0, truth = 0, flagged = 0, disagree = 0, uncertain = 0;
-  double lo = 0, hi = 0;  // the depth range of the flagged pixels' overlaps, 0 near .. 1 far
+  std::int64_t flagged_uncertain = 0;
+  double lo = 0, hi = 0;  // the depth range of every flagged pixel's overlap, 0 near .. 1 far
   int passes = 0, bits = 0;
   FrameCost cost;
   RgbImage image, difference;

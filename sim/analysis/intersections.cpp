@@ -159,22 +159,27 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
     for (int b = b0; b <= b1; ++b)
       for (int a = a0; a <= a1; ++a) cells[static_cast<std::size_t>(b) * cx + a].push_back(i);
   }
+  // Barycentric coordinates of (x, y) in screen triangle k; false if degenerate.
+  auto barycentric = [&](int k, double x, double y, double& l0, double& l1, double& l2) {
+    const auto& v = screen[k];
+    const double det =
+        (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[2].x - v[0].x) * (v[1].y - v[0].y);
+    if (det == 0) return false;
+    l1 = ((x - v[0].x) * (v[2].y - v[0].y) - (v[2].x - v[0].x) * (y - v[0].y)) / det;
+    l2 = ((v[1].x - v[0].x) * (y - v[0].y) - (x - v[0].x) * (v[1].y - v[0].y)) / det;
+    l0 = 1.0 - l1 - l2;
+    return true;
+  };
   auto hidden = [&](const glm::dvec3& s, int first, int second) {
     const int a = static_cast<int>(std::floor(s.x / kCell));
     const int b = static_cast<int>(std::floor(s.y / kCell));
     if (a < 0 || b < 0 || a >= cx || b >= cy) return true;
     for (int k : cells[static_cast<std::size_t>(b) * cx + a]) {
       if (k == first || k == second) continue;
-      const auto& v = screen[k];
-      const double det =
-          (v[1].x - v[0].x) * (v[2].y - v[0].y) - (v[2].x - v[0].x) * (v[1].y - v[0].y);
-      if (det == 0) continue;
-      const double l1 =
-          ((s.x - v[0].x) * (v[2].y - v[0].y) - (v[2].x - v[0].x) * (s.y - v[0].y)) / det;
-      const double l2 =
-          ((v[1].x - v[0].x) * (s.y - v[0].y) - (s.x - v[0].x) * (v[1].y - v[0].y)) / det;
-      const double l0 = 1.0 - l1 - l2;
+      double l0, l1, l2;
+      if (!barycentric(k, s.x, s.y, l0, l1, l2)) continue;
       if (l0 < 0 || l1 < 0 || l2 < 0) continue;
+      const auto& v = screen[k];
       const double z = l0 * v[0].z + l1 * v[1].z + l2 * v[2].z;  // affine in screen space
       if (z < s.z - 1e-7) return true;
     }
@@ -213,6 +218,20 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
     }
   }
   t.pixels = static_cast<std::size_t>(std::count(t.mask.begin(), t.mask.end(), 1));
+  // The recall ceiling: truth pixels whose centre at least two triangles cover.
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      if (!t.mask[static_cast<std::size_t>(y) * width + x]) continue;
+      const double px = x + 0.5, py = y + 0.5;
+      int surfaces = 0;
+      for (int k : cells[static_cast<std::size_t>(y / kCell) * cx + x / kCell]) {
+        double l0, l1, l2;
+        if (barycentric(k, px, py, l0, l1, l2) && l0 >= 0 && l1 >= 0 && l2 >= 0 && ++surfaces == 2)
+          break;
+      }
+      t.reachable += surfaces >= 2;
+    }
+  }
   return t;
 }
 
@@ -266,6 +285,7 @@ Accuracy measure_accuracy(const IntersectionTruth& truth,
     a.hits += truth.mask[p] && flagged[p];
   }
   a.recall = a.truth ? static_cast<double>(a.hits) / a.truth : 0;
+  a.ceiling = truth.pixels ? static_cast<double>(truth.reachable) / truth.pixels : 0;
   a.precision = a.flagged ? static_cast<double>(a.hits) / a.flagged : 0;
   WidthSum all;
   for (const CurveSample& s : truth.visible) {

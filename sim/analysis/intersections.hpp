@@ -10,6 +10,11 @@
 //    are ignored (they have no intersection curve).
 //  - A curve sample is visible when no third triangle covers its screen position nearer
 //    than it (by more than 1e-7 of the depth range).
+//  - A truth pixel is reachable when at least two drawable triangles cover its centre: a
+//    depth-test highlighter compares a sample with another only where two surfaces reach the
+//    same pixel, so a truth pixel reached by one surface (or none: the band of width delta
+//    spills past the surfaces' outlines) cannot be flagged by any program. The share of
+//    truth pixels that are reachable is the recall ceiling of the truth.
 //  - Screen conventions are the GP's: pixel (X, Y) has its centre at (X + 0.5, Y + 0.5),
 //    y down, depth in [0, 1] from the near to the far plane.
 #include <cstdint>
@@ -49,6 +54,7 @@ struct IntersectionTruth {
   std::vector<CurveSample> visible;  // the visible samples
   std::vector<std::uint8_t> mask;    // pixels within delta of a visible sample
   std::size_t pixels = 0;            // set bits of mask
+  std::size_t reachable = 0;         // of those, pixels whose centre two or more triangles cover
 };
 
 // Samples every segment at `spacing` pixels on the screen. With visible_only false, hidden
@@ -59,6 +65,7 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
 struct Accuracy {
   std::size_t truth = 0, flagged = 0, hits = 0;
   double recall = 0;     // hits / truth
+  double ceiling = 0;    // truth.reachable / truth: the highest recall any program can reach
   double precision = 0;  // hits / flagged
   // Width of the flagged curve across the true one, in pixels, measured at the visible
   // samples whose own pixel is flagged; `coverage` is the share of samples that are.

@@ -451,7 +451,7 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
   // |C| / |(A, B)| <= |(u, w)| of the edge's first vertex: so 2^-n 2 R, R the farthest pixel
   // or vertex from the origin.
   report.E_snap = std::sqrt(2.0) * std::ldexp(1.0, -(config.gp.subpixel_bits + 1));
-  if (config.gp.edge_significand_bits < 62) {
+  if (config.gp.significand_bits < 62) {
     double R = std::hypot(config.screen.width, config.screen.height);
     for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
       pieces.clear();
@@ -461,7 +461,7 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
           R = std::max(R, std::hypot(std::fabs(v.position.x) + 1, std::fabs(v.position.y) + 1));
       }
     }
-    report.E_edge = std::ldexp(2.0 * R, -config.gp.edge_significand_bits);
+    report.E_edge = std::ldexp(2.0 * R, -config.gp.significand_bits);
   }
   report.E = report.E_snap + report.E_edge;
   const Reference ref = reference(config, scene, report.E);

@@ -25,7 +25,7 @@
 //  - The paper's bound, in our terms. E: the farthest the edge the GP sends lies from the true
 //    one, E_snap + E_edge pixels. E_snap = sqrt(2) 2^-(gp.subpixel_bits + 1) (each vertex
 //    moves by at most half a snapped unit in x and in y; the paper's E is along x only).
-//    E_edge = 2^-n 2 R with n = gp.edge_significand_bits (0 at 62): rounding A, B and C to n
+//    E_edge = 2^-n 2 R with n = gp.significand_bits (0 at 62): rounding A, B and C to n
 //    significant bits changes A x + B y + C by at most 2^-n (|A| x + |B| y + |C|), which is at
 //    most 2^-n 2 R |(A, B)|, R the farthest screen pixel or triangle vertex from the origin. M: the
 //    larger depth gradient (depth units per pixel, Euclidean, the paper's dZ/dX in any direction)

@@ -1,12 +1,18 @@
 #include "sim/analysis/spheres.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
 #include "common/parallel_for.hpp"
+#include "models/machine.hpp"
+#include "sim/analysis/analysis_firmware.hpp"
 #include "sim/analysis/field_render.hpp"
+#include "sim/analysis/visible_surface.hpp"
+#include "sim/simulation.hpp"
 
 namespace pp5 {
 
@@ -160,8 +166,55 @@ DrawnSpheres draw_spheres(const MachineConfig& config, const Scene& scene, const
   return out;
 }
 
+std::vector<int> shown_spheres(const MachineConfig& config, const Scene& drawn,
+                               const std::vector<int>& triangle_sphere, int threads) {
+  const int triangles = static_cast<int>(drawn.mesh.triangles.size());
+  if (static_cast<std::size_t>(triangles) + drawn.spheres.size() >= (std::size_t{1} << 24) - 1)
+    throw std::invalid_argument(
+        fmt::format("scene '{}': too many primitives for 24-bit visibility colours", drawn.name));
+  // Triangles coloured t + 1 (visibility_scene), spheres triangles + k + 1; colours exact
+  // multiples of 1/255, so the GP's constant is the byte itself.
+  Scene ids = visibility_scene(drawn, {});
+  for (std::size_t k = 0; k < ids.spheres.size(); ++k) {
+    const auto id = static_cast<unsigned>(triangles) + static_cast<unsigned>(k) + 1;
+    ids.spheres[k].color = glm::vec3(static_cast<float>(id & 0xFF) / 255.0f,
+                                     static_cast<float>((id >> 8) & 0xFF) / 255.0f,
+                                     static_cast<float>((id >> 16) & 0xFF) / 255.0f);
+  }
+  const std::string text = zbuffer_colour_firmware(
+                               "Visibility with spheres: each pixel keeps the nearest "
+                               "primitive's index, z-buffered on depth and sphere_depth.",
+                               config.gp.depth_bits, "depth", "base") +
+                           R"(
+proc sphere
+  eall
+  qtest.ge sphere_inside
+  qcmp.lt z, sphere_depth
+  qload z, sphere_depth
+  qload red, sphere_red
+  qload green, sphere_green
+  qload blue, sphere_blue
+end
+)";
+  const Program program = assemble(text, "visibility-spheres", assembler_options(config));
+  const IdImage id = decode_visibility(simulate_frame(config, ids, program, threads).image.flat());
+  std::vector<int> out(id.id.size(), -1);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const int v = id.id[i];
+    if (v < 0) continue;
+    if (v < triangles) {
+      const auto t = static_cast<std::size_t>(v);
+      out[i] = t < triangle_sphere.size() && triangle_sphere[t] >= 0 ? triangle_sphere[t] : -2;
+    } else {
+      out[i] = v - triangles;
+    }
+  }
+  return out;
+}
+
 SphereAccuracy measure_spheres(const MachineConfig& config, const Scene& scene,
-                               const RayCast& truth, const DrawnSpheres& drawn) {
+                               const RayCast& truth, const DrawnSpheres& drawn,
+                               const std::vector<int>& shown) {
   const Rays rays(config, scene.camera);
   SphereAccuracy a;
   double depth_sum = 0, normal_sum = 0;
@@ -190,8 +243,12 @@ SphereAccuracy measure_spheres(const MachineConfig& config, const Scene& scene,
         a.normal_max_error_degrees = std::max(a.normal_max_error_degrees, angle);
         normal_sum += angle;
       }
+      if (truth.what[i] < -1) {
+        ++a.triangle_pixels;
+        a.triangle_depth_max_error = std::max(a.triangle_depth_max_error, dz);
+      }
       if (truth.spheres[i] >= 2 && truth.what[i] >= 0) {
-        ++a.curve_pixels;
+        ++a.overlap_pixels;
         // The sphere the drawn depth belongs to: the one whose exact depth is nearest it.
         int nearest = -1;
         double best = kInf;
@@ -206,8 +263,40 @@ SphereAccuracy measure_spheres(const MachineConfig& config, const Scene& scene,
             nearest = static_cast<int>(k);
           }
         }
-        if (nearest != truth.what[i]) ++a.curve_wrong;
+        if (nearest != truth.what[i]) ++a.overlap_depth_wrong;
+        if (!shown.empty() && shown[i] != truth.what[i]) ++a.overlap_shown_wrong;
       }
+    }
+  }
+  // What the pixels show, against the ray cast's visible primitive.
+  if (!shown.empty()) {
+    for (std::size_t i = 0; i < shown.size(); ++i) {
+      if (truth.what[i] < -1 && shown[i] != -2) ++a.triangle_shown_wrong;
+    }
+  }
+  // Intersection-curve pixels, from the ray cast alone.
+  auto depth_of = [&](int k, int x, int y) { return sphere_depth_at(config, scene, k, x, y); };
+  for (int y = 0; y < truth.height; ++y) {
+    for (int x = 0; x < truth.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * truth.width + x;
+      const int a0 = truth.what[i];
+      if (a0 < 0 || truth.spheres[i] < 2) continue;
+      bool curve = false;
+      for (const auto& [dx, dy] :
+           {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+        const int qx = x + dx, qy = y + dy;
+        if (curve || qx < 0 || qy < 0 || qx >= truth.width || qy >= truth.height) continue;
+        const std::size_t j = static_cast<std::size_t>(qy) * truth.width + qx;
+        const int b0 = truth.what[j];
+        if (b0 < 0 || b0 == a0 || truth.spheres[j] < 2) continue;
+        // Both surfaces at both centres, nearer first at one and second at the other.
+        const double za_p = depth_of(a0, x, y), zb_p = depth_of(b0, x, y);
+        const double za_q = depth_of(a0, qx, qy), zb_q = depth_of(b0, qx, qy);
+        curve = std::isfinite(zb_p) && std::isfinite(za_q) && za_p <= zb_p && zb_q <= za_q;
+      }
+      if (!curve) continue;
+      ++a.curve_pixels;
+      if (!shown.empty() && shown[i] != a0) ++a.curve_shown_wrong;
     }
   }
   if (both > 0) {

@@ -43,6 +43,16 @@ struct DrawnSpheres {
 DrawnSpheres draw_spheres(const MachineConfig& config, const Scene& scene, const Program& program,
                           int threads);
 
+// Which primitive each pixel shows, read from firmware as `pp5sim visible` reads it: the scene
+// `drawn` is run with every primitive's index + 1 as its unlit colour (24 bits over red,
+// green, blue) under a z-buffer on the same depth expressions as phong.pp5 (`depth` for a
+// triangle, `sphere_depth` for a sphere), and the frame decoded. Per pixel: the index of the
+// sphere shown, -1 for background, -2 for a triangle that stands for no sphere.
+// `triangle_sphere[t]` is the sphere triangle t of drawn.mesh stands for (a tessellation's
+// triangle), or -1; empty: no triangle stands for a sphere.
+std::vector<int> shown_spheres(const MachineConfig& config, const Scene& drawn,
+                               const std::vector<int>& triangle_sphere, int threads);
+
 // The accuracy of a drawn frame against the ray cast.
 struct SphereAccuracy {
   std::uint64_t pixels = 0;            // pixels the ray cast finds covered
@@ -52,10 +62,24 @@ struct SphereAccuracy {
   double depth_mean_error = 0;
   double normal_max_error_degrees = 0;  // angle between drawn and exact normals
   double normal_mean_error_degrees = 0;
-  std::uint64_t curve_pixels = 0;  // pixels where two or more spheres meet the ray
-  std::uint64_t curve_wrong = 0;   // ... where the drawn depth is nearer another sphere's
+  // Overlap pixels: a sphere is visible and the ray meets two or more spheres.
+  std::uint64_t overlap_pixels = 0;
+  std::uint64_t overlap_depth_wrong = 0;  // ... where the drawn depth is nearer another sphere's
+  std::uint64_t overlap_shown_wrong = 0;  // ... where the pixel shows another primitive
+  // Intersection-curve pixels: the visible sphere differs from a 4-neighbour's, and both
+  // spheres' surfaces cover both pixels with their depth order swapped between them (the two
+  // surfaces cross between the centres: a silhouette over another sphere is not counted).
+  std::uint64_t curve_pixels = 0;
+  std::uint64_t curve_shown_wrong = 0;  // ... where the pixel shows another primitive
+  // Triangle pixels: the ray cast's visible surface is a triangle; the largest depth error
+  // there (depth units), and pixels that show something else.
+  std::uint64_t triangle_pixels = 0;
+  double triangle_depth_max_error = 0;
+  std::uint64_t triangle_shown_wrong = 0;
 };
+// `shown` (shown_spheres), or empty to leave the *_shown_wrong counts 0.
 SphereAccuracy measure_spheres(const MachineConfig& config, const Scene& scene,
-                               const RayCast& truth, const DrawnSpheres& drawn);
+                               const RayCast& truth, const DrawnSpheres& drawn,
+                               const std::vector<int>& shown = {});
 
 }  // namespace pp5

@@ -195,7 +195,7 @@ Command add_csg_command(CLI::App& app) {
   auto o = std::make_shared<CsgOptions>();
   auto* cmd = app.add_subcommand(
       "csg",
-      "The parity and depth-interval applications (Rossignac 9.2) on the machine, each "
+      "The parity and depth-interval applications (Rossignac 9.2.2 to 9.2.4) on the machine, each "
       "against a double-precision ground truth (--application, all by default): parity, point "
       "in solid (parity, parity_accurate); interference of two solids by depth intervals "
       "(interference, interference_accurate); csg, CSG rendering by Goldfeather's multipass "

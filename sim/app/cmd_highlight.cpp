@@ -104,15 +104,17 @@ int run_highlight(const HighlightOptions& o) {
   }
 
   std::string table = fmt::format(
-      "| program | scene | truth px | flagged px | recall | precision | width mean | width sd | "
-      "coverage | {} | bits of {} | spilled | {} polygons/s ({} GP code) | {} "
+      "| program | scene | truth px | flagged px | recall | recall ceiling | precision | width "
+      "mean | "
+      "width sd | coverage | {} | bits of {} | spilled | {} polygons/s ({} GP code) | {} "
       "polygons/s (compiled GP code) "
-      "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+      "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       compare ? fmt::format("changed by {} order", other.text()) : std::string("order change"),
       config.renderer.memory_bits, o.speed_scene, name_of(config.gp.code), o.speed_scene);
   std::string curve_table;
   std::string csv =
-      "program,scene,truth_pixels,flagged_pixels,recall,precision,width_mean,width_sd,coverage,"
+      "program,scene,truth_pixels,flagged_pixels,recall,recall_ceiling,precision,width_mean,width_"
+      "sd,coverage,"
       "order,compare_order,order_changed_pixels,order_change,bits_used,memory_bits,spilled,"
       "polygons_per_second,polygons_per_second_compiled\n";
   for (const Scene& scene : scenes) {
@@ -127,8 +129,11 @@ int run_highlight(const HighlightOptions& o) {
       truths[all] = intersection_truth(scene, config.screen.width, config.screen.height, delta,
                                        0.25, all == 0);
     }
-    std::cerr << fmt::format("{}: {} intersection segments; {} truth pixels visible, {} in all\n",
-                             scene_name, truths[0].segments, truths[0].pixels, truths[1].pixels);
+    std::cerr << fmt::format(
+        "{}: {} intersection segments; {} truth pixels visible ({} reached by two or more "
+        "surfaces), {} in all ({})\n",
+        scene_name, truths[0].segments, truths[0].pixels, truths[0].reachable, truths[1].pixels,
+        truths[1].reachable);
     // The same scene in the other display-list order (from the built-in order, so that
     // "--order reversed --compare-order given" compares the same two orders both ways).
     Scene reordered = make_builtin_scene(scene_name);
@@ -185,16 +190,17 @@ int run_highlight(const HighlightOptions& o) {
       const std::string speed_compiled =
           o.speed_scene.empty() ? "-" : fmt::format("{:.0f}", e.speed_compiled);
       table += fmt::format(
-          "| {} | {} | {} | {} | {:.3f} | {:.3f} | {:.2f} | {:.2f} | {:.3f} | {} | {} | {} | {} | "
+          "| {} | {} | {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.2f} | {:.2f} | {:.3f} | {} | {} | "
           "{} "
-          "|\n",
-          e.name, scene_name, a.truth, a.flagged, a.recall, a.precision, a.width_mean, a.width_sd,
-          a.coverage, change, e.program.bits_used(), spilled_fields(e.program), speed,
+          "| {} | {} |\n",
+          e.name, scene_name, a.truth, a.flagged, a.recall, a.ceiling, a.precision, a.width_mean,
+          a.width_sd, a.coverage, change, e.program.bits_used(), spilled_fields(e.program), speed,
           speed_compiled);
       csv += fmt::format(
-          "{},{},{},{},{:.6f},{:.6f},{:.4f},{:.4f},{:.6f},{},{},{},{},{},{},{},{},{}\n", e.name,
-          scene_name, a.truth, a.flagged, a.recall, a.precision, a.width_mean, a.width_sd,
-          a.coverage, order.text(), compare ? other.text() : "none", compare ? changed : 0,
+          "{},{},{},{},{:.6f},{:.6f},{:.6f},{:.4f},{:.4f},{:.6f},{},{},{},{},{},{},{},{},{}\n",
+          e.name, scene_name, a.truth, a.flagged, a.recall, a.ceiling, a.precision, a.width_mean,
+          a.width_sd, a.coverage, order.text(), compare ? other.text() : "none",
+          compare ? changed : 0,
           compare && a.flagged ? static_cast<double>(changed) / a.flagged : 0.0,
           e.program.bits_used(), config.renderer.memory_bits, spilled_fields(e.program), speed,
           speed_compiled);

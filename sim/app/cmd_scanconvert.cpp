@@ -76,9 +76,9 @@ int run_scanconvert(const ScanConvertOptions& o) {
   outputs.add((fs::path(o.out_dir) / "scanconvert.md").string(), table + "\n" + notes);
   // The table and every image together, or none of them (sim/output).
   outputs.commit();
-  const int n = config.gp.edge_significand_bits;
+  const int n = config.gp.significand_bits;
   std::cout << fmt::format(
-                   "{} x {} screen, vertices snapped to 1/{} pixel, edge coefficients {}\n\n",
+                   "{} x {} screen, vertices snapped to 1/{} pixel, the GP's coefficients {}\n\n",
                    config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits,
                    n < 62 ? fmt::format("kept to {} significant bits", n) : std::string("exact"))
             << table << "\n"

@@ -60,7 +60,7 @@ int run_spheres(const SpheresOptions& o) {
   const FrameResult base = simulate_frame(config, empty, program, o.threads);
   const RayCast truth = ray_cast(config, scene);
 
-  auto row = [&](const std::string& what, const Scene& s) {
+  auto row = [&](const std::string& what, const Scene& s, const std::vector<int>& stands_for) {
     const FrameResult r = simulate_frame(config, s, program, o.threads);
     SphereRow out;
     out.what = what;
@@ -85,12 +85,13 @@ int run_spheres(const SpheresOptions& o) {
         config.renderer.count * config.renderer.clock_hz / std::max(1.0, out.renderer_cycles);
     out.rate = std::min(gp_rate, renderer_rate);
     out.accuracy =
-        measure_spheres(config, scene, truth, draw_spheres(config, s, program, o.threads));
+        measure_spheres(config, scene, truth, draw_spheres(config, s, program, o.threads),
+                        shown_spheres(config, s, stands_for, o.threads));
     return out;
   };
 
   std::vector<SphereRow> rows;
-  rows.push_back(row("quadric", scene));
+  rows.push_back(row("quadric", scene, {}));
   for (const std::string& t : o.tessellations) {
     int u = 0, v = 0;
     if (std::sscanf(t.c_str(), "%dx%d", &u, &v) != 2 || u < 3 || v < 2 || u > 1024 || v > 1024) {
@@ -101,7 +102,14 @@ int run_spheres(const SpheresOptions& o) {
     Scene tess = scene;
     tess.spheres.clear();
     append_tessellated_spheres(scene.spheres, u, v, tess.mesh);
-    rows.push_back(row(fmt::format("{} ({} triangles)", t, 2 * u * (v - 1)), tess));
+    // The scene's own triangles stand for no sphere; then 2 u (v - 1) per sphere, in order.
+    std::vector<int> stands_for(scene.mesh.triangles.size(), -1);
+    for (std::size_t k = 0; k < scene.spheres.size(); ++k)
+      stands_for.insert(stands_for.end(), static_cast<std::size_t>(2 * u * (v - 1)),
+                        static_cast<int>(k));
+    if (stands_for.size() != tess.mesh.triangles.size())
+      throw std::logic_error("cmd_spheres: tessellation triangle count");
+    rows.push_back(row(fmt::format("{} ({} triangles)", t, 2 * u * (v - 1)), tess, stands_for));
   }
 
   std::cout << fmt::format(
@@ -113,17 +121,20 @@ int run_spheres(const SpheresOptions& o) {
   std::cout << "| spheres as | GP clocks | packet words | ring words | Renderer cycles | spheres/s "
                "| coverage "
                "errors (extra / missing of covered) | depth error max / mean | normal error max "
-               "/ mean | intersection pixels wrong |\n";
-  std::cout << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+               "/ mean | overlap pixels: depth nearer another sphere | overlap pixels: showing "
+               "another primitive | intersection-curve pixels: showing another primitive |\n";
+  std::cout << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const SphereRow& r : rows) {
     const SphereAccuracy& a = r.accuracy;
     std::cout << fmt::format(
         "| {} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.3g} | {} / {} of {} | {:.0f} / {:.1f} | "
         "{:.1f}° / "
-        "{:.2f}° | {} of {} |\n",
+        "{:.2f}° | {} of {} | {} of {} | {} of {} |\n",
         r.what, r.gp_clocks, r.packet_words, r.ring_words, r.renderer_cycles, r.rate,
         a.coverage_extra, a.coverage_missing, a.pixels, a.depth_max_error, a.depth_mean_error,
-        a.normal_max_error_degrees, a.normal_mean_error_degrees, a.curve_wrong, a.curve_pixels);
+        a.normal_max_error_degrees, a.normal_mean_error_degrees, a.overlap_depth_wrong,
+        a.overlap_pixels, a.overlap_shown_wrong, a.overlap_pixels, a.curve_shown_wrong,
+        a.curve_pixels);
   }
   return 0;
 }
