@@ -11,6 +11,9 @@
 //    none is read back from a configuration constant or a published figure.
 //  - Each row says whether its figure was fitted (the simulator was tuned to it, so matching
 //    it is a consistency check), derived (the configuration follows from it) or predicted.
+//    A figure is fitted when any fitted key of the configuration table names it as consumed
+//    (fits_consuming), so marking a constant fitted reaches the report without code here;
+//    only predictions count as evidence (evidence_summary).
 //  - The sensitivity table varies one constant at a time, to each end of its declared
 //    plausible range (ParameterInfo::low/high: the --set assignments that put the machine
 //    there), from `base`; every other key stays as in `base`. Constants come from the
@@ -41,6 +44,13 @@ struct ValidationRow {
   std::string unit;
   std::string status;  // "fitted", "derived" or "predicted"
   std::string note;    // what else the run showed (a second figure, a caveat)
+  // The figure's id in the configuration table's fits (ParameterInfo::consumes), if any, and
+  // the fitted keys whose fit consumed it: then the status is "fitted" whatever the row
+  // would otherwise say, and the figure is no evidence.
+  std::string id = {};
+  std::vector<std::string> consumed_by = {};
+  // Only a prediction is evidence for the model: a fitted figure comes out by construction.
+  bool evidence() const { return status == "predicted"; }
   // (simulated - published_value) / published_value
   double difference() const {
     return published_value != 0 ? (simulated - published_value) / published_value : 0;
@@ -90,6 +100,9 @@ SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& loa
                              const std::vector<std::string>& only = {});
 
 std::string validation_markdown(const std::vector<ValidationRow>& rows);
+// Which figures are evidence: the predictions, each with its difference, and the figures a
+// fit consumed (with the keys), which are not.
+std::string evidence_summary(const std::vector<ValidationRow>& rows);
 std::string validation_csv(const std::vector<ValidationRow>& rows);
 std::string sensitivity_markdown(const SensitivityTable& table);
 std::string sensitivity_csv(const SensitivityTable& table);

@@ -34,7 +34,7 @@ int run_validate(const ValidateOptions& o) {
   const auto rows = validate_against_record(config, load, options);
   std::string report =
       "Published figures beside the simulator's projection of the same workload:\n\n" +
-      validation_markdown(rows);
+      validation_markdown(rows) + "\n" + evidence_summary(rows);
   OutputSet outputs;
   outputs.add(o.out + "/validate.csv", validation_csv(rows));
   if (o.sensitivity) {
