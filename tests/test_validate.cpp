@@ -212,3 +212,56 @@ TEST_CASE("sensitivity: an end that does not combine with the configuration has 
   CHECK(t.rows[0].rates[0][2] > 0);
   CHECK_THAT(sensitivity_markdown(t), Catch::Contains("| - .. "));
 }
+
+TEST_CASE("joint sensitivity: a seeded Latin hypercube over constants and workload choices",
+          "[validate]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=512", "screen.height=512", "gp.count=8", "renderer.count=4"});
+  JointSensitivityOptions options;
+  options.samples = 9;
+  options.tessellation_u = 32;
+  options.tessellation_v = 8;
+  const JointSensitivity a = joint_sensitivity(config, kLoad, options);
+  REQUIRE(a.points.size() == 9);
+  CHECK(a.skipped.empty());
+  // Deterministic: the same seed gives the same samples and figures.
+  const JointSensitivity b = joint_sensitivity(config, kLoad, options);
+  for (std::size_t i = 0; i < a.points.size(); ++i) {
+    CHECK(a.points[i].sets == b.points[i].sets);
+    CHECK(a.points[i].rate == b.points[i].rate);
+  }
+  // A Latin hypercube: a numeric constant takes one value in each ninth of its range.
+  std::vector<double> factors;
+  std::set<std::string> scenes, culling;
+  for (const JointSample& p : a.points) {
+    for (const std::string& s : p.sets) {
+      if (s.rfind("gp.overhead_factor=", 0) == 0) factors.push_back(std::stod(s.substr(19)));
+      if (s.rfind("gp.cull_back_faces=", 0) == 0) culling.insert(s);
+    }
+    scenes.insert(p.scene.substr(0, p.scene.find(' ')));
+  }
+  REQUIRE(factors.size() == 9);
+  std::sort(factors.begin(), factors.end());
+  for (std::size_t i = 0; i < factors.size(); ++i) {
+    const double lo = 2.61 + (3.73 - 2.61) * static_cast<double>(i) / 9;
+    CHECK(factors[i] >= lo - 1e-4);
+    CHECK(factors[i] <= lo + (3.73 - 2.61) / 9 + 1e-4);
+  }
+  CHECK(scenes.size() == 2);
+  CHECK(culling.size() == 2);
+  // Each conclusion's share is counted from the samples themselves.
+  REQUIRE(a.conclusions.size() == 3);
+  int below = 0, renderers = 0;
+  for (const JointSample& p : a.points) {
+    below += p.rate < 1e6;
+    renderers += p.bottleneck == "Renderers";
+  }
+  CHECK(a.conclusions[0].holds == renderers);
+  CHECK(a.conclusions[1].holds == below);
+  CHECK(a.conclusions[1].min <= a.conclusions[1].median);
+  CHECK(a.conclusions[1].median <= a.conclusions[1].max);
+  CHECK_THAT(joint_sensitivity_markdown(a), Catch::Contains("holds in"));
+  // Another seed draws other machines.
+  options.seed = 7;
+  CHECK(joint_sensitivity(config, kLoad, options).points[0].sets != a.points[0].sets);
+}

@@ -22,6 +22,7 @@
 //    coefficient bits `base` asks for) has the rate NaN, printed '-'.
 //  - Deterministic: the same inputs give the same rows.
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -98,6 +99,56 @@ struct SensitivityTable {
 SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& load,
                              const std::vector<SensitivityWorkload>& workloads,
                              const std::vector<std::string>& only = {});
+
+// Joint sensitivity of the headline conclusions (docs/timing.md "Sensitivity of the
+// conclusions"): every fitted or assumed constant with a plausible range and the workload
+// choices vary together, by a Latin hypercube with a seeded generator (splitmix64, the same
+// on every host). A constant with one numeric key at each end takes a value between them
+// (geometrically when the ends differ fourfold or more, rounded for an integer key); a
+// choice, or ends that move linked keys, takes the low end, the default or the high end.
+// Workload choices: the scene (the torus or the figure-eight), its tessellation (triangle
+// size: the scene's triangles x 1/4, 1 or 4 about `options`' torus), back-face culling; the
+// ring's arbitration is gp.send_order among the constants. The workload is the design
+// goal's: phong on hand-coded GPs at `base`'s screen. Frames run at `level` (analytic by
+// default: validated against the event level on held-out machines).
+struct JointSensitivityOptions {
+  int samples = 64;
+  std::uint64_t seed = 0x3403;
+  std::string level = "analytic";  // fidelity.timing of every sample
+  int tessellation_u = 512;        // the torus at the middle triangle size
+  int tessellation_v = 128;
+};
+
+struct JointSample {
+  std::vector<std::string> sets;  // over `base`
+  std::string scene;
+  int triangles = 0;
+  double rate = 0;            // triangles/s, one frame
+  double pipelined_rate = 0;  // triangles/s, frames pipelined
+  std::string bottleneck;
+};
+
+// A headline conclusion and how it fares over the samples.
+struct ConclusionShare {
+  std::string conclusion;                // what the default machine says
+  std::string measure;                   // what is measured per sample
+  double low = 0, median = 0, high = 0;  // the measure's 5th percentile, median, 95th
+  double min = 0, max = 0;
+  int holds = 0;  // samples where the conclusion holds
+  int samples = 0;
+};
+
+struct JointSensitivity {
+  JointSensitivityOptions options;
+  std::vector<std::string> varied;  // the constants and workload choices varied
+  std::vector<JointSample> points;
+  std::vector<std::string> skipped;  // samples whose ends do not combine, with the error
+  std::vector<ConclusionShare> conclusions;
+};
+
+JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoader& load,
+                                   const JointSensitivityOptions& options = {});
+std::string joint_sensitivity_markdown(const JointSensitivity& joint);
 
 std::string validation_markdown(const std::vector<ValidationRow>& rows);
 // Which figures are evidence: the predictions, each with its difference, and the figures a
