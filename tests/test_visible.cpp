@@ -127,16 +127,25 @@ TEST_CASE("visible surfaces: every algorithm agrees with the reference without h
 }
 
 // Cyclic overlap and interpenetration are the failure cases of Newell, Newell and Sancha's
-// depth sort (which splits the polygons); the slides do not discuss them, and the report
-// attributes them to their source.
-TEST_CASE("visible surfaces: painter's fails where its tests cannot order a pair", "[visible]") {
+// depth sort, which splits a polygon by the other's plane there; the slides do not discuss
+// them. Without splitting (split_rounds 0) painter's fails on them; with it (the default)
+// it draws them with no differing certain pixel.
+TEST_CASE("visible surfaces: painter's splits the pairs its tests cannot order", "[visible]") {
+  const MachineConfig config = small_machine();
+  const Program gouraud = test::load_program("gouraud", config);
+  const Program painter = test::load_program("painter", config);
+  PainterOptions unsplit;
+  unsplit.split_rounds = 0;
   for (const char* name : {"cyclic-overlap", "pierced-quad", "two-triangles", "receding-pairs"}) {
     SECTION(name) {
-      const VisibleSceneReport r = analyse(name);
-      const std::string text = format_visible_report({r}, small_machine());
+      const Scene scene = make_builtin_scene(name);
+      const VisibleSceneReport r =
+          analyse_visible_surfaces(config, scene, gouraud, painter, 2, unsplit);
+      const std::string text = format_visible_report({r}, config);
       INFO(text);
       CHECK_FALSE(r.sort.unresolved.empty());
       CHECK(r.rows[1].difference.differing > 0);
+      CHECK(r.split_triangles == 0);
       CHECK(text.find("failure cases of Newell, Newell and Sancha's depth sort") !=
             std::string::npos);
       CHECK(text.find("as the slides say") == std::string::npos);
@@ -144,10 +153,32 @@ TEST_CASE("visible surfaces: painter's fails where its tests cannot order a pair
       CHECK(r.rows[0].difference.differing == 0);
       CHECK(r.rows[2].difference.differing == 0);
       CHECK(r.rows[3].difference.differing == 0);
+      // Split, painter's draws them too.
+      const VisibleSceneReport split = analyse_visible_surfaces(config, scene, gouraud, painter, 2);
+      INFO(format_visible_report({split}, config));
+      CHECK(split.unresolved_before_split == r.sort.unresolved.size());
+      CHECK(split.split_triangles > 0);
+      CHECK(split.pieces > split.polygons - split.culled);
+      CHECK(split.sort.unresolved.empty());
+      CHECK(split.rows[1].difference.differing == 0);
     }
   }
+  SECTION("the torus's self-intersections") {
+    // On the default machine (1280 x 1024, 32 GPs), as `pp5sim visible` reports it: 296 pairs
+    // no test orders, 349 triangles split, no certain pixel differs. (At 256 x 256 on 4 GPs
+    // one certain pixel still differs, against about 450 unsplit; its cause is not known.)
+    const MachineConfig full = MachineConfig::defaults();
+    const VisibleSceneReport r = analyse_visible_surfaces(full, make_builtin_scene("torus"),
+                                                          test::load_program("gouraud", full),
+                                                          test::load_program("painter", full), 2);
+    CHECK(r.unresolved_before_split > 0);
+    CHECK(r.split_triangles > 0);
+    CHECK(r.sort.unresolved.empty());
+    CHECK(r.rows[1].difference.differing == 0);
+  }
   SECTION("the registered statistics say so too") {
-    const Statistics stats = visible_statistics({analyse("pierced-quad")});
+    const Statistics stats = visible_statistics({analyse_visible_surfaces(
+        config, make_builtin_scene("pierced-quad"), gouraud, painter, 2, unsplit)});
     CHECK(stats.text("scene.0.name") == "pierced-quad");
     CHECK(stats.integer("scene.0.depth_sort.unorderable") > 0);
     CHECK(stats.integer("scene.0.depth_sort.tests_run.projection") > 0);
@@ -156,8 +187,8 @@ TEST_CASE("visible surfaces: painter's fails where its tests cannot order a pair
     CHECK(stats.elements("scene.0.depth_sort.gp") == 4);
   }
   SECTION("the sticks' and the sliver's planes cut the others: no test orders them") {
-    CHECK(analyse("cyclic-overlap").sort.unorderable > 0);
-    CHECK(analyse("pierced-quad").sort.unorderable > 0);
+    CHECK(analyse("cyclic-overlap").unresolved_before_split > 0);
+    CHECK(analyse("pierced-quad").unresolved_before_split > 0);
   }
 }
 
@@ -280,7 +311,8 @@ TEST_CASE("visible surfaces: the depth sort's cost over the painter's choices", 
   old.overhead_factor = true;
   const VisibleSceneReport o = analyse_visible_surfaces(config, sphere, gouraud, painter, 2, old);
   CHECK(o.sort_seconds == o.sort_costs[5].seconds());
-  CHECK(o.sort.order.size() == r.polygons);
+  CHECK(o.sort.order.size() == o.pieces);
+  CHECK(o.pieces >= r.polygons);
   CHECK(o.rows[1].difference.differing == 0);
   CHECK(r.rows[1].difference.differing == 0);
   CHECK_THAT(format_visible_report({r}, config),

@@ -42,7 +42,9 @@ namespace pp5 {
 // z the screen depth, 0 near .. 1 far).
 struct ScreenPolygon {
   std::vector<glm::dvec3> v;
-  int source = 0;  // the scene triangle
+  std::vector<double> w;  // each vertex's clip w (eye depth): screen coordinates x w are
+                          // affine in the world point, which is what splitting needs
+  int source = 0;         // the scene triangle
 };
 
 // The scene's triangles through the machine's transform and clipping (with
@@ -124,6 +126,9 @@ struct AlgorithmRow {
 struct PainterOptions {
   bool remove_back_faces = true;  // false: every face is sorted and drawn (two-sided)
   bool overhead_factor = false;   // true: the sort's clocks x gp.overhead_factor too
+  // A pair no test orders: split one polygon by the other's plane (Newell, Newell and
+  // Sancha) and sort again, up to this many rounds; 0 leaves such pairs in far-depth order.
+  int split_rounds = 8;
 };
 
 // One way of running the sort and what it costs on the GPs: the slowest GP's prepare, the
@@ -147,6 +152,12 @@ struct VisibleSceneReport {
   std::uint64_t polygons = 0;      // after the transform (dropped ones removed)
   std::vector<AlgorithmRow> rows;  // z-buffer, painter's, scan-line, Warnock
   PainterOptions painter_options;
+  // Splitting: the rounds run, the triangles split, the pieces drawn in their place, and the
+  // pairs the first sort could not order.
+  int split_rounds = 0;
+  std::uint64_t split_triangles = 0;
+  std::uint64_t pieces = 0;
+  std::uint64_t unresolved_before_split = 0;
   DepthSortResult sort;
   std::vector<GpClocks> sort_clocks;  // per GP: prepare + its share of the checks
   GpClocks merge_clocks{};
