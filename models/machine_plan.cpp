@@ -50,6 +50,9 @@ I860Params i860_params(const MachineConfig& c) {
   p.assembly_code_bytes = c.gp.assembly_code_bytes;
   p.compiled_code_bytes = c.gp.compiled_code_bytes;
   p.overhead_factor = c.gp.overhead_factor;
+  p.overhead_form = c.gp.overhead_form == MachineConfig::Gp::OverheadForm::add
+                        ? I860Params::OverheadForm::add
+                        : I860Params::OverheadForm::multiply;
   return p;
 }
 

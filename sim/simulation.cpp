@@ -490,36 +490,30 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
   s.add_real("ring.utilisation", u::ratio, "Words carried / (bandwidth x frame time)",
              [ring_util] { return ring_util; });
 
-  // The critical path of the closed form: the GPs' geometry, then the map's trip, the
-  // busiest unit, and the last region's trip.
+  // The critical path of the contention recurrence: the critical Renderer's array time, its
+  // waits for computing GPs and for the ring (models/renderer/analytic.hpp).
   FrameAttribution at;
-  at.critical_renderer = a->busiest_renderer;
-  at.gp_seconds = a->geometry_seconds + (a->busiest_unit == "GPs" ? a->busiest_seconds : 0);
-  at.ring_seconds = (a->fill_seconds - a->geometry_seconds) + a->drain_seconds +
-                    (a->busiest_unit == "ring" ? a->busiest_seconds : 0);
-  at.renderer_seconds = a->busiest_unit == "Renderers" ? a->busiest_seconds : 0;
+  at.critical_renderer = a->critical_renderer;
+  at.gp_seconds = a->critical_gp_seconds;
+  at.ring_seconds = a->critical_ring_seconds;
+  at.renderer_seconds = a->critical_renderer_seconds;
   at.unattributed_seconds = 0;
-  at.bottleneck = "Renderers";
-  double top = at.renderer_seconds;
-  if (at.gp_seconds > top) at.bottleneck = "GPs", top = at.gp_seconds;
-  if (at.ring_seconds > top) at.bottleneck = "ring", top = at.ring_seconds;
+  at.bottleneck = a->bottleneck;
   auto attribution = std::make_shared<const FrameAttribution>(at);
-  s.add_integer("timing.critical_renderer", u::index, "The busiest Renderer",
+  s.add_integer("timing.critical_renderer", u::index, "The Renderer whose last region arrives last",
                 [attribution] { return std::int64_t{attribution->critical_renderer}; });
   s.add_real("timing.gp_seconds", u::seconds,
-             "Of the frame time: the slowest GP's geometry, and the GPs' sending if they are the "
-             "busiest unit",
+             "Of the frame time on the critical path: waiting for GPs that were computing",
              [attribution] { return attribution->gp_seconds; });
   s.add_real("timing.ring_seconds", u::seconds,
-             "Of the frame time: the bin map's and the last region's trips, and the ring's words "
-             "if it is the busiest unit",
+             "Of the frame time on the critical path: waiting for the ring, and the last "
+             "region's trip",
              [attribution] { return attribution->ring_seconds; });
   s.add_real("timing.renderer_seconds", u::seconds,
-             "Of the frame time: the busiest Renderer's cycles if the Renderers are the busiest "
-             "unit",
+             "Of the frame time on the critical path: the Renderer's array cycles",
              [attribution] { return attribution->renderer_seconds; });
   s.add_real("timing.unattributed_seconds", u::seconds,
-             "Always 0: the closed form is all explained", [] { return 0.0; });
+             "Always 0: the recurrence's critical path is all explained", [] { return 0.0; });
   s.add_text("timing.bottleneck", u::name,
              "The largest of gp_seconds, ring_seconds and renderer_seconds: GPs, ring or Renderers",
              [attribution] { return attribution->bottleneck; });
@@ -548,15 +542,18 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
              [balancing] { return balancing; });
   s.add_real("analytic.geometry_seconds", u::seconds, "The slowest GP's geometry pass",
              [a] { return a->geometry_seconds; });
-  s.add_real("analytic.fill_seconds", u::seconds,
-             "Until the last bin map is in: the slowest GP's geometry, then its map",
+  s.add_real("analytic.fill_seconds", u::seconds, "Until the last bin map is in at every Renderer",
              [a] { return a->fill_seconds; });
   s.add_real("analytic.busiest_seconds", u::seconds,
-             "The busiest unit's work: a Renderer's cycles, the ring's words or a GP's sending",
+             "What the contention recurrence adds between the fill and the drain",
              [a] { return a->busiest_seconds; });
+  s.add_real("analytic.closed_form_seconds", u::seconds,
+             "The closed form without contention: fill + the busiest unit's work + drain",
+             [a] { return a->closed_form_seconds; });
   s.add_real("analytic.drain_seconds", u::seconds, "The last region's trip to the frame buffer",
              [a] { return a->drain_seconds; });
-  s.add_text("analytic.busiest_unit", u::name, "Which unit is the busiest: GPs, ring or Renderers",
+  s.add_text("analytic.busiest_unit", u::name,
+             "Which unit the closed form names the busiest: GPs, ring or Renderers",
              [a] { return a->busiest_unit; });
   register_program_statistics(s, program);
   register_host_statistics(s, {host_seconds, timing_seconds, pixel_seconds, threads},

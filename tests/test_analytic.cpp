@@ -1,7 +1,7 @@
 // The analytic timing model against the event model: the work it sums is exactly the event
 // model's (packets, GP geometry clocks, Renderer busy cycles), the image it lets the boards
-// draw is the same, and its frame time over a grid of machines (GP and Renderer counts, ring
-// channels, programs) stays within a measured bound, asserted here as a regression bound.
+// draw is the same, and its frame time on a held-out grid of machines meets the targets where
+// it does (sim/analysis/analytic_validation.hpp), with the measured bound where it does not.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "sim/analysis/analytic_validation.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 #include "support.hpp"
@@ -140,47 +141,81 @@ TEST_CASE("analytic timing with word pixels draws the event model's image", "[an
   }
 }
 
-TEST_CASE("analytic frame time within its measured bound over a grid of machines", "[analytic]") {
-  // The bound is measured: the largest |analytic - event| / event over this grid, rounded up
-  // (docs/timing.md "Analytic timing" gives the table). A change to either model that moves
-  // the analytic error beyond it fails here and must say why.
-  // Measured on this grid: worst 31.8% (phong, 32 GPs, 2 Renderers, 1 ring channel: the
-  // ring and the Renderers take turns, the closed form overlaps them), mean 13.1%; the
-  // bottleneck agrees at 44 of the 48 points. (29.4%, 12.9% and 42 before the event model's
-  // GPs were woken nearest first, RegionScheduler, which moved that machine's frame 3.6%.)
-  constexpr double kBound = 0.33;
-  const Scene scene = make_builtin_scene("torus");
-  double worst = 0, sum = 0;
-  std::string worst_at;
-  int agree = 0, points = 0;
-  for (const char* program_name : {"phong", "threshold", "flat", "transparent"}) {
-    for (int gps : {4, 32}) {
-      for (int renderers : {2, 8, 16}) {
-        for (int channels : {1, 8}) {
-          MachineConfig config = MachineConfig::defaults();
-          config.set({"screen.width=640", "screen.height=512", fmt::format("gp.count={}", gps),
-                      fmt::format("renderer.count={}", renderers),
-                      fmt::format("ring.channels={}", channels)});
-          const Program program = test::load_program(program_name, config);
-          const FrameResult event = run(config, "event", "none", scene, program);
-          const FrameResult analytic = run(config, "analytic", "none", scene, program);
-          const double error =
-              std::abs(analytic.frame_seconds - event.frame_seconds) / event.frame_seconds;
-          const std::string at = fmt::format("{} gps={} renderers={} channels={}", program_name,
-                                             gps, renderers, channels);
-          if (error > worst) worst = error, worst_at = at;
-          sum += error;
-          ++points;
-          if (analytic.stats.text("timing.bottleneck") == event.stats.text("timing.bottleneck"))
-            ++agree;
-        }
-      }
-    }
+// The analytic level against the event level on the held-out grid: machines drawn with a
+// seeded generator over scenes, programs, screens and every timing knob, which the model was
+// never adjusted on (sim/analysis/analytic_validation.hpp; the tuning grid is the 48-point
+// torus grid, on which it was). Targets (docs/timing.md): worst frame-time error at most 15%,
+// Kendall tau at least 0.9. Measured on this grid (120 machines): mean 2.2%, worst 22.0% (a
+// machine with dynamic balancing, whose region claims the recurrence orders only
+// approximately), bottleneck agrees at 117 of 120, tau 0.987; with static balancing (59
+// machines) worst 9.5%, mean 1.3%. So the worst-error target is met with static balancing and
+// not with dynamic: the bound below is the measured 22.0% rounded up, a regression bound, and
+// the targets are asserted where they hold.
+TEST_CASE("analytic frame time on the held-out grid: error, bottleneck and rank against events",
+          "[analytic]") {
+  const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
+    return test::load_program(name, c);
+  };
+  const std::vector<GridMachine> grid = analytic_heldout_grid();
+  REQUIRE(grid.size() >= 100);
+  const AnalyticValidation v = validate_analytic("held-out", grid, load);
+  double static_worst = 0;
+  for (const AnalyticPoint& p : v.points) {
+    bool dynamic = false;
+    for (const std::string& set : p.machine.sets)
+      dynamic = dynamic || set == "renderer.balancing=dynamic";
+    if (!dynamic) static_worst = std::max(static_worst, std::abs(p.error()));
   }
-  INFO("worst error " << worst << " at " << worst_at << "; bottleneck agrees at " << agree << " of "
-                      << points);
   WARN(fmt::format(
-      "analytic frame time: worst error {:.2f}% ({}), mean {:.2f}%, bottleneck agrees at {} of {}",
-      100 * worst, worst_at, 100 * sum / points, agree, points));
-  CHECK(worst <= kBound);
+      "analytic on the held-out grid: mean {:.2f}%, worst {:.2f}% ({}), static "
+      "balancing worst {:.2f}%, bottleneck {} of {}, tau {:.3f}; closed form mean "
+      "{:.2f}%, worst {:.2f}%, tau {:.3f}",
+      100 * v.mean_error, 100 * v.worst_error, v.worst_at, 100 * static_worst, v.bottleneck_agree,
+      v.points.size(), v.kendall_tau, 100 * v.closed_form_mean_error,
+      100 * v.closed_form_worst_error, v.closed_form_tau));
+  CHECK(v.kendall_tau >= 0.9);
+  CHECK(static_worst <= 0.15);
+  CHECK(v.worst_error <= 0.23);
+  CHECK(v.mean_error <= 0.03);
+  CHECK(v.bottleneck_agree >= static_cast<int>(v.points.size()) * 95 / 100);
+  // The recurrence must beat the closed form it refines, on the same machines.
+  CHECK(v.mean_error < v.closed_form_mean_error);
+  CHECK(v.kendall_tau > v.closed_form_tau);
+}
+
+// What the closed form could not see: the ring's channels with few Renderers (a plateau:
+// 2 to 8 channels changed nothing there) and the Renderers' queue. Each now moves the
+// analytic frame time the way it moves the event model's.
+TEST_CASE("analytic frame time follows ring.channels and renderer.queue_words", "[analytic]") {
+  const Scene scene = make_builtin_scene("torus");
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=640", "screen.height=512", "gp.count=32", "renderer.count=2"});
+  const Program program = test::load_program("phong", config);
+  auto frame = [&](const std::vector<std::string>& sets, const char* timing) {
+    MachineConfig c = config;
+    c.set(sets);
+    return run(c, timing, "none", scene, program).frame_seconds;
+  };
+  for (const char* timing : {"event", "analytic"}) {
+    INFO(timing);
+    CHECK(frame({"ring.channels=1"}, timing) > 1.05 * frame({"ring.channels=8"}, timing));
+    CHECK(frame({"ring.channels=2"}, timing) > frame({"ring.channels=8"}, timing));
+    // A queue of one message makes the Renderer and the ring take turns.
+    CHECK(frame({"renderer.queue_words=1024"}, timing) >
+          1.02 * frame({"renderer.queue_words=16384"}, timing));
+  }
+  // The analytic level's gains track the event level's within a few per cent.
+  const double e = frame({"ring.channels=2"}, "event") / frame({"ring.channels=8"}, "event");
+  const double a = frame({"ring.channels=2"}, "analytic") / frame({"ring.channels=8"}, "analytic");
+  CHECK(a == Approx(e).epsilon(0.05));
+}
+
+TEST_CASE("Kendall's tau-b: orders, reversals and ties", "[analytic]") {
+  CHECK(kendall_tau({1, 2, 3, 4}, {10, 20, 30, 40}) == Approx(1.0));
+  CHECK(kendall_tau({1, 2, 3, 4}, {4, 3, 2, 1}) == Approx(-1.0));
+  // One discordant pair of six: (5 - 1) / 6.
+  CHECK(kendall_tau({1, 2, 3, 4}, {1, 2, 4, 3}) == Approx(4.0 / 6.0));
+  // A tie in y (x = 1, 2, 3; y = 1, 1, 2): one pair tied in y, two concordant, so
+  // tau-b = (C - D) / sqrt((C + D + Tx)(C + D + Ty)) = 2 / sqrt(2 x 3).
+  CHECK(kendall_tau({1, 2, 3}, {1, 1, 2}) == Approx(2.0 / std::sqrt(3.0 * 2.0)));
 }

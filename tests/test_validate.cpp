@@ -53,13 +53,26 @@ TEST_CASE("calibration: every timing constant is marked, and each range is a val
       CHECK(moves_key);
     }
   }
-  // The one fitted constant names the figure it was fitted to.
+  // Every fitted constant names the published figure it consumed, by id and in its basis:
+  // the overhead factor the hand-coded rate, the refill constants the compiled rate, the
+  // overhead's form the gap between the two.
+  std::set<std::string> fitted;
   for (const ParameterInfo& p : describe_parameters()) {
+    INFO(p.key);
     if (p.calibration == Calibration::fitted) {
-      CHECK(p.key == "gp.overhead_factor");
-      CHECK_THAT(p.basis, Catch::Contains("1 million polygons/second"));
+      fitted.insert(p.key);
+      CHECK(!p.consumes.empty());
+      CHECK_THAT(p.basis, Catch::Contains("polygons/second") || Catch::Contains("rates"));
+    } else {
+      CHECK(p.consumes.empty());
     }
   }
+  CHECK(fitted == std::set<std::string>{"gp.overhead_factor", "gp.icache_miss_clocks",
+                                        "gp.compiled_code_bytes", "gp.overhead_form"});
+  CHECK(fits_consuming("banks.compiled_rate") == std::vector<std::string>{"gp.icache_miss_clocks",
+                                                                          "gp.compiled_code_bytes",
+                                                                          "gp.overhead_form"});
+  CHECK(fits_consuming("fuchs.design_goal").empty());
   CHECK(keys.count("gp.multipass") == 1);
 }
 
@@ -131,7 +144,17 @@ TEST_CASE("validate: every projection comes from running the models", "[validate
   // ... and the GP rate is the simulated clocks': twice the overhead, half the rate.
   const ValidationRow fast = find(rows, "transform + Phong, hand-coded");
   CHECK(fast.status == "fitted");
-  CHECK(find(rows, "transform + Phong, compiled").status == "predicted");
+  CHECK(!fast.evidence());
+  // The compiled rate was consumed by the fits of the refill constants and the overhead's
+  // form: it is a consistency check, not evidence. The design goal was consumed by none.
+  const ValidationRow slow = find(rows, "transform + Phong, compiled");
+  CHECK(slow.status == "fitted");
+  CHECK(!slow.evidence());
+  CHECK(slow.consumed_by == fits_consuming("banks.compiled_rate"));
+  CHECK(find(rows, "design goal: ").evidence());
+  const std::string evidence = evidence_summary(rows);
+  CHECK_THAT(evidence, Catch::Contains("consumed by the fit of `gp.icache_miss_clocks`"));
+  CHECK_THAT(evidence, !Catch::Contains("- transform + Phong, compiled C: 1"));
   // A Pixel-Powers operation costs eall and qcmp of a 24-bit field, from the instruction table.
   const ValidationRow csg = find(rows, "Pixel-Powers");
   const double per_op =
@@ -188,4 +211,57 @@ TEST_CASE("sensitivity: an end that does not combine with the configuration has 
   CHECK(std::isnan(t.rows[0].rates[0][0]));
   CHECK(t.rows[0].rates[0][2] > 0);
   CHECK_THAT(sensitivity_markdown(t), Catch::Contains("| - .. "));
+}
+
+TEST_CASE("joint sensitivity: a seeded Latin hypercube over constants and workload choices",
+          "[validate]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=512", "screen.height=512", "gp.count=8", "renderer.count=4"});
+  JointSensitivityOptions options;
+  options.samples = 9;
+  options.tessellation_u = 32;
+  options.tessellation_v = 8;
+  const JointSensitivity a = joint_sensitivity(config, kLoad, options);
+  REQUIRE(a.points.size() == 9);
+  CHECK(a.skipped.empty());
+  // Deterministic: the same seed gives the same samples and figures.
+  const JointSensitivity b = joint_sensitivity(config, kLoad, options);
+  for (std::size_t i = 0; i < a.points.size(); ++i) {
+    CHECK(a.points[i].sets == b.points[i].sets);
+    CHECK(a.points[i].rate == b.points[i].rate);
+  }
+  // A Latin hypercube: a numeric constant takes one value in each ninth of its range.
+  std::vector<double> factors;
+  std::set<std::string> scenes, culling;
+  for (const JointSample& p : a.points) {
+    for (const std::string& s : p.sets) {
+      if (s.rfind("gp.overhead_factor=", 0) == 0) factors.push_back(std::stod(s.substr(19)));
+      if (s.rfind("gp.cull_back_faces=", 0) == 0) culling.insert(s);
+    }
+    scenes.insert(p.scene.substr(0, p.scene.find(' ')));
+  }
+  REQUIRE(factors.size() == 9);
+  std::sort(factors.begin(), factors.end());
+  for (std::size_t i = 0; i < factors.size(); ++i) {
+    const double lo = 2.61 + (3.73 - 2.61) * static_cast<double>(i) / 9;
+    CHECK(factors[i] >= lo - 1e-4);
+    CHECK(factors[i] <= lo + (3.73 - 2.61) / 9 + 1e-4);
+  }
+  CHECK(scenes.size() == 2);
+  CHECK(culling.size() == 2);
+  // Each conclusion's share is counted from the samples themselves.
+  REQUIRE(a.conclusions.size() == 3);
+  int below = 0, renderers = 0;
+  for (const JointSample& p : a.points) {
+    below += p.rate < 1e6;
+    renderers += p.bottleneck == "Renderers";
+  }
+  CHECK(a.conclusions[0].holds == renderers);
+  CHECK(a.conclusions[1].holds == below);
+  CHECK(a.conclusions[1].min <= a.conclusions[1].median);
+  CHECK(a.conclusions[1].median <= a.conclusions[1].max);
+  CHECK_THAT(joint_sensitivity_markdown(a), Catch::Contains("holds in"));
+  // Another seed draws other machines.
+  options.seed = 7;
+  CHECK(joint_sensitivity(config, kLoad, options).points[0].sets != a.points[0].sets);
 }

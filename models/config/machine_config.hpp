@@ -47,6 +47,9 @@ struct MachineConfig {
     int assembly_code_bytes = 0;
     int compiled_code_bytes = 0;
     double overhead_factor = 0;
+    // How the overhead factor applies to the counted clocks (I860Params::overhead_form).
+    enum class OverheadForm { multiply, add };
+    OverheadForm overhead_form = OverheadForm::multiply;
     int cull_back_faces = 0;
     // What a GP does for the second and later passes of a multipass program: send the binned
     // packets it kept again, or traverse and transform its share of the display list again.
@@ -146,6 +149,7 @@ struct MachineConfig {
 std::string name_of(MachineConfig::Gp::Code code);
 std::string name_of(MachineConfig::Renderer::Balancing balancing);
 std::string name_of(MachineConfig::Gp::Multipass multipass);
+std::string name_of(MachineConfig::Gp::OverheadForm form);
 std::string name_of(MachineConfig::Gp::SendOrder order);
 
 // How a timing constant's value was obtained (docs/timing.md, "Calibration"):
@@ -176,8 +180,14 @@ struct ParameterInfo {
   // 4 channels runs at 40 MHz to keep the published 5 Gb/s). Empty otherwise.
   std::vector<std::string> low;
   std::vector<std::string> high;
+  // A fitted constant: the ids of the published figures its fit consumed (PublishedFigure).
+  std::vector<std::string> consumes;
 };
 std::vector<ParameterInfo> describe_parameters();
+
+// The fitted constants whose fit consumed published figure `id` (ParameterInfo::consumes):
+// reproducing that figure is a consistency check, not evidence.
+std::vector<std::string> fits_consuming(const std::string& id);
 
 // Frame parameters (the `frame.` section). Contract:
 //  - frame_parameter_default(k, depth_bits): the declared default of settable parameter k

@@ -1,7 +1,13 @@
 #include "models/renderer/analytic.hpp"
 
 #include <algorithm>
+#include <deque>
+#include <functional>
+#include <iterator>
+#include <map>
+#include <queue>
 #include <stdexcept>
+#include <tuple>
 
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/setup_memo.hpp"
@@ -28,6 +34,339 @@ std::uint64_t busy_cycles(const ProcedureCode& code, const PacketValues& values,
 }
 
 std::uint64_t ceil_div(std::uint64_t a, std::uint64_t b) { return (a + b - 1) / b; }
+
+struct ContentionResult {
+  std::vector<std::vector<int>> regions;  // per Renderer, the regions it rendered, in order
+  double maps_seconds = 0;                // the last bin map in at every Renderer
+  double frame_seconds = 0;               // the last region at the frame buffer
+  double drain_seconds = 0;               // the last region's trip
+  int critical_renderer = 0;
+  // The critical Renderer's time, split as the event model splits its critical path.
+  double gp_seconds = 0, ring_seconds = 0, renderer_seconds = 0;
+};
+
+// One message of a Renderer's stage: from GP `gp`, `words` ring words, `cycles` of the
+// Renderer's array to consume.
+struct AnalyticMessage {
+  int gp = 0;
+  std::uint64_t words = 0;
+  std::uint64_t cycles = 0;
+};
+
+ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo::Summary& summary,
+                                       const AnalyticTiming& a, const std::vector<int>& block_end,
+                                       std::uint64_t send_clocks) {
+  const MachineConfig& config = plan.config();
+  const TimingParams& timing = plan.timing();
+  const int gps = plan.gp_count();
+  const int renderers = plan.renderer_count();
+  const int passes = plan.passes();
+  const double gp_hz = config.gp.clock_hz;
+  const double ring_hz = config.ring.clock_hz;
+  const double cycle = 1.0 / config.renderer.clock_hz;
+  const double start_s = static_cast<double>(send_clocks) / gp_hz;
+  const auto capacity = static_cast<std::uint64_t>(config.renderer.queue_words);
+  const bool retraverse = config.gp.multipass == MachineConfig::Gp::Multipass::retraverse;
+  const RegionStream stream(plan.program(), plan.frame_values());
+
+  // Region-wide cycles: before each pass (clear, pass), after the last (closing, lights,
+  // shade) and the copy-out; each packet's cycles per pass, one sum per procedure.
+  std::vector<std::uint64_t> before(static_cast<std::size_t>(passes), 0);
+  for (int pass = 0; pass < passes; ++pass) {
+    stream.before_pass(pass, [&](const RegionStep& step) {
+      before[static_cast<std::size_t>(pass)] += busy_cycles(step.code, step.values, config, timing);
+    });
+  }
+  std::uint64_t after = 0;
+  stream.after_passes([&](const RegionStep& step) {
+    after += busy_cycles(step.code, step.values, config, timing);
+  });
+  if (config.renderer.overlap_shipping) {
+    const int blocks = (config.frame_buffer.bits_per_pixel + config.renderer.block_bits - 1) /
+                       config.renderer.block_bits;
+    after += static_cast<std::uint64_t>(blocks) *
+             static_cast<std::uint64_t>(config.renderer.backing_store_cycles_per_block);
+  }
+  std::vector<std::pair<const ProcedureCode*, std::uint64_t>> memo;
+  auto packet_cycles = [&](const Packet& p, int pass) -> std::uint64_t {
+    const RegionStep step = stream.packet(p, pass, 0);
+    if (!step.code.defined) return 0;
+    std::uint64_t load = 0;
+    if (!config.evaluator.double_buffered) {
+      load = ceil_div(p.words > 0 ? p.words - 1 : 0,
+                      static_cast<std::uint64_t>(config.evaluator.coefficient_words_per_cycle));
+    }
+    for (const auto& [code, cycles] : memo) {
+      if (code == &step.code) return cycles + load;
+    }
+    memo.emplace_back(&step.code, busy_cycles(step.code, step.values, config, timing));
+    return memo.back().second + load;
+  };
+  // The messages of a stage (region r, pass): each GP's bin cut as GraphicsProcessor::run
+  // cuts it, a header word and as many of the bin's next packets as fit in the queue.
+  auto stage_messages = [&](int r, int pass, std::vector<AnalyticMessage>& out) {
+    out.clear();
+    const auto i = static_cast<std::size_t>(r);
+    std::uint32_t at = summary.region_first[i];
+    const std::uint32_t end = summary.region_first[i + 1];
+    for (int k = 0; k < gps && at < end; ++k) {
+      const int last = block_end[static_cast<std::size_t>(k)];
+      AnalyticMessage m{k, 0, 0};
+      for (; at < end && summary.region_primitive[at] < last; ++at) {
+        const Packet& p = **summary.region_packets[at];
+        if (m.words > 0 && m.words + p.words > capacity) {
+          out.push_back(m);
+          m = AnalyticMessage{k, 0, 0};
+        }
+        if (m.words == 0) m.words = 1;
+        m.words += p.words;
+        m.cycles += packet_cycles(p, pass);
+      }
+      if (m.words > 0) out.push_back(m);
+    }
+  };
+
+  // The ring's channels, each a calendar of the intervals it is booked for: a message takes
+  // the channel that can carry it soonest, in the first gap long enough from the time it is
+  // asked for. (Bookings come in the order messages could go, not strictly in time: a
+  // Renderer's finished region is booked when its array finishes, which may be later than
+  // messages booked after it; the calendar keeps such a booking from blocking the gap
+  // before it.)
+  std::vector<std::map<double, double>> channels(static_cast<std::size_t>(config.ring.channels));
+  auto book = [&](double at, std::uint64_t words) {
+    const double length = static_cast<double>(words) / ring_hz;
+    double best = 0;
+    std::size_t best_channel = 0;
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      const std::map<double, double>& booked = channels[c];
+      double t = at;
+      auto it = booked.upper_bound(t);
+      if (it != booked.begin() && std::prev(it)->second > t) t = std::prev(it)->second;
+      for (; it != booked.end() && it->first < t + length; ++it) t = std::max(t, it->second);
+      if (c == 0 || t < best) best = t, best_channel = c;
+    }
+    channels[best_channel].emplace(best, best + length);
+    return best + length;  // the end of its last word
+  };
+  std::vector<double> geometry_end(static_cast<std::size_t>(gps), 0.0);
+  std::vector<double> gp_free(static_cast<std::size_t>(gps), 0.0);
+  ContentionResult out;
+  // The bin maps, in the order the GPs finish their geometry.
+  std::vector<int> order;
+  for (int k = 0; k < gps; ++k) {
+    if (a.gp_messages[static_cast<std::size_t>(k)] > 0) order.push_back(k);
+  }
+  for (int k : order) {
+    geometry_end[static_cast<std::size_t>(k)] =
+        static_cast<double>(a.gps[static_cast<std::size_t>(k)].geometry.count) / gp_hz;
+  }
+  std::stable_sort(order.begin(), order.end(), [&](int x, int y) {
+    return geometry_end[static_cast<std::size_t>(x)] < geometry_end[static_cast<std::size_t>(y)];
+  });
+  std::vector<double> maps_in(static_cast<std::size_t>(renderers), 0.0);
+  std::vector<double> maps_requested(static_cast<std::size_t>(renderers), 0.0);
+  for (int k : order) {
+    const auto i = static_cast<std::size_t>(k);
+    const double requested = geometry_end[i] + start_s;
+    const double end = book(requested, plan.bin_map_words());
+    gp_free[i] = end;
+    for (int j = 0; j < renderers; ++j) {
+      const auto jj = static_cast<std::size_t>(j);
+      maps_in[jj] = std::max(
+          maps_in[jj], end + plan.hop_delay(plan.gp_stop(k), plan.renderer_stop(j)).to_seconds());
+      maps_requested[jj] = std::max(maps_requested[jj], requested);
+    }
+  }
+  for (double t : maps_in) out.maps_seconds = std::max(out.maps_seconds, t);
+
+  // Each Renderer's progress through its stages.
+  struct Queued {
+    double consumed;
+    std::uint64_t words;
+  };
+  struct RendererState {
+    std::size_t region = 0;  // static balancing: the next of a.regions[j]
+    int current = -1;        // the region it renders, -1 before it has one
+    int pass = 0;
+    bool entered = false;  // the stage's region-wide steps and messages are made
+    std::vector<AnalyticMessage> messages;
+    std::size_t next = 0;      // the next message of the stage
+    double stage_open = 0;     // when the stage opened for input
+    double last_sent = 0;      // the latest booking of the stage's messages
+    double room = 0;           // when the queue has room for the next message
+    double array = 0;          // when the array is free
+    double ship_free = 0;      // the video-RAM port's next free time
+    double finished = 0;       // its last region at the frame buffer
+    std::deque<Queued> queue;  // messages sent, not yet consumed, in order
+    std::uint64_t queued = 0;
+    double gp_s = 0, ring_s = 0, renderer_s = 0;  // its time, attributed
+    bool maps_waited = false;
+    bool done = false;
+  };
+  std::vector<RendererState> rs(static_cast<std::size_t>(renderers));
+  // A wait of the array from `from` to `to`: the GPs' while the GP computed (from `gp_from`
+  // until `gp_until`), the ring's for the rest, as the event model attributes its critical
+  // path.
+  auto attribute_wait = [](RendererState& st, double from, double to, double gp_from,
+                           double gp_until) {
+    if (to <= from) return;
+    const double gp_part = std::max(0.0, std::min(to, gp_until) - std::max(from, gp_from));
+    st.gp_s += gp_part;
+    st.ring_s += to - from - gp_part;
+  };
+  auto run_array = [&](RendererState& st, std::uint64_t cycles) {
+    const double t = static_cast<double>(cycles) * cycle;
+    st.array += t;
+    st.renderer_s += t;
+  };
+  // Static balancing: Renderer j renders a.regions[j] in order. Dynamic: a Renderer claims
+  // the next unclaimed region when it opens its next stage (RegionScheduler::claim_region),
+  // in time order among the Renderers (claims go through the heap below).
+  const bool dynamic = config.renderer.balancing == MachineConfig::Renderer::Balancing::dynamic;
+  const int regions = config.regions();
+  int unclaimed = 0;
+  out.regions.assign(static_cast<std::size_t>(renderers), {});
+  enum class Next { message, claim, done };
+  // Moves Renderer j to a stage with a message to send, running the region-wide steps and
+  // empty stages on the way: Next::message, or Next::claim when it needs its next region
+  // (dynamic balancing), or Next::done.
+  auto advance = [&](int j) -> Next {
+    RendererState& st = rs[static_cast<std::size_t>(j)];
+    for (;;) {
+      if (st.entered && st.next < st.messages.size()) return Next::message;
+      if (st.entered) {
+        // The stage is all sent (its messages consumed as they came): the next one opens
+        // when its last message was sent, or, for an empty stage, when the Renderer
+        // started on it.
+        st.stage_open = st.messages.empty() ? std::max(st.stage_open, st.array) : st.last_sent;
+        st.entered = false;
+        if (st.pass + 1 < passes) {
+          ++st.pass;
+        } else {
+          run_array(st, after);
+          const double trip =
+              plan.hop_delay(plan.renderer_stop(j), plan.frame_buffer_stop()).to_seconds();
+          if (config.renderer.overlap_shipping) {
+            const double end = book(std::max(st.array, st.ship_free), plan.region_words());
+            st.ship_free = end;
+            st.finished = std::max(st.finished, end + trip);
+          } else {
+            const double end = book(st.array, plan.region_words()) + trip;
+            st.ring_s += end - st.array;
+            st.array = end;
+            st.finished = std::max(st.finished, end);
+          }
+          st.current = -1;
+          st.pass = 0;
+        }
+      }
+      if (st.current < 0) {
+        if (dynamic) return Next::claim;
+        const auto& mine = a.regions[static_cast<std::size_t>(j)];
+        if (st.region >= mine.size()) return Next::done;
+        st.current = mine[st.region++];
+        out.regions[static_cast<std::size_t>(j)].push_back(st.current);
+      }
+      st.entered = true;
+      run_array(st, before[static_cast<std::size_t>(st.pass)]);
+      if (!st.maps_waited) {
+        // The array waits for every GP's bin map before its first message.
+        st.maps_waited = true;
+        const double in = std::max(st.array, maps_in[static_cast<std::size_t>(j)]);
+        attribute_wait(st, st.array, in, 0.0, maps_requested[static_cast<std::size_t>(j)]);
+        st.array = in;
+      }
+      stage_messages(st.current, st.pass, st.messages);
+      st.next = 0;
+      st.last_sent = st.stage_open;
+    }
+  };
+  // Retraversal: a GP's packets of pass k exist after k more traversals of its share.
+  auto pass_ready = [&](int k, int pass) {
+    const double g = geometry_end[static_cast<std::size_t>(k)];
+    return retraverse ? g * (1 + pass) : g;
+  };
+  // When Renderer j's next message can go: its stage open, room in the queue, its GP free.
+  auto ready_time = [&](int j) {
+    RendererState& st = rs[static_cast<std::size_t>(j)];
+    const AnalyticMessage& m = st.messages[st.next];
+    while (!st.queue.empty() && st.queued + m.words > capacity) {
+      st.room = std::max(st.room, st.queue.front().consumed);
+      st.queued -= st.queue.front().words;
+      st.queue.pop_front();
+    }
+    return std::max({st.stage_open, st.room, gp_free[static_cast<std::size_t>(m.gp)],
+                     pass_ready(m.gp, st.pass)});
+  };
+  // (time, kind, Renderer): kind 0 a region to claim, 1 a message to send; earliest first,
+  // claims before messages at one instant, then the lower Renderer.
+  using Candidate = std::tuple<double, int, int>;
+  std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> heap;
+  auto schedule = [&](int j) {
+    switch (advance(j)) {
+      case Next::message:
+        heap.emplace(ready_time(j), 1, j);
+        break;
+      case Next::claim:
+        heap.emplace(rs[static_cast<std::size_t>(j)].stage_open, 0, j);
+        break;
+      case Next::done:
+        break;
+    }
+  };
+  for (int j = 0; j < renderers; ++j) schedule(j);
+  while (!heap.empty()) {
+    const auto [when, kind, j] = heap.top();
+    heap.pop();
+    RendererState& st = rs[static_cast<std::size_t>(j)];
+    if (kind == 0) {
+      if (unclaimed < regions) {
+        st.current = unclaimed++;
+        out.regions[static_cast<std::size_t>(j)].push_back(st.current);
+        schedule(j);
+      }
+      continue;
+    }
+    const double ready = ready_time(j);
+    if (ready > when) {  // its GP was taken meanwhile
+      heap.emplace(ready, 1, j);
+      continue;
+    }
+    const AnalyticMessage m = st.messages[st.next++];
+    const auto g = static_cast<std::size_t>(m.gp);
+    // The GP starts the message (i860 clocks), then holds its interface for the words.
+    const double requested = ready + start_s;
+    const double end = book(requested, m.words);
+    gp_free[g] = end;
+    st.last_sent = std::max(st.last_sent, requested);
+    const double arrival =
+        end + plan.hop_delay(plan.gp_stop(m.gp), plan.renderer_stop(j)).to_seconds();
+    // The array consumes it after the messages before it, once it has arrived.
+    const double begin = std::max(st.array, arrival);
+    // The GP computed until it could start this message if its geometry (or a traversal)
+    // held it; otherwise only while starting it.
+    attribute_wait(st, st.array, begin, pass_ready(m.gp, st.pass) >= ready ? 0.0 : ready,
+                   requested);
+    st.array = begin;
+    run_array(st, m.cycles);
+    st.queue.push_back({st.array, m.words});
+    st.queued += m.words;
+    schedule(j);
+  }
+  for (int j = 0; j < renderers; ++j) {
+    const RendererState& st = rs[static_cast<std::size_t>(j)];
+    const double finished = std::max(st.finished, st.array);
+    if (finished > out.frame_seconds || j == 0) {
+      out.frame_seconds = finished;
+      out.critical_renderer = j;
+      out.gp_seconds = st.gp_s;
+      out.renderer_seconds = st.renderer_s;
+      out.ring_seconds = st.ring_s + (finished - st.array);  // the last region's trip
+      out.drain_seconds = finished - st.array;
+    }
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -210,7 +549,8 @@ AnalyticTiming analytic_timing(const MachinePlan& plan) {
   a.ring_words += static_cast<std::uint64_t>(regions) * plan.region_words();
   a.ring_messages += static_cast<std::uint64_t>(regions);
 
-  // The closed form.
+  // The closed form without contention: each unit's work, overlapped perfectly after the
+  // fill. A lower bound, kept beside the recurrence below (analytic.closed_form_seconds).
   double map_seconds = 0;
   for (int k = 0; k < gps; ++k) {
     if (a.gp_messages[static_cast<std::size_t>(k)] == 0) continue;
@@ -225,7 +565,6 @@ AnalyticTiming analytic_timing(const MachinePlan& plan) {
         std::max(map_seconds, geometry + static_cast<double>(send_clocks) / gp_hz +
                                   static_cast<double>(plan.bin_map_words()) / ring_hz + farthest);
   }
-  a.fill_seconds = map_seconds;
   for (int k = 0; k < gps; ++k) {
     // After its map, a GP starts each message and holds its ring interface for its words.
     const auto i = static_cast<std::size_t>(k);
@@ -247,21 +586,53 @@ AnalyticTiming analytic_timing(const MachinePlan& plan) {
       a.busiest_renderer = j;
     }
   }
-  a.busiest_seconds = a.renderer_busiest_seconds;
+  double unit_seconds = a.renderer_busiest_seconds;
   a.busiest_unit = "Renderers";
-  if (a.ring_seconds > a.busiest_seconds)
-    a.busiest_seconds = a.ring_seconds, a.busiest_unit = "ring";
-  if (a.gp_busiest_seconds > a.busiest_seconds) {
-    a.busiest_seconds = a.gp_busiest_seconds;
-    a.busiest_unit = "GPs";
-  }
+  if (a.ring_seconds > unit_seconds) unit_seconds = a.ring_seconds, a.busiest_unit = "ring";
+  if (a.gp_busiest_seconds > unit_seconds)
+    unit_seconds = a.gp_busiest_seconds, a.busiest_unit = "GPs";
   double drain = 0;
   for (int j = 0; j < renderers; ++j) {
     drain = std::max(drain,
                      plan.hop_delay(plan.renderer_stop(j), plan.frame_buffer_stop()).to_seconds());
   }
-  a.drain_seconds = static_cast<double>(plan.region_words()) / ring_hz + drain;
-  a.frame_seconds = a.fill_seconds + a.busiest_seconds + a.drain_seconds;
+  a.closed_form_seconds =
+      map_seconds + unit_seconds + static_cast<double>(plan.region_words()) / ring_hz + drain;
+
+  // The contention recurrence (docs/timing.md "Analytic timing"): every message of every
+  // Renderer's stages, booked in order of the time it could go, on servers shared as the
+  // machine shares them: each GP's ring interface (one message at a time, after starting it),
+  // the ring's channels (the one that frees first), each Renderer's queue (a message needs
+  // room for all its words, freed when the Renderer has consumed it) and its array (one
+  // message after another, after its arrival). A stage opens when the last message of the
+  // stage before was sent. No process and no event: a max-plus recurrence over messages.
+  const ContentionResult c = contention_recurrence(plan, summary, a, block_end, send_clocks);
+  if (dynamic) {
+    // Dynamic balancing: the regions go where the recurrence's Renderers claimed them.
+    a.regions = c.regions;
+    std::fill(a.renderer_busy_cycles.begin(), a.renderer_busy_cycles.end(), 0);
+    std::fill(a.renderer_packets.begin(), a.renderer_packets.end(), 0);
+    for (std::size_t j = 0; j < a.regions.size(); ++j) {
+      for (int r : a.regions[j]) {
+        const auto i = static_cast<std::size_t>(r);
+        a.renderer_busy_cycles[j] += a.region_cycles[i];
+        a.renderer_packets[j] += (summary.region_first[i + 1] - summary.region_first[i]) *
+                                 static_cast<std::uint64_t>(passes);
+      }
+    }
+  }
+  a.fill_seconds = c.maps_seconds;
+  a.frame_seconds = c.frame_seconds;
+  a.drain_seconds = c.drain_seconds;
+  a.busiest_seconds = a.frame_seconds - a.fill_seconds - a.drain_seconds;
+  a.critical_renderer = c.critical_renderer;
+  a.critical_gp_seconds = c.gp_seconds;
+  a.critical_ring_seconds = c.ring_seconds;
+  a.critical_renderer_seconds = c.renderer_seconds;
+  a.bottleneck = "Renderers";
+  double top = c.renderer_seconds;
+  if (c.gp_seconds > top) a.bottleneck = "GPs", top = c.gp_seconds;
+  if (c.ring_seconds > top) a.bottleneck = "ring";
   return a;
 }
 

@@ -2,15 +2,12 @@
 // The analytic timing model (fidelity.timing=analytic): the frame time without a single
 // SystemC event. Each unit's work is summed from the same cost tables the event model charges
 // (the GPs' geometry pass and i860 clocks, the instruction table's cycles per procedure, the
-// ring's words), and the frame time comes from a closed form, docs/timing.md "Analytic
-// timing":
-//
-//   T = fill + busiest + drain
-//   fill    = the slowest GP's geometry + starting and sending its bin map (nothing leaves a
-//             GP before its geometry ends, and a Renderer waits for every map)
-//   busiest = max(the busiest Renderer's cycles, all ring words over the ring's bandwidth,
-//                 the busiest GP's sending: its i860 clocks per message and its words)
-//   drain   = the last region's trip to the frame buffer
+// ring's words), and the frame time comes from a contention recurrence, docs/timing.md
+// "Analytic timing": every Renderer's messages, stage by stage, booked in order of the time
+// each could go on servers shared as the machine shares them (each GP's ring interface, the
+// ring's channels, each Renderer's queue of renderer.queue_words and its array), a stage
+// opening when the stage before it was all sent. It is a max-plus recurrence over messages:
+// no process, no event, one pass in time order.
 //
 // Contract:
 //  - It needs no Machine, only what the units share (MachinePlan: the configuration, the
@@ -19,12 +16,15 @@
 //    complete, then sums each GP's share of the display list from the memo's summary
 //    (SetupMemo::Summary), so its packets, set-up counts and GP clocks are exactly the event
 //    model's, and a run of frames of one scene (a sweep) sets it up once.
-//  - No contention: no unit waits for another beyond the closed form (no queue-full stalls,
-//    no channel conflicts, no backing-store port stalls, coefficient loads overlapped when
-//    double-buffered); the error this makes against the event model is measured, not assumed
-//    (tests/test_analytic.cpp states the bound).
+//  - What it leaves out against the event model: backing-store port stalls, the double-
+//    buffered coefficient load's stall after a wait, the scheduler's order among waiting GPs
+//    (GPs are served in the order their messages could go), and bookings made in the order
+//    of readiness rather than of request. The error this makes is measured on held-out
+//    machines (sim/analysis/analytic_validation.hpp, `pp5sim fidelity`), not assumed.
 //  - Regions go to Renderers as the event model's static balancing does (r mod count); with
-//    dynamic balancing, each region in order to the Renderer with the least work so far.
+//    dynamic balancing, as the recurrence's Renderers claim them, each taking the next
+//    region when it opens its next stage, in time order (the closed form kept beside it
+//    gives each region to the Renderer with the least work so far).
 //  - Deterministic, and a pure function of the machine's inputs.
 #include <cstdint>
 #include <memory>
@@ -51,15 +51,27 @@ struct AnalyticTiming {
   std::vector<std::uint64_t> renderer_packets;
   std::uint64_t ring_words = 0;
   std::uint64_t ring_messages = 0;
-  // The closed form's terms, in simulated seconds, and which unit is the busiest.
+  // The frame time from the contention recurrence, in simulated seconds, split as
+  // fill (until every bin map is in) + busiest (the span the recurrence adds) + drain (the
+  // last region's trip).
   double geometry_seconds = 0;  // the slowest GP's geometry
   double fill_seconds = 0;
   double busiest_seconds = 0;
   double drain_seconds = 0;
   double frame_seconds = 0;
-  std::string busiest_unit;  // "GPs", "ring" or "Renderers", as timing.bottleneck names them
+  // The critical Renderer (whose last region arrives last) and its time split as the event
+  // model splits its critical path; the bottleneck is the largest part.
+  int critical_renderer = 0;
+  double critical_gp_seconds = 0;
+  double critical_ring_seconds = 0;
+  double critical_renderer_seconds = 0;
+  std::string bottleneck;  // "GPs", "ring" or "Renderers", as timing.bottleneck names them
+  // The closed form without contention (fill + the busiest unit's work + drain): a lower
+  // bound the recurrence refines, and which unit it names the busiest.
+  double closed_form_seconds = 0;
+  std::string busiest_unit;
   double gp_busiest_seconds = 0;
-  double ring_seconds = 0;
+  double ring_seconds = 0;  // all ring words over the ring's bandwidth
   double renderer_busiest_seconds = 0;
   int busiest_renderer = 0;
 };

@@ -11,6 +11,9 @@
 //    none is read back from a configuration constant or a published figure.
 //  - Each row says whether its figure was fitted (the simulator was tuned to it, so matching
 //    it is a consistency check), derived (the configuration follows from it) or predicted.
+//    A figure is fitted when any fitted key of the configuration table names it as consumed
+//    (fits_consuming), so marking a constant fitted reaches the report without code here;
+//    only predictions count as evidence (evidence_summary).
 //  - The sensitivity table varies one constant at a time, to each end of its declared
 //    plausible range (ParameterInfo::low/high: the --set assignments that put the machine
 //    there), from `base`; every other key stays as in `base`. Constants come from the
@@ -19,6 +22,7 @@
 //    coefficient bits `base` asks for) has the rate NaN, printed '-'.
 //  - Deterministic: the same inputs give the same rows.
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -41,6 +45,13 @@ struct ValidationRow {
   std::string unit;
   std::string status;  // "fitted", "derived" or "predicted"
   std::string note;    // what else the run showed (a second figure, a caveat)
+  // The figure's id in the configuration table's fits (ParameterInfo::consumes), if any, and
+  // the fitted keys whose fit consumed it: then the status is "fitted" whatever the row
+  // would otherwise say, and the figure is no evidence.
+  std::string id = {};
+  std::vector<std::string> consumed_by = {};
+  // Only a prediction is evidence for the model: a fitted figure comes out by construction.
+  bool evidence() const { return status == "predicted"; }
   // (simulated - published_value) / published_value
   double difference() const {
     return published_value != 0 ? (simulated - published_value) / published_value : 0;
@@ -89,7 +100,60 @@ SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& loa
                              const std::vector<SensitivityWorkload>& workloads,
                              const std::vector<std::string>& only = {});
 
+// Joint sensitivity of the headline conclusions (docs/timing.md "Sensitivity of the
+// conclusions"): every fitted or assumed constant with a plausible range and the workload
+// choices vary together, by a Latin hypercube with a seeded generator (splitmix64, the same
+// on every host). A constant with one numeric key at each end takes a value between them
+// (geometrically when the ends differ fourfold or more, rounded for an integer key); a
+// choice, or ends that move linked keys, takes the low end, the default or the high end.
+// Workload choices: the scene (the torus or the figure-eight), its tessellation (triangle
+// size: the scene's triangles x 1/4, 1 or 4 about `options`' torus), back-face culling; the
+// ring's arbitration is gp.send_order among the constants. The workload is the design
+// goal's: phong on hand-coded GPs at `base`'s screen. Frames run at `level` (analytic by
+// default: validated against the event level on held-out machines).
+struct JointSensitivityOptions {
+  int samples = 64;
+  std::uint64_t seed = 0x3403;
+  std::string level = "analytic";  // fidelity.timing of every sample
+  int tessellation_u = 512;        // the torus at the middle triangle size
+  int tessellation_v = 128;
+};
+
+struct JointSample {
+  std::vector<std::string> sets;  // over `base`
+  std::string scene;
+  int triangles = 0;
+  double rate = 0;            // triangles/s, one frame
+  double pipelined_rate = 0;  // triangles/s, frames pipelined
+  std::string bottleneck;
+};
+
+// A headline conclusion and how it fares over the samples.
+struct ConclusionShare {
+  std::string conclusion;                // what the default machine says
+  std::string measure;                   // what is measured per sample
+  double low = 0, median = 0, high = 0;  // the measure's 5th percentile, median, 95th
+  double min = 0, max = 0;
+  int holds = 0;  // samples where the conclusion holds
+  int samples = 0;
+};
+
+struct JointSensitivity {
+  JointSensitivityOptions options;
+  std::vector<std::string> varied;  // the constants and workload choices varied
+  std::vector<JointSample> points;
+  std::vector<std::string> skipped;  // samples whose ends do not combine, with the error
+  std::vector<ConclusionShare> conclusions;
+};
+
+JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoader& load,
+                                   const JointSensitivityOptions& options = {});
+std::string joint_sensitivity_markdown(const JointSensitivity& joint);
+
 std::string validation_markdown(const std::vector<ValidationRow>& rows);
+// Which figures are evidence: the predictions, each with its difference, and the figures a
+// fit consumed (with the keys), which are not.
+std::string evidence_summary(const std::vector<ValidationRow>& rows);
 std::string validation_csv(const std::vector<ValidationRow>& rows);
 std::string sensitivity_markdown(const SensitivityTable& table);
 std::string sensitivity_csv(const SensitivityTable& table);

@@ -42,7 +42,9 @@ namespace pp5 {
 // z the screen depth, 0 near .. 1 far).
 struct ScreenPolygon {
   std::vector<glm::dvec3> v;
-  int source = 0;  // the scene triangle
+  std::vector<double> w;  // each vertex's clip w (eye depth): screen coordinates x w are
+                          // affine in the world point, which is what splitting needs
+  int source = 0;         // the scene triangle
 };
 
 // The scene's triangles through the machine's transform and clipping (with
@@ -116,15 +118,53 @@ struct AlgorithmRow {
   RgbImage image;                      // the difference image
 };
 
+// How painter's runs (docs/timing.md "Depth sort"). The defaults are the slides' order
+// (their drawing algorithm removes back faces, then sorts), over the whole screen, costed from
+// the sort's own operation counts: gp.overhead_factor was fitted to the transform loop's
+// uncounted work (traversal, PPHIGS state, the OS), which a sort over records already in
+// memory does not do, so it is not applied unless asked for.
+struct PainterOptions {
+  bool remove_back_faces = true;  // false: every face is sorted and drawn (two-sided)
+  bool overhead_factor = false;   // true: the sort's clocks x gp.overhead_factor too
+  // A pair no test orders: split one polygon by the other's plane (Newell, Newell and
+  // Sancha) and sort again, up to this many rounds; 0 leaves such pairs in far-depth order.
+  int split_rounds = 8;
+};
+
+// One way of running the sort and what it costs on the GPs: the slowest GP's prepare, the
+// merge on GP 0 with the runs' and the order's ring transfers, the slowest GP's checks.
+struct SortCost {
+  std::string label;
+  bool back_faces_removed = true;
+  bool per_region = false;  // each region's bin sorted on its own (cost only: see below)
+  bool overhead_factor = false;
+  std::uint64_t polygons = 0;
+  std::uint64_t pairs_checked = 0;
+  double prepare_seconds = 0, merge_seconds = 0, transfer_seconds = 0, check_seconds = 0;
+  double seconds() const {
+    return prepare_seconds + merge_seconds + transfer_seconds + check_seconds;
+  }
+};
+
 struct VisibleSceneReport {
   std::string scene;
   std::uint64_t triangles = 0;
   std::uint64_t polygons = 0;      // after the transform (dropped ones removed)
   std::vector<AlgorithmRow> rows;  // z-buffer, painter's, scan-line, Warnock
+  PainterOptions painter_options;
+  // Splitting: the rounds run, the triangles split, the pieces drawn in their place, and the
+  // pairs the first sort could not order.
+  int split_rounds = 0;
+  std::uint64_t split_triangles = 0;
+  std::uint64_t pieces = 0;
+  std::uint64_t unresolved_before_split = 0;
   DepthSortResult sort;
   std::vector<GpClocks> sort_clocks;  // per GP: prepare + its share of the checks
   GpClocks merge_clocks{};
-  double sort_seconds = 0;
+  double sort_seconds = 0;  // the sort painter's ran with (painter_options), transfers included
+  // The sort's cost under every combination of the choices (back faces removed or kept,
+  // whole screen or per region bin, overhead factor or not): the range it spans.
+  std::vector<SortCost> sort_costs;
   // Perspective depth: visibility with eye depth interpolated linearly (bad) against
   // screen depth (correct); pixels whose visible triangle flips between the two.
   Difference bad_depth;  // against the reference
@@ -141,7 +181,8 @@ struct VisibleSceneReport {
 // (gouraud.pp5 and painter.pp5) whose runs give cycles, bits and frame time.
 VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config, const Scene& scene,
                                             const Program& zbuffer, const Program& painter,
-                                            int threads);
+                                            int threads,
+                                            const PainterOptions& painter_options = {});
 // The comparison table and the per-scene notes (markdown).
 // The reports as a statistics registry (frozen), written as visible.json: per scene
 // (scene.N.*) its name, triangles, the depth sort's (scene.N.depth_sort.*, registered by

@@ -102,7 +102,11 @@ std::vector<ScreenPolygon> project_scene(const MachineConfig& config, const Scen
     p.source = t;
     auto point = [](const ScreenVertex& v) { return glm::dvec3(v.position, v.depth); };
     p.v = {point(pieces[0].v[0]), point(pieces[0].v[1])};
-    for (const ScreenTriangle& s : pieces) p.v.push_back(point(s.v[2]));
+    p.w = {pieces[0].v[0].eye_depth, pieces[0].v[1].eye_depth};
+    for (const ScreenTriangle& s : pieces) {
+      p.v.push_back(point(s.v[2]));
+      p.w.push_back(s.v[2].eye_depth);
+    }
     out.push_back(std::move(p));
   }
   return out;

@@ -14,6 +14,7 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "sim/analysis/analytic_validation.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/output/output_set.hpp"
 #include "sim/scene/scene.hpp"
@@ -45,6 +46,8 @@ struct FidelityOptions {
   int runs = 3;
   int threads = default_threads();
   std::string out_dir = "out/fidelity";
+  bool analytic_grids = true;
+  int heldout = 120;
 };
 
 // Every region's whole pixel memory after the region, as the snapshot layout, for counting
@@ -195,13 +198,44 @@ int run_fidelity(FidelityOptions o) {
                        r.has_pixels ? std::to_string(r.pixels_differing) : "",
                        r.has_memory ? std::to_string(r.bits_differing) : "");
   }
+  std::string analytic_csv;
+  if (o.analytic_grids) {
+    // The analytic level against the event level on machines it was not adjusted on: the
+    // held-out grid (seeded, drawn before either model was looked at) beside the tuning one.
+    const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
+      return assemble_file(resolve_firmware(name), assembler_options(c));
+    };
+    const std::vector<AnalyticValidation> grids = {
+        validate_analytic("tuning", analytic_tuning_grid(), load),
+        validate_analytic("held-out", analytic_heldout_grid(o.heldout), load)};
+    md +=
+        "\nThe analytic level against the event level (frame time, no pixels), on the grid "
+        "it was adjusted on and on a held-out grid of seeded machines (scenes, programs, "
+        "screens, GPs, Renderers, channels, queue words, balancing, shipping, hop latency, "
+        "double buffering, code profile):\n\n" +
+        analytic_validation_markdown(grids);
+    analytic_csv =
+        "grid,machine,event_seconds,analytic_seconds,error,closed_form_seconds,"
+        "event_bottleneck,analytic_bottleneck\n";
+    for (const AnalyticValidation& v : grids) {
+      for (const AnalyticPoint& p : v.points) {
+        analytic_csv +=
+            fmt::format("{},{},{:.9g},{:.9g},{:.6f},{:.9g},{},{}\n", v.grid, p.machine.label(),
+                        p.event_seconds, p.analytic_seconds, p.error(), p.closed_form_seconds,
+                        p.event_bottleneck, p.analytic_bottleneck);
+      }
+    }
+  }
   const fs::path dir(o.out_dir);
   OutputSet outputs;
   outputs.add((dir / "fidelity.md").string(), md);
   outputs.add((dir / "fidelity.csv").string(), csv);
+  if (!analytic_csv.empty()) outputs.add((dir / "analytic_validation.csv").string(), analytic_csv);
   outputs.commit();
   std::cout << md;
-  std::cout << fmt::format("\nwrote {}/fidelity.md, {}/fidelity.csv\n", o.out_dir, o.out_dir);
+  std::cout << fmt::format(
+      "\nwrote {}/fidelity.md, {}/fidelity.csv{}\n", o.out_dir, o.out_dir,
+      analytic_csv.empty() ? "" : ", " + o.out_dir + "/analytic_validation.csv");
   return 0;
 }
 
@@ -226,6 +260,11 @@ Command add_fidelity_command(CLI::App& app) {
       ->check(CLI::Range(1, 256))
       ->capture_default_str();
   cmd->add_option("-o,--out", o->out_dir, "Output folder for fidelity.md and fidelity.csv")
+      ->capture_default_str();
+  cmd->add_flag("!--no-analytic-grids", o->analytic_grids,
+                "Skip the analytic level's validation on the tuning and held-out grids");
+  cmd->add_option("--heldout", o->heldout, "Machines of the held-out grid")
+      ->check(CLI::Range(2, 100000))
       ->capture_default_str();
   return {cmd, [o] { return run_fidelity(*o); }};
 }

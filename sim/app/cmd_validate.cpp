@@ -20,6 +20,7 @@ struct ValidateOptions {
   std::string out = "out/validate";
   bool sensitivity = true;
   std::vector<int> tessellation{512, 128};
+  int joint = 64;
 };
 
 int run_validate(const ValidateOptions& o) {
@@ -34,7 +35,7 @@ int run_validate(const ValidateOptions& o) {
   const auto rows = validate_against_record(config, load, options);
   std::string report =
       "Published figures beside the simulator's projection of the same workload:\n\n" +
-      validation_markdown(rows);
+      validation_markdown(rows) + "\n" + evidence_summary(rows);
   OutputSet outputs;
   outputs.add(o.out + "/validate.csv", validation_csv(rows));
   if (o.sensitivity) {
@@ -45,6 +46,25 @@ int run_validate(const ValidateOptions& o) {
         "values:\n\n" +
         sensitivity_markdown(table);
     outputs.add(o.out + "/sensitivity.csv", sensitivity_csv(table));
+  }
+  if (o.joint > 0) {
+    JointSensitivityOptions joint;
+    joint.samples = o.joint;
+    joint.tessellation_u = o.tessellation[0];
+    joint.tessellation_v = o.tessellation[1];
+    const JointSensitivity j = joint_sensitivity(config, load, joint);
+    report +=
+        "\nJoint sensitivity of the conclusions: the design goal's workload (phong, hand-coded "
+        "GPs) with every fitted and assumed constant and the workload choices varied "
+        "together:\n\n" +
+        joint_sensitivity_markdown(j);
+    std::string csv = "sample,scene,triangles,rate,pipelined_rate,bottleneck,sets\n";
+    for (std::size_t k = 0; k < j.points.size(); ++k) {
+      const JointSample& p = j.points[k];
+      csv += fmt::format("{},{},{},{:.9g},{:.9g},{},{}\n", k, p.scene, p.triangles, p.rate,
+                         p.pipelined_rate, p.bottleneck, fmt::join(p.sets, " "));
+    }
+    outputs.add(o.out + "/joint.csv", csv);
   }
   outputs.add(o.out + "/validate.md", report);
   outputs.commit();
@@ -61,12 +81,18 @@ Command add_validate_command(CLI::App& app) {
       "Every figure the published record gives (design goal, GP rates, ring bandwidth, pixel "
       "memory, Pixel-Powers CSG timing) beside the simulator's projection of the same "
       "workload, the difference, and whether the figure was fitted, derived or is predicted; "
-      "then the sensitivity of the torus's projected rates to every assumed constant. Writes "
-      "validate.md, validate.csv and sensitivity.csv into --out.");
+      "then the sensitivity of the torus's projected rates to every assumed constant, one at a "
+      "time, and of the headline conclusions to all of them and the workload choices together "
+      "(a seeded Latin hypercube). Writes validate.md, validate.csv, sensitivity.csv and "
+      "joint.csv into --out.");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out, "Output folder (default out/validate)");
   cmd->add_flag("!--no-sensitivity", o->sensitivity,
                 "Skip the sensitivity table (about 170 projections of the torus, some seconds)");
+  cmd->add_option("--joint", o->joint,
+                  "Samples of the joint sensitivity of the conclusions (0: skip it)")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
   cmd->add_option("--tessellation", o->tessellation,
                   "Tessellation U V of the large torus the full machine renders against the "
                   "design goal (default 512 128: 131,072 triangles)")

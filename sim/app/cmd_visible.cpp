@@ -23,6 +23,7 @@ struct VisibleOptions {
   std::vector<std::string> sets;
   std::string out_dir = "out/visible";
   int threads = default_threads();
+  PainterOptions painter;
 };
 
 // A scene's name as a file-name prefix: letters, digits, '-' and '_' kept, others '_'.
@@ -47,7 +48,7 @@ int run_visible(const VisibleOptions& o) {
   for (const std::string& n : names) scenes.push_back(load_scene(n));
   std::vector<VisibleSceneReport> reports;
   for (const Scene& s : scenes) {
-    reports.push_back(analyse_visible_surfaces(config, s, zbuffer, painter, o.threads));
+    reports.push_back(analyse_visible_surfaces(config, s, zbuffer, painter, o.threads, o.painter));
   }
   const std::string table = format_visible_report(reports, config);
   std::cout << table;
@@ -94,6 +95,12 @@ Command add_visible_command(CLI::App& app) {
                   "file; default every built-in scene of triangles (not the sphere scenes)");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/visible)");
+  cmd->add_flag("!--painter-every-face", o->painter.remove_back_faces,
+                "Painter's sorts and draws every face (two-sided); by default back faces are "
+                "removed before the sort, as the slides' drawing algorithm does");
+  cmd->add_flag("--painter-overhead-factor", o->painter.overhead_factor,
+                "Multiply the depth sort's clocks by gp.overhead_factor (fitted to the transform "
+                "loop); by default the sort is costed from its own operation counts");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
   return {cmd, [o] { return run_visible(*o); }};

@@ -1,0 +1,183 @@
+#include "sim/analysis/analytic_validation.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
+
+namespace pp5 {
+
+namespace {
+
+// splitmix64: a generator whose sequence is fixed by its seed on every host.
+struct GridRandom {
+  std::uint64_t state;
+  std::uint64_t next() {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  int below(int n) { return static_cast<int>(next() % static_cast<std::uint64_t>(n)); }
+  template <class T>
+  const T& pick(const std::vector<T>& v) {
+    return v[static_cast<std::size_t>(below(static_cast<int>(v.size())))];
+  }
+};
+
+}  // namespace
+
+std::string GridMachine::label() const {
+  std::string out = scene + " " + program;
+  for (const std::string& s : sets) out += " " + s;
+  return out;
+}
+
+std::vector<GridMachine> analytic_tuning_grid() {
+  std::vector<GridMachine> grid;
+  for (const char* program : {"phong", "threshold", "flat", "transparent"}) {
+    for (int gps : {4, 32}) {
+      for (int renderers : {2, 8, 16}) {
+        for (int channels : {1, 8}) {
+          grid.push_back({"torus",
+                          program,
+                          {"screen.width=640", "screen.height=512", fmt::format("gp.count={}", gps),
+                           fmt::format("renderer.count={}", renderers),
+                           fmt::format("ring.channels={}", channels)}});
+        }
+      }
+    }
+  }
+  return grid;
+}
+
+std::vector<GridMachine> analytic_heldout_grid(int count, std::uint64_t seed) {
+  GridRandom random{seed};
+  // Triangle scenes with any program; sphere scenes with the programs that draw spheres.
+  const std::vector<std::string> triangle_scenes = {"torus", "sphere", "figure-eight",
+                                                    "folded-slab"};
+  const std::vector<std::string> triangle_programs = {"phong", "threshold", "flat", "gouraud",
+                                                      "transparent"};
+  const std::vector<std::string> sphere_scenes = {"molecule", "spheres-and-triangles"};
+  const std::vector<std::string> sphere_programs = {"phong", "threshold"};
+  const std::vector<std::string> screens = {"512 512", "640 512", "1280 1024"};
+  const std::vector<int> channels = {1, 2, 4, 8, 16};
+  const std::vector<int> queue = {1024, 2048, 4096, 8192, 16384};
+  std::vector<GridMachine> grid;
+  for (int i = 0; i < count; ++i) {
+    GridMachine m;
+    if (random.below(4) == 0) {
+      m.scene = random.pick(sphere_scenes);
+      m.program = random.pick(sphere_programs);
+    } else {
+      m.scene = random.pick(triangle_scenes);
+      m.program = random.pick(triangle_programs);
+    }
+    const std::string& screen = random.pick(screens);
+    const auto space = screen.find(' ');
+    m.sets = {"screen.width=" + screen.substr(0, space),
+              "screen.height=" + screen.substr(space + 1),
+              fmt::format("gp.count={}", 1 + random.below(32)),
+              fmt::format("renderer.count={}", 1 + random.below(16)),
+              fmt::format("ring.channels={}", random.pick(channels)),
+              fmt::format("renderer.queue_words={}", random.pick(queue)),
+              random.below(2) ? "renderer.balancing=dynamic" : "renderer.balancing=static",
+              fmt::format("renderer.overlap_shipping={}", random.below(2)),
+              fmt::format("ring.hop_latency_cycles={}", random.below(5)),
+              fmt::format("evaluator.double_buffered={}", random.below(2)),
+              random.below(2) ? "gp.code=compiled" : "gp.code=assembly"};
+    grid.push_back(std::move(m));
+  }
+  return grid;
+}
+
+double kendall_tau(const std::vector<double>& x, const std::vector<double>& y) {
+  double concordant = 0, discordant = 0, ties_x = 0, ties_y = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    for (std::size_t j = i + 1; j < x.size(); ++j) {
+      const double dx = x[i] - x[j];
+      const double dy = y[i] - y[j];
+      if (dx == 0 && dy == 0) continue;
+      if (dx == 0) {
+        ++ties_x;
+      } else if (dy == 0) {
+        ++ties_y;
+      } else if ((dx > 0) == (dy > 0)) {
+        ++concordant;
+      } else {
+        ++discordant;
+      }
+    }
+  }
+  const double denominator =
+      std::sqrt((concordant + discordant + ties_x) * (concordant + discordant + ties_y));
+  return denominator > 0 ? (concordant - discordant) / denominator : 0;
+}
+
+AnalyticValidation validate_analytic(const std::string& grid,
+                                     const std::vector<GridMachine>& machines,
+                                     const ProgramLoader& load) {
+  AnalyticValidation v;
+  v.grid = grid;
+  std::vector<double> event, analytic, closed;
+  for (const GridMachine& m : machines) {
+    MachineConfig config = MachineConfig::defaults();
+    config.set(m.sets);
+    config.set(std::vector<std::string>{"fidelity.pixels=none", "fidelity.timing=event"});
+    const Scene scene = make_builtin_scene(m.scene);
+    const Program program = load(m.program, config);
+    const FrameResult e = project_frame(config, scene, program);
+    config.set("fidelity.timing=analytic");
+    const FrameResult a = project_frame(config, scene, program);
+    AnalyticPoint p;
+    p.machine = m;
+    p.event_seconds = e.frame_seconds;
+    p.analytic_seconds = a.frame_seconds;
+    p.closed_form_seconds = a.stats.real("analytic.closed_form_seconds");
+    p.event_bottleneck = e.stats.text("timing.bottleneck");
+    p.analytic_bottleneck = a.stats.text("timing.bottleneck");
+    const double error = std::abs(p.error());
+    v.mean_error += error;
+    if (error > v.worst_error) v.worst_error = error, v.worst_at = m.label();
+    const double closed_error = std::abs(p.closed_form_seconds - p.event_seconds) / p.event_seconds;
+    v.closed_form_mean_error += closed_error;
+    v.closed_form_worst_error = std::max(v.closed_form_worst_error, closed_error);
+    if (p.event_bottleneck == p.analytic_bottleneck) ++v.bottleneck_agree;
+    event.push_back(p.event_seconds);
+    analytic.push_back(p.analytic_seconds);
+    closed.push_back(p.closed_form_seconds);
+    v.points.push_back(std::move(p));
+  }
+  if (!v.points.empty()) {
+    v.mean_error /= static_cast<double>(v.points.size());
+    v.closed_form_mean_error /= static_cast<double>(v.points.size());
+  }
+  v.kendall_tau = kendall_tau(event, analytic);
+  v.closed_form_tau = kendall_tau(event, closed);
+  return v;
+}
+
+std::string analytic_validation_markdown(const std::vector<AnalyticValidation>& grids) {
+  std::string out =
+      "| grid | machines | model | mean error | worst error | bottleneck agrees | Kendall tau | "
+      "worst machine |\n|---|---|---|---|---|---|---|---|\n";
+  for (const AnalyticValidation& v : grids) {
+    const auto n = v.points.size();
+    out += fmt::format(
+        "| {} | {} | contention recurrence | {:.1f}% | {:.1f}% | {} of {} | {:.3f} | "
+        "{} |\n",
+        v.grid, n, 100 * v.mean_error, 100 * v.worst_error, v.bottleneck_agree, n, v.kendall_tau,
+        v.worst_at);
+    out += fmt::format(
+        "| {} | {} | closed form, no contention | {:.1f}% | {:.1f}% | - | {:.3f} | "
+        "|\n",
+        v.grid, n, 100 * v.closed_form_mean_error, 100 * v.closed_form_worst_error,
+        v.closed_form_tau);
+  }
+  return out;
+}
+
+}  // namespace pp5

@@ -1,0 +1,74 @@
+#pragma once
+// The analytic timing level against the event level, on grids of machines chosen before
+// either model's results were looked at (docs/timing.md "Analytic timing: validation").
+//
+// Contract:
+//  - analytic_tuning_grid(): the 48 machines the analytic level may be adjusted on (the
+//    torus at 640 x 512; phong, threshold, flat, transparent; 4 and 32 GPs; 2, 8 and 16
+//    Renderers; 1 and 8 ring channels).
+//  - analytic_heldout_grid(count, seed): `count` machines drawn with a seeded generator
+//    (splitmix64, so the same on every host) over scenes, programs, screens and every
+//    timing knob the analytic level claims to follow (GPs, Renderers, channels, queue
+//    words, balancing, shipping overlap, hop latency, double buffering, code profile). It
+//    is never used to adjust the model: the test asserts the targets on it.
+//  - validate_analytic runs each machine at both levels (fidelity.pixels=none) and reports
+//    the frame-time error |analytic - event| / event (mean and worst), the bottleneck's
+//    agreement (timing.bottleneck) and Kendall's tau-b between the two levels' frame times;
+//    the same for the closed form without contention (analytic.closed_form_seconds), so the
+//    gain of the recurrence is shown beside it.
+//  - Deterministic: the same grid gives the same figures.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/analysis/validate.hpp"
+
+namespace pp5 {
+
+struct GridMachine {
+  std::string scene;
+  std::string program;
+  std::vector<std::string> sets;  // --set assignments over the defaults
+  std::string label() const;
+};
+
+std::vector<GridMachine> analytic_tuning_grid();
+// The seed of the held-out grid the test asserts on. A first draw (seed 0x34) was looked at
+// once and showed a fault of the model under dynamic balancing; after the fault was fixed it
+// no longer counts as held out (docs/timing.md gives its figures), and this seed was drawn.
+constexpr std::uint64_t kHeldOutSeed = 0x3434;
+std::vector<GridMachine> analytic_heldout_grid(int count = 120, std::uint64_t seed = kHeldOutSeed);
+
+struct AnalyticPoint {
+  GridMachine machine;
+  double event_seconds = 0;
+  double analytic_seconds = 0;
+  double closed_form_seconds = 0;
+  std::string event_bottleneck;
+  std::string analytic_bottleneck;
+  double error() const { return (analytic_seconds - event_seconds) / event_seconds; }
+};
+
+struct AnalyticValidation {
+  std::string grid;  // "tuning" or "held-out"
+  std::vector<AnalyticPoint> points;
+  double mean_error = 0;   // of |error|
+  double worst_error = 0;  // of |error|
+  std::string worst_at;
+  int bottleneck_agree = 0;
+  double kendall_tau = 0;
+  double closed_form_mean_error = 0;
+  double closed_form_worst_error = 0;
+  double closed_form_tau = 0;
+};
+
+AnalyticValidation validate_analytic(const std::string& grid,
+                                     const std::vector<GridMachine>& machines,
+                                     const ProgramLoader& load);
+
+// Kendall's tau-b of two equally long series (ties in either counted as neither).
+double kendall_tau(const std::vector<double>& x, const std::vector<double>& y);
+
+std::string analytic_validation_markdown(const std::vector<AnalyticValidation>& grids);
+
+}  // namespace pp5
