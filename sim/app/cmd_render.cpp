@@ -107,7 +107,8 @@ int run_render(RenderOptions o) {
   parallel_for(2, o.threads, [&](int image) {
     if (image == 0 && pixels) frame_png = encode_png(result.image);
     if (image == 1 && heat_map) {
-      const RegionHeatMap map(result.image, result.regions);
+      const RegionHeatMap map(result.image, result.regions,
+                              static_cast<int>(result.stats.integer("timing.critical_renderer")));
       regions_png = encode_png(map.width(), map.height(),
                                [&map](int y, std::uint8_t* row) { map.row(y, row); });
     }
