@@ -6,6 +6,8 @@
 
 #include "sim/analysis/extremes.hpp"
 #include "sim/app/commands.hpp"
+#include "sim/output/output_set.hpp"
+#include "sim/output/report_html.hpp"
 #include "sim/scene/scene_loader.hpp"
 
 namespace pp5 {
@@ -18,6 +20,7 @@ struct ExtremesOptions {
   std::vector<std::string> sets;
   int threads = default_threads();
   bool synthetic = true;
+  std::string report;  // also this HTML file (sim/output/report_html.hpp)
 };
 
 int run_extremes(const ExtremesOptions& o) {
@@ -33,6 +36,13 @@ int run_extremes(const ExtremesOptions& o) {
     cases.insert(cases.end(), more.begin(), more.end());
   }
   std::cout << format_extremes(cases);
+  if (!o.report.empty()) {
+    report::Report r = extremes_report(cases);
+    r.subtitle = fmt::format("{} x {} screen{}", config.screen.width, config.screen.height,
+                             o.scene_name.empty() ? "" : ", scene " + o.scene_name);
+    write_file_atomically(o.report, report::html(r));
+    std::cout << fmt::format("wrote {}\n", o.report);
+  }
   for (const ExtremeCase& c : cases) {
     if (!c.pass) return 1;
   }
@@ -58,6 +68,9 @@ Command add_extremes_command(CLI::App& app) {
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
   cmd->add_flag("!--no-synthetic", o->synthetic, "Only the checks on --scene");
+  cmd->add_option("--report", o->report,
+                  "Also write the cases to FILE as a self-contained HTML page (a sortable, "
+                  "searchable table)");
   return {cmd, [o] { return run_extremes(*o); }};
 }
 
