@@ -21,12 +21,19 @@ grep -q "No image" "$tmp/analytic/report.html" || fail "the analytic report does
   --grid gp.count=1,2 --grid renderer.count=1,2 -j 1 --out "$tmp/sweep" >"$tmp/log" 2>&1 \
   || fail "sweep: $(cat "$tmp/log")"
 "$bin" sweep aggregate "$tmp/sweep" --report >"$tmp/log" 2>&1 || fail "aggregate --report: $(cat "$tmp/log")"
+# The same page straight from the sweep (--report aggregates after the runs).
+"$bin" sweep --scene two-triangles --set screen.width=128 --set screen.height=128 \
+  --grid gp.count=1,2 --grid renderer.count=1,2 -j 1 --out "$tmp/sweep2" --report >"$tmp/log" 2>&1 \
+  || fail "sweep --report: $(cat "$tmp/log")"
+[ -s "$tmp/sweep2/report.html" ] || fail "sweep --report wrote no report.html"
+diff <(cut -d, -f1-3 "$tmp/sweep/sweep.csv") <(cut -d, -f1-3 "$tmp/sweep2/sweep.csv") >/dev/null \
+  || fail "sweep --report and sweep aggregate give different rows"
 mkdir -p "$tmp/extremes"
 "$bin" extremes -j 2 --report "$tmp/extremes/report.html" >"$tmp/log" 2>&1 \
   || fail "extremes --report: $(cat "$tmp/log")"
 
 # Self-contained: no address outside the page in any of them.
-for f in "$tmp"/{frame,analytic,sweep,extremes}/report.html; do
+for f in "$tmp"/{frame,analytic,sweep,sweep2,extremes}/report.html; do
   [ -s "$f" ] || fail "no $f"
   if grep -Eo '(src|href)="[a-z]+:[^"]{0,30}' "$f" | grep -v '="data:' | grep -q .; then
     fail "$f links outside itself: $(grep -Eo '(src|href)="[a-z]+:[^"]{0,30}' "$f" | grep -v '="data:' | head -3)"
@@ -35,5 +42,5 @@ done
 args=()
 [ -n "$shots" ] && args=(--screenshots "$shots")
 timeout 300 python3 "$(dirname "$0")/browser_check.py" "${args[@]}" \
-  "$tmp"/{frame,analytic,sweep,extremes}/report.html || fail "the browser found faults (above)"
+  "$tmp"/{frame,analytic,sweep,sweep2,extremes}/report.html || fail "the browser found faults (above)"
 echo "report_browser_test: passed"

@@ -211,6 +211,8 @@ echo "$array $aggregate" > {out}/slurm-jobs.txt
   return 0;
 }
 
+int run_aggregate(const SweepOptions& o);
+
 int run_sweep(const SweepOptions& o, const std::string& program_path) {
   const std::vector<Axis> axes = parse_grid(o.grid);
   std::uint64_t points = 1;
@@ -312,6 +314,14 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
     std::cerr << fmt::format("[{}/{}] {}: {:.3f} ms, {:.0f} triangles/s, bottleneck {}\n", i + 1,
                              points, dir.filename().string(), r.frame_seconds * 1e3,
                              r.triangles_per_second, r.stats.text("timing.bottleneck"));
+  }
+  if (!o.print_commands && o.report) {
+    // --report: aggregate at once, into OUT/sweep.csv and OUT/report.html.
+    std::cout << fmt::format("{} runs in {}\n", points, o.out_dir);
+    SweepOptions aggregate = o;
+    aggregate.aggregate_dir = o.out_dir;
+    aggregate.csv_out.clear();
+    return run_aggregate(aggregate);
   }
   if (!o.print_commands) {
     std::cout << fmt::format("{} runs in {}; next: pp5sim sweep aggregate {} -o sweep.csv\n",
@@ -776,6 +786,12 @@ Command add_sweep_command(CLI::App& app) {
       sweep->add_subcommand("aggregate", "Collect every run's stats.json under DIR into one CSV");
   aggregate->add_option("dir", o->aggregate_dir, "The sweep's output folder")->required();
   aggregate->add_option("-o,--out", o->csv_out, "CSV file [DIR/sweep.csv]");
+  sweep
+      ->add_flag("--report", o->report,
+                 "After the runs, aggregate them into OUT/sweep.csv and write OUT/report.html "
+                 "(as `sweep aggregate OUT --report`)")
+      ->excludes("--print-commands")
+      ->excludes("--slurm");
   aggregate->add_flag("--report", o->report,
                       "Also write DIR/report.html: one self-contained page that plots any "
                       "statistic of the runs against the swept keys, and the runs' table");
