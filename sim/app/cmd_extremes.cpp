@@ -38,8 +38,14 @@ int run_extremes(const ExtremesOptions& o) {
   std::cout << format_extremes(cases);
   if (!o.report.empty()) {
     report::Report r = extremes_report(cases);
-    r.subtitle = fmt::format("{} x {} screen{}", config.screen.width, config.screen.height,
-                             o.scene_name.empty() ? "" : ", scene " + o.scene_name);
+    r.subtitle = o.synthetic
+                     ? "The synthetic cases, each on a 256 x 256 screen of the configured machine"
+                     : std::string();
+    if (!o.scene_name.empty()) {
+      r.subtitle +=
+          fmt::format("{}scene '{}' on the configured {} x {} screen", o.synthetic ? "; " : "",
+                      o.scene_name, config.screen.width, config.screen.height);
+    }
     write_file_atomically(o.report, report::html(r));
     std::cout << fmt::format("wrote {}\n", o.report);
   }

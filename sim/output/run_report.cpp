@@ -69,7 +69,7 @@ std::string run_report_json_value(const nlohmann::json& doc, const std::string& 
   const auto value = section->find(key.substr(dot + 1));
   if (value == section->end()) return "";
   if (value->is_string()) return value->get<std::string>();
-  if (value->is_number_float()) return fmt::format("{:g}", value->get<double>());
+  if (value->is_number_float()) return fmt::format("{}", value->get<double>());
   return value->dump();
 }
 
