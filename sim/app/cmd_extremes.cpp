@@ -1,6 +1,7 @@
 // pp5sim extremes: the numerical-stability report (sim/analysis/extremes.hpp).
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -46,6 +47,8 @@ int run_extremes(const ExtremesOptions& o) {
           fmt::format("{}scene '{}' on the configured {} x {} screen", o.synthetic ? "; " : "",
                       o.scene_name, config.screen.width, config.screen.height);
     }
+    const std::filesystem::path folder = std::filesystem::path(o.report).parent_path();
+    if (!folder.empty()) prepare_output_folder(folder.string(), "--report");
     write_file_atomically(o.report, report::html(r));
     std::cout << fmt::format("wrote {}\n", o.report);
   }

@@ -202,7 +202,7 @@ Command add_render_command(CLI::App& app) {
   render
       ->add_option("-s,--scene", o->scene_name,
                    "A built-in scene (see 'pp5sim scenes'), a mesh file (.obj .ply .stl .off) or a "
-                   "scene file (.json, described in README.md)")
+                   "scene file (.json, described in docs/reference/scene-files.md)")
       ->capture_default_str();
   render->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*render, o->config_path, o->sets);
