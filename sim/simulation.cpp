@@ -21,6 +21,7 @@
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 #include "sim/kernel.hpp"
+#include "sim/output/run_report.hpp"
 
 namespace pp5 {
 
@@ -722,18 +723,8 @@ std::vector<StatisticInfo> describe_statistics(const std::string& program_path) 
 }
 
 std::string bit_budget_table(const Program& program, const TimingParams& timing) {
-  std::string out = fmt::format("{:<16} {:>5}  {}\n", "field", "bits", "where");
-  for (const FieldDecl& f : program.fields) {
-    out += fmt::format("{:<16} {:>5}  {}\n", f.name, f.width,
-                       f.spilled ? fmt::format("backing store, block {}", f.block)
-                                 : fmt::format("pixel memory [{}:{}]", f.lo + f.width - 1, f.lo));
-  }
-  if (program.staging_bits) {
-    out += fmt::format("{:<16} {:>5}  staging for spilled fields\n", "(staging)",
-                       program.staging_bits);
-  }
-  out += fmt::format("{:<16} {:>5}  of {} bits ({:.0f}%)\n", "total", program.bits_used(),
-                     program.memory_bits, 100.0 * program.bits_used() / program.memory_bits);
+  // The table itself comes from the report model (sim/output/run_report.hpp).
+  std::string out = report::text(bit_budget(program));
   const OwnedValues none{};
   for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
     const ProcedureCode& code = program.procedures[k];

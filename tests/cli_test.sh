@@ -173,7 +173,14 @@ cmake --install "$(dirname "$bin")" --prefix "$tmp/prefix" >"$tmp/install.log" 2
   || fail "cmake --install failed: $(cat "$tmp/install.log")"
 [ -x "$tmp/prefix/bin/pp5sim" ] || fail "no bin/pp5sim installed"
 [ -s "$tmp/prefix/share/pp5sim/programs/phong.pp5" ] || fail "no programs installed"
+# The examples the documentation's commands use, installed beside the programs.
+for f in scenes/glass.json machines/half-machine.json meshes/knot.obj molecules/polyala-helix.pdb; do
+  [ -s "$tmp/prefix/share/pp5sim/examples/$f" ] || fail "no examples/$f installed"
+done
 mv "$tmp/prefix" "$tmp/moved"
+(cd "$tmp" && "$tmp/moved/bin/pp5sim" render --scene "$tmp/moved/share/pp5sim/examples/scenes/glass.json" \
+  --set screen.width=128 --set screen.height=128 --fidelity timing --out "$tmp/inst-example" \
+  >"$tmp/inst-example.log" 2>&1) || fail "an installed example failed: $(tail -3 "$tmp/inst-example.log")"
 (cd "$tmp" && "$tmp/moved/bin/pp5sim" render --scene two-triangles --firmware gouraud \
   --set screen.width=128 --set screen.height=128 --out "$tmp/inst" >"$tmp/inst.log" 2>&1) \
   || fail "the moved installation failed: $(cat "$tmp/inst.log")"

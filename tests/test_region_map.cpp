@@ -81,7 +81,7 @@ TEST_CASE("the heat map tints each region by its cycles and outlines the busiest
   CHECK(brightness(pixel(map, 64, 64)) != 3 * 255);
   CHECK(brightness(pixel(map, 128, 64)) != 3 * 255);
   // The legend's bar runs from the scale's bottom to its top, left to right.
-  const int y = 128 + kLegendHeight / 2;
+  const int y = 128 + kLegendBarRows / 2;
   int first = -1, last = -1;
   for (int x = 0; x < map.width; ++x) {
     std::uint8_t lo[3];
@@ -107,4 +107,36 @@ TEST_CASE("the heat map refuses regions outside the frame", "[region_map]") {
                     Catch::Contains("region 7 lies outside the frame"));
   frame.rgb.pop_back();
   CHECK_THROWS_WITH(region_heat_map(frame, {}), Catch::Contains("does not match its size"));
+}
+
+TEST_CASE("the heat map outlines the critical-path Renderer apart from the busiest",
+          "[region_map]") {
+  RgbImage frame;
+  frame.width = 256;
+  frame.height = 128;
+  frame.rgb.assign(static_cast<std::size_t>(256) * 128 * 3, 100);
+  // Renderer 0 is the busiest (900 cycles); renderer 1 (300) is named the critical path.
+  const std::vector<RegionLoad> loads = {{0, 0, 0, 128, 128, 0, 900},
+                                         {1, 128, 0, 128, 128, 1, 300}};
+  const RgbImage map = region_heat_map(frame, loads, 1);
+  const std::uint8_t cyan[3] = {0, 220, 255};
+  // Renderer 1's region: cyan 3 and 4 pixels in, black at 5, no white frame at its edge.
+  for (int d : {3, 4}) {
+    CHECK(std::equal(cyan, cyan + 3, pixel(map, 128 + d, 64)));
+    CHECK(std::equal(cyan, cyan + 3, pixel(map, 192, d)));
+  }
+  CHECK(brightness(pixel(map, 128 + 5, 64)) == 0);
+  CHECK(brightness(pixel(map, 128, 64)) != 3 * 255);
+  // Renderer 0's region: the white frame, and no cyan one.
+  CHECK(brightness(pixel(map, 0, 64)) == 3 * 255);
+  CHECK(!std::equal(cyan, cyan + 3, pixel(map, 3, 64)));
+  // Both on one Renderer: both frames.
+  const RgbImage both = region_heat_map(frame, loads, 0);
+  CHECK(brightness(pixel(both, 0, 64)) == 3 * 255);
+  CHECK(std::equal(cyan, cyan + 3, pixel(both, 3, 64)));
+  // The legend's second row names them: white text pixels below the bar rows.
+  int lit = 0;
+  for (int y = 128 + kLegendBarRows; y < map.height; ++y)
+    for (int x = 0; x < map.width; ++x) lit += brightness(pixel(map, x, y)) == 3 * 255;
+  CHECK(lit > 100);
 }

@@ -14,6 +14,15 @@ for args in "rendr" "render --sceen torus" "render --threads 0" "sweep --grid"; 
 done
 "$bin" --version | grep -q "^pp5sim [0-9]" || fail "--version printed: $("$bin" --version)"
 [ "$(status_of --help)" = 0 ] || fail "--help should exit 0"
+# The top-level --help lists each command on one line that fits a terminal; a command's own
+# --help keeps its whole description.
+"$bin" --help > "$tmp/help.txt"
+for command in render sweep trace highlight extremes validate visible csg; do
+  [ "$(grep -c "^  $command " "$tmp/help.txt")" = 1 ] || fail "--help: no one line for $command"
+done
+awk '!/^Usage:/ && length > 80 { print; bad = 1 } END { exit bad }' "$tmp/help.txt" \
+  || fail "--help has lines wider than 80 columns"
+"$bin" extremes --help | grep -q "pixel-centre ownership" || fail "extremes --help lost its description"
 [ -e "$tmp/x" ] && fail "a usage error wrote output"
 # A grid is walked, never held: a 26-million-point grid is refused at once, a 100,000-point
 # one prints its commands without exhausting memory.

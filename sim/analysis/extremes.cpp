@@ -688,17 +688,33 @@ std::vector<ExtremeCase> scene_extreme_cases(const MachineConfig& config, const 
   return cases;
 }
 
-std::string format_extremes(const std::vector<ExtremeCase>& cases) {
-  std::string out;
+report::Report extremes_report(const std::vector<ExtremeCase>& cases) {
+  using namespace report;
+  Table t;
+  t.id = "extremes";
+  t.columns = {text_column("result", "PASS or FAIL"), text_column("case"),
+               text_column("expected", "What a correct machine does"),
+               text_column("observed", "What the firmware, executing on the pixel arrays, did")};
   int failed = 0;
   for (const ExtremeCase& c : cases) {
-    out += fmt::format("{} {}\n  expected: {}\n  observed: {}\n", c.pass ? "PASS" : "FAIL", c.name,
-                       c.expected, c.observed);
+    t.add_row({c.pass ? "PASS" : "FAIL", c.name, c.expected, c.observed});
     failed += !c.pass;
   }
-  out += fmt::format("\n{} cases, {} passed, {} failed\n", cases.size(), cases.size() - failed,
-                     failed);
-  return out;
+  Report r;
+  r.title = "pp5sim extremes: numerical stability at the extremes";
+  Section& s = r.add_section("cases", "Cases");
+  s.blocks.push_back(t);
+  s.blocks.push_back(Note{
+      failed ? Note::Level::warning : Note::Level::info,
+      fmt::format("{} cases, {} passed, {} failed", cases.size(), cases.size() - failed, failed)});
+  return r;
+}
+
+std::string format_extremes(const std::vector<ExtremeCase>& cases) {
+  const report::Report r = extremes_report(cases);
+  const auto& blocks = r.sections.at(0).blocks;
+  return report::text_records(std::get<report::Table>(blocks.at(0)), 2) + "\n" +
+         std::get<report::Note>(blocks.at(1)).text + "\n";
 }
 
 }  // namespace pp5

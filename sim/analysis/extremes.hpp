@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "models/config/machine_config.hpp"
+#include "sim/output/report.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {
@@ -36,7 +37,10 @@ std::vector<ExtremeCase> synthetic_extreme_cases(const MachineConfig& config, in
 // across a closed mesh, and the depth precision of the configured screen.
 std::vector<ExtremeCase> scene_extreme_cases(const MachineConfig& config, const Scene& scene,
                                              int threads);
-// A table: one block per case, with PASS or FAIL.
+// The cases as a report (sim/output/report.hpp): a table of result, case, expected and
+// observed, and a note counting them.
+report::Report extremes_report(const std::vector<ExtremeCase>& cases);
+// The report as the terminal shows it: one block per case, with PASS or FAIL, then the count.
 std::string format_extremes(const std::vector<ExtremeCase>& cases);
 
 // Building blocks, exposed for the tests.

@@ -1,11 +1,14 @@
 // pp5sim extremes: the numerical-stability report (sim/analysis/extremes.hpp).
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
 #include "sim/analysis/extremes.hpp"
 #include "sim/app/commands.hpp"
+#include "sim/output/output_set.hpp"
+#include "sim/output/report_html.hpp"
 #include "sim/scene/scene_loader.hpp"
 
 namespace pp5 {
@@ -18,6 +21,7 @@ struct ExtremesOptions {
   std::vector<std::string> sets;
   int threads = default_threads();
   bool synthetic = true;
+  std::string report;  // also this HTML file (sim/output/report_html.hpp)
 };
 
 int run_extremes(const ExtremesOptions& o) {
@@ -33,6 +37,21 @@ int run_extremes(const ExtremesOptions& o) {
     cases.insert(cases.end(), more.begin(), more.end());
   }
   std::cout << format_extremes(cases);
+  if (!o.report.empty()) {
+    report::Report r = extremes_report(cases);
+    r.subtitle = o.synthetic
+                     ? "The synthetic cases, each on a 256 x 256 screen of the configured machine"
+                     : std::string();
+    if (!o.scene_name.empty()) {
+      r.subtitle +=
+          fmt::format("{}scene '{}' on the configured {} x {} screen", o.synthetic ? "; " : "",
+                      o.scene_name, config.screen.width, config.screen.height);
+    }
+    const std::filesystem::path folder = std::filesystem::path(o.report).parent_path();
+    if (!folder.empty()) prepare_output_folder(folder.string(), "--report");
+    write_file_atomically(o.report, report::html(r));
+    std::cout << fmt::format("wrote {}\n", o.report);
+  }
   for (const ExtremeCase& c : cases) {
     if (!c.pass) return 1;
   }
@@ -58,6 +77,9 @@ Command add_extremes_command(CLI::App& app) {
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
   cmd->add_flag("!--no-synthetic", o->synthetic, "Only the checks on --scene");
+  cmd->add_option("--report", o->report,
+                  "Also write the cases to FILE as a self-contained HTML page (a sortable, "
+                  "searchable table)");
   return {cmd, [o] { return run_extremes(*o); }};
 }
 

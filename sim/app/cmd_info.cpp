@@ -16,6 +16,7 @@
 #include "firmware/isa/isa.hpp"
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
+#include "sim/output/report.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
@@ -25,11 +26,13 @@ namespace pp5 {
 namespace {
 
 std::string isa_reference() {
-  std::string out = "| instruction | operands | effect | cycles |\n|---|---|---|---|\n";
+  report::Table table;
+  table.columns = {report::code_column("instruction"), report::text_column("operands"),
+                   report::text_column("effect"), report::text_column("cycles")};
   for (const auto& i : instruction_table()) {
-    out += fmt::format("| `{}` | {} | {} | {} |\n", i.syntax, i.operands[0] ? i.operands : "-",
-                       markdown_cell(i.effect), markdown_cell(i.cycles));
+    table.add_row({i.syntax, i.operands[0] ? i.operands : "-", i.effect, i.cycles});
   }
+  std::string out = report::markdown(table);
   // Which costs rest on an unpublished property of the machine, grouped by property.
   std::vector<std::pair<std::string, std::vector<std::string>>> bases;
   for (const auto& i : instruction_table()) {
@@ -123,9 +126,11 @@ struct ConfigOptions {
 // with its calibration mark, its basis and its plausible range.
 std::string calibration_table(const MachineConfig& config) {
   const nlohmann::json values = config.to_json();
-  std::string out =
-      "| key | value | unit | calibration | basis | plausible range (low .. high) |\n"
-      "|---|---|---|---|---|---|\n";
+  report::Table table;
+  table.columns = {
+      report::code_column("key"),   report::text_column("value"),
+      report::text_column("unit"),  report::text_column("calibration"),
+      report::text_column("basis"), report::text_column("plausible range (low .. high)")};
   for (const ParameterInfo& p : describe_parameters()) {
     if (p.calibration == Calibration::none) continue;
     const auto dot = p.key.find('.');
@@ -136,11 +141,10 @@ std::string calibration_table(const MachineConfig& config) {
     const std::string range =
         p.low.empty() ? "-"
                       : fmt::format("{} .. {}", fmt::join(p.low, " "), fmt::join(p.high, " "));
-    out +=
-        fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", p.key, value, p.unit,
-                    calibration_name(p.calibration), markdown_cell(p.basis), markdown_cell(range));
+    table.add_row(
+        {p.key, value, p.unit, std::string(calibration_name(p.calibration)), p.basis, range});
   }
-  return out;
+  return report::markdown(table);
 }
 
 // 1234567 -> "1,234,567".
@@ -328,14 +332,16 @@ Command add_config_command(CLI::App& app) {
               std::cout << load_config(o->path, o->sets).to_json().dump(2) << "\n";
               return 0;
             }
-            std::cout << "| key | default | range | unit | conf. | calibration | meaning |\n"
-                         "|---|---|---|---|---|---|---|\n";
+            report::Table table;
+            table.columns = {report::code_column("key"),    report::text_column("default"),
+                             report::text_column("range"),  report::text_column("unit"),
+                             report::text_column("conf."),  report::text_column("calibration"),
+                             report::text_column("meaning")};
             for (const auto& p : describe_parameters()) {
-              std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} | {} |\n", p.key,
-                                       p.default_value, p.range, p.unit, p.confidence,
-                                       calibration_name(p.calibration),
-                                       markdown_cell(p.description));
+              table.add_row({p.key, p.default_value, p.range, p.unit, p.confidence,
+                             std::string(calibration_name(p.calibration)), p.description});
             }
+            std::cout << report::markdown(table);
             std::cout << "\nConfidence (conf.): where the value comes from: P published (SIGGRAPH "
                          "1989), S secondary source, A assumption. Calibration: how a timing "
                          "constant was obtained: fitted (to a published figure), derived (from a "
@@ -361,11 +367,13 @@ Command add_stats_command(CLI::App& app) {
               throw std::runtime_error("stats: give --describe or a stats.json file (one of them)");
             }
             if (!o->file.empty()) return print_stats_file(o->file);
-            std::cout << "| statistic | kind | unit | meaning |\n|---|---|---|---|\n";
+            report::Table table;
+            table.columns = {report::code_column("statistic"), report::text_column("kind"),
+                             report::text_column("unit"), report::text_column("meaning")};
             for (const StatisticInfo& i : describe_statistics(resolve_firmware("phong"))) {
-              std::cout << fmt::format("| `{}` | {} | {} | {} |\n", i.name, stat_kind_name(i.kind),
-                                       i.unit, markdown_cell(i.description));
+              table.add_row({i.name, stat_kind_name(i.kind), i.unit, i.description});
             }
+            std::cout << report::markdown(table);
             return 0;
           }};
 }

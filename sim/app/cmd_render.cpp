@@ -11,6 +11,7 @@
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/output/run_report.hpp"
 #include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
@@ -32,42 +33,46 @@ struct RenderOptions {
   std::vector<int> tessellation;
   std::string timeline;
   std::string order = "given";
+  bool report = false;  // also OUT/report.html (sim/output/run_report.hpp)
 };
 
-// What the scene asks for that the program would ignore, one stderr line each: opacity
+// What the scene asks for that the program would ignore, one warning each (printed to stderr
+// and shown in report.html): opacity
 // reaches the pixels only through the `opacity` expression, and a program that lights pixels
 // itself (it reads light_x) but has no `light` procedure sees the first light only.
-void warn_about_ignored_scene_parts(const Scene& scene, const Program& program) {
+std::vector<std::string> ignored_scene_parts(const Scene& scene, const Program& program) {
+  std::vector<std::string> warnings;
   const std::string name = fs::path(program.name).stem().string();
   const bool transparent = std::any_of(scene.mesh.vertices.begin(), scene.mesh.vertices.end(),
                                        [](const Vertex& v) { return v.opacity < 1.0f; });
   const int opacity = static_cast<int>(Expression::opacity);
   if (transparent && !program.procedure(Procedure::triangle).expressions.test(opacity)) {
-    std::cerr << fmt::format(
-        "warning: scene '{}' has materials with opacity < 1, but firmware '{}' has no 'opacity' "
-        "expression: the opacity is ignored (use --firmware transparent)\n",
-        scene.name, name);
+    warnings.push_back(
+        fmt::format("scene '{}' has materials with opacity < 1, but firmware '{}' has no 'opacity' "
+                    "expression: the opacity is ignored (use --firmware transparent)",
+                    scene.name, name));
   }
   bool reads_light = false;
   for (const ProcedureCode& code : program.procedures) {
     reads_light = reads_light || code.parameters.test(static_cast<int>(Parameter::light_x));
   }
   if (scene.lights.size() > 1 && reads_light && !program.procedure(Procedure::light).defined) {
-    std::cerr << fmt::format(
-        "warning: scene '{}' has {} lights, but firmware '{}' has no 'light' procedure: it "
-        "shades with the first light only (phong sums them all)\n",
-        scene.name, scene.lights.size(), name);
+    warnings.push_back(
+        fmt::format("scene '{}' has {} lights, but firmware '{}' has no 'light' procedure: it "
+                    "shades with the first light only (phong sums them all)",
+                    scene.name, scene.lights.size(), name));
   }
   // A "csg" expression is drawn by a program with the CSG pass plan's procedures (its
   // `surface`, models/gp/pass_plan.hpp); any other draws every mesh as it is: say so rather
   // than let the union of the meshes pass for the result.
   if (!scene.csg.empty() && !program.procedure(Procedure::surface).defined) {
-    std::cerr << fmt::format(
-        "warning: scene '{}' gives a CSG expression ({} product{} after normalising), but "
+    warnings.push_back(fmt::format(
+        "scene '{}' gives a CSG expression ({} product{} after normalising), but "
         "firmware '{}' does not draw CSG (it has no 'surface' procedure): it draws every mesh "
-        "as it is (use --firmware csg)\n",
-        scene.name, scene.csg.size(), scene.csg.size() == 1 ? "" : "s", name);
+        "as it is (use --firmware csg)",
+        scene.name, scene.csg.size(), scene.csg.size() == 1 ? "" : "s", name));
   }
+  return warnings;
 }
 
 int run_render(RenderOptions o) {
@@ -89,13 +94,18 @@ int run_render(RenderOptions o) {
   apply_display_order(scene.mesh, order);
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(firmware_for(o.firmware, scene), assembler_options(config));
-  warn_about_ignored_scene_parts(scene, program);
+  std::vector<std::string> warnings = ignored_scene_parts(scene, program);
+  for (const std::string& w : warnings) std::cerr << "warning: " << w << "\n";
   if (o.out_dir.empty()) o.out_dir = default_output_folder(scene.name);
   const bool replacing = prepare_output_folder(o.out_dir, "--out");
 
   nlohmann::json timeline;
-  FrameResult result = simulate_frame(config, scene, program, o.threads, {},
-                                      o.timeline.empty() ? nullptr : &timeline);
+  // report.html draws the timeline: recorded for it too where the timing model has events.
+  const bool record_timeline =
+      !o.timeline.empty() ||
+      (o.report && config.fidelity.timing == MachineConfig::Fidelity::Timing::event);
+  FrameResult result =
+      simulate_frame(config, scene, program, o.threads, {}, record_timeline ? &timeline : nullptr);
   // All of the run's outputs, or none of them (sim/output/output_set.hpp).
   const fs::path dir(o.out_dir);
   OutputSet outputs;
@@ -107,11 +117,34 @@ int run_render(RenderOptions o) {
   parallel_for(2, o.threads, [&](int image) {
     if (image == 0 && pixels) frame_png = encode_png(result.image);
     if (image == 1 && heat_map) {
-      const RegionHeatMap map(result.image, result.regions);
+      const RegionHeatMap map(result.image, result.regions,
+                              static_cast<int>(result.stats.integer("timing.critical_renderer")));
       regions_png = encode_png(map.width(), map.height(),
                                [&map](int y, std::uint8_t* row) { map.row(y, row); });
     }
   });
+  const Statistics& stats = result.stats;
+  const std::int64_t overflow = stats.integer("setup.coefficient_overflow");
+  if (overflow > 0) {
+    warnings.push_back(
+        fmt::format("{} triangles were not drawn because a coefficient did not fit "
+                    "evaluator.coefficient_bits = {} (see 'pp5sim extremes')",
+                    overflow, config.evaluator.coefficient_bits));
+  }
+  if (o.report) {
+    RunReportInput in;
+    in.title = fmt::format("scene '{}' ({} triangles), firmware {}", scene.name,
+                           scene.mesh.triangles.size(), fs::path(program.name).stem().string());
+    in.subtitle = scene.description;
+    in.config = &config;
+    in.program = &program;
+    in.result = &result;
+    in.frame_png = frame_png;
+    in.regions_png = regions_png;
+    in.timeline = record_timeline ? &timeline : nullptr;
+    in.warnings = warnings;
+    outputs.add((dir / "report.html").string(), report::html(run_report(in)));
+  }
   if (pixels) outputs.add((dir / "frame.png").string(), std::move(frame_png));
   if (heat_map) outputs.add((dir / "regions.png").string(), std::move(regions_png));
   outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
@@ -122,13 +155,12 @@ int run_render(RenderOptions o) {
   std::error_code ignored;
   if (!pixels) fs::remove(dir / "frame.png", ignored);
   if (!heat_map) fs::remove(dir / "regions.png", ignored);
+  if (!o.report) fs::remove(dir / "report.html", ignored);
 
   std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n{}\n\n", scene.name,
                            scene.mesh.triangles.size(), program.name, scene.description);
   std::cout << summary(result, program, timing_params(config));
   // What set-up dropped, so that no triangle disappears silently.
-  const Statistics& stats = result.stats;
-  const std::int64_t overflow = stats.integer("setup.coefficient_overflow");
   std::cout << fmt::format(
       "set-up dropped: {} clipped away, {} zero-area, {} without a pixel centre, {} with a "
       "coefficient overflow\n",
@@ -158,6 +190,7 @@ int run_render(RenderOptions o) {
   if (!o.timeline.empty()) {
     std::cout << fmt::format("wrote {} (open it in ui.perfetto.dev)\n", o.timeline);
   }
+  if (o.report) std::cout << fmt::format("wrote {}/report.html\n", o.out_dir);
   return 0;
 }
 
@@ -169,7 +202,7 @@ Command add_render_command(CLI::App& app) {
   render
       ->add_option("-s,--scene", o->scene_name,
                    "A built-in scene (see 'pp5sim scenes'), a mesh file (.obj .ply .stl .off) or a "
-                   "scene file (.json, described in README.md)")
+                   "scene file (.json, described in docs/reference/scene-files.md)")
       ->capture_default_str();
   render->add_option("-f,--firmware", o->firmware, firmware_help());
   add_config_options(*render, o->config_path, o->sets);
@@ -191,6 +224,10 @@ Command add_render_command(CLI::App& app) {
   render->add_option("--timeline", o->timeline,
                      "Also write a timeline of every GP, ring channel and Renderer to FILE, in the "
                      "Chrome trace-event JSON format that ui.perfetto.dev opens");
+  render->add_flag("--report", o->report,
+                   "Also write OUT/report.html: one self-contained page with the frame, the "
+                   "regions heat map, the bit budget, utilisation, the timeline, every "
+                   "statistic and the configuration");
   render
       ->add_option("--order", o->order,
                    "Display-list order of the scene's triangles: given, reversed, shuffled or "

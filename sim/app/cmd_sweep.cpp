@@ -29,6 +29,7 @@
 #include "models/gp/setup_memo.hpp"
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
+#include "sim/output/report_html.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
@@ -58,6 +59,7 @@ struct SweepOptions {
   // aggregate
   std::string aggregate_dir;
   std::string csv_out;
+  bool report = false;  // aggregate: also DIR/report.html
   // plot
   std::string plot_csv;
   std::string plot_out;
@@ -211,6 +213,8 @@ echo "$array $aggregate" > {out}/slurm-jobs.txt
   return 0;
 }
 
+int run_aggregate(const SweepOptions& o);
+
 int run_sweep(const SweepOptions& o, const std::string& program_path) {
   const std::vector<Axis> axes = parse_grid(o.grid);
   std::uint64_t points = 1;
@@ -329,6 +333,14 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
                              points, dir.filename().string(), r.frame_seconds * 1e3,
                              r.triangles_per_second, r.stats.text("timing.bottleneck"));
   }
+  if (!o.print_commands && o.report) {
+    // --report: aggregate at once, into OUT/sweep.csv and OUT/report.html.
+    std::cout << fmt::format("{} runs in {}\n", points, o.out_dir);
+    SweepOptions aggregate = o;
+    aggregate.aggregate_dir = o.out_dir;
+    aggregate.csv_out.clear();
+    return run_aggregate(aggregate);
+  }
   if (!o.print_commands) {
     std::cout << fmt::format("{} runs in {}; next: pp5sim sweep aggregate {} -o sweep.csv\n",
                              points, o.out_dir, o.out_dir);
@@ -369,16 +381,53 @@ const std::vector<std::pair<std::string, std::string>>& metric_columns() {
   return columns;
 }
 
-std::string csv_value(const nlohmann::json& v) {
-  if (v.is_string()) return v.get<std::string>();
-  if (v.is_number_integer()) return std::to_string(v.get<long long>());
-  return fmt::format("{:.9g}", v.get<double>());
+// A configuration value or a statistic as a typed cell (the CSV writes integers exactly and
+// reals with 9 significant digits).
+report::Cell sweep_cell(const nlohmann::json& v) {
+  if (v.is_string()) return report::Cell(v.get<std::string>());
+  if (v.is_boolean()) return report::Cell(std::string(v.get<bool>() ? "true" : "false"));
+  if (v.is_number_integer()) return report::Cell(static_cast<std::int64_t>(v.get<long long>()));
+  if (v.is_number()) {
+    const double d = v.get<double>();
+    return report::Cell::shown_as(report::Cell(d), fmt::format("{:.9g}", d));
+  }
+  return report::Cell(v.dump());
 }
 
-std::string csv_value(const StatValue& v) {
-  if (const auto* text = std::get_if<std::string>(&v)) return *text;
-  if (const auto* integer = std::get_if<std::int64_t>(&v)) return std::to_string(*integer);
-  return fmt::format("{:.9g}", std::get<double>(v));
+report::Cell sweep_cell(const StatValue& v) {
+  if (const auto* text = std::get_if<std::string>(&v)) return report::Cell(*text);
+  if (const auto* integer = std::get_if<std::int64_t>(&v)) return report::Cell(*integer);
+  const double d = std::get<double>(v);
+  return report::Cell::shown_as(report::Cell(d), fmt::format("{:.9g}", d));
+}
+
+// What each statistic is (unit, description), by pattern, from a frame of the smallest
+// machine running `firmware`; empty if that cannot run (the report then shows no units).
+std::map<std::string, StatisticInfo> sweep_statistic_infos(const std::string& firmware) {
+  std::map<std::string, StatisticInfo> infos;
+  try {
+    for (const StatisticInfo& i : describe_statistics(resolve_firmware(firmware)))
+      infos[i.name] = i;
+  } catch (const std::exception& e) {
+    std::cerr << fmt::format("pp5sim: warning: no units for the report ({})\n", e.what());
+  }
+  return infos;
+}
+
+report::Column sweep_column(const std::string& key, const std::string& name,
+                            const std::map<std::string, StatisticInfo>& infos) {
+  report::Column c = report::text_column(key);
+  const auto it = infos.find(stat_pattern(name));
+  if (it != infos.end()) {
+    c.unit = it->second.unit == stat_unit::name ? "" : it->second.unit;
+    c.description = name + ": " + it->second.description;
+    c.kind = it->second.kind == StatKind::text      ? report::Kind::text
+             : it->second.kind == StatKind::integer ? report::Kind::integer
+                                                    : report::Kind::real;
+  }
+  c.key = key;
+  c.heading = key;
+  return c;
 }
 
 int run_aggregate(const SweepOptions& o) {
@@ -407,11 +456,33 @@ int run_aggregate(const SweepOptions& o) {
   std::vector<fs::path> runs;
   for (std::uint64_t i = 0; i < points; ++i) runs.push_back(dir / run_name(axes, point(axes, i)));
   std::sort(runs.begin(), runs.end());
-  std::string csv;
-  std::vector<std::pair<std::vector<double>, std::string>> sorted_rows;
-  for (const auto& k : keys) csv += k + ",";
-  for (const auto& [column, name] : metric_columns()) csv += column + ",";
-  csv += "fidelity_pixels,fidelity_timing\n";  // the level each row was simulated at
+  // The units come from the statistics' registry; reading it runs a tiny frame, so only for
+  // the report.
+  const std::map<std::string, StatisticInfo> infos =
+      o.report ? sweep_statistic_infos(sweep.value("firmware", std::string("phong")))
+               : std::map<std::string, StatisticInfo>{};
+  // One row per run (sweep.csv), and for the report one with every statistic.
+  report::Table table;
+  table.id = "runs";
+  for (const auto& k : keys) {
+    report::Column c = report::text_column(k, "A swept configuration key");
+    c.key = k;
+    table.columns.push_back(c);
+  }
+  for (const auto& [column, name] : metric_columns())
+    table.columns.push_back(sweep_column(column, name, infos));
+  for (const char* level : {"fidelity_pixels", "fidelity_timing"}) {
+    report::Column c = report::text_column(level, "The level each row was simulated at");
+    table.columns.push_back(c);
+  }
+  report::Table every;  // the report's plot: the swept keys and every statistic
+  every.id = "statistics";
+  struct Row {
+    std::vector<double> order;
+    std::vector<report::Cell> cells;
+    std::vector<report::Cell> all;
+  };
+  std::vector<Row> sorted_rows;
   int rows = 0;
   int missing = 0;
   for (const fs::path& run : runs) {
@@ -423,40 +494,89 @@ int run_aggregate(const SweepOptions& o) {
     }
     const nlohmann::json config = read_json(run / "config.json");
     const Statistics stats = read_statistics(run / "stats.json");
-    std::string row;
-    std::vector<double> order;
+    Row row;
     for (const auto& k : keys) {
       const auto dot = k.find('.');
       const nlohmann::json& v = config.at(k.substr(0, dot)).at(k.substr(dot + 1));
-      order.push_back(v.is_number() ? v.get<double>() : 0.0);
-      row += csv_value(v) + ",";
+      row.order.push_back(v.is_number() ? v.get<double>() : 0.0);
+      row.cells.push_back(sweep_cell(v));
     }
     for (const auto& [column, name] : metric_columns()) {
       if (!stats.contains(name)) {
         throw std::runtime_error(fmt::format("{}: no '{}' in stats.json (from an older pp5sim?)",
                                              (run / "stats.json").string(), name));
       }
-      row += csv_value(stats.value(name)) + ",";
+      row.cells.push_back(sweep_cell(stats.value(name)));
     }
     // A run from before the fidelity keys was simulated at the only level there was.
     const auto level = [&](const char* key, const char* before) {
       const auto f = config.find("fidelity");
-      if (f == config.end() || !f->contains(key)) return std::string(before);
-      return csv_value(f->at(key));
+      if (f == config.end() || !f->contains(key)) return report::Cell(before);
+      return sweep_cell(f->at(key));
     };
-    row += level("pixels", "bit") + "," + level("timing", "event") + "\n";
-    sorted_rows.push_back({order, row});
+    row.cells.push_back(level("pixels", "bit"));
+    row.cells.push_back(level("timing", "event"));
+    if (o.report) {
+      const std::vector<StatisticInfo> names = stats.infos();
+      if (every.columns.empty()) {
+        for (std::size_t k = 0; k < keys.size(); ++k) every.columns.push_back(table.columns[k]);
+        for (const StatisticInfo& i : names)
+          every.columns.push_back(sweep_column(i.name, i.name, infos));
+      }
+      row.all.assign(row.cells.begin(), row.cells.begin() + static_cast<long>(keys.size()));
+      for (std::size_t k = keys.size(); k < every.columns.size(); ++k) {
+        const std::string& name = every.columns[k].key;
+        row.all.push_back(stats.contains(name) ? sweep_cell(stats.value(name)) : report::Cell());
+      }
+    }
+    sorted_rows.push_back(std::move(row));
     ++rows;
   }
   // Rows in the grid's numeric order (folder names sort as text).
   std::stable_sort(sorted_rows.begin(), sorted_rows.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (const auto& r : sorted_rows) csv += r.second;
+                   [](const Row& a, const Row& b) { return a.order < b.order; });
+  for (Row& r : sorted_rows) {
+    table.add_row(r.cells);
+    if (o.report) every.add_row(r.all);
+  }
   if (rows == 0) throw std::runtime_error(fmt::format("{}: no finished runs", dir.string()));
   const std::string out = o.csv_out.empty() ? (dir / "sweep.csv").string() : o.csv_out;
-  write_file_atomically(out, csv);
+  OutputSet outputs;
+  outputs.add(out, report::csv(table));
+  const std::string report_path = (dir / "report.html").string();
+  if (o.report) {
+    report::Report r;
+    r.title = fmt::format("pp5sim sweep: {} runs of scene '{}', firmware {}", rows,
+                          sweep.value("scene", std::string("?")),
+                          fs::path(sweep.value("firmware", std::string("?"))).stem().string());
+    std::string grid;
+    for (const Axis& a : axes)
+      grid +=
+          (grid.empty() ? "" : "; ") + a.key + " = " + fmt::format("{}", fmt::join(a.values, ", "));
+    r.subtitle = "Grid: " + grid;
+    report::Section& plot = r.add_section("plot", "Any statistic against the swept keys");
+    plot.blocks.push_back(report::Paragraph{
+        "Choose the statistic (y), the swept key on the x axis and the key whose values make "
+        "the lines. Every statistic of every run's stats.json is here."});
+    plot.blocks.push_back(report::RawHtml{
+        report::html_plot(every, keys, "frame.projected_triangles_per_second"), ""});
+    report::Section& runs_section = r.add_section("runs", "Runs");
+    runs_section.blocks.push_back(report::Paragraph{
+        "sweep.csv: one row per run. Click a heading to sort; a heading's tooltip says what "
+        "the column is."});
+    runs_section.blocks.push_back(table);
+    if (missing) {
+      runs_section.blocks.push_back(report::Note{
+          report::Note::Level::warning,
+          fmt::format("{} runs of the grid have no stats.json or config.json (not run yet?)",
+                      missing)});
+    }
+    outputs.add(report_path, report::html(r));
+  }
+  outputs.commit();
   std::cout << fmt::format("wrote {} ({} runs{})\n", out, rows,
                            missing ? fmt::format(", {} missing", missing) : "");
+  if (o.report) std::cout << fmt::format("wrote {}\n", report_path);
   return 0;
 }
 
@@ -684,6 +804,15 @@ Command add_sweep_command(CLI::App& app) {
       sweep->add_subcommand("aggregate", "Collect every run's stats.json under DIR into one CSV");
   aggregate->add_option("dir", o->aggregate_dir, "The sweep's output folder")->required();
   aggregate->add_option("-o,--out", o->csv_out, "CSV file [DIR/sweep.csv]");
+  sweep
+      ->add_flag("--report", o->report,
+                 "After the runs, aggregate them into OUT/sweep.csv and write OUT/report.html "
+                 "(as `sweep aggregate OUT --report`)")
+      ->excludes("--print-commands")
+      ->excludes("--slurm");
+  aggregate->add_flag("--report", o->report,
+                      "Also write DIR/report.html: one self-contained page that plots any "
+                      "statistic of the runs against the swept keys, and the runs' table");
 
   auto* plot = sweep->add_subcommand(
       "plot", "Draw a metric of the CSV against a swept parameter, one line per value of another");

@@ -193,7 +193,7 @@ void add_fidelity_option(CLI::App& command, std::vector<std::string>& sets) {
           throw CLI::ValidationError(e.what());
         }
       },
-      std::string("How much of the machine to simulate (README \"Fidelity levels\"): ") +
+      std::string("How much of the machine to simulate (docs/concepts/fidelity.md): ") +
           kFidelityHelp + ". Applied after --set.");
 }
 

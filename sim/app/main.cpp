@@ -3,8 +3,10 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
@@ -77,6 +79,31 @@ int report_parse_error(const CLI::App& app, const CLI::ParseError& e, int argc, 
   return 2;
 }
 
+// The top-level --help: each command on one line. A command's own --help keeps its whole
+// description; here it is cut to its first clause (before " (", ". " or "; ") and to the
+// width of a terminal, so that a new command needs nothing added here.
+class OneLineCommands : public CLI::Formatter {
+ public:
+  std::string make_subcommand(const CLI::App* sub) const override {
+    std::string line = sub->get_description();
+    for (const char* stop : {" (", ". ", "; ", ", each", ", then"}) {
+      const auto at = line.find(stop);
+      if (at != std::string::npos && at >= 12) line = line.substr(0, at);
+    }
+    constexpr std::size_t kWidth = 64;
+    if (line.size() > kWidth) {
+      const auto space = line.rfind(' ', kWidth - 4);
+      line = line.substr(0, space == std::string::npos ? kWidth - 4 : space) + " ...";
+    }
+    char buffer[256];
+    std::snprintf(buffer, sizeof buffer, "  %-13s %s\n", sub->get_name().c_str(), line.c_str());
+    return buffer;
+  }
+  std::string make_footer(const CLI::App*) const override {
+    return "\nRun 'pp5sim COMMAND --help' for a command's options and the files it writes.\n";
+  }
+};
+
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
     __has_feature(memory_sanitizer)
@@ -132,6 +159,8 @@ int main(int argc, char** argv) {
       add_csg_command(app),
   };
 
+  // After the commands are added: they keep the default formatter, with full descriptions.
+  app.formatter(std::make_shared<OneLineCommands>());
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

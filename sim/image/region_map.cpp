@@ -31,7 +31,26 @@ constexpr std::array<std::array<std::uint8_t, 5>, 10> kDigits = {{
     {7, 5, 7, 1, 7},
 }};
 
+// Capital letters A-Z, then ':' and '-', in the same form (the legend's words).
+constexpr std::array<std::array<std::uint8_t, 5>, 28> kLetters = {{
+    {2, 5, 7, 5, 5}, {6, 5, 6, 5, 6}, {3, 4, 4, 4, 3}, {6, 5, 5, 5, 6}, {7, 4, 6, 4, 7},
+    {7, 4, 6, 4, 4}, {3, 4, 5, 5, 3}, {5, 5, 7, 5, 5}, {7, 2, 2, 2, 7}, {1, 1, 1, 5, 2},
+    {5, 5, 6, 5, 5}, {4, 4, 4, 4, 7}, {5, 7, 7, 5, 5}, {6, 5, 5, 5, 5}, {2, 5, 5, 5, 2},
+    {6, 5, 6, 4, 4}, {2, 5, 5, 6, 3}, {6, 5, 6, 5, 5}, {3, 4, 2, 1, 6}, {7, 2, 2, 2, 2},
+    {5, 5, 5, 5, 7}, {5, 5, 5, 5, 2}, {5, 5, 7, 7, 5}, {5, 5, 2, 5, 5}, {5, 5, 2, 2, 2},
+    {7, 1, 2, 4, 7}, {0, 2, 0, 2, 0}, {0, 0, 7, 0, 0},
+}};
+
 constexpr int kDigitScale = 2;  // each font pixel is 2 x 2 image pixels
+
+// The glyph of `ch` (a digit, a capital, ':', '-'), or none (a space).
+const std::array<std::uint8_t, 5>* legend_glyph(char ch) {
+  if (ch >= '0' && ch <= '9') return &kDigits[static_cast<std::size_t>(ch - '0')];
+  if (ch >= 'A' && ch <= 'Z') return &kLetters[static_cast<std::size_t>(ch - 'A')];
+  if (ch == ':') return &kLetters[26];
+  if (ch == '-') return &kLetters[27];
+  return nullptr;
+}
 
 void put(RgbImage& image, int x, int y, const std::uint8_t c[3]) {
   if (x < 0 || y < 0 || x >= image.width || y >= image.height) return;
@@ -41,11 +60,17 @@ void put(RgbImage& image, int x, int y, const std::uint8_t c[3]) {
   p[2] = c[2];
 }
 
-// Draws `text` (digits only) with its top-left corner at (x, y); returns its width.
+// Draws `text` (digits, capitals, ':', '-' and spaces) with its top-left corner at (x, y);
+// returns its width.
 int draw_number(RgbImage& image, int x, int y, const std::string& text, const std::uint8_t c[3]) {
   int cx = x;
   for (char ch : text) {
-    const auto& glyph = kDigits[static_cast<std::size_t>(ch - '0')];
+    const auto* found = legend_glyph(ch);
+    if (!found) {
+      cx += 4 * kDigitScale;
+      continue;
+    }
+    const auto& glyph = *found;
     for (int row = 0; row < 5; ++row) {
       for (int col = 0; col < 3; ++col) {
         if (((glyph[row] >> (2 - col)) & 1) == 0) continue;
@@ -58,6 +83,8 @@ int draw_number(RgbImage& image, int x, int y, const std::string& text, const st
   }
   return cx - x - kDigitScale;
 }
+
+constexpr std::uint8_t kCriticalOutline[3] = {0, 220, 255};
 
 int number_width(const std::string& text) {
   return static_cast<int>(text.size()) * 4 * kDigitScale - kDigitScale;
@@ -88,26 +115,29 @@ const RgbImage& checked_frame(const RgbImage& frame) {
 
 }  // namespace
 
-RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions)
+RegionHeatMap::RegionHeatMap(const RgbImage& frame, const std::vector<RegionLoad>& regions,
+                             int critical_renderer)
     : RegionHeatMap(
           checked_frame(frame).width, frame.height,
           [&frame](int y, std::uint8_t* out) {
             const std::size_t stride = static_cast<std::size_t>(frame.width) * 3;
             std::memcpy(out, frame.rgb.data() + stride * static_cast<std::size_t>(y), stride);
           },
-          regions) {}
+          regions, critical_renderer) {}
 
-RegionHeatMap::RegionHeatMap(const FrameImage& frame, const std::vector<RegionLoad>& regions)
+RegionHeatMap::RegionHeatMap(const FrameImage& frame, const std::vector<RegionLoad>& regions,
+                             int critical_renderer)
     : RegionHeatMap(
           frame.width(), frame.height(), [&frame](int y, std::uint8_t* out) { frame.row(y, out); },
-          regions) {}
+          regions, critical_renderer) {}
 
 RegionHeatMap::RegionHeatMap(int width, int height,
                              std::function<void(int y, std::uint8_t* out)> frame_row,
-                             const std::vector<RegionLoad>& regions)
+                             const std::vector<RegionLoad>& regions, int critical_renderer)
     : width_(width),
       frame_height_(height),
       frame_row_(std::move(frame_row)),
+      critical_(critical_renderer),
       src_(static_cast<std::size_t>(std::max(width, 0)) * 3),
       grey_(static_cast<std::size_t>(std::max(width, 0))) {
   if (width <= 0 || height <= 0) {
@@ -140,21 +170,34 @@ RegionHeatMap::RegionHeatMap(int width, int height,
     }
     tints_.push_back(t);
   }
-  // The legend: "0", the colour bar, the peak's cycles.
+  // The legend. Its first row: "0", the colour bar, the peak's cycles and their unit; its
+  // second: which outline is which Renderer's.
   legend_.width = width;
   legend_.height = kLegendHeight;
   legend_.rgb.assign(static_cast<std::size_t>(legend_.width) * legend_.height * 3, 0);
   const std::uint8_t white[3] = {255, 255, 255};
-  const int top = (kLegendHeight - 5 * kDigitScale) / 2;
-  const std::string peak_text = std::to_string(peak);
+  const std::uint8_t cyan[3] = {kCriticalOutline[0], kCriticalOutline[1], kCriticalOutline[2]};
+  const int top = (kLegendBarRows - 5 * kDigitScale) / 2;
+  const std::string peak_text = std::to_string(peak) + " ARRAY CYCLES";
   const int x = 4 + draw_number(legend_, 4, top, "0", white) + 6;
   const int bar_end = legend_.width - 4 - number_width(peak_text) - 6;
   for (int bx = x; bx < bar_end; ++bx) {
     std::uint8_t c[3];
     heat_colour(static_cast<double>(bx - x) / std::max(1, bar_end - 1 - x), c);
-    for (int y = 4; y < kLegendHeight - 4; ++y) put(legend_, bx, y, c);
+    for (int y = 4; y < kLegendBarRows - 4; ++y) put(legend_, bx, y, c);
   }
   if (bar_end > x) draw_number(legend_, bar_end + 6, top, peak_text, white);
+  // "[white] BUSIEST RENDERER 3  [cyan] CRITICAL PATH RENDERER 5"
+  const int key_top = kLegendBarRows + (kLegendHeight - kLegendBarRows - 5 * kDigitScale) / 2;
+  int kx = 4;
+  auto key = [&](const std::uint8_t* colour, const std::string& label) {
+    for (int yy = key_top; yy < key_top + 5 * kDigitScale; ++yy)
+      for (int xx = kx; xx < kx + 10; ++xx) put(legend_, xx, yy, colour);
+    kx += 16;
+    kx += draw_number(legend_, kx, key_top, label, white) + 16;
+  };
+  if (busiest_ >= 0) key(white, "BUSIEST RENDERER " + std::to_string(busiest_));
+  if (critical_ >= 0) key(cyan, "CRITICAL PATH RENDERER " + std::to_string(critical_));
 }
 
 void RegionHeatMap::row(int y, std::uint8_t* out) const {
@@ -186,22 +229,29 @@ void RegionHeatMap::row(int y, std::uint8_t* out) const {
     }
   }
   // A white frame 2 pixels wide just inside each of the busiest Renderer's regions, lined
-  // with black, so that it shows on the palest colours too.
+  // with black, so that it shows on the palest colours too; inside it (3 to 5 pixels in) a
+  // cyan one, lined with black, on each of the critical-path Renderer's regions. A Renderer
+  // that is both has both.
   for (const Tint& t : tints_) {
     const RegionLoad& r = t.load;
-    if (r.renderer != busiest_ || y < r.y0 || y >= r.y0 + r.height) continue;
+    const bool busiest = r.renderer == busiest_, critical = r.renderer == critical_;
+    if ((!busiest && !critical) || y < r.y0 || y >= r.y0 + r.height) continue;
     const int dy = std::min(y - r.y0, r.y0 + r.height - 1 - y);
     for (int x = r.x0; x < r.x0 + r.width; ++x) {
       const int d = std::min({dy, x - r.x0, r.x0 + r.width - 1 - x});
-      if (d > 2) continue;
-      const std::uint8_t v = d < 2 ? 255 : 0;
-      out[3 * x] = out[3 * x + 1] = out[3 * x + 2] = v;
+      if (busiest && d <= 2) {
+        const std::uint8_t v = d < 2 ? 255 : 0;
+        out[3 * x] = out[3 * x + 1] = out[3 * x + 2] = v;
+      } else if (critical && d >= 3 && d <= 5) {
+        for (int k = 0; k < 3; ++k) out[3 * x + k] = d < 5 ? kCriticalOutline[k] : 0;
+      }
     }
   }
 }
 
-RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& regions) {
-  const RegionHeatMap map(frame, regions);
+RgbImage region_heat_map(const RgbImage& frame, const std::vector<RegionLoad>& regions,
+                         int critical_renderer) {
+  const RegionHeatMap map(frame, regions, critical_renderer);
   RgbImage out;
   out.width = map.width();
   out.height = map.height();

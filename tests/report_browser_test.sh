@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Every kind of HTML report, opened in headless Chromium (tests/browser_check.py): a frame's
+# (bit-level pixels and event timing), a timing-only frame's (analytic: no image, no
+# timeline), a sweep's and an analysis's (extremes). Fails on a console error, a request
+# outside the page, an image that does not decode, a blank first screen, a table that does
+# not sort or a plot that draws nothing. Skips (77) where Chromium is not installed
+# (scripts/install-deps.sh test installs Debian's chromium).
+# Usage: tests/report_browser_test.sh PP5SIM [SCREENSHOT_DIR]
+. "$(dirname "$0")/cli_lib.sh"
+shots="${2:-}"
+command -v chromium >/dev/null || { echo "SKIP: no chromium (scripts/install-deps.sh test)"; exit 77; }
+small=(--set screen.width=256 --set screen.height=256 --set gp.count=4 --set renderer.count=4)
+
+"$bin" render --scene torus "${small[@]}" -j 2 --out "$tmp/frame" --report >"$tmp/log" 2>&1 \
+  || fail "render --report: $(cat "$tmp/log")"
+grep -q "wrote $tmp/frame/report.html" "$tmp/log" || fail "render did not say it wrote report.html"
+"$bin" render --scene sphere "${small[@]}" --fidelity analytic --out "$tmp/analytic" --report \
+  >"$tmp/log" 2>&1 || fail "render --fidelity analytic --report: $(cat "$tmp/log")"
+grep -q "No image" "$tmp/analytic/report.html" || fail "the analytic report does not say it has no image"
+"$bin" sweep --scene two-triangles --set screen.width=128 --set screen.height=128 \
+  --grid gp.count=1,2 --grid renderer.count=1,2 -j 1 --out "$tmp/sweep" >"$tmp/log" 2>&1 \
+  || fail "sweep: $(cat "$tmp/log")"
+"$bin" sweep aggregate "$tmp/sweep" --report >"$tmp/log" 2>&1 || fail "aggregate --report: $(cat "$tmp/log")"
+# The same page straight from the sweep (--report aggregates after the runs).
+"$bin" sweep --scene two-triangles --set screen.width=128 --set screen.height=128 \
+  --grid gp.count=1,2 --grid renderer.count=1,2 -j 1 --out "$tmp/sweep2" --report >"$tmp/log" 2>&1 \
+  || fail "sweep --report: $(cat "$tmp/log")"
+[ -s "$tmp/sweep2/report.html" ] || fail "sweep --report wrote no report.html"
+diff <(cut -d, -f1-3 "$tmp/sweep/sweep.csv") <(cut -d, -f1-3 "$tmp/sweep2/sweep.csv") >/dev/null \
+  || fail "sweep --report and sweep aggregate give different rows"
+mkdir -p "$tmp/extremes"
+"$bin" extremes -j 2 --report "$tmp/extremes/report.html" >"$tmp/log" 2>&1 \
+  || fail "extremes --report: $(cat "$tmp/log")"
+
+# Self-contained: no address outside the page in any of them.
+for f in "$tmp"/{frame,analytic,sweep,sweep2,extremes}/report.html; do
+  [ -s "$f" ] || fail "no $f"
+  if grep -Eo '(src|href)="[a-z]+:[^"]{0,30}' "$f" | grep -v '="data:' | grep -q .; then
+    fail "$f links outside itself: $(grep -Eo '(src|href)="[a-z]+:[^"]{0,30}' "$f" | grep -v '="data:' | head -3)"
+  fi
+done
+args=()
+[ -n "$shots" ] && args=(--screenshots "$shots")
+timeout 300 python3 "$(dirname "$0")/browser_check.py" "${args[@]}" \
+  "$tmp"/{frame,analytic,sweep,sweep2,extremes}/report.html || fail "the browser found faults (above)"
+echo "report_browser_test: passed"
