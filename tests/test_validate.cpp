@@ -221,6 +221,7 @@ TEST_CASE("joint sensitivity: a seeded Latin hypercube over constants and worklo
   options.samples = 9;
   options.tessellation_u = 32;
   options.tessellation_v = 8;
+  options.painter_samples = 1;
   const JointSensitivity a = joint_sensitivity(config, kLoad, options);
   REQUIRE(a.points.size() == 9);
   CHECK(a.skipped.empty());
@@ -250,7 +251,12 @@ TEST_CASE("joint sensitivity: a seeded Latin hypercube over constants and worklo
   CHECK(scenes.size() == 2);
   CHECK(culling.size() == 2);
   // Each conclusion's share is counted from the samples themselves.
-  REQUIRE(a.conclusions.size() == 3);
+  REQUIRE(a.conclusions.size() == 4);
+  // Painter's against the z-buffer at the first sample only.
+  CHECK(std::isfinite(a.points[0].painter_over_zbuffer));
+  CHECK(std::isnan(a.points[1].painter_over_zbuffer));
+  CHECK(a.conclusions[3].samples == 1);
+  CHECK(a.conclusions[3].holds == (a.points[0].painter_over_zbuffer > 0 ? 1 : 0));
   int below = 0, renderers = 0;
   for (const JointSample& p : a.points) {
     below += p.rate < 1e6;

@@ -241,9 +241,9 @@ const std::vector<Entry>& parameter_table() {
            "Clocks of the counted operations are multiplied by this for the work the count leaves "
            "out (display-list traversal, PPHIGS state, the message-passing OS), in either code "
            "profile. Fitted: the hand-coded Phong triangle then runs at 1.2 M/s on 32 GPs. The "
-           "compiled rate, about 100 K/s, is then a prediction that rests on two assumed constants "
-           "(gp.compiled_code_bytes, gp.icache_miss_clocks); docs/timing.md says why the factor "
-           "multiplies rather than adds.",
+           "compiled rate, about 100 K/s, is no prediction either: gp.icache_miss_clocks and "
+           "gp.compiled_code_bytes were fitted to it, and gp.overhead_form (multiply or add) to "
+           "the gap between the two (docs/timing.md).",
            [](MachineConfig& c) -> Ref { return &c.gp.overhead_factor; }},
           "banks.hand_coded_rate",
           "to the hand-coded rate: transform + Phong 'well over 1 million polygons/second' on the "
@@ -437,8 +437,9 @@ const std::vector<Entry>& parameter_table() {
        [](MachineConfig& c) -> Ref { return choice(&c.fidelity.pixels); }, "bit|word|none"},
       {"fidelity.timing", "level", "A", 0, 0, 0,
        "Where the frame time comes from: 'event' (the SystemC model of every unit, with "
-       "contention) or 'analytic' (each unit's work from the same cost tables and a closed "
-       "form, docs/timing.md; no contention, no events).",
+       "contention) or 'analytic' (each unit's work from the same cost tables and a "
+       "recurrence over the messages with queueing at channels, GPs and queues, no events; "
+       "its error against 'event' is measured on held-out machines, docs/timing.md).",
        [](MachineConfig& c) -> Ref { return choice(&c.fidelity.timing); }, "event|analytic"},
       {"fidelity.window_x", "regions", "A", 0, 0, 1024,
        "First column of regions whose pixels execute; the others are timed only (black).",

@@ -15,6 +15,7 @@
 #include "models/pixel_array/backends.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "models/ring/ring.hpp"
+#include "sim/analysis/visible_surface.hpp"
 #include "sim/kernel.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
@@ -431,11 +432,14 @@ JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoade
     constants.push_back(p);
     out.varied.push_back(p.key);
   }
-  // Workload choices after the constants: scene, triangle size, back-face culling.
-  const std::size_t dimensions = constants.size() + 3;
-  out.varied.insert(out.varied.end(),
-                    {"scene (torus, figure-eight)", "triangle size (x 1/4, 1, 4 triangles)",
-                     "gp.cull_back_faces"});
+  // Workload choices after the constants: scene, triangle size, back-face culling; then the
+  // painter's choices: back faces removed first, splitting, per region bin, the factor.
+  const std::size_t dimensions = constants.size() + 7;
+  out.varied.insert(
+      out.varied.end(),
+      {"scene (torus, figure-eight)", "triangle size (x 1/4, 1, 4 triangles)", "gp.cull_back_faces",
+       "painter's: back faces removed first", "painter's: splitting", "painter's: per region bin",
+       "painter's: sort x gp.overhead_factor"});
   const int n = std::max(1, options.samples);
   JointRandom random{options.seed};
   // Latin hypercube: each dimension's n strata in a random order, a random point in each.
@@ -452,8 +456,8 @@ JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoade
           (strata[static_cast<std::size_t>(i)] + random.unit()) / static_cast<double>(n);
     }
   }
-  std::vector<double> gaps, pipelined_gaps, renderer_share;
-  int renderers = 0, below = 0, pipelined_below = 0;
+  std::vector<double> gaps, pipelined_gaps, renderer_share, painter_ratio;
+  int renderers = 0, below = 0, pipelined_below = 0, zbuffer_faster = 0;
   for (int i = 0; i < n; ++i) {
     const auto s = static_cast<std::size_t>(i);
     JointSample sample;
@@ -490,6 +494,25 @@ JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoade
     sample.rate = r.triangles_per_second;
     sample.pipelined_rate = pipelined_rate(r);
     sample.bottleneck = r.stats.text("timing.bottleneck");
+    sample.painter_over_zbuffer = std::nan("");
+    if (i < options.painter_samples) {
+      PainterOptions painter;
+      const std::size_t at = constants.size() + 3;
+      painter.remove_back_faces = u[at][s] >= 0.5;
+      painter.split_rounds = u[at + 1][s] >= 0.5 ? 8 : 0;
+      const bool per_region = u[at + 2][s] >= 0.5;
+      painter.overhead_factor = u[at + 3][s] >= 0.5;
+      sample.painter_choices = fmt::format(
+          "{}, {}, {}, {}", painter.remove_back_faces ? "back faces removed" : "every face",
+          painter.split_rounds ? "split" : "unsplit", per_region ? "per region" : "whole screen",
+          painter.overhead_factor ? "x factor" : "own counts");
+      const PainterTiming t =
+          painter_against_zbuffer(c, make_builtin_scene("torus"), load("gouraud", c),
+                                  load("painter", c), painter, per_region);
+      sample.painter_over_zbuffer = t.painter_seconds() / t.zbuffer_seconds - 1;
+      painter_ratio.push_back(sample.painter_over_zbuffer);
+      if (sample.painter_over_zbuffer > 0) ++zbuffer_faster;
+    }
     gaps.push_back(sample.rate / kDesignGoal - 1);
     pipelined_gaps.push_back(sample.pipelined_rate / kDesignGoal - 1);
     if (sample.rate < kDesignGoal) ++below;
@@ -506,6 +529,11 @@ JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoade
                                      "rate / 1 M - 1, one frame", gaps, below));
   out.conclusions.push_back(share_of("frames pipelined fall short of the design goal",
                                      "rate / 1 M - 1, pipelined", pipelined_gaps, pipelined_below));
+  if (!painter_ratio.empty()) {
+    out.conclusions.push_back(share_of(
+        "the z-buffer is faster than painter's (the torus, 8,192 triangles)",
+        "painter's time (frame + sort) / z-buffer frame - 1", painter_ratio, zbuffer_faster));
+  }
   return out;
 }
 

@@ -117,6 +117,10 @@ struct JointSensitivityOptions {
   std::string level = "analytic";  // fidelity.timing of every sample
   int tessellation_u = 512;        // the torus at the middle triangle size
   int tessellation_v = 128;
+  // Painter's against the z-buffer, on the built-in torus (8,192 triangles) at the first
+  // `painter_samples` samples' machines, with the painter's choices varied too (back faces
+  // removed first, splitting, per region bin, the overhead factor on the sort).
+  int painter_samples = 16;
 };
 
 struct JointSample {
@@ -126,6 +130,9 @@ struct JointSample {
   double rate = 0;            // triangles/s, one frame
   double pipelined_rate = 0;  // triangles/s, frames pipelined
   std::string bottleneck;
+  // Painter's (its frame plus its sort) over the z-buffer's frame, minus 1; NaN where not run.
+  double painter_over_zbuffer = 0;
+  std::string painter_choices;
 };
 
 // A headline conclusion and how it fares over the samples.

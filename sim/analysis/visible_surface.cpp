@@ -283,6 +283,58 @@ Scene pieces_scene(const Scene& scene, const std::vector<int>& first,
 
 }  // namespace
 
+PainterTiming painter_against_zbuffer(const MachineConfig& config_in, const Scene& scene,
+                                      const Program& zbuffer, const Program& painter,
+                                      const PainterOptions& options, bool per_region) {
+  MachineConfig config = config_in;
+  config.fidelity.pixels = MachineConfig::Fidelity::Pixels::none;
+  MachineConfig painter_config = config;
+  painter_config.gp.cull_back_faces = options.remove_back_faces ? 1 : 0;
+  PainterTiming t;
+  t.zbuffer_seconds = project_frame(config, scene, zbuffer).frame_seconds;
+  const std::vector<ScreenPolygon> painted = project_scene(painter_config, scene);
+  std::vector<PaintPiece> pieces;
+  for (const ScreenPolygon& poly : painted) {
+    PaintPiece piece;
+    piece.source = poly.source;
+    if (poly.v.size() == 3 && poly.w.size() == 3) {
+      const glm::uvec3& tri = scene.mesh.triangles[static_cast<std::size_t>(poly.source)];
+      for (std::size_t k = 0; k < 3; ++k) {
+        piece.v[k].world = scene.mesh.vertices[tri[static_cast<glm::length_t>(k)]];
+        piece.v[k].screen = poly.v[k];
+        piece.v[k].w = poly.w[k];
+      }
+    } else {
+      piece.clipped = poly.v;
+    }
+    pieces.push_back(std::move(piece));
+  }
+  VisibleSceneReport scratch;
+  std::vector<std::vector<SortPolygon>> earlier;
+  std::vector<DepthSortResult> earlier_sorts;
+  const DepthSortResult sort = sort_with_splitting(pieces, config.gp.count, options.split_rounds,
+                                                   scratch, earlier, earlier_sorts);
+  std::vector<SortPolygon> sortable;
+  for (const PaintPiece& piece : pieces) sortable.push_back(sort_polygon(piece));
+  SortCost c = painter_sort_cost(config, sortable, per_region, options.overhead_factor,
+                                 per_region ? nullptr : &sort);
+  for (std::size_t k = 0; k < earlier.size(); ++k) {
+    c.prepare_seconds +=
+        painter_sort_cost(config, earlier[k], false, options.overhead_factor, &earlier_sorts[k])
+            .seconds();
+  }
+  t.sort_seconds = c.seconds();
+  std::vector<int> first;
+  std::vector<char> placed(scene.mesh.triangles.size(), 0);
+  for (const ScreenPolygon& p : painted) placed[static_cast<std::size_t>(p.source)] = 1;
+  for (int k = 0; k < static_cast<int>(placed.size()); ++k)
+    if (!placed[static_cast<std::size_t>(k)]) first.push_back(k);
+  t.painter_frame_seconds =
+      project_frame(painter_config, pieces_scene(scene, first, pieces, sort.order, false), painter)
+          .frame_seconds;
+  return t;
+}
+
 VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, const Scene& scene,
                                             const Program& zbuffer, const Program& painter,
                                             int threads, const PainterOptions& painter_options) {

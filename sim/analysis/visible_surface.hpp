@@ -183,6 +183,20 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config, const S
                                             const Program& zbuffer, const Program& painter,
                                             int threads,
                                             const PainterOptions& painter_options = {});
+// Painter's against the z-buffer on the timing model alone (no pixels, `config`'s
+// fidelity.timing): the z-buffer's frame (`zbuffer`, back faces as `config` says), and
+// painter's frame (`painter`, in the sorted order, pieces split as `options` says) plus the
+// sort's time (whole screen, or `per_region` bins; own counts or x the factor).
+struct PainterTiming {
+  double zbuffer_seconds = 0;
+  double painter_frame_seconds = 0;
+  double sort_seconds = 0;
+  double painter_seconds() const { return painter_frame_seconds + sort_seconds; }
+};
+PainterTiming painter_against_zbuffer(const MachineConfig& config, const Scene& scene,
+                                      const Program& zbuffer, const Program& painter,
+                                      const PainterOptions& options, bool per_region);
+
 // The comparison table and the per-scene notes (markdown).
 // The reports as a statistics registry (frozen), written as visible.json: per scene
 // (scene.N.*) its name, triangles, the depth sort's (scene.N.depth_sort.*, registered by

@@ -58,11 +58,14 @@ int run_validate(const ValidateOptions& o) {
         "GPs) with every fitted and assumed constant and the workload choices varied "
         "together:\n\n" +
         joint_sensitivity_markdown(j);
-    std::string csv = "sample,scene,triangles,rate,pipelined_rate,bottleneck,sets\n";
+    std::string csv =
+        "sample,scene,triangles,rate,pipelined_rate,bottleneck,painter_over_zbuffer,"
+        "painter_choices,sets\n";
     for (std::size_t k = 0; k < j.points.size(); ++k) {
       const JointSample& p = j.points[k];
-      csv += fmt::format("{},{},{},{:.9g},{:.9g},{},{}\n", k, p.scene, p.triangles, p.rate,
-                         p.pipelined_rate, p.bottleneck, fmt::join(p.sets, " "));
+      csv += fmt::format("{},{},{},{:.9g},{:.9g},{},{:.6g},{},{}\n", k, p.scene, p.triangles,
+                         p.rate, p.pipelined_rate, p.bottleneck, p.painter_over_zbuffer,
+                         p.painter_choices, fmt::join(p.sets, " "));
     }
     outputs.add(o.out + "/joint.csv", csv);
   }
