@@ -386,7 +386,7 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
     const std::vector<std::vector<RegionWork>> regions = analytic_work(*a, plan);
     std::vector<const std::vector<RegionWork>*> work;
     for (const auto& w : regions) work.push_back(&w);
-    execute_pixels(*machine, work, threads);
+    execute_pixels(machine->plan(), machine->frame_buffer(), work, threads);
     result.image = machine->frame_buffer().take_image();
   } else {
     result.image = FrameImage(config.screen.width, config.screen.height,

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "firmware/assembler/assembler.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "support.hpp"
 

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "common/units.hpp"
-#include "models/renderer/packet.hpp"
+#include "models/protocol/packet.hpp"
 
 namespace pp5 {
 

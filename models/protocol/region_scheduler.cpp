@@ -1,4 +1,4 @@
-#include "models/renderer/region_scheduler.hpp"
+#include "models/protocol/region_scheduler.hpp"
 
 #include <algorithm>
 
