@@ -1,5 +1,6 @@
 #include "models/machine.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "models/frame_buffer/frame_buffer.hpp"
@@ -25,13 +26,13 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       "frame_buffer", config.screen.width, config.screen.height, config.renderer.region_width,
       config.renderer.region_height, config.regions(),
       config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none);
-  const RendererWiring renderer_wiring{plan_, *ring_, scheduler_, gp_reports_, timeline_};
+  const RendererWiring renderer_wiring{plan_, *ring_, scheduler_, gp_reports_, timeline_, clock_};
   for (int k = 0; k < renderers; ++k) {
     renderers_.push_back(
         std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, renderer_wiring));
     renderer_queues_.push_back(renderers_.back().get());
   }
-  const GpWiring gp_wiring{plan_, *ring_, scheduler_, renderer_queues_, timeline_};
+  const GpWiring gp_wiring{plan_, *ring_, scheduler_, renderer_queues_, timeline_, clock_};
   for (int k = 0; k < gps; ++k) {
     const auto [first, last] = plan_.gp_block(k);
     gps_.push_back(
@@ -53,6 +54,20 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
 }
 
 Machine::~Machine() = default;
+
+sc_core::sc_time Machine::frame_end() const {
+  return std::max(sc_core::sc_time_stamp(), clock_.start() + frame_buffer_->frame_complete());
+}
+
+void Machine::begin_frame(int frame) {
+  clock_.begin(frame);
+  timeline_.set_frame(frame);
+  scheduler_.reset_frame();
+  ring_->reset_frame(clock_.start());
+  frame_buffer_->begin_frame(clock_.start());
+  for (auto& r : renderers_) r->reset_frame();
+  for (auto& g : gps_) g->reset_frame();
+}
 
 void Machine::record_timeline(bool on) {
   timeline_.record(on);

@@ -33,6 +33,7 @@
 
 #include "models/frame_buffer/image.hpp"
 #include "models/gp/machine_plan.hpp"
+#include "models/protocol/frame_clock.hpp"
 #include "models/protocol/packet.hpp"
 #include "models/protocol/region_scheduler.hpp"
 #include "models/protocol/region_stream.hpp"
@@ -90,6 +91,17 @@ class Machine : public sc_core::sc_module {
   const I860Model& i860() const { return plan_.i860(); }
   const GpWorkload& gp_workload() const { return plan_.gp_workload(); }
 
+  // Frames in sequence (models/protocol/frame_clock.hpp): frame 0 runs when the kernel first
+  // starts; begin_frame(n), between kernel runs, resets every unit and begins frame n at the
+  // current simulated time, which the next kernel run then simulates.
+  void begin_frame(int frame);
+  // When the current frame ends, in the run's time: its last region's arrival at the frame
+  // buffer, which may lie after the units' last event (a region's trip is booked, not
+  // waited for, when shipping overlaps). The host runs the kernel up to it before
+  // begin_frame.
+  sc_core::sc_time frame_end() const;
+  const FrameClock& clock() const { return clock_; }
+
   // The timeline: when on, modules record slices of activity.
   void record_timeline(bool on);
   bool timeline_on() const { return timeline_.on(); }
@@ -113,6 +125,7 @@ class Machine : public sc_core::sc_module {
   RegionScheduler scheduler_;
   std::vector<int> renderer_stops_;
   Timeline timeline_;
+  FrameClock clock_{"frame_clock"};
   // What each unit sees of the others (models/protocol/unit_ports.hpp), filled as they are
   // made: the GPs see the Renderers' queues, the Renderers what the GPs report.
   std::vector<RendererQueue*> renderer_queues_;

@@ -23,6 +23,7 @@ GraphicsProcessor::GraphicsProcessor(sc_core::sc_module_name name, int index, in
       clock_(1.0 / wiring.plan.config().gp.clock_hz, sc_core::SC_SEC) {
   for (int k = 0; k < plan_.renderer_count(); ++k)
     renderer_stops_.push_back(plan_.renderer_stop(k));
+  clock_slot_ = wiring_.clock.enrol();
   SC_THREAD(run);
 }
 
@@ -213,6 +214,20 @@ void fill_setup_memo(const MachinePlan& plan, int threads, int least_part) {
 }
 
 void GraphicsProcessor::run() {
+  // Frame after frame: frame 0 as the kernel starts, each later one when the host begins it.
+  for (;;) {
+    run_frame();
+    wait(wiring_.clock.started(clock_slot_));
+  }
+}
+
+void GraphicsProcessor::reset_frame() {
+  stats_ = GpStats{};
+  activity_.assign(1, {wiring_.clock.start(), GpActivity::compute});
+}
+
+void GraphicsProcessor::run_frame() {
+  const sc_core::sc_time base = wiring_.clock.start();
   // With fewer triangles than GPs, a GP may have none: it takes no part in the frame, and
   // the Renderers expect no bin map from it (Machine::busy_gp_count).
   if (first_ == last_) {
@@ -225,8 +240,8 @@ void GraphicsProcessor::run() {
   // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
   stats_.busy += stats_.geometry;
   wait(clock_ * static_cast<double>(stats_.geometry.count));
-  stats_.geometry_done = sc_core::sc_time_stamp();
-  wiring_.timeline.add(Unit::gp, index_, "geometry", sc_core::SC_ZERO_TIME, stats_.geometry_done);
+  stats_.geometry_done = sc_core::sc_time_stamp() - base;
+  wiring_.timeline.add(Unit::gp, index_, "geometry", base, sc_core::sc_time_stamp());
 
   // The bin map goes first, in one message that passes every Renderer: which regions this
   // GP has packets for.
@@ -360,7 +375,7 @@ void GraphicsProcessor::run() {
     send(std::move(m));
   }
   begin(GpActivity::done);
-  stats_.finished = sc_core::sc_time_stamp();
+  stats_.finished = sc_core::sc_time_stamp() - base;
 }
 
 void GraphicsProcessor::send_bin_map() {

@@ -18,6 +18,7 @@
 #include "models/gp/machine_plan.hpp"
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/region_bins.hpp"
+#include "models/protocol/frame_clock.hpp"
 #include "models/protocol/region_scheduler.hpp"
 #include "models/protocol/timeline.hpp"
 #include "models/protocol/unit_ports.hpp"
@@ -45,13 +46,14 @@ struct GpStats {
 
 // What a GP is wired to (the Machine builds it): the plan it works from, the ring it sends
 // on, the scheduler that says who owns a region, each Renderer's queue in Renderer order (a
-// vector the Machine fills once every Renderer exists) and the timeline.
+// vector the Machine fills once every Renderer exists), the timeline and the frame clock.
 struct GpWiring {
   const MachinePlan& plan;
   Ring& ring;
   RegionScheduler& scheduler;
   const std::vector<RendererQueue*>& renderers;
   Timeline& timeline;
+  FrameClock& clock;
 };
 
 class GraphicsProcessor : public sc_core::sc_module, public GpReport {
@@ -61,6 +63,9 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
                     const GpWiring& wiring);
 
   const GpStats& stats() const { return stats_; }
+  // Host side, between frames: forgets the last frame (its statistics and activity) before
+  // the frame clock begins the next (Machine::begin_frame).
+  void reset_frame();
   // Registers gp.INDEX.* (models/gp/gp_statistics.cpp); read once the frame has run.
   void register_statistics(Statistics& stats, double frame_seconds) const;
   // How the GP spent [from, to): so that a Renderer's wait for this GP can be attributed.
@@ -68,6 +73,7 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
 
  private:
   void run();
+  void run_frame();
   void spend(GpClocks clocks);
   void send(std::shared_ptr<BinMessage> message);
   // Tells every Renderer which regions this GP has packets for (RegionScheduler::add_bin_senders),
@@ -82,6 +88,7 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   int first_;  // display-list range [first_, last_)
   int last_;
   GpWiring wiring_;
+  int clock_slot_ = 0;  // FrameClock::enrol
   const MachinePlan& plan_;
   std::vector<int> renderer_stops_;  // where the bin map goes
   sc_core::sc_time clock_;

@@ -15,6 +15,7 @@ Renderer::Renderer(sc_core::sc_module_name name, int index, const RendererWiring
       plan_(wiring.plan),
       cycle_(1.0 / wiring.plan.config().renderer.clock_hz, sc_core::SC_SEC),
       capacity_(static_cast<std::uint64_t>(wiring.plan.config().renderer.queue_words)) {
+  clock_slot_ = wiring_.clock.enrol();
   SC_THREAD(run);
 }
 
@@ -209,18 +210,49 @@ void Renderer::ship(int region) {
 }
 
 void Renderer::run() {
+  // Frame after frame: frame 0 as the kernel starts, each later one when the host begins it.
+  for (;;) {
+    run_frame();
+    wait(wiring_.clock.started(clock_slot_));
+  }
+}
+
+void Renderer::reset_frame() {
+  const sc_core::sc_time base = wiring_.clock.start();
+  open_region_ = -1;
+  open_pass_ = -1;
+  lasts_delivered_ = 0;
+  open_started_ = false;
+  maps_delivered_ = 0;
+  maps_requested_ = base;
+  maps_arrival_ = base;
+  stages_.clear();
+  queue_.clear();
+  queued_words_ = 0;
+  cursor_ = base;
+  port_free_ = base;
+  ship_free_ = base;
+  coefficients_free_ = base;
+  stats_ = RendererStats{};
+  work_.clear();
+}
+
+void Renderer::run_frame() {
+  const sc_core::sc_time base = wiring_.clock.start();
   const MachineConfig& config = plan_.config();
   const Program& program = plan_.program();
   const int gps = plan_.gp_count();
   const RegionStream stream(program, plan_.frame_values());
-  cursor_ = sc_core::SC_ZERO_TIME;
+  cursor_ = base;
   open_next_stage();
   std::vector<std::vector<std::shared_ptr<const Packet>>> by_gp(gps);
   // The array cycle at which each packet started, by pass and GP (for traces): a GP's
   // packets come in the same order in every pass.
   std::vector<std::vector<std::vector<std::uint64_t>>> starts(
       stream.passes(), std::vector<std::vector<std::uint64_t>>(gps));
-  auto cycle_now = [&] { return static_cast<std::uint64_t>(std::llround(cursor_ / cycle_)); };
+  auto cycle_now = [&] {
+    return static_cast<std::uint64_t>(std::llround((cursor_ - base) / cycle_));
+  };
   std::vector<std::uint64_t> step_start;
   auto charge_step = [&](const RegionStep& step) {
     step_start.push_back(cycle_now());
@@ -319,8 +351,9 @@ void Renderer::run() {
     work_.push_back(std::move(w));
   }
   catch_up();
-  stats_.computed = sc_core::sc_time_stamp();
-  stats_.finished = std::max(stats_.finished, stats_.computed);
+  // The frame's times are the frame's own (FrameClock's contract).
+  stats_.computed = sc_core::sc_time_stamp() - base;
+  stats_.finished = std::max(stats_.finished, sc_core::sc_time_stamp()) - base;
 }
 
 void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,

@@ -29,6 +29,7 @@
 
 #include "common/units.hpp"
 #include "models/gp/machine_plan.hpp"
+#include "models/protocol/frame_clock.hpp"
 #include "models/protocol/region_scheduler.hpp"
 #include "models/protocol/region_stream.hpp"
 #include "models/protocol/timeline.hpp"
@@ -82,13 +83,14 @@ struct RendererStats {
 // What a Renderer is wired to (the Machine builds it): the plan it works from, the ring it
 // ships regions on, the scheduler that gives it regions and says who sends them, what each
 // GP reports of its activity in GP order (a vector the Machine fills once every GP exists),
-// and the timeline.
+// the timeline and the frame clock.
 struct RendererWiring {
   const MachinePlan& plan;
   Ring& ring;
   RegionScheduler& scheduler;
   const std::vector<const GpReport*>& gps;
   Timeline& timeline;
+  FrameClock& clock;
 };
 
 class Renderer : public sc_core::sc_module, public RingEndpoint, public RendererQueue {
@@ -110,6 +112,10 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
   // regions).
   void receive_bin_map(const BinMapArrival& map) override;
 
+  // Host side, between frames: forgets the last frame (its statistics, its regions, its
+  // queue's and array's state) before the frame clock begins the next (Machine::begin_frame).
+  void reset_frame();
+
   const RendererStats& stats() const { return stats_; }
   // Registers renderer.INDEX.* (models/renderer/renderer_statistics.cpp); read once the frame
   // has run.
@@ -127,6 +133,7 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
     int pass;
   };
   void run();
+  void run_frame();
   void open_next_stage();
   // Opens the next stage if the open one has all its input: every GP's bin map and the last
   // message of every GP that has packets for it. A stage nobody has packets for is complete
@@ -158,6 +165,7 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
 
   int index_;
   RendererWiring wiring_;
+  int clock_slot_ = 0;  // FrameClock::enrol
   const MachinePlan& plan_;
   sc_core::sc_time cycle_;
   std::uint64_t capacity_;
