@@ -607,6 +607,26 @@ Session::Session(const MachineConfig& config, std::shared_ptr<const Scene> scene
 
 Session::~Session() = default;
 
+std::string RunSummary::text() const {
+  return fmt::format(
+      "run: {} frame{}, simulated {:.3f} ms a frame ({:.3f} .. {:.3f} ms), {:.3f} ms in all; "
+      "host {:.3f} s a frame, {:.3g} host seconds per simulated second\n",
+      frames, frames == 1 ? "" : "s", mean_frame_seconds() * 1e3, shortest_frame_seconds * 1e3,
+      longest_frame_seconds * 1e3, simulated_seconds * 1e3, frames ? host_seconds / frames : 0.0,
+      host_over_simulated());
+}
+
+FrameResult Session::counted(FrameResult r) {
+  RunSummary& s = summary_;
+  s.shortest_frame_seconds =
+      s.frames == 0 ? r.frame_seconds : std::min(s.shortest_frame_seconds, r.frame_seconds);
+  s.longest_frame_seconds = std::max(s.longest_frame_seconds, r.frame_seconds);
+  s.simulated_seconds += r.frame_seconds;
+  s.host_seconds += r.stats.real("host.seconds");
+  ++s.frames;
+  return r;
+}
+
 const Machine* Session::machine() const { return event_ ? event_->machine.get() : nullptr; }
 
 FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& observe,
@@ -619,7 +639,7 @@ FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& ob
     ++frames_;
     MachineConfig c = config;
     if (!pixels) c.fidelity.pixels = MachineConfig::Fidelity::Pixels::none;
-    return analytic_frame(c, scene, program, pixels ? threads : 1, memo_);
+    return counted(analytic_frame(c, scene, program, pixels ? threads : 1, memo_));
   }
   const auto t0 = std::chrono::steady_clock::now();
   Machine* machine = event_->machine.get();
@@ -731,7 +751,7 @@ FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& ob
                            "Host time of the timing model (the SystemC run)");
   s.freeze();
   result.stats_json = s.to_json();
-  return result;
+  return counted(std::move(result));
 }
 
 namespace {

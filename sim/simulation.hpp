@@ -63,6 +63,23 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
 //  - With `timeline`, frame() stores the run's timeline so far (every frame recorded with a
 //    timeline on, in the run's simulated time).
 class Machine;
+
+// What a run of frames did, over all its frames so far (Session::summary).
+struct RunSummary {
+  int frames = 0;
+  double simulated_seconds = 0;  // the frames' simulated times, summed
+  double shortest_frame_seconds = 0;
+  double longest_frame_seconds = 0;
+  double host_seconds = 0;  // host.seconds, summed
+  double mean_frame_seconds() const { return frames ? simulated_seconds / frames : 0; }
+  // Host seconds per simulated second (below 1 the simulator keeps up with the machine).
+  double host_over_simulated() const {
+    return simulated_seconds > 0 ? host_seconds / simulated_seconds : 0;
+  }
+  // One line for people: frames, mean (shortest .. longest) frame time, host per frame.
+  std::string text() const;
+};
+
 class Session {
  public:
   Session(const MachineConfig& config, std::shared_ptr<const Scene> scene,
@@ -74,8 +91,9 @@ class Session {
   // Simulates the next frame; with `pixels` false, its timing only (as project_frame).
   FrameResult frame(const std::function<BoardObserver*(int renderer)>& observe = {},
                     nlohmann::json* timeline = nullptr, bool pixels = true);
-  // Frames simulated so far.
+  // Frames simulated so far, and the run's summary over them.
   int frames() const { return frames_; }
+  const RunSummary& summary() const { return summary_; }
   const MachineConfig& config() const { return config_; }
   const Scene& scene() const { return *scene_; }
   const Program& program() const { return *program_; }
@@ -92,6 +110,8 @@ class Session {
   std::unique_ptr<Event> event_;
   double startup_seconds_ = 0;
   int frames_ = 0;
+  RunSummary summary_;
+  FrameResult counted(FrameResult r);
 };
 
 // The timing model alone, for projections over many configurations (pp5sim validate): the

@@ -61,6 +61,14 @@ TEST_CASE("session: every frame of a run reports what a single frame reports", "
       CHECK(r.image.flat().rgb == alone.image.flat().rgb);
     }
     CHECK(session.frames() == 3);
+    // The run's summary is over its frames: three of the single frame's time.
+    const RunSummary& run = session.summary();
+    CHECK(run.frames == 3);
+    CHECK(run.simulated_seconds == Approx(3 * alone.frame_seconds));
+    CHECK(run.shortest_frame_seconds == alone.frame_seconds);
+    CHECK(run.longest_frame_seconds == alone.frame_seconds);
+    CHECK(run.host_seconds > 0);
+    CHECK(run.text().find("run: 3 frames") == 0);
   }
 }
 
