@@ -15,7 +15,7 @@
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/trace/recorder.hpp"
 

@@ -1,9 +1,11 @@
 #include "models/machine.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/graphics_processor.hpp"
+#include "models/renderer/execute_pixels.hpp"
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
@@ -24,13 +26,18 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       "frame_buffer", config.screen.width, config.screen.height, config.renderer.region_width,
       config.renderer.region_height, config.regions(),
       config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none);
+  const RendererWiring renderer_wiring{plan_, *ring_, scheduler_, gp_reports_, timeline_, clock_};
   for (int k = 0; k < renderers; ++k) {
-    renderers_.push_back(std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, *this));
+    renderers_.push_back(
+        std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, renderer_wiring));
+    renderer_queues_.push_back(renderers_.back().get());
   }
+  const GpWiring gp_wiring{plan_, *ring_, scheduler_, renderer_queues_, timeline_, clock_};
   for (int k = 0; k < gps; ++k) {
     const auto [first, last] = plan_.gp_block(k);
     gps_.push_back(
-        std::make_unique<GraphicsProcessor>(fmt_name("gp", k).c_str(), k, first, last, *this));
+        std::make_unique<GraphicsProcessor>(fmt_name("gp", k).c_str(), k, first, last, gp_wiring));
+    gp_reports_.push_back(gps_.back().get());
   }
   // The stops are numbered once every unit exists. GPs receive nothing.
   for (int k = 0; k < renderers; ++k) {
@@ -48,9 +55,30 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
 
 Machine::~Machine() = default;
 
+sc_core::sc_time Machine::frame_end() const {
+  return std::max(sc_core::sc_time_stamp(), clock_.start() + frame_buffer_->frame_complete());
+}
+
+void Machine::begin_frame(int frame) {
+  clock_.begin(frame);
+  timeline_.set_frame(frame);
+  scheduler_.reset_frame();
+  ring_->reset_frame(clock_.start());
+  frame_buffer_->begin_frame(clock_.start());
+  for (auto& r : renderers_) r->reset_frame();
+  for (auto& g : gps_) g->reset_frame();
+}
+
 void Machine::record_timeline(bool on) {
-  timeline_on_ = on;
+  timeline_.record(on);
   ring_->record_messages(on);
+}
+
+void execute_pixels(Machine& machine, int threads,
+                    const std::function<BoardObserver*(int renderer)>& observe) {
+  std::vector<const std::vector<RegionWork>*> work;
+  for (int k = 0; k < machine.renderer_count(); ++k) work.push_back(&machine.renderer(k).work());
+  execute_pixels(machine.plan(), machine.frame_buffer(), work, threads, observe);
 }
 
 std::string Machine::fmt_name(const char* base, int k) {

@@ -26,15 +26,19 @@
 // region's packets; after the simulation each Renderer's board executes its regions'
 // instruction streams on its pixel array (execute_pixels, models/renderer/execute_pixels.hpp),
 // in parallel across boards.
+#include <functional>
 #include <memory>
 #include <systemc>
 #include <vector>
 
 #include "models/frame_buffer/image.hpp"
-#include "models/machine_plan.hpp"
-#include "models/renderer/packet.hpp"
-#include "models/renderer/region_scheduler.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/gp/machine_plan.hpp"
+#include "models/protocol/frame_clock.hpp"
+#include "models/protocol/packet.hpp"
+#include "models/protocol/region_scheduler.hpp"
+#include "models/protocol/region_stream.hpp"
+#include "models/protocol/timeline.hpp"
+#include "models/protocol/unit_ports.hpp"
 
 namespace pp5 {
 
@@ -43,16 +47,7 @@ class Renderer;
 class Ring;
 class FrameBuffer;
 class SetupMemo;
-
-// One slice of activity for the timeline (Chrome trace-event format, see simulation.cpp).
-enum class Unit { gp, ring, renderer, frame_buffer };
-struct TimelineSlice {
-  Unit unit;
-  int index;  // GP, ring channel, Renderer
-  std::string name;
-  sc_core::sc_time start;
-  sc_core::sc_time end;
-};
+class BoardObserver;
 
 class Machine : public sc_core::sc_module {
  public:
@@ -60,7 +55,7 @@ class Machine : public sc_core::sc_module {
           const Program& program);
   ~Machine() override;
 
-  // What the units share, without SystemC (models/machine_plan.hpp); the accessors below
+  // What the units share, without SystemC (models/gp/machine_plan.hpp); the accessors below
   // forward to it.
   const MachinePlan& plan() const { return plan_; }
   const MachineConfig& config() const { return plan_.config(); }
@@ -96,14 +91,22 @@ class Machine : public sc_core::sc_module {
   const I860Model& i860() const { return plan_.i860(); }
   const GpWorkload& gp_workload() const { return plan_.gp_workload(); }
 
+  // Frames in sequence (models/protocol/frame_clock.hpp): frame 0 runs when the kernel first
+  // starts; begin_frame(n), between kernel runs, resets every unit and begins frame n at the
+  // current simulated time, which the next kernel run then simulates.
+  void begin_frame(int frame);
+  // When the current frame ends, in the run's time: its last region's arrival at the frame
+  // buffer, which may lie after the units' last event (a region's trip is booked, not
+  // waited for, when shipping overlaps). The host runs the kernel up to it before
+  // begin_frame.
+  sc_core::sc_time frame_end() const;
+  const FrameClock& clock() const { return clock_; }
+
   // The timeline: when on, modules record slices of activity.
   void record_timeline(bool on);
-  bool timeline_on() const { return timeline_on_; }
-  void add_slice(Unit unit, int index, std::string name, sc_core::sc_time start,
-                 sc_core::sc_time end) {
-    if (timeline_on_) slices_.push_back({unit, index, std::move(name), start, end});
-  }
-  const std::vector<TimelineSlice>& slices() const { return slices_; }
+  bool timeline_on() const { return timeline_.on(); }
+  Timeline& timeline() { return timeline_; }
+  const std::vector<TimelineSlice>& slices() const { return timeline_.slices(); }
   std::uint64_t packet_words(const ExpressionSet& expressions) const {
     return plan_.packet_words(expressions);
   }
@@ -121,8 +124,17 @@ class Machine : public sc_core::sc_module {
   std::vector<std::unique_ptr<GraphicsProcessor>> gps_;
   RegionScheduler scheduler_;
   std::vector<int> renderer_stops_;
-  bool timeline_on_ = false;
-  std::vector<TimelineSlice> slices_;
+  Timeline timeline_;
+  FrameClock clock_{"frame_clock"};
+  // What each unit sees of the others (models/protocol/unit_ports.hpp), filled as they are
+  // made: the GPs see the Renderers' queues, the Renderers what the GPs report.
+  std::vector<RendererQueue*> renderer_queues_;
+  std::vector<const GpReport*> gp_reports_;
 };
+
+// The functional half of the frame: every Renderer's board executes the regions its timing
+// pass recorded (models/renderer/execute_pixels.hpp).
+void execute_pixels(Machine& machine, int threads,
+                    const std::function<BoardObserver*(int renderer)>& observe = {});
 
 }  // namespace pp5

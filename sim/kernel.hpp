@@ -1,12 +1,33 @@
 #pragma once
-// The SystemC kernel as the simulator uses it: a fresh kernel for every frame.
+// The SystemC kernel as the simulator uses it: one simulation context per run, which runs
+// frame after frame and is freed when the run ends.
+
+#include <systemc>
 
 namespace pp5 {
 
-// SystemC allows one elaboration per kernel; a new simulation context gives every frame a
-// fresh kernel, so that one process can simulate many frames. The old context is left
-// alive on purpose: objects of the previous run may still refer to it while they unwind.
-// An untouched kernel is used as it is.
+// A simulation context of its own, made current on construction and deleted on
+// destruction. SystemC allows one elaboration per context, and a context may run
+// (sc_start) any number of times: a run of many frames elaborates its machine once and runs
+// the kernel once per frame. Everything elaborated in the context (modules, spawned
+// processes, events) must be destroyed before it: declare the KernelContext before them.
+// Contexts do not nest: one at a time per process.
+class KernelContext {
+ public:
+  KernelContext();
+  ~KernelContext();
+  KernelContext(const KernelContext&) = delete;
+  KernelContext& operator=(const KernelContext&) = delete;
+  // sc_start() until no event is left; may be called again after more events are notified.
+  void run();
+  // Advances simulated time to `t` (running whatever events lie before it); nothing if `t` is
+  // not later than now.
+  void run_until(sc_core::sc_time t);
+};
+
+// For tests that build modules without an owner of the context: a fresh context made current
+// (the previous one, if it was used, is left alive: objects of an earlier test may still
+// refer to it). A run of the simulator uses KernelContext.
 void fresh_kernel();
 
 // sc_start() until no event is left.

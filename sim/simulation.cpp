@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <memory>
+#include <optional>
 #include <systemc>
 
 #include "firmware/assembler/program_statistics.hpp"
@@ -367,10 +369,11 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
   // Pixels need the Renderer boards and the frame buffer: only then is the Machine built,
   // and the model reads its plan; otherwise a plan alone.
   const bool pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
+  std::optional<KernelContext> kernel;  // before the Machine, which must go first
   std::unique_ptr<Machine> machine;
   std::unique_ptr<MachinePlan> alone;
   if (pixels) {
-    fresh_kernel();
+    kernel.emplace();
     machine = std::make_unique<Machine>("pp5", config, scene, program);
     machine->use_setup_memo(*memo);
   } else {
@@ -387,7 +390,7 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
     const std::vector<std::vector<RegionWork>> regions = analytic_work(*a, plan);
     std::vector<const std::vector<RegionWork>*> work;
     for (const auto& w : regions) work.push_back(&w);
-    execute_pixels(*machine, work, threads);
+    execute_pixels(machine->plan(), machine->frame_buffer(), work, threads);
     result.image = machine->frame_buffer().take_image();
   } else {
     result.image = FrameImage(config.screen.width, config.screen.height,
@@ -565,33 +568,97 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
   return result;
 }
 
-// simulate_frame, or with `pixels` false project_frame: the timing model alone.
-FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Program& program,
-                      int threads, const std::function<BoardObserver*(int renderer)>& observe,
-                      nlohmann::json* timeline, bool pixels, SetupMemo* memo) {
+}  // namespace
+
+// The event model's run: one SystemC context and one Machine, elaborated once, that run frame
+// after frame (models/protocol/frame_clock.hpp). Declared in this order so that the Machine
+// goes before the context it was elaborated in.
+struct Session::Event {
+  KernelContext kernel;
+  std::unique_ptr<Machine> machine;
+  std::unique_ptr<SetupMemo> own_memo;
+};
+
+Session::Session(const MachineConfig& config, std::shared_ptr<const Scene> scene,
+                 std::shared_ptr<const Program> program, int threads, SetupMemo* memo)
+    : config_(config),
+      scene_(std::move(scene)),
+      program_(std::move(program)),
+      threads_(threads),
+      memo_(memo) {
+  if (config_.fidelity.timing == MachineConfig::Fidelity::Timing::analytic) return;
   const auto t0 = std::chrono::steady_clock::now();
-  check_memory(config, scene, program, threads);
-  fresh_kernel();
-  auto machine = std::make_unique<Machine>("pp5", config, scene, program);
+  check_memory(config_, *scene_, *program_, threads_);
+  event_ = std::make_unique<Event>();
+  event_->machine = std::make_unique<Machine>("pp5", config_, *scene_, *program_);
+  Machine& machine = *event_->machine;
   // A display list large enough to split over the host threads is set up on them first,
   // into a memo the GPs replay (models/gp/setup_memo.hpp): the same packets and counts.
-  std::unique_ptr<SetupMemo> own;
-  if (memo == nullptr && setup_parts(machine->plan(), threads) > 1)
-    memo = (own = std::make_unique<SetupMemo>(scene)).get();
-  if (memo != nullptr) {
-    machine->use_setup_memo(*memo);
-    fill_setup_memo(machine->plan(), threads);
+  if (memo_ == nullptr && setup_parts(machine.plan(), threads_) > 1)
+    memo_ = (event_->own_memo = std::make_unique<SetupMemo>(*scene_)).get();
+  if (memo_ != nullptr) {
+    machine.use_setup_memo(*memo_);
+    fill_setup_memo(machine.plan(), threads_);
+  }
+  startup_seconds_ = seconds_since(t0);
+}
+
+Session::~Session() = default;
+
+std::string RunSummary::text() const {
+  return fmt::format(
+      "run: {} frame{}, simulated {:.3f} ms a frame ({:.3f} .. {:.3f} ms), {:.3f} ms in all; "
+      "host {:.3f} s a frame, {:.3g} host seconds per simulated second\n",
+      frames, frames == 1 ? "" : "s", mean_frame_seconds() * 1e3, shortest_frame_seconds * 1e3,
+      longest_frame_seconds * 1e3, simulated_seconds * 1e3, frames ? host_seconds / frames : 0.0,
+      host_over_simulated());
+}
+
+FrameResult Session::counted(FrameResult r) {
+  RunSummary& s = summary_;
+  s.shortest_frame_seconds =
+      s.frames == 0 ? r.frame_seconds : std::min(s.shortest_frame_seconds, r.frame_seconds);
+  s.longest_frame_seconds = std::max(s.longest_frame_seconds, r.frame_seconds);
+  s.simulated_seconds += r.frame_seconds;
+  s.host_seconds += r.stats.real("host.seconds");
+  ++s.frames;
+  return r;
+}
+
+const Machine* Session::machine() const { return event_ ? event_->machine.get() : nullptr; }
+
+FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& observe,
+                           nlohmann::json* timeline, bool pixels) {
+  const MachineConfig& config = config_;
+  const Scene& scene = *scene_;
+  const Program& program = *program_;
+  const int threads = threads_;
+  if (!event_) {
+    ++frames_;
+    MachineConfig c = config;
+    if (!pixels) c.fidelity.pixels = MachineConfig::Fidelity::Pixels::none;
+    return counted(analytic_frame(c, scene, program, pixels ? threads : 1, memo_));
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  Machine* machine = event_->machine.get();
+  // Frame 0 runs as the kernel first starts; a later frame begins where the last ended.
+  if (frames_ > 0) {
+    event_->kernel.run_until(machine->frame_end());
+    machine->begin_frame(frames_);
   }
   machine->record_timeline(timeline != nullptr);
-  run_kernel();
+  event_->kernel.run();
   check_time_did_not_wrap(*machine);
   if (timeline) *timeline = timeline_document(*machine);
-  const double timing_seconds = seconds_since(t0);
+  // The first frame's host time includes elaborating the machine, as a single frame's always
+  // has; a later frame's does not.
+  const double startup = frames_ == 0 ? startup_seconds_ : 0;
+  const double timing_seconds = seconds_since(t0) + startup;
   const auto t1 = std::chrono::steady_clock::now();
   if (pixels) execute_pixels(*machine, threads, observe);
   const double pixel_seconds = seconds_since(t1);
-  const double host_seconds = seconds_since(t0);
-
+  const double host_seconds = seconds_since(t0) + startup;
+  ++frames_;
   FrameResult result;
   FrameBuffer& fb = machine->frame_buffer();
   result.image = fb.take_image();
@@ -682,8 +749,19 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
                            "Host time of the timing model (the SystemC run)");
   s.freeze();
   result.stats_json = s.to_json();
-  machine.reset();
-  return result;
+  return counted(std::move(result));
+}
+
+namespace {
+
+// simulate_frame, or with `pixels` false project_frame: the one-frame case of a Session.
+FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Program& program,
+                      int threads, const std::function<BoardObserver*(int renderer)>& observe,
+                      nlohmann::json* timeline, bool pixels, SetupMemo* memo) {
+  // The caller owns the scene and the program: the session only refers to them.
+  Session session(config, std::shared_ptr<const Scene>(&scene, [](const Scene*) {}),
+                  std::shared_ptr<const Program>(&program, [](const Program*) {}), threads, memo);
+  return session.frame(observe, timeline, pixels);
 }
 
 }  // namespace

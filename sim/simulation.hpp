@@ -1,8 +1,10 @@
 #pragma once
 // Runs one frame through the whole machine and gathers what it produced: the image, the
 // statistics and the human-readable summary. A library entry point, so that tests, the
-// command-line program and (later) sweeps share it; each call gets a fresh SystemC kernel.
+// command-line program and sweeps share it; each call is the one-frame case of a Session
+// (below), with a SystemC context of its own that it frees.
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -45,6 +47,72 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
                            int threads,
                            const std::function<BoardObserver*(int renderer)>& observe = {},
                            nlohmann::json* timeline = nullptr, SetupMemo* memo = nullptr);
+
+// A simulation that persists across frames: it owns one SystemC context, the Machine
+// elaborated in it, the assembled program and the scene, and runs frame after frame
+// (models/protocol/frame_clock.hpp). Each frame() returns that frame's own result: its image,
+// and its statistics frozen when it ends, with every time relative to the frame's start, so
+// that a frame reports what a run of that frame alone reports. simulate_frame and
+// project_frame are the one-frame case of a Session.
+//
+// Contract:
+//  - frame n starts when frame n - 1 has ended (the units' last events), on the same
+//    machine, whose units begin each frame as new (Machine::begin_frame).
+//  - `memo` as for simulate_frame; it must outlive the session.
+//  - fidelity.timing=analytic runs no kernel: each frame is the analytic model's.
+//  - With `timeline`, frame() stores the run's timeline so far (every frame recorded with a
+//    timeline on, in the run's simulated time).
+class Machine;
+
+// What a run of frames did, over all its frames so far (Session::summary).
+struct RunSummary {
+  int frames = 0;
+  double simulated_seconds = 0;  // the frames' simulated times, summed
+  double shortest_frame_seconds = 0;
+  double longest_frame_seconds = 0;
+  double host_seconds = 0;  // host.seconds, summed
+  double mean_frame_seconds() const { return frames ? simulated_seconds / frames : 0; }
+  // Host seconds per simulated second (below 1 the simulator keeps up with the machine).
+  double host_over_simulated() const {
+    return simulated_seconds > 0 ? host_seconds / simulated_seconds : 0;
+  }
+  // One line for people: frames, mean (shortest .. longest) frame time, host per frame.
+  std::string text() const;
+};
+
+class Session {
+ public:
+  Session(const MachineConfig& config, std::shared_ptr<const Scene> scene,
+          std::shared_ptr<const Program> program, int threads, SetupMemo* memo = nullptr);
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  // Simulates the next frame; with `pixels` false, its timing only (as project_frame).
+  FrameResult frame(const std::function<BoardObserver*(int renderer)>& observe = {},
+                    nlohmann::json* timeline = nullptr, bool pixels = true);
+  // Frames simulated so far, and the run's summary over them.
+  int frames() const { return frames_; }
+  const RunSummary& summary() const { return summary_; }
+  const MachineConfig& config() const { return config_; }
+  const Scene& scene() const { return *scene_; }
+  const Program& program() const { return *program_; }
+  // The event model's machine (null at fidelity.timing=analytic).
+  const Machine* machine() const;
+
+ private:
+  struct Event;
+  MachineConfig config_;
+  std::shared_ptr<const Scene> scene_;
+  std::shared_ptr<const Program> program_;
+  int threads_;
+  SetupMemo* memo_;
+  std::unique_ptr<Event> event_;
+  double startup_seconds_ = 0;
+  int frames_ = 0;
+  RunSummary summary_;
+  FrameResult counted(FrameResult r);
+};
 
 // The timing model alone, for projections over many configurations (pp5sim validate): the
 // frame time and the statistics of simulate_frame, without executing the firmware on the

@@ -13,7 +13,7 @@
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/analysis/csg.hpp"
 #include "sim/scene/scene.hpp"

@@ -15,7 +15,7 @@
 #include "models/gp/geometry.hpp"
 #include "models/gp/i860.hpp"
 #include "models/machine.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/analysis/intersections.hpp"

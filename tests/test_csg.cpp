@@ -12,7 +12,7 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/pass_plan.hpp"
 #include "models/machine.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "sim/analysis/csg.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/analysis/transparency.hpp"

@@ -6,7 +6,7 @@
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"
 #include "models/machine.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "sim/scene/scene.hpp"
 

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "models/gp/graphics_processor.hpp"
+#include "models/gp/machine_plan.hpp"
 #include "models/gp/setup_memo.hpp"
-#include "models/machine_plan.hpp"
-#include "models/renderer/packet.hpp"
+#include "models/protocol/packet.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 #include "tests/support.hpp"

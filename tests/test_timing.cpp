@@ -13,7 +13,7 @@
 #include "models/gp/expressions.hpp"
 #include "models/gp/i860.hpp"
 #include "models/machine.hpp"
-#include "models/renderer/region_scheduler.hpp"
+#include "models/protocol/region_scheduler.hpp"
 #include "models/ring/ring.hpp"
 #include "sim/kernel.hpp"
 #include "sim/simulation.hpp"

@@ -165,7 +165,7 @@ struct PacketValues {
       : expressions(v.expressions), parameters(v.parameters) {}
 };
 
-// One pass of a frame's pass plan (models/renderer/region_stream.hpp): the region-wide
+// One pass of a frame's pass plan (models/protocol/region_stream.hpp): the region-wide
 // procedures that open it, in order, the group of primitives whose packets it draws, which of
 // their faces, and the procedure those packets run. A primitive's group is the solid it
 // belongs to (Scene::solids), or kNoGroup for one in no solid; a packet's facing is the GP's

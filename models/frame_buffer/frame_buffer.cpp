@@ -9,8 +9,21 @@ namespace pp5 {
 FrameBuffer::FrameBuffer(sc_core::sc_module_name name, int width, int height, int region_width,
                          int region_height, int regions, bool image)
     : sc_module(name),
+      width_(width),
+      height_(height),
+      region_width_(region_width),
+      region_height_(region_height),
+      has_image_(image),
       image_(width, height, region_width, region_height, image),
       arrival_(regions, sc_core::SC_ZERO_TIME) {}
+
+void FrameBuffer::begin_frame(sc_core::sc_time start) {
+  start_ = start;
+  last_ = start;
+  received_ = 0;
+  std::fill(arrival_.begin(), arrival_.end(), start);
+  image_ = FrameImage(width_, height_, region_width_, region_height_, has_image_);
+}
 
 void FrameBuffer::receive_region(const RegionArrival& region) {
   arrival_[region.region] = region.arrival;

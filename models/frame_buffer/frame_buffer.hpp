@@ -32,16 +32,24 @@ class FrameBuffer : public sc_core::sc_module, public RingEndpoint {
   std::uint8_t* region_bytes(int x0, int y0);
   void store_region(int x0, int y0);
 
+  // Host side, between frames: a new frame begins at `start` (the times below are then
+  // relative to it, except arrivals(), which keeps the run's time for the timeline), with
+  // no region received and a new image.
+  void begin_frame(sc_core::sc_time start);
+
   // Hands the assembled frame over; the frame buffer is empty afterwards.
   FrameImage take_image() { return std::move(image_); }
   // Simulated time at which the last region arrived: the frame time.
-  sc_core::sc_time frame_complete() const { return last_; }
+  sc_core::sc_time frame_complete() const { return last_ - start_; }
   int regions_received() const { return received_; }
   const std::vector<sc_core::sc_time>& arrivals() const { return arrival_; }
   // Registers frame.simulated_seconds (models/frame_buffer/frame_buffer_statistics.cpp).
   void register_statistics(Statistics& stats) const;
 
  private:
+  int width_, height_, region_width_, region_height_;
+  bool has_image_;
+  sc_core::sc_time start_;
   FrameImage image_;
   std::vector<sc_core::sc_time> arrival_;
   sc_core::sc_time last_;

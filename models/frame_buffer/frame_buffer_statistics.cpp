@@ -7,7 +7,7 @@ namespace pp5 {
 void FrameBuffer::register_statistics(Statistics& stats) const {
   stats.add_real("frame.simulated_seconds", stat_unit::seconds,
                  "Frame time: when the last region reached the frame buffer",
-                 [this] { return last_.to_seconds(); });
+                 [this] { return frame_complete().to_seconds(); });
 }
 
 }  // namespace pp5

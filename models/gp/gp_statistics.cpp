@@ -13,7 +13,7 @@ void GraphicsProcessor::register_statistics(Statistics& stats, double frame_seco
   namespace u = stat_unit;
   const std::string p = "gp." + std::to_string(index_) + ".";
   const GpStats& g = stats_;
-  const double clock_hz = machine_.config().gp.clock_hz;
+  const double clock_hz = plan_.config().gp.clock_hz;
   stats.add_integer(p + "busy_clocks", u::gp_clocks,
                     "Clocks computing: geometry, and starting its ring messages",
                     [&g] { return stat_count(g.busy.count); });

@@ -8,19 +8,22 @@
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/region_bins.hpp"
 #include "models/gp/setup_memo.hpp"
-#include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 
 namespace pp5 {
 
 GraphicsProcessor::GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last,
-                                     Machine& machine)
+                                     const GpWiring& wiring)
     : sc_module(name),
       index_(index),
       first_(first),
       last_(last),
-      machine_(machine),
-      clock_(1.0 / machine.config().gp.clock_hz, sc_core::SC_SEC) {
+      wiring_(wiring),
+      plan_(wiring.plan),
+      clock_(1.0 / wiring.plan.config().gp.clock_hz, sc_core::SC_SEC) {
+  for (int k = 0; k < plan_.renderer_count(); ++k)
+    renderer_stops_.push_back(plan_.renderer_stop(k));
+  clock_slot_ = wiring_.clock.enrol();
   SC_THREAD(run);
 }
 
@@ -211,24 +214,38 @@ void fill_setup_memo(const MachinePlan& plan, int threads, int least_part) {
 }
 
 void GraphicsProcessor::run() {
+  // Frame after frame: frame 0 as the kernel starts, each later one when the host begins it.
+  for (;;) {
+    run_frame();
+    wait(wiring_.clock.started(clock_slot_));
+  }
+}
+
+void GraphicsProcessor::reset_frame() {
+  stats_ = GpStats{};
+  activity_.assign(1, {wiring_.clock.start(), GpActivity::compute});
+}
+
+void GraphicsProcessor::run_frame() {
+  const sc_core::sc_time base = wiring_.clock.start();
   // With fewer triangles than GPs, a GP may have none: it takes no part in the frame, and
   // the Renderers expect no bin map from it (Machine::busy_gp_count).
   if (first_ == last_) {
     begin(GpActivity::done);
     return;
   }
-  const MachineConfig& config = machine_.config();
+  const MachineConfig& config = plan_.config();
   RegionBins bins;
-  geometry_pass(machine_.plan(), first_, last_, stats_, &bins);
+  geometry_pass(plan_, first_, last_, stats_, &bins);
   // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
   stats_.busy += stats_.geometry;
   wait(clock_ * static_cast<double>(stats_.geometry.count));
-  stats_.geometry_done = sc_core::sc_time_stamp();
-  machine_.add_slice(Unit::gp, index_, "geometry", sc_core::SC_ZERO_TIME, stats_.geometry_done);
+  stats_.geometry_done = sc_core::sc_time_stamp() - base;
+  wiring_.timeline.add(Unit::gp, index_, "geometry", base, sc_core::sc_time_stamp());
 
   // The bin map goes first, in one message that passes every Renderer: which regions this
   // GP has packets for.
-  machine_.scheduler().add_bin_senders(bins.regions());
+  wiring_.scheduler.add_bin_senders(bins.regions());
   send_bin_map();
 
   // Bins go out as their Renderers open (pass, region) stages: each message goes to the
@@ -239,7 +256,7 @@ void GraphicsProcessor::run() {
   // transformed its share k more times, each costing what the first traversal cost; it
   // does the next traversal whenever it has nothing it can send (functionally the packets
   // are the same, so the first traversal's are sent).
-  const int passes = machine_.passes();
+  const int passes = plan_.passes();
   const bool retraverse = config.gp.multipass == MachineConfig::Gp::Multipass::retraverse;
   const GpClocks traversal = stats_.geometry;
   const OpCounts traversal_ops = stats_.ops;
@@ -291,19 +308,19 @@ void GraphicsProcessor::run() {
   // with nothing it can send waits until a stage it owes opens or frees room
   // (RegionScheduler::wait_for_input, which says in what order waiting GPs go).
   std::vector<int> open_stages;
-  open_stages.reserve(static_cast<std::size_t>(machine_.renderer_count()));
-  const auto renderers = static_cast<std::size_t>(machine_.renderer_count());
+  open_stages.reserve(static_cast<std::size_t>(plan_.renderer_count()));
+  const auto renderers = static_cast<std::size_t>(plan_.renderer_count());
   while (!owed.empty()) {
     open_stages.clear();
     if (owed.size() <= renderers) {
       for (const int s : owed) {
         if (s / n >= ready_passes) break;
-        const int owner = machine_.scheduler().owner_of_region(s % n);
-        if (owner >= 0 && machine_.renderer(owner).open_stage(n) == s) open_stages.push_back(s);
+        const int owner = wiring_.scheduler.owner_of_region(s % n);
+        if (owner >= 0 && queue(owner).open_stage(n) == s) open_stages.push_back(s);
       }
     } else {
-      for (int k = 0; k < machine_.renderer_count(); ++k) {
-        const int s = machine_.renderer(k).open_stage(n);
+      for (int k = 0; k < plan_.renderer_count(); ++k) {
+        const int s = queue(k).open_stage(n);
         // A region it claimed (its owner), of a pass whose packets exist.
         if (s >= 0 && bins.slot(s % n) >= 0 && !done[slot(s)] && s / n < ready_passes)
           open_stages.push_back(s);
@@ -312,7 +329,7 @@ void GraphicsProcessor::run() {
     }
     int pick = -1;
     for (int s : open_stages) {
-      if (machine_.renderer(machine_.scheduler().owner_of_region(s % n)).has_room(words_for(s))) {
+      if (queue(wiring_.scheduler.owner_of_region(s % n)).has_room(words_for(s))) {
         pick = s;
         break;
       }
@@ -322,9 +339,10 @@ void GraphicsProcessor::run() {
       spend(traversal);
       stats_.geometry += traversal;
       stats_.ops += traversal_ops;
-      if (machine_.timeline_on()) {
-        machine_.add_slice(Unit::gp, index_, "retraverse for pass " + std::to_string(ready_passes),
-                           t0, sc_core::sc_time_stamp());
+      if (wiring_.timeline.on()) {
+        wiring_.timeline.add(Unit::gp, index_,
+                             "retraverse for pass " + std::to_string(ready_passes), t0,
+                             sc_core::sc_time_stamp());
       }
       ++ready_passes;
       continue;
@@ -332,7 +350,7 @@ void GraphicsProcessor::run() {
     if (pick < 0) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();
       begin(GpActivity::renderer);
-      machine_.scheduler().wait_for_input(index_, owed);
+      wiring_.scheduler.wait_for_input(index_, owed);
       (open_stages.empty() ? stats_.waiting_stage : stats_.waiting_queue) +=
           sc_core::sc_time_stamp() - t0;
       continue;
@@ -349,7 +367,7 @@ void GraphicsProcessor::run() {
     m->packets.assign(bin.begin() + static_cast<std::ptrdiff_t>(first),
                       bin.begin() + static_cast<std::ptrdiff_t>(next[k]));
     m->last = next[k] == bin.size();
-    machine_.renderer(machine_.scheduler().owner_of_region(pick % n)).reserve_room(m->words);
+    queue(wiring_.scheduler.owner_of_region(pick % n)).reserve_room(m->words);
     if (m->last) {
       done[k] = true;
       owed.erase(std::lower_bound(owed.begin(), owed.end(), pick));
@@ -357,33 +375,33 @@ void GraphicsProcessor::run() {
     send(std::move(m));
   }
   begin(GpActivity::done);
-  stats_.finished = sc_core::sc_time_stamp();
+  stats_.finished = sc_core::sc_time_stamp() - base;
 }
 
 void GraphicsProcessor::send_bin_map() {
-  spend(machine_.i860().clocks(I860Work::send_bin(), 0));
+  spend(plan_.i860().clocks(I860Work::send_bin(), 0));
   const sc_core::sc_time requested = sc_core::sc_time_stamp();
-  const RingBooking b = machine_.ring().send_bin_map(
-      machine_.gp_stop(index_), machine_.renderer_stops(), machine_.bin_map_words(), index_);
+  const RingBooking b = wiring_.ring.send_bin_map(plan_.gp_stop(index_), renderer_stops_,
+                                                  plan_.bin_map_words(), index_);
   ++stats_.messages;
-  if (machine_.timeline_on()) machine_.add_slice(Unit::gp, index_, "bin map", requested, b.end);
+  if (wiring_.timeline.on()) wiring_.timeline.add(Unit::gp, index_, "bin map", requested, b.end);
   begin(GpActivity::ring);
   stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
   wait(b.end - sc_core::sc_time_stamp());
 }
 
 void GraphicsProcessor::send(std::shared_ptr<BinMessage> m) {
-  const int renderer_index = machine_.scheduler().owner_of_region(m->region);
+  const int renderer_index = wiring_.scheduler.owner_of_region(m->region);
   // Starting the message costs i860 clocks; its room in the queue is already reserved.
-  spend(machine_.i860().clocks(I860Work::send_bin(), 0));
+  spend(plan_.i860().clocks(I860Work::send_bin(), 0));
   const sc_core::sc_time requested = sc_core::sc_time_stamp();
   m->requested = requested;
   const int region = m->region;
-  const RingBooking b = machine_.ring().send_bin(
-      machine_.gp_stop(index_), machine_.renderer_stop(renderer_index), std::move(m));
+  const RingBooking b = wiring_.ring.send_bin(plan_.gp_stop(index_),
+                                              plan_.renderer_stop(renderer_index), std::move(m));
   ++stats_.messages;
-  if (machine_.timeline_on()) {
-    machine_.add_slice(
+  if (wiring_.timeline.on()) {
+    wiring_.timeline.add(
         Unit::gp, index_,
         "send region " + std::to_string(region) + " to renderer" + std::to_string(renderer_index),
         requested, b.end);

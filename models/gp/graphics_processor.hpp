@@ -15,9 +15,13 @@
 #include <vector>
 
 #include "common/units.hpp"
+#include "models/gp/machine_plan.hpp"
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/region_bins.hpp"
-#include "models/machine.hpp"
+#include "models/protocol/frame_clock.hpp"
+#include "models/protocol/region_scheduler.hpp"
+#include "models/protocol/timeline.hpp"
+#include "models/protocol/unit_ports.hpp"
 #include "models/ring/ring.hpp"
 
 namespace pp5 {
@@ -40,41 +44,53 @@ struct GpStats {
   sc_core::sc_time finished;
 };
 
-// What a GP is doing: computing, sending on the ring, or waiting for a Renderer (its queue
-// full, or no stage open for the GP's remaining bins).
-enum class GpActivity { compute, ring, renderer, done };
-
-// Time spent in each activity over an interval, in seconds.
-struct GpActivityTimes {
-  double compute = 0;
-  double ring = 0;
-  double renderer = 0;
+// What a GP is wired to (the Machine builds it): the plan it works from, the ring it sends
+// on, the scheduler that says who owns a region, each Renderer's queue in Renderer order (a
+// vector the Machine fills once every Renderer exists), the timeline and the frame clock.
+struct GpWiring {
+  const MachinePlan& plan;
+  Ring& ring;
+  RegionScheduler& scheduler;
+  const std::vector<RendererQueue*>& renderers;
+  Timeline& timeline;
+  FrameClock& clock;
 };
 
-class GraphicsProcessor : public sc_core::sc_module {
+class GraphicsProcessor : public sc_core::sc_module, public GpReport {
  public:
   SC_HAS_PROCESS(GraphicsProcessor);
-  GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last, Machine& machine);
+  GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last,
+                    const GpWiring& wiring);
 
   const GpStats& stats() const { return stats_; }
+  // Host side, between frames: forgets the last frame (its statistics and activity) before
+  // the frame clock begins the next (Machine::begin_frame).
+  void reset_frame();
   // Registers gp.INDEX.* (models/gp/gp_statistics.cpp); read once the frame has run.
   void register_statistics(Statistics& stats, double frame_seconds) const;
   // How the GP spent [from, to): so that a Renderer's wait for this GP can be attributed.
-  GpActivityTimes activity(sc_core::sc_time from, sc_core::sc_time to) const;
+  GpActivityTimes activity(sc_core::sc_time from, sc_core::sc_time to) const override;
 
  private:
   void run();
+  void run_frame();
   void spend(GpClocks clocks);
   void send(std::shared_ptr<BinMessage> message);
   // Tells every Renderer which regions this GP has packets for (RegionScheduler::add_bin_senders),
   // in one message around the ring.
   void send_bin_map();
   void begin(GpActivity a);
+  RendererQueue& queue(int renderer) const {
+    return *wiring_.renderers[static_cast<std::size_t>(renderer)];
+  }
 
   int index_;
   int first_;  // display-list range [first_, last_)
   int last_;
-  Machine& machine_;
+  GpWiring wiring_;
+  int clock_slot_ = 0;  // FrameClock::enrol
+  const MachinePlan& plan_;
+  std::vector<int> renderer_stops_;  // where the bin map goes
   sc_core::sc_time clock_;
   GpStats stats_;
   // When each activity began, in time order.

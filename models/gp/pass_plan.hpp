@@ -1,6 +1,6 @@
 #pragma once
 // The GP side's pass plan (FrameValues::plan and FrameValues::closing, walked by
-// models/renderer/region_stream.hpp): which passes a frame makes, the procedures that open
+// models/protocol/region_stream.hpp): which passes a frame makes, the procedures that open
 // each, the group of primitives each draws, which of their faces, and the procedure its
 // packets run, derived from the program and the scene.
 //

@@ -17,7 +17,7 @@
 #include <numeric>
 #include <vector>
 
-#include "models/renderer/packet.hpp"
+#include "models/protocol/packet.hpp"
 
 namespace pp5 {
 

@@ -30,7 +30,7 @@
 
 #include "models/gp/geometry.hpp"
 #include "models/gp/primitive_kind.hpp"
-#include "models/renderer/packet.hpp"
+#include "models/protocol/packet.hpp"
 
 namespace pp5 {
 

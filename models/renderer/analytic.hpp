@@ -32,7 +32,7 @@
 #include <vector>
 
 #include "models/gp/graphics_processor.hpp"
-#include "models/machine_plan.hpp"
+#include "models/gp/machine_plan.hpp"
 #include "models/renderer/renderer.hpp"
 
 namespace pp5 {

@@ -6,22 +6,16 @@
 
 #include "common/parallel_for.hpp"
 #include "models/frame_buffer/frame_buffer.hpp"
-#include "models/machine.hpp"
+#include "models/gp/machine_plan.hpp"
 #include "models/renderer/renderer.hpp"
 
 namespace pp5 {
 
-void execute_pixels(Machine& machine, int threads,
+void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
+                    const std::vector<const std::vector<RegionWork>*>& work, int threads,
                     const std::function<BoardObserver*(int renderer)>& observe) {
-  std::vector<const std::vector<RegionWork>*> work;
-  for (int k = 0; k < machine.renderer_count(); ++k) work.push_back(&machine.renderer(k).work());
-  execute_pixels(machine, work, threads, observe);
-}
-
-void execute_pixels(Machine& machine, const std::vector<const std::vector<RegionWork>*>& work,
-                    int threads, const std::function<BoardObserver*(int renderer)>& observe) {
-  const Program& program = machine.program();
-  const MachineConfig& config = machine.config();
+  const Program& program = plan.program();
+  const MachineConfig& config = plan.config();
   using Pixels = MachineConfig::Fidelity::Pixels;
   if (config.fidelity.pixels == Pixels::none) return;  // timing only: the frame holds no pixels
   RendererBoardParams params = board_params(config);
@@ -34,8 +28,8 @@ void execute_pixels(Machine& machine, const std::vector<const std::vector<Region
   // without a check; the rest of the boards' regions run as recorded. Where clear after
   // shade gives the same state again (the probe), no board executes an empty region at all.
   RendererBoard first(params);
-  first.run_empty_region(0, 0, program, machine.frame_values());
-  first.probe_clear_after_shade(program, machine.frame_values());
+  first.run_empty_region(0, 0, program, plan.frame_values());
+  first.probe_clear_after_shade(program, plan.frame_values());
   // One board per host worker, made here on the calling thread and restarted, for each
   // Renderer after its first, in the state of a newly made board (`fresh`): the same results
   // as a new board per Renderer, whatever the thread count, without a worker thread's first
@@ -55,7 +49,7 @@ void execute_pixels(Machine& machine, const std::vector<const std::vector<Region
     if (observe) board.set_observer(observe(k));
     board.share_empty_region(first);
     const int columns = config.regions_x();
-    execute_regions(regions, board, program, machine.frame_buffer(), machine.frame_values(),
+    execute_regions(regions, board, program, frame_buffer, plan.frame_values(),
                     [&](const RegionWork& w) {
                       return config.fidelity.executes(w.region % columns, w.region / columns);
                     });

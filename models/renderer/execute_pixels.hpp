@@ -17,15 +17,15 @@
 
 namespace pp5 {
 
-class Machine;
+class MachinePlan;
+class FrameBuffer;
 class BoardObserver;
 struct RegionWork;
 
-void execute_pixels(Machine& machine, int threads,
+// work[k] is board k's regions, in order: the event model's Renderers' (Machine's
+// execute_pixels, models/machine.hpp) or the analytic timing model's.
+void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
+                    const std::vector<const std::vector<RegionWork>*>& work, int threads,
                     const std::function<BoardObserver*(int renderer)>& observe = {});
-// The same for work that did not come from the event model (the analytic timing model's):
-// work[k] is board k's regions, in order.
-void execute_pixels(Machine& machine, const std::vector<const std::vector<RegionWork>*>& work,
-                    int threads, const std::function<BoardObserver*(int renderer)>& observe = {});
 
 }  // namespace pp5

@@ -4,17 +4,18 @@
 #include <cmath>
 
 #include "models/frame_buffer/frame_buffer.hpp"
-#include "models/gp/graphics_processor.hpp"
 #include "models/ring/ring.hpp"
 
 namespace pp5 {
 
-Renderer::Renderer(sc_core::sc_module_name name, int index, Machine& machine)
+Renderer::Renderer(sc_core::sc_module_name name, int index, const RendererWiring& wiring)
     : sc_module(name),
       index_(index),
-      machine_(machine),
-      cycle_(1.0 / machine.config().renderer.clock_hz, sc_core::SC_SEC),
-      capacity_(static_cast<std::uint64_t>(machine.config().renderer.queue_words)) {
+      wiring_(wiring),
+      plan_(wiring.plan),
+      cycle_(1.0 / wiring.plan.config().renderer.clock_hz, sc_core::SC_SEC),
+      capacity_(static_cast<std::uint64_t>(wiring.plan.config().renderer.queue_words)) {
+  clock_slot_ = wiring_.clock.enrol();
   SC_THREAD(run);
 }
 
@@ -45,7 +46,7 @@ void Renderer::receive_bin_map(const BinMapArrival& map) {
 
 void Renderer::advance() {
   if (open_region_ < 0 || !maps_complete()) return;
-  const int senders = machine_.scheduler().bin_senders(open_region_);
+  const int senders = wiring_.scheduler.bin_senders(open_region_);
   if (lasts_delivered_ == senders && (senders > 0 || open_started_)) open_next_stage();
 }
 
@@ -63,23 +64,23 @@ void Renderer::wait_for_bin_maps() {
 void Renderer::open_next_stage() {
   lasts_delivered_ = 0;
   open_started_ = false;
-  if (open_region_ >= 0 && open_pass_ + 1 < machine_.passes()) {
+  if (open_region_ >= 0 && open_pass_ + 1 < plan_.passes()) {
     ++open_pass_;
   } else {
     // The last pass of the region is all in the queue: take the next region now, so that
     // its bins flow in while this one finishes.
-    open_region_ = machine_.scheduler().claim_region(index_);
+    open_region_ = wiring_.scheduler.claim_region(index_);
     open_pass_ = open_region_ >= 0 ? 0 : -1;
   }
   if (open_region_ >= 0) stages_.push_back({open_region_, open_pass_});
-  machine_.scheduler().input_changed(index_, open_stage(machine_.config().regions()));
+  wiring_.scheduler.input_changed(index_, open_stage(plan_.config().regions()));
 }
 
 void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values,
                       bool region_wide) {
   if (!procedure.defined) return;
-  const MachineConfig& config = machine_.config();
-  const TimingParams& timing = machine_.timing();
+  const MachineConfig& config = plan_.config();
+  const TimingParams& timing = plan_.timing();
   ++stats_.packets;
   stats_.instructions += procedure.code.size();
   RegionWideCost* memo = nullptr;
@@ -141,7 +142,7 @@ void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values
 }
 
 void Renderer::load_coefficients(const Packet& packet, sc_core::sc_time arrival) {
-  const MachineConfig& config = machine_.config();
+  const MachineConfig& config = plan_.config();
   // The packet's words after its header are coefficients, moved from the queue into the
   // evaluator's input registers.
   const std::uint64_t words = packet.words > 0 ? packet.words - 1 : 0;
@@ -170,11 +171,11 @@ void Renderer::catch_up() {
 }
 
 void Renderer::ship(int region) {
-  const MachineConfig& config = machine_.config();
-  Ring& ring = machine_.ring();
-  const int from = machine_.renderer_stop(index_);
-  const int to = machine_.frame_buffer_stop();
-  const std::uint64_t words = machine_.region_words();
+  const MachineConfig& config = plan_.config();
+  Ring& ring = wiring_.ring;
+  const int from = plan_.renderer_stop(index_);
+  const int to = plan_.frame_buffer_stop();
+  const std::uint64_t words = plan_.region_words();
   if (config.renderer.overlap_shipping) {
     // Colours go to the backing store (before the next region's clear overwrites them); its
     // video-RAM port then streams them onto the ring while the array works on.
@@ -192,7 +193,7 @@ void Renderer::ship(int region) {
     port_free_ = cursor_;
     stats_.busy += copy;
     catch_up();
-    machine_.add_slice(Unit::renderer, index_, "copy out", t0, cursor_);
+    wiring_.timeline.add(Unit::renderer, index_, "copy out", t0, cursor_);
     const RingBooking b = ring.send_region(from, to, words, region, ship_free_);
     ship_free_ = b.end;
     stats_.finished = std::max(stats_.finished, b.arrival);
@@ -209,18 +210,49 @@ void Renderer::ship(int region) {
 }
 
 void Renderer::run() {
-  const MachineConfig& config = machine_.config();
-  const Program& program = machine_.program();
-  const int gps = machine_.gp_count();
-  const RegionStream stream(program, machine_.frame_values());
-  cursor_ = sc_core::SC_ZERO_TIME;
+  // Frame after frame: frame 0 as the kernel starts, each later one when the host begins it.
+  for (;;) {
+    run_frame();
+    wait(wiring_.clock.started(clock_slot_));
+  }
+}
+
+void Renderer::reset_frame() {
+  const sc_core::sc_time base = wiring_.clock.start();
+  open_region_ = -1;
+  open_pass_ = -1;
+  lasts_delivered_ = 0;
+  open_started_ = false;
+  maps_delivered_ = 0;
+  maps_requested_ = base;
+  maps_arrival_ = base;
+  stages_.clear();
+  queue_.clear();
+  queued_words_ = 0;
+  cursor_ = base;
+  port_free_ = base;
+  ship_free_ = base;
+  coefficients_free_ = base;
+  stats_ = RendererStats{};
+  work_.clear();
+}
+
+void Renderer::run_frame() {
+  const sc_core::sc_time base = wiring_.clock.start();
+  const MachineConfig& config = plan_.config();
+  const Program& program = plan_.program();
+  const int gps = plan_.gp_count();
+  const RegionStream stream(program, plan_.frame_values());
+  cursor_ = base;
   open_next_stage();
   std::vector<std::vector<std::shared_ptr<const Packet>>> by_gp(gps);
   // The array cycle at which each packet started, by pass and GP (for traces): a GP's
   // packets come in the same order in every pass.
   std::vector<std::vector<std::vector<std::uint64_t>>> starts(
       stream.passes(), std::vector<std::vector<std::uint64_t>>(gps));
-  auto cycle_now = [&] { return static_cast<std::uint64_t>(std::llround(cursor_ / cycle_)); };
+  auto cycle_now = [&] {
+    return static_cast<std::uint64_t>(std::llround((cursor_ - base) / cycle_));
+  };
   std::vector<std::uint64_t> step_start;
   auto charge_step = [&](const RegionStep& step) {
     step_start.push_back(cycle_now());
@@ -246,7 +278,7 @@ void Renderer::run() {
     stream.before_pass(stage.pass, charge_step);
     catch_up();
     if (!maps_complete() || maps_arrival_ > sc_core::sc_time_stamp()) wait_for_bin_maps();
-    const int senders = machine_.scheduler().bin_senders(stage.region);
+    const int senders = wiring_.scheduler.bin_senders(stage.region);
     int lasts = 0;
     while (lasts < senders) {
       catch_up();
@@ -271,8 +303,8 @@ void Renderer::run() {
       stats_.waiting_ring += ring_part;
       // Before that, it was whatever the sending GP was doing: computing (the GPs' time),
       // sending earlier messages (the ring's) or waiting for other Renderers (theirs).
-      const GpActivityTimes before =
-          machine_.gp(m->gp).activity(waiting_from, std::min(m->requested, now));
+      const GpActivityTimes before = wiring_.gps[static_cast<std::size_t>(m->gp)]->activity(
+          waiting_from, std::min(m->requested, now));
       stats_.waiting_gp += sc_core::sc_time(before.compute, sc_core::SC_SEC);
       stats_.waiting_ring += sc_core::sc_time(before.ring, sc_core::SC_SEC);
       stats_.waiting_renderers += sc_core::sc_time(before.renderer, sc_core::SC_SEC);
@@ -290,21 +322,21 @@ void Renderer::run() {
       // Time advances per message, not per cycle: one kernel event for a whole stream.
       catch_up();
       ++stats_.messages;
-      if (machine_.timeline_on() && cursor_ > t0) {
-        machine_.add_slice(
+      if (wiring_.timeline.on() && cursor_ > t0) {
+        wiring_.timeline.add(
             Unit::renderer, index_,
             "gp" + std::to_string(m->gp) + ": " + std::to_string(m->packets.size()) + " triangles",
             t0, cursor_);
       }
       queued_words_ -= m->words;
-      machine_.scheduler().input_changed(index_, open_stage(machine_.config().regions()));
+      wiring_.scheduler.input_changed(index_, open_stage(plan_.config().regions()));
       if (m->last) ++lasts;
     }
     if (stage.pass + 1 < stream.passes()) continue;
     stream.after_passes(charge_step);
     catch_up();
-    machine_.add_slice(Unit::renderer, index_, "region " + std::to_string(stage.region),
-                       region_start, cursor_);
+    wiring_.timeline.add(Unit::renderer, index_, "region " + std::to_string(stage.region),
+                         region_start, cursor_);
     RegionWork w;
     w.region = stage.region;
     w.x0 = config.region_x0(stage.region);
@@ -319,8 +351,9 @@ void Renderer::run() {
     work_.push_back(std::move(w));
   }
   catch_up();
-  stats_.computed = sc_core::sc_time_stamp();
-  stats_.finished = std::max(stats_.finished, stats_.computed);
+  // The frame's times are the frame's own (FrameClock's contract).
+  stats_.computed = sc_core::sc_time_stamp() - base;
+  stats_.finished = std::max(stats_.finished, sc_core::sc_time_stamp()) - base;
 }
 
 void Renderer::execute(RendererBoard& board, const Program& program, FrameBuffer& frame_buffer,

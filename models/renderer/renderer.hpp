@@ -28,14 +28,19 @@
 #include <vector>
 
 #include "common/units.hpp"
-#include "models/machine.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/gp/machine_plan.hpp"
+#include "models/protocol/frame_clock.hpp"
+#include "models/protocol/region_scheduler.hpp"
+#include "models/protocol/region_stream.hpp"
+#include "models/protocol/timeline.hpp"
+#include "models/protocol/unit_ports.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "models/ring/ring.hpp"
 
 namespace pp5 {
 
 class Statistics;
+class FrameBuffer;
 
 // What one region ran, recorded by the timing pass for the functional one: the region's
 // packets, kept in GP order, which is display-list order, whatever order their messages
@@ -75,24 +80,41 @@ struct RendererStats {
   sc_core::sc_time finished;  // when its last region reached the frame buffer
 };
 
-class Renderer : public sc_core::sc_module, public RingEndpoint {
+// What a Renderer is wired to (the Machine builds it): the plan it works from, the ring it
+// ships regions on, the scheduler that gives it regions and says who sends them, what each
+// GP reports of its activity in GP order (a vector the Machine fills once every GP exists),
+// the timeline and the frame clock.
+struct RendererWiring {
+  const MachinePlan& plan;
+  Ring& ring;
+  RegionScheduler& scheduler;
+  const std::vector<const GpReport*>& gps;
+  Timeline& timeline;
+  FrameClock& clock;
+};
+
+class Renderer : public sc_core::sc_module, public RingEndpoint, public RendererQueue {
  public:
   SC_HAS_PROCESS(Renderer);
-  Renderer(sc_core::sc_module_name name, int index, Machine& machine);
+  Renderer(sc_core::sc_module_name name, int index, const RendererWiring& wiring);
 
   // The (region, pass) stage open for input as pass * regions + region, or -1 when none is
   // (the region is always one this Renderer claimed); then room in its queue.
-  int open_stage(int regions) const {
+  int open_stage(int regions) const override {
     return open_region_ < 0 ? -1 : open_pass_ * regions + open_region_;
   }
-  bool has_room(std::uint64_t words) const { return queued_words_ + words <= capacity_; }
+  bool has_room(std::uint64_t words) const override { return queued_words_ + words <= capacity_; }
   // A GP takes room for its next message (after has_room), before it starts sending.
-  void reserve_room(std::uint64_t words);
+  void reserve_room(std::uint64_t words) override;
   // Through the ring: a GP's message has been booked; it is in the queue from its arrival on.
   void receive_bin(std::shared_ptr<const BinMessage> message) override;
   // Through the ring: a GP's bin map has been booked (RegionScheduler::bin_senders has its
   // regions).
   void receive_bin_map(const BinMapArrival& map) override;
+
+  // Host side, between frames: forgets the last frame (its statistics, its regions, its
+  // queue's and array's state) before the frame clock begins the next (Machine::begin_frame).
+  void reset_frame();
 
   const RendererStats& stats() const { return stats_; }
   // Registers renderer.INDEX.* (models/renderer/renderer_statistics.cpp); read once the frame
@@ -111,13 +133,14 @@ class Renderer : public sc_core::sc_module, public RingEndpoint {
     int pass;
   };
   void run();
+  void run_frame();
   void open_next_stage();
   // Opens the next stage if the open one has all its input: every GP's bin map and the last
   // message of every GP that has packets for it. A stage nobody has packets for is complete
   // as soon as the maps are in, but the next opens only once the Renderer starts on it, so
   // a run of empty regions is not all claimed at once.
   void advance();
-  bool maps_complete() const { return maps_delivered_ == machine_.busy_gp_count(); }
+  bool maps_complete() const { return maps_delivered_ == plan_.busy_gp_count(); }
   // Waits until every bin map has arrived; the wait is the GPs' (before the last map was
   // asked for) and the ring's (after).
   void wait_for_bin_maps();
@@ -141,7 +164,9 @@ class Renderer : public sc_core::sc_module, public RingEndpoint {
   std::vector<RegionWideCost> region_wide_costs_;
 
   int index_;
-  Machine& machine_;
+  RendererWiring wiring_;
+  int clock_slot_ = 0;  // FrameClock::enrol
+  const MachinePlan& plan_;
   sc_core::sc_time cycle_;
   std::uint64_t capacity_;
   int open_region_ = -1;

@@ -1,5 +1,6 @@
 #include "models/renderer/renderer_board.hpp"
 
+#include "models/gp/machine_plan.hpp"
 #include "models/pixel_array/backends.hpp"
 
 namespace pp5 {
@@ -189,6 +190,20 @@ ArrayCycles procedure_cost(const ProcedureCode& procedure, const TimingParams& t
   ArrayCycles cycles{};
   for (const Instruction& ins : procedure.code) cycles += instruction_cost(ins, timing, values);
   return cycles;
+}
+
+RendererBoardParams board_params(const MachineConfig& c) {
+  RendererBoardParams p;
+  p.array.width = c.renderer.region_width;
+  p.array.height = c.renderer.region_height;
+  p.array.memory_bits = c.renderer.memory_bits;
+  p.array.enable_stack_depth = c.renderer.enable_stack_depth;
+  p.array.backing_store_bits = c.renderer.backing_store_bits;
+  p.array.block_bits = c.renderer.block_bits;
+  p.evaluator.coefficient_bits = c.evaluator.coefficient_bits;
+  p.evaluator.result_bits = c.evaluator.result_bits;
+  p.timing = timing_params(c);
+  return p;
 }
 
 }  // namespace pp5

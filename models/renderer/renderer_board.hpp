@@ -17,8 +17,9 @@
 #include "firmware/isa/interface.hpp"
 #include "firmware/isa/isa.hpp"
 #include "firmware/isa/types.hpp"
+#include "models/config/machine_config.hpp"
 #include "models/frame_buffer/image.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 
 namespace pp5 {
 
@@ -57,6 +58,9 @@ struct RendererBoardParams {
   std::string backend = "bit";  // a name in pixel_backends()
 };
 
+// A board's parameters from the configuration (the array, the evaluator, the timing).
+RendererBoardParams board_params(const MachineConfig& config);
+
 class RendererBoard {
  public:
   // Throws std::invalid_argument for an unknown backend name.
@@ -83,7 +87,7 @@ class RendererBoard {
   // The same into pixels() * 3 bytes at rgb.
   void read_outputs(const Program& program, std::uint8_t* rgb) const;
 
-  // One step of a region's stream (models/renderer/region_stream.hpp); an observer sees it
+  // One step of a region's stream (models/protocol/region_stream.hpp); an observer sees it
   // as a packet of `region` starting at simulated array cycle `start_cycle`.
   ArrayCycles run_step(const RegionStep& step, int region = 0, std::uint64_t start_cycle = 0);
   // A region no primitive touches: its stream (RegionStream::for_each_empty) and its outputs,

@@ -12,7 +12,7 @@ void Renderer::register_statistics(Statistics& stats, double frame_seconds) cons
   namespace u = stat_unit;
   const std::string p = "renderer." + std::to_string(index_) + ".";
   const RendererStats& st = stats_;
-  const double array_hz = machine_.config().renderer.clock_hz;
+  const double array_hz = plan_.config().renderer.clock_hz;
   stats.add_integer(p + "busy_cycles", u::array_cycles,
                     "Cycles executing micro-instructions, decoding packets and copying finished "
                     "colours to the backing store",

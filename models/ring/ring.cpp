@@ -37,6 +37,14 @@ RingBooking Ring::reserve(int from, int to, std::uint64_t words, sc_core::sc_tim
   return b;
 }
 
+void Ring::reset_frame(sc_core::sc_time start) {
+  std::fill(free_at_.begin(), free_at_.end(), start);
+  std::fill(busy_.begin(), busy_.end(), RingCycles{});
+  contention_ = RingCycles{};
+  messages_ = 0;
+  words_ = 0;
+}
+
 sc_core::sc_time Ring::hop_delay(int from, int to) const {
   return ring_hop_delay(params_, cycle_, from, to, stops_);
 }

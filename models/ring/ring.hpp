@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "common/units.hpp"
-#include "models/renderer/packet.hpp"
+#include "models/protocol/packet.hpp"
 
 namespace pp5 {
 
@@ -121,6 +121,12 @@ class Ring : public sc_core::sc_module {
   // to the farthest of several stops passes the nearer ones on the way (a broadcast).
   sc_core::sc_time hop_delay(int from, int to) const;
   int hops(int from, int to) const { return ring_hops(from, to, stops_); }
+
+  // Host side, between frames: a new frame begins at `start`, after every booking so far
+  // ended; each channel is free from then on, as in a new ring (so the next message takes
+  // channel 0), and the counts start again from 0. The message log is kept, for a timeline
+  // over all frames.
+  void reset_frame(sc_core::sc_time start);
 
   // Keep every message for the timeline (off by default: it costs memory).
   void record_messages(bool on) { record_ = on; }

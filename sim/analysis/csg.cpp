@@ -13,7 +13,7 @@
 #include "models/gp/pass_plan.hpp"
 #include "models/gp/sphere.hpp"
 #include "models/machine.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "sim/analysis/field_render.hpp"
 #include "sim/scene/csg_expression.hpp"
 #include "sim/scene/sphere_scenes.hpp"

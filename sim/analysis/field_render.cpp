@@ -12,7 +12,7 @@
 #include "models/gp/pass_plan.hpp"
 #include "models/gp/primitive_kind.hpp"
 #include "models/machine.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "models/renderer/renderer_board.hpp"
 
 namespace pp5 {

@@ -57,7 +57,7 @@ double gp_rate(const MachineConfig& c, const FrameResult& r) {
 // Senders that keep the ring saturated with queue-sized messages; returns the bits per second
 // it delivered (the last arrival bounds the time, so hop latency counts against it).
 double measured_ring_bandwidth(const MachineConfig& c) {
-  fresh_kernel();
+  KernelContext kernel;  // declared first: freed after the ring and its senders
   RingParams p;
   p.channels = c.ring.channels;
   p.word_bits = c.ring.word_bits;
@@ -81,7 +81,7 @@ double measured_ring_bandwidth(const MachineConfig& c) {
         },
         sc_core::sc_gen_unique_name("sender"));
   }
-  run_kernel();
+  kernel.run();
   const double bits = static_cast<double>(ring.words()) * p.word_bits;
   return bits / last.to_seconds();
 }

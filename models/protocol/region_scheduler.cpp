@@ -1,4 +1,4 @@
-#include "models/renderer/region_scheduler.hpp"
+#include "models/protocol/region_scheduler.hpp"
 
 #include <algorithm>
 
@@ -26,6 +26,21 @@ RegionScheduler::RegionScheduler(sc_core::sc_module_name name, int regions, int 
   SC_METHOD(arbitrate);
   sensitive << changed_event_;
   dont_initialize();
+}
+
+void RegionScheduler::reset_frame() {
+  std::fill(owner_.begin(), owner_.end(), -1);
+  std::fill(bin_senders_.begin(), bin_senders_.end(), 0);
+  next_region_ = 0;
+  std::fill(claimed_.begin(), claimed_.end(), 0);
+  changed_.clear();
+  std::fill(is_changed_.begin(), is_changed_.end(), 0);
+  std::fill(open_stage_.begin(), open_stage_.end(), -1);
+  std::fill(owed_.begin(), owed_.end(), nullptr);
+  waiting_ = 0;
+  std::fill(nearest_.begin(), nearest_.end(), -1);
+  wake_order_.clear();
+  next_turn_ = 0;
 }
 
 int RegionScheduler::claim_region(int renderer) {

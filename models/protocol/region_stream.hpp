@@ -38,7 +38,7 @@
 
 #include "firmware/assembler/assembler.hpp"
 #include "firmware/isa/isa.hpp"
-#include "models/renderer/packet.hpp"
+#include "models/protocol/packet.hpp"
 
 namespace pp5 {
 

@@ -40,6 +40,10 @@ class RegionScheduler : public sc_core::sc_module {
   RegionScheduler(sc_core::sc_module_name name, int regions, int renderers, int gps, bool dynamic,
                   Order order = Order::nearest);
 
+  // Host side, between frames: no region claimed, no bin sender, no GP waiting, the
+  // round-robin turn at GP 0: as a new scheduler, so that every frame starts alike.
+  void reset_frame();
+
   int claim_region(int renderer);
   int owner_of_region(int region) const { return owner_[region]; }
   void add_bin_senders(const std::vector<int>& regions);

@@ -20,7 +20,7 @@
 #include "models/display_list/scene.hpp"
 #include "models/gp/geometry.hpp"
 #include "models/gp/i860.hpp"
-#include "models/renderer/region_stream.hpp"
+#include "models/protocol/region_stream.hpp"
 #include "models/ring/ring.hpp"
 
 namespace pp5 {
@@ -32,8 +32,6 @@ GeometryParams geometry_params(const MachineConfig& config);
 TimingParams timing_params(const MachineConfig& config);
 I860Params i860_params(const MachineConfig& config);
 RingParams ring_params(const MachineConfig& config);
-struct RendererBoardParams;
-RendererBoardParams board_params(const MachineConfig& config);
 AssemblerOptions assembler_options(const MachineConfig& config);
 
 class MachinePlan {

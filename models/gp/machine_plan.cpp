@@ -1,4 +1,4 @@
-#include "models/machine_plan.hpp"
+#include "models/gp/machine_plan.hpp"
 
 #include <fmt/format.h>
 
@@ -8,7 +8,6 @@
 #include "models/gp/pass_plan.hpp"
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/setup_memo.hpp"
-#include "models/renderer/renderer_board.hpp"
 
 namespace pp5 {
 
@@ -53,20 +52,6 @@ I860Params i860_params(const MachineConfig& c) {
   p.overhead_form = c.gp.overhead_form == MachineConfig::Gp::OverheadForm::add
                         ? I860Params::OverheadForm::add
                         : I860Params::OverheadForm::multiply;
-  return p;
-}
-
-RendererBoardParams board_params(const MachineConfig& c) {
-  RendererBoardParams p;
-  p.array.width = c.renderer.region_width;
-  p.array.height = c.renderer.region_height;
-  p.array.memory_bits = c.renderer.memory_bits;
-  p.array.enable_stack_depth = c.renderer.enable_stack_depth;
-  p.array.backing_store_bits = c.renderer.backing_store_bits;
-  p.array.block_bits = c.renderer.block_bits;
-  p.evaluator.coefficient_bits = c.evaluator.coefficient_bits;
-  p.evaluator.result_bits = c.evaluator.result_bits;
-  p.timing = timing_params(c);
   return p;
 }
 

@@ -1,0 +1,65 @@
+// Frames in sequence against single frames, on the built-in torus at 1280 x 1024 (8,192
+// triangles, phong, the default machine), 2 host threads, frame.png encoded for every frame.
+// One run times kFrames single frames (simulate_frame: a SystemC context and a Machine made and
+// freed per frame, as `pp5sim render` does) and then kFrames frames of one Session (one
+// context and one Machine for all of them), and reports:
+//   single_over_simulated   host seconds per single frame / the simulated frame period
+//   session_over_simulated  host seconds per session frame / the simulated frame period
+//   session_over_single     the two host times' ratio (below 1: the session is faster)
+// at the fidelity level given as the argument (0: word, 1: bit).
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <memory>
+#include <string>
+
+#include "firmware/assembler/assembler.hpp"
+#include "models/gp/machine_plan.hpp"
+#include "sim/image/png_writer.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/simulation.hpp"
+
+namespace {
+
+constexpr int kFrames = 10;
+
+void BM_FramesInSequence(benchmark::State& state) {
+  pp5::MachineConfig config = pp5::MachineConfig::defaults();
+  config.set(std::vector<std::string>{state.range(0) == 0 ? "fidelity.pixels=word"
+                                                          : "fidelity.pixels=bit"});
+  const auto scene = std::make_shared<const pp5::Scene>(pp5::make_builtin_scene("torus"));
+  const auto program = std::make_shared<const pp5::Program>(
+      pp5::assemble_file(std::string(PP5_SOURCE_DIR) + "/firmware/programs/phong.pp5",
+                         pp5::assembler_options(config)));
+  auto seconds_since = [](std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  double single = 0, session = 0, simulated = 0;
+  for (auto _ : state) {
+    auto t0 = std::chrono::steady_clock::now();
+    for (int f = 0; f < kFrames; ++f) {
+      const pp5::FrameResult r = pp5::simulate_frame(config, *scene, *program, 2);
+      const std::string png = pp5::encode_png(r.image);
+      benchmark::DoNotOptimize(png.data());
+      simulated = r.frame_seconds;
+    }
+    single += seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    pp5::Session run(config, scene, program, 2);
+    for (int f = 0; f < kFrames; ++f) {
+      const pp5::FrameResult r = run.frame();
+      const std::string png = pp5::encode_png(r.image);
+      benchmark::DoNotOptimize(png.data());
+    }
+    session += seconds_since(t0);
+  }
+  const double frames = static_cast<double>(state.iterations()) * kFrames;
+  state.counters["sim_ms"] = simulated * 1e3;
+  state.counters["single_over_simulated"] = single / frames / simulated;
+  state.counters["session_over_simulated"] = session / frames / simulated;
+  state.counters["session_over_single"] = session / single;
+}
+
+BENCHMARK(BM_FramesInSequence)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
