@@ -66,7 +66,9 @@ struct SweepOptions {
   std::string plot_y = "triangles_per_second";
 };
 
-std::vector<Axis> parse_grid(const std::vector<std::string>& grid) {
+// Each value is checked against `base`: the configuration with --config and --set applied,
+// which is what the point will run with.
+std::vector<Axis> parse_grid(const std::vector<std::string>& grid, const MachineConfig& base) {
   if (grid.empty()) {
     throw std::runtime_error("--grid: give at least one, e.g. --grid gp.count=1,2,4,8");
   }
@@ -94,7 +96,7 @@ std::vector<Axis> parse_grid(const std::vector<std::string>& grid) {
             fmt::format("--grid {}: value '{}' is given twice for '{}'", g, v, a.key));
       }
       // Each value must be valid on its own: the error names the key.
-      MachineConfig probe = MachineConfig::defaults();
+      MachineConfig probe = base;
       try {
         probe.set(a.key + "=" + v);
       } catch (const ConfigError& e) {
@@ -212,7 +214,10 @@ echo "$array $aggregate" > {out}/slurm-jobs.txt
 }
 
 int run_sweep(const SweepOptions& o, const std::string& program_path) {
-  const std::vector<Axis> axes = parse_grid(o.grid);
+  // Each point's configuration is the base (file and --set) with its axes set, built when it
+  // is needed rather than all held at once.
+  const MachineConfig base = load_config(o.config_path, o.sets);
+  const std::vector<Axis> axes = parse_grid(o.grid, base);
   std::uint64_t points = 1;
   for (const Axis& a : axes) {
     if (points > kMaxSweepPoints / a.values.size()) {
@@ -223,9 +228,6 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
     }
     points *= a.values.size();
   }
-  // Each point's configuration is the base (file and --set) with its axes set, built when it
-  // is needed rather than all held at once.
-  const MachineConfig base = load_config(o.config_path, o.sets);
   auto config_of = [&](std::uint64_t i) {
     const std::vector<std::string> values = point(axes, i);
     std::vector<std::string> sets;
