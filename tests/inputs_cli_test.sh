@@ -62,4 +62,12 @@ echo "$out" | grep -q "'\\\\xff\\\\xfe\\\\x01bad' outside a procedure" || fail "
 printf 'field z 24\n%s 1\n' "$(head -c 100000 /dev/zero | tr '\0' 'w')" > long.pp5
 out=$("$bin" asm long.pp5 2>&1) && fail "long assembled"
 [ "${#out}" -lt 600 ] || fail "a 100,000-byte word was printed whole (${#out} bytes)"
+# sweep plot: an inf (or nan) in the CSV is refused by name, not drawn as an endless axis.
+printf 'gp.count,triangles_per_second\n1,1000\n2,inf\n' > inf.csv
+expect_error "inf.csv: column 'triangles_per_second' has 'inf', which is not a finite number" \
+  sweep plot inf.csv -o inf.svg
+printf 'gp.count,triangles_per_second\n1,1e-300\n2,1e300\n' > wide.csv
+expect_error "wide.csv: triangles_per_second runs from 1e-300 to 1e+300, 601 decades" \
+  sweep plot wide.csv -o wide.svg
+[ -e inf.svg ] || [ -e wide.svg ] && fail "a plot was written"
 echo "inputs_cli: all checks passed"

@@ -23,6 +23,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "common/escape.hpp"
 #include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
@@ -504,11 +505,12 @@ double number(const std::string& text, const std::string& path, const std::strin
   try {
     std::size_t used = 0;
     const double v = std::stod(text, &used);
-    if (used == text.size()) return v;
+    // inf and nan parse, and an axis to infinity drew gigabytes of grid lines.
+    if (used == text.size() && std::isfinite(v)) return v;
   } catch (const std::exception&) {
   }
-  throw std::runtime_error(
-      fmt::format("{}: column '{}' has '{}', which is not a number", path, column, text));
+  throw std::runtime_error(fmt::format("{}: column '{}' has '{}', which is not a finite number",
+                                       path, escape_for_message(column), escape_for_message(text)));
 }
 
 std::string svg_escape(const std::string& s) {
@@ -570,6 +572,13 @@ int run_plot(const SweepOptions& o) {
   }
   const double lx0 = std::log10(x0), lx1 = std::max(std::log10(x1), lx0 + 1e-9);
   const double ly0 = std::floor(std::log10(y0)), ly1 = std::ceil(std::log10(y1) + 1e-9);
+  // Grid lines are drawn per decade: bounded before they are.
+  constexpr double kMaxDecades = 40;
+  if (ly1 - ly0 > kMaxDecades) {
+    throw std::runtime_error(
+        fmt::format("{}: {} runs from {:g} to {:g}, {} decades; the plot draws at most {}",
+                    o.plot_csv, escape_for_message(o.plot_y), y0, y1, ly1 - ly0, kMaxDecades));
+  }
   const int W = 760, H = 480, L = 90, R = 170, T = 50, B = 60;
   auto px = [&](double x) { return L + (std::log10(x) - lx0) / (lx1 - lx0) * (W - L - R); };
   auto py = [&](double y) { return H - B - (std::log10(y) - ly0) / (ly1 - ly0) * (H - T - B); };
