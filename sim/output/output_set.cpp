@@ -155,6 +155,19 @@ struct Target {
 };
 
 Target resolve_output_target(const std::string& named) {
+  // What the name leads to, links followed: a link to a FIFO, a device or a pipe
+  // (/dev/stdout is /proc/self/fd/1, whose target "pipe:[N]" is no path) is written in place
+  // through the name itself.
+  {
+    struct stat st {};
+    if (::stat(named.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+      if (S_ISDIR(st.st_mode)) throw OutputError(named + ": is a folder, expected a file to write");
+      if (S_ISSOCK(st.st_mode))
+        throw OutputError(named + ": is a socket, expected a file, a FIFO or a device to write");
+      return {named, true};
+    }
+    if (errno == ELOOP) throw OutputError(named + ": too many levels of symbolic links");
+  }
   fs::path p(named);
   for (int hops = 0;; ++hops) {
     struct stat st {};
@@ -369,6 +382,9 @@ bool prepare_output_folder(const std::string& dir, const std::string& option) {
 void install_signal_cleanup() {
   static std::atomic<bool> installed{false};
   if (installed.exchange(true)) return;
+  // A file size limit (ulimit -f) makes write() fail with EFBIG, which the writer reports and
+  // cleans up after, instead of SIGXFSZ ending the process with its folder half made.
+  ::signal(SIGXFSZ, SIG_IGN);
   for (int signal : {SIGINT, SIGTERM, SIGHUP}) {
     struct sigaction action {};
     action.sa_handler = remove_temporaries_and_reraise;
