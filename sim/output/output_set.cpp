@@ -34,8 +34,9 @@ struct Slot {
 };
 std::array<Slot, kSlots> g_slots;
 std::array<Slot, kSlots> g_folder_slots;  // outermost first
-// While a commit moves a run's files into place, a signal waits for it to finish (the
-// handler records it and returns), so that a run's files appear together or not at all.
+// While a commit moves a run's files into place (or a temporary is created and registered),
+// a signal waits for it to finish (the handler records it and returns), so that a run's
+// files appear together or not at all and no temporary escapes the handler.
 std::atomic<bool> g_committing{false};
 std::atomic<int> g_pending_signal{0};
 
@@ -111,11 +112,17 @@ std::string write_temporary(const std::string& path, const std::string& bytes, i
   std::string name = "." + dest.filename().string() + ".XXXXXX";
   if (name.size() > NAME_MAX) name = ".pp5-output.XXXXXX";
   std::string tmpl = (dir / name).string();
+  // A signal between mkstemp and the registration would leave the new file behind: it waits
+  // (as during a commit's renames) until the file is registered.
+  g_committing.store(true);
   const int fd = ::mkstemp(tmpl.data());
+  const int create_errno = errno;
+  if (fd >= 0) slot = register_temporary(tmpl);
+  end_commit();
   if (fd < 0) {
-    throw OutputError(path + ": cannot create a temporary file beside it (" + reason(errno) + ")");
+    throw OutputError(path + ": cannot create a temporary file beside it (" + reason(create_errno) +
+                      ")");
   }
-  slot = register_temporary(tmpl);
   auto fail = [&](const std::string& what, int err) {
     ::close(fd);
     ::unlink(tmpl.c_str());
