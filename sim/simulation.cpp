@@ -793,9 +793,11 @@ FrameResult project_frame(const MachineConfig& config, const Scene& scene, const
   return run_frame(config, scene, program, 1, {}, nullptr, false, memo);
 }
 
-std::vector<StatisticInfo> describe_statistics(const std::string& program_path) {
+std::vector<StatisticInfo> describe_statistics(const std::string& program_path,
+                                               const std::vector<std::string>& sets) {
   MachineConfig config = MachineConfig::defaults();
   config.set({"screen.width=128", "screen.height=128", "gp.count=1", "renderer.count=1"});
+  config.set(sets);
   const Program program = assemble_file(program_path, assembler_options(config));
   return simulate_frame(config, make_builtin_scene("two-triangles"), program, 1).stats.describe();
 }

@@ -126,7 +126,10 @@ FrameResult project_frame(const MachineConfig& config, const Scene& scene, const
 // those of any run with the indices of gp, renderer, ring.channels and primitives_per_region
 // written N.
 // `program_path` is a firmware program (any: the statistics do not depend on it).
-std::vector<StatisticInfo> describe_statistics(const std::string& program_path);
+// `sets` are configuration assignments applied after the small default machine, e.g. the
+// fidelity level whose statistics are wanted ({"fidelity.timing=analytic", ...}).
+std::vector<StatisticInfo> describe_statistics(const std::string& program_path,
+                                               const std::vector<std::string>& sets = {});
 
 // The bit-budget table and the headline figures, as printed after a run.
 std::string bit_budget_table(const Program& program, const TimingParams& timing);

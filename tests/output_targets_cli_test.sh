@@ -40,6 +40,19 @@ ln -s submit-target.sh submit.sh
 "$bin" sweep --scene two-triangles --grid gp.count=1,2 --out sl --slurm submit.sh >/dev/null \
   || fail "--slurm through a link failed"
 [ -L submit.sh ] && grep -q sbatch submit-target.sh || fail "--slurm replaced the link"
+# /dev/stdout into a pipe: /proc/self/fd/1 links to "pipe:[N]", no path; written in place.
+"$bin" render --scene two-triangles "${small[@]}" --out r --timeline /dev/stdout | grep -q traceEvents \
+  || fail "a timeline to /dev/stdout (a pipe) did not come through"
+# A link loop is named, not followed forever.
+ln -s loop loop
+expect_error "loop: too many levels of symbolic links" render --scene two-triangles "${small[@]}" \
+  --out r --timeline loop
+# A file size limit (ulimit -f): an error naming the file, nothing left behind (SIGXFSZ ended
+# the run with its folder made and empty).
+out=$( (ulimit -f 1; "$bin" render --scene two-triangles "${small[@]}" --out fsize --timeline fsize.json 2>&1) ) \
+  && fail "a run past the file size limit succeeded"
+echo "$out" | grep -q "cannot write (File too large)" || fail "ulimit -f said: $out"
+[ -e fsize ] || [ -e fsize.json ] && fail "a run past the file size limit left $(ls -d fsize*)"
 # A socket cannot be written: refused, with nothing else written.
 if python3 -c 'import socket,sys; socket.socket(socket.AF_UNIX).bind(sys.argv[1])' sock 2>/dev/null; then
   expect_error "sock: is a socket, expected a file, a FIFO or a device" render --scene two-triangles \

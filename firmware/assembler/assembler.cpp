@@ -10,6 +10,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "common/escape.hpp"
 #include "common/read_file.hpp"
 
 namespace pp5 {
@@ -98,13 +99,23 @@ class Assembler {
   }
 
  private:
+  bool accepted_statement_ = false;  // whether any statement has been read without error
+
   template <typename... Args>
   [[noreturn]] void fail(fmt::format_string<Args...> f, Args&&... args) {
-    throw AssemblyError(fmt::format("{}:{}: {}", program_.name, line_,
-                                    fmt::format(f, std::forward<Args>(args)...)));
+    // Words from the file are untrusted: escaped and cut short (common/escape.hpp), so that
+    // a binary file or a 1 MB word prints as one readable line.
+    throw AssemblyError(
+        fmt::format("{}:{}: {}", escape_for_message(program_.name, 200), line_,
+                    escape_for_message(fmt::format(f, std::forward<Args>(args)...), 300)));
   }
 
   void statement(const std::string& text) {
+    statement_once(text);
+    accepted_statement_ = true;
+  }
+
+  void statement_once(const std::string& text) {
     const auto words = split_words(text);
     const std::string& head = words[0];
     if (head == "field" || head == "scratch") return declare_field(words);
@@ -119,6 +130,19 @@ class Assembler {
       return;
     }
     if (current_ < 0) {
+      // A first statement whose first word is not even a name: the file is not a program (a
+      // file named as firmware by mistake), and its first line is not printed back.
+      const bool name_like =
+          head.size() <= 32 &&
+          (std::isalpha(static_cast<unsigned char>(head[0])) || head[0] == '_') &&
+          std::all_of(head.begin(), head.end(), [](char c) {
+            return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.';
+          });
+      if (!accepted_statement_ && !name_like) {
+        fail(
+            "not a firmware program: its first statement is not field, scratch, output, option "
+            "or proc");
+      }
       fail("'{}' outside a procedure: expected field, scratch, output, option or proc", head);
     }
     instruction(text);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <set>
 #include <sstream>
 #include <variant>
 
@@ -623,8 +624,10 @@ void assign(MachineConfig& config, const Entry& p, const nlohmann::json& value,
   }
 }
 
+// `assigned`: the keys set so far in this document, so that one given both flat
+// ("renderer.count") and nested ({"renderer": {"count"}}) is refused like a repeated key.
 void apply(MachineConfig& config, const nlohmann::json& node, const std::string& prefix,
-           const std::string& origin) {
+           const std::string& origin, std::set<std::string>& assigned) {
   if (!node.is_object()) {
     throw ConfigError(fmt::format("{}: '{}' must be an object of parameters", origin,
                                   prefix.empty() ? "<top level>" : prefix));
@@ -632,6 +635,12 @@ void apply(MachineConfig& config, const nlohmann::json& node, const std::string&
   for (const auto& [name, value] : node.items()) {
     const std::string key = prefix.empty() ? name : prefix + "." + name;
     if (const Entry* p = find_parameter(key)) {
+      if (!assigned.insert(key).second) {
+        throw ConfigError(fmt::format(
+            "{}: key '{}' is given twice (once as a dotted name, once nested in its section); "
+            "give it once",
+            origin, key));
+      }
       assign(config, *p, value, origin);
       continue;
     }
@@ -654,7 +663,7 @@ void apply(MachineConfig& config, const nlohmann::json& node, const std::string&
       throw ConfigError(
           fmt::format("{}: unknown key '{}' (expected one of {})", origin, key, known));
     }
-    apply(config, value, key, origin);
+    apply(config, value, key, origin, assigned);
   }
 }
 
@@ -713,7 +722,8 @@ MachineConfig MachineConfig::defaults() {
 
 MachineConfig MachineConfig::from_json(const nlohmann::json& doc, const std::string& origin) {
   MachineConfig c = defaults();
-  apply(c, doc, "", origin);
+  std::set<std::string> assigned;
+  apply(c, doc, "", origin, assigned);
   validate(c, origin);
   return c;
 }

@@ -97,9 +97,15 @@ int print_stats_file(const std::string& path) {
     // parse_strict_json names the file itself; from_json does not.
     throw std::runtime_error(what.rfind(path, 0) == 0 ? what : fmt::format("{}: {}", path, what));
   }
+  // What a run at any fidelity level may write: the analytic and pixel-less levels register
+  // statistics of their own (analytic.busiest_seconds, ...).
   std::map<std::string, StatisticInfo> described;
-  for (StatisticInfo& i : describe_statistics(resolve_firmware("phong")))
-    described.emplace(i.name, std::move(i));
+  for (const std::vector<std::string>& level :
+       {std::vector<std::string>{}, fidelity_assignments("timing"),
+        fidelity_assignments("analytic")}) {
+    for (StatisticInfo& i : describe_statistics(resolve_firmware("phong"), level))
+      described.emplace(i.name, std::move(i));
+  }
   for (const StatisticInfo& i : file.infos()) {
     const auto it = described.find(stat_pattern(i.name));
     if (it == described.end()) {

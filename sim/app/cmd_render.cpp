@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 
 #include "common/parallel_for.hpp"
@@ -181,6 +182,29 @@ int run_render(RenderOptions o) {
         "warning: {} triangles were not drawn because a coefficient did not fit "
         "evaluator.coefficient_bits = {} (see 'pp5sim extremes')\n",
         overflow, config.evaluator.coefficient_bits);
+  }
+  // Every primitive dropped: the frame is the background alone, which must not pass silently
+  // (a mesh at 1e20, or scaled by 1e-30, is framed by the camera and then lost to
+  // single-precision set-up).
+  const std::int64_t triangles = static_cast<std::int64_t>(scene.mesh.triangles.size());
+  const std::int64_t spheres = static_cast<std::int64_t>(scene.spheres.size());
+  const std::int64_t dropped_triangles = stats.integer("setup.clipped_away") +
+                                         stats.integer("setup.degenerate") +
+                                         stats.integer("setup.no_pixel_centres") + overflow;
+  if (triangles + spheres > 0 && dropped_triangles >= triangles && behind + near + far >= spheres) {
+    glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    for (const Vertex& v : scene.mesh.vertices) {
+      lo = glm::min(lo, v.position);
+      hi = glm::max(hi, v.position);
+    }
+    std::cerr << fmt::format(
+        "warning: nothing was drawn: set-up dropped all {} triangles and {} spheres (above), so "
+        "the frame is the background alone{}\n",
+        triangles, spheres,
+        triangles > 0 ? fmt::format("; the scene's vertices span ({:g}, {:g}, {:g}) to ({:g}, "
+                                    "{:g}, {:g}), a size single-precision set-up may not resolve",
+                                    lo.x, lo.y, lo.z, hi.x, hi.y, hi.z)
+                      : "");
   }
   std::cout << fmt::format("\n{} {}{}{}/config.json, {}/stats.json{}\n",
                            replacing ? "wrote (replacing the previous run's)" : "wrote",

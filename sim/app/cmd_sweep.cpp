@@ -23,6 +23,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "common/escape.hpp"
 #include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 #include "firmware/assembler/assembler.hpp"
@@ -68,7 +69,9 @@ struct SweepOptions {
   std::string plot_y = "triangles_per_second";
 };
 
-std::vector<Axis> parse_grid(const std::vector<std::string>& grid) {
+// Each value is checked against `base`: the configuration with --config and --set applied,
+// which is what the point will run with.
+std::vector<Axis> parse_grid(const std::vector<std::string>& grid, const MachineConfig& base) {
   if (grid.empty()) {
     throw std::runtime_error("--grid: give at least one, e.g. --grid gp.count=1,2,4,8");
   }
@@ -96,7 +99,7 @@ std::vector<Axis> parse_grid(const std::vector<std::string>& grid) {
             fmt::format("--grid {}: value '{}' is given twice for '{}'", g, v, a.key));
       }
       // Each value must be valid on its own: the error names the key.
-      MachineConfig probe = MachineConfig::defaults();
+      MachineConfig probe = base;
       try {
         probe.set(a.key + "=" + v);
       } catch (const ConfigError& e) {
@@ -216,7 +219,10 @@ echo "$array $aggregate" > {out}/slurm-jobs.txt
 int run_aggregate(const SweepOptions& o);
 
 int run_sweep(const SweepOptions& o, const std::string& program_path) {
-  const std::vector<Axis> axes = parse_grid(o.grid);
+  // Each point's configuration is the base (file and --set) with its axes set, built when it
+  // is needed rather than all held at once.
+  const MachineConfig base = load_config(o.config_path, o.sets);
+  const std::vector<Axis> axes = parse_grid(o.grid, base);
   std::uint64_t points = 1;
   for (const Axis& a : axes) {
     if (points > kMaxSweepPoints / a.values.size()) {
@@ -227,9 +233,6 @@ int run_sweep(const SweepOptions& o, const std::string& program_path) {
     }
     points *= a.values.size();
   }
-  // Each point's configuration is the base (file and --set) with its axes set, built when it
-  // is needed rather than all held at once.
-  const MachineConfig base = load_config(o.config_path, o.sets);
   auto config_of = [&](std::uint64_t i) {
     const std::vector<std::string> values = point(axes, i);
     std::vector<std::string> sets;
@@ -622,11 +625,12 @@ double number(const std::string& text, const std::string& path, const std::strin
   try {
     std::size_t used = 0;
     const double v = std::stod(text, &used);
-    if (used == text.size()) return v;
+    // inf and nan parse, and an axis to infinity drew gigabytes of grid lines.
+    if (used == text.size() && std::isfinite(v)) return v;
   } catch (const std::exception&) {
   }
-  throw std::runtime_error(
-      fmt::format("{}: column '{}' has '{}', which is not a number", path, column, text));
+  throw std::runtime_error(fmt::format("{}: column '{}' has '{}', which is not a finite number",
+                                       path, escape_for_message(column), escape_for_message(text)));
 }
 
 std::string svg_escape(const std::string& s) {
@@ -688,6 +692,13 @@ int run_plot(const SweepOptions& o) {
   }
   const double lx0 = std::log10(x0), lx1 = std::max(std::log10(x1), lx0 + 1e-9);
   const double ly0 = std::floor(std::log10(y0)), ly1 = std::ceil(std::log10(y1) + 1e-9);
+  // Grid lines are drawn per decade: bounded before they are.
+  constexpr double kMaxDecades = 40;
+  if (ly1 - ly0 > kMaxDecades) {
+    throw std::runtime_error(
+        fmt::format("{}: {} runs from {:g} to {:g}, {} decades; the plot draws at most {}",
+                    o.plot_csv, escape_for_message(o.plot_y), y0, y1, ly1 - ly0, kMaxDecades));
+  }
   const int W = 760, H = 480, L = 90, R = 170, T = 50, B = 60;
   auto px = [&](double x) { return L + (std::log10(x) - lx0) / (lx1 - lx0) * (W - L - R); };
   auto py = [&](double y) { return H - B - (std::log10(y) - ly0) / (ly1 - ly0) * (H - T - B); };

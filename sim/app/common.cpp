@@ -118,8 +118,25 @@ void add_config_options(CLI::App& command, std::string& path, std::vector<std::s
       "--set", append(""),
       "Override one parameter, KEY=VALUE (repeatable), e.g. --set renderer.count=8 or --set "
       "frame.threshold=8192 (pp5sim config --describe lists the keys)");
+  // CLI11 runs every --set before every --param, whatever their order on the command line:
+  // a frame parameter given by both would take --param's value even where --set came last.
+  // So giving one key both ways is an error that names it.
+  auto append_params = [&sets](const std::vector<std::string>& items) {
+    for (const std::string& item : items) {
+      const std::string key = "frame." + item.substr(0, item.find('='));
+      for (const std::string& s : sets) {
+        if (s.substr(0, s.find('=')) == key) {
+          throw CLI::ValidationError(fmt::format(
+              "--param {}: {} is also given by --set {}; give a frame parameter once (--param "
+              "NAME=VALUE is short for --set frame.NAME=VALUE)",
+              escape_for_message(item), escape_for_message(key), escape_for_message(s)));
+        }
+      }
+      sets.push_back("frame." + item);
+    }
+  };
   command.add_option_function<std::vector<std::string>>(
-      "--param", append("frame."),
+      "--param", append_params,
       "Set a frame parameter, NAME=VALUE (repeatable): short for --set frame.NAME=VALUE, e.g. "
       "--param highlight_opacity=128 (pp5sim isa lists them)");
 }

@@ -104,6 +104,20 @@ class OneLineCommands : public CLI::Formatter {
   }
 };
 
+// SystemC reports an exception thrown inside a simulation process as its own error, "Error:
+// (E549) uncaught exception: MESSAGE\nIn file: kernel/sc_except.cpp:101\nIn process: ...":
+// the user gets MESSAGE, which names the input, without the kernel's frame around it.
+std::string unwrap_systemc_error(const std::string& what) {
+  const std::string tag = "uncaught exception: ";
+  const std::size_t at = what.find(tag);
+  if (what.find("(E549)") == std::string::npos || at == std::string::npos) return what;
+  std::string message = what.substr(at + tag.size());
+  const std::size_t frame = message.find("\nIn file:");
+  if (frame != std::string::npos) message.erase(frame);
+  while (!message.empty() && (message.back() == '\n' || message.back() == ' ')) message.pop_back();
+  return message;
+}
+
 #if defined(__has_feature)
 #if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
     __has_feature(memory_sanitizer)
@@ -195,7 +209,7 @@ int main(int argc, char** argv) {
                    "screen or renderer.backing_store_bits smaller\n";
       return 1;
     }
-    std::cerr << "pp5sim: error: " << e.what() << "\n";
+    std::cerr << "pp5sim: error: " << unwrap_systemc_error(e.what()) << "\n";
     return 1;
   }
 }

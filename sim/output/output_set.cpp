@@ -34,8 +34,9 @@ struct Slot {
 };
 std::array<Slot, kSlots> g_slots;
 std::array<Slot, kSlots> g_folder_slots;  // outermost first
-// While a commit moves a run's files into place, a signal waits for it to finish (the
-// handler records it and returns), so that a run's files appear together or not at all.
+// While a commit moves a run's files into place (or a temporary is created and registered),
+// a signal waits for it to finish (the handler records it and returns), so that a run's
+// files appear together or not at all and no temporary escapes the handler.
 std::atomic<bool> g_committing{false};
 std::atomic<int> g_pending_signal{0};
 
@@ -111,11 +112,17 @@ std::string write_temporary(const std::string& path, const std::string& bytes, i
   std::string name = "." + dest.filename().string() + ".XXXXXX";
   if (name.size() > NAME_MAX) name = ".pp5-output.XXXXXX";
   std::string tmpl = (dir / name).string();
+  // A signal between mkstemp and the registration would leave the new file behind: it waits
+  // (as during a commit's renames) until the file is registered.
+  g_committing.store(true);
   const int fd = ::mkstemp(tmpl.data());
+  const int create_errno = errno;
+  if (fd >= 0) slot = register_temporary(tmpl);
+  end_commit();
   if (fd < 0) {
-    throw OutputError(path + ": cannot create a temporary file beside it (" + reason(errno) + ")");
+    throw OutputError(path + ": cannot create a temporary file beside it (" + reason(create_errno) +
+                      ")");
   }
-  slot = register_temporary(tmpl);
   auto fail = [&](const std::string& what, int err) {
     ::close(fd);
     ::unlink(tmpl.c_str());
@@ -155,6 +162,19 @@ struct Target {
 };
 
 Target resolve_output_target(const std::string& named) {
+  // What the name leads to, links followed: a link to a FIFO, a device or a pipe
+  // (/dev/stdout is /proc/self/fd/1, whose target "pipe:[N]" is no path) is written in place
+  // through the name itself.
+  {
+    struct stat st {};
+    if (::stat(named.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+      if (S_ISDIR(st.st_mode)) throw OutputError(named + ": is a folder, expected a file to write");
+      if (S_ISSOCK(st.st_mode))
+        throw OutputError(named + ": is a socket, expected a file, a FIFO or a device to write");
+      return {named, true};
+    }
+    if (errno == ELOOP) throw OutputError(named + ": too many levels of symbolic links");
+  }
   fs::path p(named);
   for (int hops = 0;; ++hops) {
     struct stat st {};
@@ -369,6 +389,9 @@ bool prepare_output_folder(const std::string& dir, const std::string& option) {
 void install_signal_cleanup() {
   static std::atomic<bool> installed{false};
   if (installed.exchange(true)) return;
+  // A file size limit (ulimit -f) makes write() fail with EFBIG, which the writer reports and
+  // cleans up after, instead of SIGXFSZ ending the process with its folder half made.
+  ::signal(SIGXFSZ, SIG_IGN);
   for (int signal : {SIGINT, SIGTERM, SIGHUP}) {
     struct sigaction action {};
     action.sa_handler = remove_temporaries_and_reraise;

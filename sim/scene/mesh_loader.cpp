@@ -189,6 +189,8 @@ void check_off(std::string_view data, const std::string& origin, const LoadLimit
 // early as zeros (text) or whatever follows (binary). So the header lines must be ones PLY
 // knows, and the body is walked as assimp will read it: every value present, every word a
 // number, every list at most max_polygon_vertices long.
+constexpr int kMaxPlyHeaderLines = 1000;
+
 void check_ply(std::string_view data, const std::string& origin, const LoadLimits& limits) {
   static const std::pair<const char*, int> sizes[] = {
       {"char", 1},   {"int8", 1},    {"uchar", 1},  {"uint8", 1},  {"short", 2}, {"int16", 2},
@@ -227,6 +229,14 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
     std::string key, a, b, c, name;
     words >> key >> a >> b >> c >> name;
     ++line;
+    // assimp's header reader takes super-quadratic time in its lines (a 2 MB header of
+    // comments ran for minutes); exporters write a few dozen.
+    if (line > kMaxPlyHeaderLines) {
+      throw MeshError(fmt::format(
+          "{}: the header has more than {} lines before 'end_header' (comments included); "
+          "assimp's PLY reader slows super-quadratically with them",
+          origin, kMaxPlyHeaderLines));
+    }
     if (data.substr(start, end - start).find('\0') != std::string_view::npos) {
       throw MeshError(fmt::format("{}:{}: a NUL byte in the header", origin, line));
     }

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
+#include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -533,6 +534,23 @@ Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {
   std::string ext = p.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   const bool tessellated = options.tessellation_u != 0 || options.tessellation_v != 0;
+  // A bare built-in name is the built-in scene, never a file or folder of that name in the
+  // current directory (which once shadowed it and was then refused as "not a mesh file");
+  // a file is named by a path (./torus) or its extension. The shadowing entry is said.
+  {
+    const std::vector<std::string> builtin = builtin_scene_names();
+    if (name_or_path.find('/') == std::string::npos &&
+        std::find(builtin.begin(), builtin.end(), name_or_path) != builtin.end()) {
+      std::error_code error;
+      if (fs::exists(name_or_path, error)) {
+        std::cerr << fmt::format(
+            "warning: '{}' is the built-in scene; the {} of that name in the current "
+            "directory is not read (name it ./{} to use it)\n",
+            name_or_path, fs::is_directory(name_or_path, error) ? "folder" : "file", name_or_path);
+      }
+      return make_builtin_scene(name_or_path, options);
+    }
+  }
   if (tessellated && (ext == ".json" || is_mesh_file(name_or_path))) {
     throw std::invalid_argument(fmt::format(
         "--tessellation: {} is a file, whose geometry is its own; only the built-in torus, "
