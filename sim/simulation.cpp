@@ -23,7 +23,7 @@
 #include "models/renderer/renderer.hpp"
 #include "models/ring/ring.hpp"
 #include "sim/kernel.hpp"
-#include "sim/output/run_report.hpp"
+#include "sim/run_report.hpp"
 
 namespace pp5 {
 
@@ -803,7 +803,7 @@ std::vector<StatisticInfo> describe_statistics(const std::string& program_path,
 }
 
 std::string bit_budget_table(const Program& program, const TimingParams& timing) {
-  // The table itself comes from the report model (sim/output/run_report.hpp).
+  // The table itself comes from the report model (sim/run_report.hpp).
   std::string out = report::text(bit_budget(program));
   const OwnedValues none{};
   for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {

@@ -12,7 +12,7 @@
 #include "models/machine.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
-#include "sim/output/run_report.hpp"
+#include "sim/run_report.hpp"
 #include "sim/scene/order.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
@@ -34,7 +34,7 @@ struct RenderOptions {
   std::vector<int> tessellation;
   std::string timeline;
   std::string order = "given";
-  bool report = false;  // also OUT/report.html (sim/output/run_report.hpp)
+  bool report = false;  // also OUT/report.html (sim/run_report.hpp)
 };
 
 // What the scene asks for that the program would ignore, one warning each (printed to stderr

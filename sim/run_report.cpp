@@ -1,4 +1,4 @@
-#include "sim/output/run_report.hpp"
+#include "sim/run_report.hpp"
 
 #include <fmt/format.h>
 
