@@ -69,7 +69,7 @@ const Workload& workload() {
 // The loop of RendererBoard::run before the observer hook, kept here as the yardstick.
 ArrayCycles baseline_run(RendererBoard& board, const ProcedureCode& procedure,
                          const PacketValues& values, const TimingParams& timing) {
-  ExecutionContext ctx{board.array(), values, timing.fraction_bits};
+  ExecutionContext ctx{board.array(), values, timing.fraction_bits, timing.multiply_window};
   ArrayCycles cycles{};
   for (const Instruction& ins : procedure.code) {
     const InstructionInfo& info = instruction_info(ins.op);

@@ -578,7 +578,15 @@ TEST_CASE("The GP cost model counts the highlighting expressions like any other 
     w.packet_words = 1 + w.expressions.count() * 3 * 2;  // 40-bit coefficients, 32-bit words
     return w;
   };
-  const GpWorkload threshold = workload("threshold");
+  GpWorkload threshold = workload("threshold");
+  // threshold's depth_minus_threshold (depth's plane, offset by one integer add) set aside:
+  // the rest is what epsilon adds its slopes to.
+  REQUIRE(threshold.expressions.test(static_cast<int>(Expression::depth_minus_threshold)));
+  const OpCounts offset = I860Work::expression_setup(Expression::depth_minus_threshold);
+  CHECK(offset.floating() == 0);
+  CHECK(offset.core() > 0);
+  threshold.expressions.reset(static_cast<int>(Expression::depth_minus_threshold));
+  threshold.packet_words -= 3 * 2;
   const GpWorkload eyez = workload("threshold_eyez");
   const GpWorkload epsilon = workload("epsilon");
   REQUIRE(epsilon.expressions.test(static_cast<int>(Expression::slope_x)));

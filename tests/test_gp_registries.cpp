@@ -128,6 +128,32 @@ TEST_CASE("GeometryEngine::setup computes only the expressions asked for", "[gp_
   CHECK(some.values.expressions[static_cast<std::size_t>(Expression::flat_green)].F != 0);
 }
 
+TEST_CASE("depth_minus/plus_threshold are depth's plane offset by the frame's threshold",
+          "[gp_registry]") {
+  Scene scene = make_builtin_scene("two-triangles");
+  scene.parameters["threshold"] = 12345;
+  const GeometryEngine engine(small_params(), scene);
+  ExpressionSet needed;
+  needed.set(static_cast<int>(Expression::depth));
+  needed.set(static_cast<int>(Expression::depth_minus_threshold));
+  needed.set(static_cast<int>(Expression::depth_plus_threshold));
+  CHECK(needs_frame_parameters(needed));
+  SetupCounts counts;
+  std::vector<ScreenTriangle> screen;
+  engine.transform(0, screen, counts);
+  REQUIRE_FALSE(screen.empty());
+  SetupResult r;
+  REQUIRE(engine.setup(screen[0], needed, r, counts));
+  const auto at = [&](Expression e) { return r.values.expressions[static_cast<std::size_t>(e)]; };
+  const std::int64_t offset = std::int64_t{12345} << small_params().fraction_bits;
+  for (const auto& [e, sign] : {std::pair{Expression::depth_minus_threshold, -1},
+                                std::pair{Expression::depth_plus_threshold, 1}}) {
+    CHECK(at(e).D == at(Expression::depth).D);
+    CHECK(at(e).E == at(Expression::depth).E);
+    CHECK(at(e).F == at(Expression::depth).F + sign * offset);
+  }
+}
+
 TEST_CASE("primitive kinds: the triangle kind runs the triangle procedure on the mesh",
           "[gp_registry]") {
   const auto& kinds = primitive_kinds();

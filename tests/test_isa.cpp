@@ -297,6 +297,38 @@ TEST_CASE("cycle costs follow the documented formulas", "[isa]") {
   CHECK(cost_of("bsst w, 3") == 2 * 64);
 }
 
+TEST_CASE("the windowed multiply adds only the partial product's window", "[isa]") {
+  // renderer.multiply_microcode: the issue's figures, a 14 x 14 square into 29 bits and a
+  // 16 x 16 one into 32; a signed a needs the full pass (its sign reaches the top); mac is
+  // the same under both.
+  const Program p = assemble(
+      "field a 14\nfield b 14\nfield s 29\nfield x 16\nfield y 16\nfield t 32\n"
+      "field c 8 signed\nfield d 20\nfield red 8\nfield green 8\nfield blue 8\n"
+      "output red green blue\nproc triangle\n  mul s, a, b\n  mul t, x, y\n"
+      "  mul d, c, red\n  mul d, red, c\n  mac d, red, 255\nend\n",
+      "window", AssemblerOptions{});
+  const auto& code = p.procedure(Procedure::triangle).code;
+  REQUIRE(code.size() == 5);
+  TimingParams full;
+  TimingParams window;
+  window.multiply_window = true;
+  const OwnedValues values;
+  auto cost = [&](int k, const TimingParams& t) {
+    return instruction_cost(code[k], t, values).count;
+  };
+  CHECK(cost(0, full) == 344);
+  CHECK(cost(0, window) == 29 + 14 * 15);  // 239
+  CHECK(cost(1, full) == 424);
+  CHECK(cost(1, window) == 32 + 16 * 17);   // 304
+  CHECK(cost(2, window) == cost(2, full));  // signed a
+  // An unsigned a by a signed b: 20 passes (b's sign extends), each at most 9 bits.
+  std::uint64_t passes = 20;
+  for (int j = 0; j < 20; ++j) passes += static_cast<std::uint64_t>(std::min(20 - j, 9));
+  CHECK(cost(3, window) == passes);
+  CHECK(cost(3, full) == 20 + steps(20, 20));
+  CHECK(cost(4, window) == cost(4, full));
+}
+
 TEST_CASE("the Renderer board charges the table's costs", "[isa]") {
   const Program p = assemble_file(test::kProgramsDir + "phong.pp5", AssemblerOptions{});
   RendererBoardParams params;
@@ -633,7 +665,9 @@ TEST_CASE("every registered backend runs the instruction table as the bit-sliced
           const Instruction ins = make.next(ref.array.enable_depth());
           INFO("packet " << packet << " instruction " << n << ": " << ins.operands[0].field.lo
                          << " " << static_cast<int>(ins.op));
-          ExecutionContext ctx{*backend, values, params.fraction_bits};
+          // Even seeds run mul's windowed microcode: the reference's full product must come
+          // out all the same.
+          ExecutionContext ctx{*backend, values, params.fraction_bits, seed % 2 == 0};
           instruction_info(ins.op).execute(ins, ctx);
           ref.execute(ins, values);
           ++ops[static_cast<std::size_t>(ins.op)];
@@ -714,7 +748,7 @@ TEST_CASE("backends follow the interface's error contract", "[isa][backend]") {
     CHECK_THROWS_AS(b->store_to_backing(Field{0, 16, false},
                                         params.array.backing_store_bits / params.array.block_bits),
                     std::out_of_range);
-    CHECK_THROWS_AS(b->multiply(Field{0, 8, false}, Field{4, 8, false}, Field{40, 8, false}),
+    CHECK_THROWS_AS(b->multiply(Field{0, 8, false}, Field{4, 8, false}, Field{40, 8, false}, false),
                     std::invalid_argument);
     CHECK_THROWS_AS(b->multiply_accumulate(Field{0, 8, false}, Field{4, 8, false}, 3),
                     std::invalid_argument);

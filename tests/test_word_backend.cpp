@@ -153,8 +153,9 @@ class Scoreboard {
         const Instruction ins = next();
         const std::string what =
             fmt::format("packet {} instruction {}: {}", k, n, disassemble(ins));
-        ExecutionContext cb{*bit_, values, p_.fraction_bits};
-        ExecutionContext cw{*word_, values, p_.fraction_bits};
+        // Odd packets run mul's windowed microcode on both backends.
+        ExecutionContext cb{*bit_, values, p_.fraction_bits, k % 2 == 1};
+        ExecutionContext cw{*word_, values, p_.fraction_bits, k % 2 == 1};
         instruction_info(ins.op).execute(ins, cb);
         instruction_info(ins.op).execute(ins, cw);
         ++executed_[static_cast<std::size_t>(ins.op)];

@@ -53,6 +53,13 @@ struct PixelBackendParams {
   int fraction_bits = 12;  // evaluator.fraction_bits: the fraction of every expression
 };
 
+// The bits one pass of a windowed mul adds over (PixelBackend::multiply): width(a) + 1 for an
+// unsigned a, or 0 where the pass must run to the destination's top (no window, or a signed
+// a, whose sign extension reaches every bit above it).
+inline int multiply_window_bits(const Field& a, bool window) {
+  return window && !a.is_signed ? a.width + 1 : 0;
+}
+
 class PixelBackend {
  public:
   virtual ~PixelBackend() = default;
@@ -90,8 +97,11 @@ class PixelBackend {
   virtual void invert(const Field& dst) = 0;
   // cmp: E <- E & (a cond b).
   virtual void compare(const Field& a, const Source& b, Compare cond) = 0;
-  // mul: dst <- a * b; mac: dst <- dst + a * k. Modulo 2^width(dst).
-  virtual void multiply(const Field& dst, const Field& a, const Field& b) = 0;
+  // mul: dst <- a * b; mac: dst <- dst + a * k. Modulo 2^width(dst). With `window`
+  // (renderer.multiply_microcode = window), a pass for bit j of b adds over bits j to
+  // j + width(a) of dst only, if a is unsigned: the carry out of that window is always 0, as
+  // the sum of the passes before is below 2^(j + width(a)).
+  virtual void multiply(const Field& dst, const Field& a, const Field& b, bool window) = 0;
   virtual void multiply_accumulate(const Field& dst, const Field& a, std::int64_t k) = 0;
 
   // bsst / bsld: backing store from block `block` on <-> field, every pixel.

@@ -115,6 +115,8 @@ enum class Expression {
   sphere_red,
   sphere_green,
   sphere_blue,
+  depth_minus_threshold,
+  depth_plus_threshold,
   count
 };
 
@@ -183,6 +185,10 @@ inline constexpr ExpressionInfo kExpressions[] = {
     {"sphere_red", "a sphere's unlit material red, 0..255, constant", true},
     {"sphere_green", "a sphere's material green, 0..255, constant", true},
     {"sphere_blue", "a sphere's material blue, 0..255, constant", true},
+    {"depth_minus_threshold",
+     "depth - threshold (the frame parameter, folded into the plane's constant term by the GP): "
+     "-threshold .. 2^gp.depth_bits - 1, negative near the near plane"},
+    {"depth_plus_threshold", "depth + threshold, likewise: up to 2^gp.depth_bits - 1 + threshold"},
 };
 static_assert(sizeof(kExpressions) / sizeof(kExpressions[0]) ==
               static_cast<std::size_t>(Expression::count));

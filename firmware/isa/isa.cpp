@@ -32,6 +32,13 @@ ArrayCycles dst_width(const Instruction& i, const TimingParams&, const PacketVal
   return ArrayCycles(width_of(i.operands[0]));
 }
 
+// The bits one pass of mul adds over (PixelBackend::multiply).
+int multiply_pass_width(int dst_width, const Field& a, int j, bool window) {
+  const int rest = dst_width - j;
+  const int bits = multiply_window_bits(a, window);
+  return bits > 0 ? std::min(rest, bits) : rest;
+}
+
 std::uint64_t magnitude(std::int64_t k) {
   return k < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(k) : static_cast<std::uint64_t>(k);
 }
@@ -41,8 +48,9 @@ constexpr const char* kEvaluatorOrder =
     "the evaluator's bit order and latency (assumed: the fraction bits stream first, LSB first, "
     "after evaluator.latency_cycles; not published)";
 constexpr const char* kMultiplyMicrocode =
-    "the multiply's microcode (a choice of the simulator: shift-and-add, one pass per multiplier "
-    "bit over the destination from that bit up; mac skips a constant's zero bits; not published)";
+    "the multiply's microcode (a choice of the simulator, renderer.multiply_microcode: "
+    "shift-and-add, one pass per multiplier bit over the destination from that bit up, or over "
+    "the partial product's window only; mac skips a constant's zero bits; not published)";
 constexpr const char* kBackingStore =
     "the backing-store transfer time per block (assumed: "
     "renderer.backing_store_cycles_per_block)";
@@ -130,18 +138,23 @@ std::vector<InstructionInfo> make_table() {
       {Opcode::mul, "mul", false, "FRR", "mul dst, a, b",
        "dst <- a * b modulo 2^width(dst), by shift-and-add over the bits of b; dst must not "
        "overlap a or b",
-       "width(dst) + sum over the n bits of b that reach dst of (width(dst) - j), n = "
-       "min(width(dst), width(b)), or width(dst) if b is signed",
-       [](const I& i, const T&, const P&) {
+       "width(dst) + sum over the n bits j of b that reach dst of the pass's width: width(dst) - "
+       "j (renderer.multiply_microcode = full, or a signed a), else min(width(dst) - j, "
+       "width(a) + 1) (window); n = min(width(dst), width(b)), or width(dst) if b is signed",
+       [](const I& i, const T& t, const P&) {
          const int w = width_of(i.operands[0]);
+         const Field& a = i.operands[1].field;
          const Field& b = i.operands[2].field;
          const int n = b.is_signed ? w : std::min(w, b.width);
          std::uint64_t cycles = static_cast<std::uint64_t>(w);
-         for (int j = 0; j < n; ++j) cycles += static_cast<std::uint64_t>(w - j);
+         for (int j = 0; j < n; ++j) {
+           cycles += static_cast<std::uint64_t>(multiply_pass_width(w, a, j, t.multiply_window));
+         }
          return ArrayCycles(cycles);
        },
        [](const I& i, X& c) {
-         c.pixels.multiply(i.operands[0].field, i.operands[1].field, i.operands[2].field);
+         c.pixels.multiply(i.operands[0].field, i.operands[1].field, i.operands[2].field,
+                           c.multiply_window);
        },
        kMultiplyMicrocode},
       {Opcode::mac, "mac", false, "FRK", "mac dst, a, k",

@@ -67,6 +67,8 @@ struct TimingParams {
   int evaluator_latency = 8;
   int block_bits = 32;
   int backing_store_cycles_per_block = 64;
+  // renderer.multiply_microcode = window: mul adds only the partial product's window.
+  bool multiply_window = false;
 };
 
 using ExpressionValues = std::array<QuadraticCoefficients, static_cast<int>(Expression::count)>;
@@ -201,7 +203,8 @@ struct FrameValues {
 struct ExecutionContext {
   PixelBackend& pixels;
   const PacketValues& values;
-  int fraction_bits;  // evaluator.fraction_bits: a broadcast expression's integer part
+  int fraction_bits;             // evaluator.fraction_bits: a broadcast expression's integer part
+  bool multiply_window = false;  // renderer.multiply_microcode = window (TimingParams)
 };
 
 struct InstructionInfo {

@@ -378,6 +378,19 @@ const std::vector<Entry>& parameter_table() {
           "'Renderers can be reassigned to any region' (P); the policy is not given: static or "
           "dynamic",
           "renderer.balancing=static", "renderer.balancing=dynamic"),
+      assumed(
+          {"renderer.multiply_microcode", "mode", "A", 0, 0, 0,
+           "The multiply's microcode (mul; mac is unaffected). 'full': one pass per multiplier "
+           "bit j, adding over the destination from bit j to its top. 'window': a pass adds only "
+           "the partial product's window, bits j to j + width(a) (the carry out of an unsigned "
+           "a's top bit is the last bit it can reach, as the sum so far is below 2^(j + "
+           "width(a))); a signed a still needs the full pass. The product is the same; only the "
+           "time differs.",
+           [](MachineConfig& c) -> Ref { return choice(&c.renderer.multiply_microcode); },
+           "full|window"},
+          "the array's multiply microcode is not published: the plain shift-and-add (full) or "
+          "the windowed pass a careful microcoder would write (window)",
+          "renderer.multiply_microcode=full", "renderer.multiply_microcode=window"),
       assumed({"renderer.packet_overhead_cycles", "array cycles", "A", 8, 0, 100000,
                "Controller cycles to decode one instruction packet and start its procedure.",
                [](MachineConfig& c) -> Ref { return &c.renderer.packet_overhead_cycles; }},
@@ -854,6 +867,11 @@ std::string name_of(MachineConfig::Renderer::Balancing balancing) {
 
 std::string name_of(MachineConfig::Gp::OverheadForm form) {
   return split_choices(find_parameter("gp.overhead_form")->choices)[static_cast<std::size_t>(form)];
+}
+
+std::string name_of(MachineConfig::Renderer::MultiplyMicrocode microcode) {
+  return split_choices(
+      find_parameter("renderer.multiply_microcode")->choices)[static_cast<std::size_t>(microcode)];
 }
 
 std::string name_of(MachineConfig::Gp::Multipass multipass) {

@@ -82,6 +82,10 @@ struct MachineConfig {
     int queue_words = 0;
     enum class Balancing { static_, dynamic };  // "static" is a keyword
     Balancing balancing = Balancing::static_;
+    // The multiply's microcode (mul): every pass adds over the destination from its bit up
+    // (full), or only over the partial product's window (window).
+    enum class MultiplyMicrocode { full, window };
+    MultiplyMicrocode multiply_microcode = MultiplyMicrocode::full;
   } renderer;
   struct Evaluator {
     int coefficient_bits = 0;
@@ -148,6 +152,7 @@ struct MachineConfig {
 // The names of the choice values, as the configuration and stats.json spell them.
 std::string name_of(MachineConfig::Gp::Code code);
 std::string name_of(MachineConfig::Renderer::Balancing balancing);
+std::string name_of(MachineConfig::Renderer::MultiplyMicrocode microcode);
 std::string name_of(MachineConfig::Gp::Multipass multipass);
 std::string name_of(MachineConfig::Gp::OverheadForm form);
 std::string name_of(MachineConfig::Gp::SendOrder order);

@@ -29,6 +29,18 @@ bool depth(const SetupContext& c, QuadraticCoefficients& out) {
   return c.plane({c.depth(0), c.depth(1), c.depth(2)}, out);
 }
 
+// Depth's plane with the frame's threshold folded into its constant term, -1 (depth minus
+// the threshold) or +1 (plus it): a firmware compares depth with z +- threshold in one qcmp
+// instead of forming z +- threshold per pixel. The value leaves the depth range near the near
+// (far) plane: a program compares it with a field one bit wider and signed.
+template <int sign>
+bool depth_threshold(const SetupContext& c, QuadraticCoefficients& out) {
+  if (!depth(c, out)) return false;
+  const std::int64_t threshold = (*c.frame)[static_cast<int>(Parameter::threshold)];
+  out.F += sign * threshold * static_cast<std::int64_t>(c.f_scale);
+  return fits(out.F, c.params.coefficient_bits);
+}
+
 bool eye_depth(const SetupContext& c, QuadraticCoefficients& out) {
   // Eye-space depth mapped linearly from [near, far] to the depth range, then a plane
   // through the three vertices in screen space: exact at the vertices, but eye depth is not
@@ -130,6 +142,9 @@ constexpr OpCounts kEdgeCost{1 + 1, 2, 0, 0, 2 + 2, 1, 1};
 // likewise (3 multiplies, 1 subtract each); C = a0 - A x0 - B y0; scale to fixed point (3
 // multiplies) and convert (3); clamp at the vertices (3 compares, 1 branch).
 constexpr OpCounts kPlaneCost{2 + 1 + 1 + 2 + 3 + 3, 3 + 3 + 2 + 3, 3, 0, 2, 1, 1};
+// Depth's plane offset by a frame parameter: the plane as `depth` (a program naming one of
+// these also loads depth, whose plane the GP then has), and one integer add to its constant.
+constexpr OpCounts kDepthOffsetCost{0, 0, 0, 0, 1, 0, 0};
 // A constant: C = the face-lit value, converted to fixed point.
 constexpr OpCounts kConstantCost{1, 1, 0, 0, 0, 0, 0};
 // A depth slope is a constant, but it is the depth plane's gradient: the same work as a
@@ -184,6 +199,9 @@ constexpr std::array<ExpressionEntry, static_cast<int>(Expression::count)> kRegi
     {E::sphere_red, F::constant, kConstantCost, false, sphere_colour<0>},
     {E::sphere_green, F::constant, kConstantCost, false, sphere_colour<1>},
     {E::sphere_blue, F::constant, kConstantCost, false, sphere_colour<2>},
+    {E::depth_minus_threshold, F::linear, kDepthOffsetCost, false, depth_threshold<-1>, false,
+     true},
+    {E::depth_plus_threshold, F::linear, kDepthOffsetCost, false, depth_threshold<+1>, false, true},
 }};
 
 constexpr bool in_enum_order() {
@@ -369,6 +387,13 @@ const std::array<ExpressionEntry, static_cast<int>(Expression::count)>& expressi
 bool needs_adjacency(const ExpressionSet& set) {
   for (const ExpressionEntry& e : kRegistry) {
     if (e.needs_adjacency && set.test(static_cast<int>(e.id))) return true;
+  }
+  return false;
+}
+
+bool needs_frame_parameters(const ExpressionSet& set) {
+  for (const ExpressionEntry& e : kRegistry) {
+    if (e.reads_frame && set.test(static_cast<int>(e.id))) return true;
   }
   return false;
 }

@@ -58,6 +58,9 @@ struct SetupContext {
   const Mesh* mesh = nullptr;
   // Where an entry counts what it decided (SetupCounts::sides); null when nobody counts.
   SetupCounts* counts = nullptr;
+  // The frame's parameters (light 0's), set when a needed expression folds one in
+  // (ExpressionEntry::reads_frame); null otherwise.
+  const ParameterValues* frame = nullptr;
   // The sphere being set up (the sphere kind, models/gp/sphere.hpp), or null for a triangle:
   // only the sphere_* entries read it, and only the sphere kind asks for them.
   const ScreenSphere* sphere = nullptr;
@@ -108,6 +111,8 @@ struct ExpressionEntry {
   // triangle that snapping flattens to zero area (its attribute planes then take their
   // gradients from the unsnapped positions; area2 is 0 in its context).
   bool widens = false;
+  // The expression folds a frame parameter in (SetupContext::frame).
+  bool reads_frame = false;
 
   const char* name() const { return kExpressions[static_cast<int>(id)].name; }
   const char* meaning() const { return kExpressions[static_cast<int>(id)].meaning; }
@@ -121,6 +126,8 @@ inline const ExpressionEntry& expression_entry(Expression e) {
 bool needs_adjacency(const ExpressionSet& set);
 // True if any expression in `set` widens the bounding box (ExpressionEntry::widens).
 bool widens_bounds(const ExpressionSet& set);
+// True if any expression in `set` reads the frame's parameters (ExpressionEntry::reads_frame).
+bool needs_frame_parameters(const ExpressionSet& set);
 
 // v rounded to `bits` significant bits (to nearest, ties to even, symmetric about 0): what
 // the GP keeps of a coefficient it sends (gp.significand_bits); v itself at 62 or more.

@@ -218,6 +218,7 @@ bool GeometryEngine::setup(const ScreenTriangle& t, const ExpressionSet& needed,
   const int s = params_.subpixel_bits;
   out.back = t.back;
   SetupContext c{params_, scene_.camera, t};
+  if (needs_frame_parameters(needed)) c.frame = &setup_parameters();
   c.scale = std::int64_t{1} << s;
   c.half = c.scale / 2;
   for (int k = 0; k < 3; ++k) {
@@ -367,6 +368,13 @@ std::array<std::int64_t, static_cast<int>(Parameter::count)> GeometryEngine::fra
   at(Parameter::normal_epsilon_scale) =
       std::min<std::int64_t>(std::llround(d * d * s * s / 256.0), (std::int64_t{1} << 30) - 1);
   return p;
+}
+
+const ParameterValues& GeometryEngine::setup_parameters() const {
+  std::call_once(setup_parameters_once_, [this] {
+    if (lights() > 0) setup_parameters_ = frame_parameters(0);
+  });
+  return setup_parameters_;
 }
 
 FrameValues GeometryEngine::frame_values() const {

@@ -124,6 +124,9 @@ class GeometryEngine {
   // light's.
   std::array<std::int64_t, static_cast<int>(Parameter::count)> frame_parameters(
       int light = 0) const;
+  // frame_parameters(0), computed on the first call and kept (all zero for a scene without
+  // lights): what set-up reads when an expression folds a frame parameter in.
+  const ParameterValues& setup_parameters() const;
   int lights() const { return static_cast<int>(light_eye_.size()); }
   // The frame's and each light's values (expressions zero), from frame_parameters(k).
   FrameValues frame_values() const;
@@ -159,6 +162,8 @@ class GeometryEngine {
   std::vector<glm::dvec3> half_eye_;
   DisplayList display_list_;
   mutable std::once_flag adjacency_once_;
+  mutable std::once_flag setup_parameters_once_;
+  mutable ParameterValues setup_parameters_{};
   mutable std::once_flag vertex_views_once_;
   mutable std::vector<VertexView> vertex_views_;
   mutable MeshAdjacency adjacency_;

@@ -35,6 +35,8 @@ TimingParams timing_params(const MachineConfig& c) {
   t.evaluator_latency = c.evaluator.latency_cycles;
   t.block_bits = c.renderer.block_bits;
   t.backing_store_cycles_per_block = c.renderer.backing_store_cycles_per_block;
+  t.multiply_window =
+      c.renderer.multiply_microcode == MachineConfig::Renderer::MultiplyMicrocode::window;
   return t;
 }
 

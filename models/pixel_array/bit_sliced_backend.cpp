@@ -98,9 +98,9 @@ void BitSlicedBackend::compare(const Field& a, const Source& b, Compare cond) {
   array_.compare(array_.bits_of(a), source_bits(b), cond);
 }
 
-void BitSlicedBackend::multiply(const Field& dst, const Field& a, const Field& b) {
+void BitSlicedBackend::multiply(const Field& dst, const Field& a, const Field& b, bool window) {
   settle();
-  array_.multiply(dst, array_.bits_of(a), array_.bits_of(b));
+  array_.multiply(dst, array_.bits_of(a), array_.bits_of(b), multiply_window_bits(a, window));
 }
 
 void BitSlicedBackend::multiply_accumulate(const Field& dst, const Field& a, std::int64_t k) {

@@ -65,7 +65,7 @@ class BitSlicedBackend final : public PixelBackend {
     array_.invert(dst);
   }
   void compare(const Field& a, const Source& b, Compare cond) override;
-  void multiply(const Field& dst, const Field& a, const Field& b) override;
+  void multiply(const Field& dst, const Field& a, const Field& b, bool window) override;
   void multiply_accumulate(const Field& dst, const Field& a, std::int64_t k) override;
   // Backing-store transfers and scalar reads and writes of memory ignore E: what is held
   // back stays held back.

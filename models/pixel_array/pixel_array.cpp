@@ -227,14 +227,15 @@ void PixelArray::check_no_overlap(const Field& dst, const Bits& src, const char*
 
 // dst[j..] += (a << j) masked by `gate` (per pixel), under E; the carry register holds the
 // chain. `negate` adds the two's complement instead.
-void PixelArray::shifted_add(const Field& dst, const Bits& a, int j, const Word* gate,
-                             bool negate) {
+void PixelArray::shifted_add(const Field& dst, const Bits& a, int j, const Word* gate, bool negate,
+                             int end) {
+  const int top = end > 0 ? std::min(end, dst.width) : dst.width;
   const WordRange r = active_words();
   const Word* e = enable_.data();
   Word* c = carry_.data();
   const Word flip = negate ? kAllOnes : 0;
   for (int w = r.begin; w < r.end; ++w) c[w] = gate ? (flip & gate[w]) : flip;
-  for (int i = j; i < dst.width; ++i) {
+  for (int i = j; i < top; ++i) {
     const Word* x = a.bit(i - j);
     Word* d = plane(dst.lo + i);
     for (int w = r.begin; w < r.end; ++w) {
@@ -247,7 +248,7 @@ void PixelArray::shifted_add(const Field& dst, const Bits& a, int j, const Word*
   }
 }
 
-void PixelArray::multiply(const Field& dst, const Bits& a, const Bits& b) {
+void PixelArray::multiply(const Field& dst, const Bits& a, const Bits& b, int window) {
   check_field(dst, geometry_.memory_bits, "mul");
   check_no_overlap(dst, a, "mul");
   check_no_overlap(dst, b, "mul");
@@ -259,7 +260,7 @@ void PixelArray::multiply(const Field& dst, const Bits& a, const Bits& b) {
   for (int j = 0; j < dst.width; ++j) {
     const Word* bj = b.bit(j);
     if (bj == zeros()) continue;  // a bit beyond an unsigned multiplier adds nothing
-    shifted_add(dst, a, j, bj, false);
+    shifted_add(dst, a, j, bj, false, window > 0 ? j + window : 0);
   }
 }
 

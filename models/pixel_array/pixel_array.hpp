@@ -78,8 +78,10 @@ class PixelArray {
   void sub(const Field& dst, const Bits& a, const Bits& b);  // dst = a - b
   void logic(const Field& dst, const Bits& a, const Bits& b, Logic op);
   void invert(const Field& dst);
-  // dst = a * b (modulo 2^dst.width); dst must not overlap a or b.
-  void multiply(const Field& dst, const Bits& a, const Bits& b);
+  // dst = a * b (modulo 2^dst.width); dst must not overlap a or b. A pass for bit j of b adds
+  // over dst's bits j and up, or, with window > 0, over bits j to j + window - 1 only (the
+  // carry out of the window is dropped: multiply_window_bits says when none can arise).
+  void multiply(const Field& dst, const Bits& a, const Bits& b, int window = 0);
   // dst += a * k for a broadcast constant k, as shift-and-add over the set bits of |k|;
   // dst must not overlap a.
   void multiply_accumulate(const Field& dst, const Bits& a, std::int64_t k);
@@ -110,7 +112,9 @@ class PixelArray {
   // `src`, with its extension plane copied aside if it lies inside `dst` (slot 0 or 1).
   Bits stable(const Bits& src, const Field& dst, int slot);
   void add_walk(const Field& dst, const Bits& a, const Bits& b, bool subtract);
-  void shifted_add(const Field& dst, const Bits& a, int j, const Word* gate, bool negate);
+  // Bits j to end - 1 of dst (end <= 0: to its top).
+  void shifted_add(const Field& dst, const Bits& a, int j, const Word* gate, bool negate,
+                   int end = 0);
   Word* backing_plane(int bit);
 
   PixelArrayGeometry geometry_;

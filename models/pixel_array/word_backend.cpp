@@ -1023,7 +1023,7 @@ bool overlaps(const Field& a, const Field& b) {
 }
 }  // namespace
 
-void WordBackend::multiply(const Field& dst, const Field& a, const Field& b) {
+void WordBackend::multiply(const Field& dst, const Field& a, const Field& b, bool window) {
   materialize();
   check_field(a, "operand");
   check_field(b, "operand");
@@ -1031,12 +1031,27 @@ void WordBackend::multiply(const Field& dst, const Field& a, const Field& b) {
   if (overlaps(dst, a) || overlaps(dst, b)) {
     throw std::invalid_argument("mul: destination overlaps a source");
   }
+  const int bits = multiply_window_bits(a, window);
   u64* x = scratch().s0.data();
   u64* y = scratch().s1.data();
   for (const Range& r : spans_) {
     load(memory_.data(), a, r, x, true);
     load(memory_.data(), b, r, y, true);
-    for (int p = r.begin; p < r.end; ++p) x[p] *= y[p];
+    if (bits == 0) {
+      for (int p = r.begin; p < r.end; ++p) x[p] *= y[p];
+    } else {
+      // The windowed passes (PixelBackend::multiply), each dropping its window's carry out.
+      for (int p = r.begin; p < r.end; ++p) {
+        u64 sum = 0;
+        for (int j = 0; j < dst.width && j < 64; ++j) {
+          if (((y[p] >> j) & 1) == 0) continue;
+          const u64 mask =
+              (bits + j >= 64 ? ~u64{0} : (u64{1} << (bits + j)) - 1) & ~((u64{1} << j) - 1);
+          sum = (sum & ~mask) | ((sum + (x[p] << j)) & mask);
+        }
+        x[p] = sum;
+      }
+    }
     store(memory_.data(), dst, r, x, true);
   }
 }

@@ -59,7 +59,7 @@ class WordBackend final : public PixelBackend {
   void logic(const Field& dst, const Source& src, Logic op) override;
   void invert(const Field& dst) override;
   void compare(const Field& a, const Source& b, Compare cond) override;
-  void multiply(const Field& dst, const Field& a, const Field& b) override;
+  void multiply(const Field& dst, const Field& a, const Field& b, bool window) override;
   void multiply_accumulate(const Field& dst, const Field& a, std::int64_t k) override;
   void store_to_backing(const Field& field, int block) override;
   void load_from_backing(const Field& field, int block) override;

@@ -148,7 +148,8 @@ void RendererBoard::share_empty_region(const RendererBoard& other) {
 ArrayCycles RendererBoard::run(const ProcedureCode& procedure, const PacketValues& values) {
   materialise();
   fresh_ = untouched_ = false;
-  ExecutionContext ctx{*array_, values, params_.timing.fraction_bits};
+  ExecutionContext ctx{*array_, values, params_.timing.fraction_bits,
+                       params_.timing.multiply_window};
   if (observer_) observer_->begin_packet(packet_, procedure, *this);
   ArrayCycles cycles{};
   int index = 0;

@@ -131,7 +131,7 @@ std::uint64_t quadric_operation_cycles(const MachineConfig& c, int operations) {
   OwnedValues values;
   auto run = [&](Procedure procedure) {
     std::uint64_t cycles = 0;
-    ExecutionContext ctx{*array, values, params.fraction_bits};
+    ExecutionContext ctx{*array, values, params.fraction_bits, timing.multiply_window};
     for (const Instruction& ins : program.procedure(procedure).code) {
       const InstructionInfo& info = instruction_info(ins.op);
       info.execute(ins, ctx);
