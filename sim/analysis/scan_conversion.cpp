@@ -491,6 +491,58 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
   return report;
 }
 
+Program with_depth_expression(const Program& program, const std::string& source,
+                              const std::string& from, const std::string& to,
+                              const AssemblerOptions& options) {
+  std::string text = source;
+  for (const std::string& op : {std::string("qcmp.lt z, "), std::string("qload z, ")}) {
+    const std::string line = op + from + "\n";
+    const std::size_t at = text.find("proc triangle");
+    const std::size_t end = text.find("\nend", at);
+    const std::size_t hit = at == std::string::npos ? at : text.find(line, at);
+    if (hit == std::string::npos || hit > end) {
+      throw std::invalid_argument(
+          fmt::format("program '{}': its triangle procedure has no line '{}{}' to ablate",
+                      program.name, op, from));
+    }
+    text.replace(hit, line.size(), op + to + "\n");
+  }
+  Program out = assemble(text, program.name + " (" + to + ")", options);
+  return out;
+}
+
+std::string format_scan_conversion_ablation(const std::vector<ScanConversionAblation>& rows) {
+  std::string out =
+      "| scene | classification | depth plane | edge px | max error | mean error | shared-edge "
+      "max | layer-edge max | interior max | hidden shows | parity errors | cycles/tri | GP "
+      "clocks/tri | words/packet |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const ScanConversionAblation& r : rows) {
+    const struct {
+      const ScanConversionMethod* m;
+      const char* edges;
+      const char* plane;
+    } lines[] = {{&r.a.standard, "snapped edges", "snapped vertices"},
+                 {&r.b.standard, "snapped edges", "unsnapped vertices"},
+                 {&r.a.accurate, "neighbour planes", "snapped vertices"},
+                 {&r.b.accurate, "neighbour planes", "unsnapped vertices"}};
+    bool first = true;
+    for (const auto& l : lines) {
+      const ScanConversionMethod& m = *l.m;
+      out += fmt::format(
+          "| {} | {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.0f} | {:.0f} | {} | {} | {} | "
+          "{:.0f} | {} |\n",
+          first ? r.a.scene : "", l.edges, l.plane, m.edge_pixels, m.edge_max_error,
+          m.edge_mean_error, m.shared_edge_max_error, m.layer_max_error, m.interior_max_error,
+          m.show_through,
+          m.parity_errors < 0 ? std::string("open") : std::to_string(m.parity_errors),
+          m.triangle_cycles, m.gp_clocks_per_triangle, m.packet_words);
+      first = false;
+    }
+  }
+  return out;
+}
+
 std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports) {
   std::string out =
       "| scene | method | edge px | max error | mean error | shared-edge max | / 2ME | "
