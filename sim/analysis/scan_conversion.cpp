@@ -127,8 +127,32 @@ Reference reference(const MachineConfig& config, const Scene& scene, double E) {
   const double depth_max = std::ldexp(1.0, config.gp.depth_bits) - 1.0;
   std::vector<ScreenTriangle> pieces;
   SetupCounts counts;
+  // The reference projects the scene itself, from the camera's view and projection in double
+  // (no code of the GP's transform): a triangle wholly inside the view volume is one piece.
+  // Only a triangle the view volume clips is taken from the GP's transform, which clips it.
+  const float aspect = static_cast<float>(config.screen.width) / static_cast<float>(r.height);
+  const glm::dmat4 view_projection =
+      glm::dmat4(projection_matrix(scene.camera, aspect)) * glm::dmat4(view_matrix(scene.camera));
   for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
-    geometry.transform(i, pieces, counts);
+    ScreenTriangle t;
+    t.source = i;
+    bool inside = true;
+    for (int k = 0; k < 3 && inside; ++k) {
+      const glm::dvec3 p(
+          scene.mesh.vertices[scene.mesh.triangles[static_cast<std::size_t>(i)][k]].position);
+      const glm::dvec4 c = view_projection * glm::dvec4(p, 1.0);
+      inside = c.w > 0 && std::fabs(c.x) <= c.w && std::fabs(c.y) <= c.w && std::fabs(c.z) <= c.w;
+      if (!inside) break;
+      const glm::dvec3 ndc = glm::dvec3(c) / c.w;
+      t.v[static_cast<std::size_t>(k)].position = {(ndc.x * 0.5 + 0.5) * r.width,
+                                                   (0.5 - ndc.y * 0.5) * r.height};
+      t.v[static_cast<std::size_t>(k)].depth = std::clamp(ndc.z * 0.5 + 0.5, 0.0, 1.0);
+    }
+    if (inside) {
+      pieces.push_back(t);
+    } else {
+      geometry.transform(i, pieces, counts);
+    }
   }
   // Per scene triangle: its one whole piece, or -1 if it was clipped into several or away.
   std::vector<int> whole(scene.mesh.triangles.size(), -1);

@@ -8,7 +8,10 @@
 // own `z` field, read back (render_field). Parity is counted by firmware too: a program per
 // method that adds 1 to a per-pixel counter for every triangle that owns the centre, with that
 // method's tests (the snapped edges; the enlarged area and the side tests). The reference is
-// computed in double precision from the projected, unsnapped triangles.
+// computed in double precision from the projected, unsnapped triangles, projected by the
+// reference itself from the camera's view and projection matrices (it shares no code with the
+// GP's transform); only a triangle the view volume clips is taken, clipped, from the GP's
+// transform (the built-in scenes have none).
 //
 // Contract (the terms of the report):
 //  - Exact depth at pixel (X, Y): the smallest depth, in depth units (0 .. 2^gp.depth_bits - 1),
