@@ -83,6 +83,10 @@ void add_torus(Mesh& mesh, float big, float small, float degrees, glm::vec3 colo
 
 std::vector<std::string> parity_scene_names() { return {"plane-sphere", "plane-boxes"}; }
 
+std::vector<std::string> epsilon_scene_names() {
+  return {"plane-sphere", "plane-boxes", "plane-slab", "plane-in-box", "plane-over-box"};
+}
+
 std::vector<std::string> interference_scene_names() {
   return {"boxes-overlap", "boxes-apart", "boxes-touching"};
 }
@@ -202,6 +206,15 @@ Scene make_parity_scene(const std::string& name) {
         mesh.triangles.emplace_back(base + f[0], base + f[2], base + f[3]);
       }
     });
+  } else if (name == "plane-in-box" || name == "plane-over-box") {
+    // The points lie 0.001 below the box's top face or 0.0005 above it (along the rays, less
+    // than the default epsilon in depth): inside a thick solid near its surface, or just
+    // outside it (nearly coincident faces, Rossignac's figure 9.4).
+    const bool in = name == "plane-in-box";
+    description = in ? "a level plane of points 0.001 inside a thick box, below its top face"
+                     : "a level plane of points 0.0005 above a thick box's top face";
+    add_plane(mesh, 0.0f, 0.0f, in ? 0.499f : 0.5005f, 1.3f);
+    solid("box", [&] { add_box(mesh, {0.0f, 0.0f, 0.0f}, {0.8f, 0.5f, 0.7f}, 20.0f, sand); });
   } else if (name == "boxes-overlap" || name == "boxes-apart" || name == "boxes-touching") {
     // Two boxes side by side along x; the second starts 0.3 inside the first, 0.1 past it, or
     // 0.0002 past it (closer than the default epsilon along the rays through both).
@@ -212,7 +225,7 @@ Scene make_parity_scene(const std::string& name) {
   } else {
     // Every scene this function makes, not only the defaults of one application.
     std::vector<std::string> all = parity_scene_names();
-    all.push_back("plane-slab");
+    for (const std::string& n : epsilon_scene_names()) all.push_back(n);
     for (const std::string& n : interference_scene_names()) all.push_back(n);
     for (const std::string& n : csg_scene_names()) all.push_back(n);
     for (const std::string& n : csg_quadric_scene_names()) all.push_back(n);
@@ -379,8 +392,10 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
       m.points += ref.inside[i] >= 0;
       m.inside += ref.inside[i] == 1;
       const bool machine = field.values[i] != 0;
+      m.machine_inside += machine;
       if (machine != (ref.inside[i] == 1)) {
         ++m.disagree;
+        ++(machine ? m.gained : m.lost);
         shade = 255;
       }
     }
@@ -907,6 +922,20 @@ std::string format_parity(const std::vector<ParityMeasure>& rows) {
         fmt::format("| point in solid | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                     m.scene, m.program, m.compared, m.points, m.inside, m.disagree, m.uncertain,
                     m.edge_disagree, m.passes, m.bits, m.cost.cells());
+  }
+  return out;
+}
+
+std::string format_epsilon(const std::vector<ParityMeasure>& rows) {
+  std::string out =
+      "| scene | program | pixels compared | with a point | inside (ray caster) | inside "
+      "(machine) | lost (inside, taken as outside) | gained (outside, taken as inside) | bits | "
+      "Renderer cycles | frame ms | frames/s |\n"
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const ParityMeasure& m : rows) {
+    out += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", m.scene, m.program,
+                       m.compared, m.points, m.inside, m.machine_inside, m.lost, m.gained, m.bits,
+                       m.cost.cells());
   }
   return out;
 }
