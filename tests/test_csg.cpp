@@ -405,6 +405,27 @@ TEST_CASE("epsilon-regularised parity: a solid thinner than epsilon vanishes", "
   CHECK(measure_parity(zero, slab, epsilon, 2).disagree == 0);
 }
 
+TEST_CASE("Goldfeather's pruning saves passes and draws the same pixels", "[csg]") {
+  const MachineConfig config = small_screen();
+  const Program program = program_named("csg", config);
+  // The bar lies apart from the box and the ball: its literal goes from the first product
+  // and the second product (bar & ball) goes whole: 13 passes become 4.
+  const CsgPruning apart =
+      measure_csg_pruning(config, make_parity_scene("box-minus-apart"), program, 2);
+  CHECK(apart.pruned_expression == "box & !ball");
+  CHECK(apart.passes_whole == 13);
+  CHECK(apart.passes_pruned == 4);
+  CHECK(apart.surface > 5000);
+  CHECK(apart.differing == 0);
+  CHECK(pruned_passes(program, make_parity_scene("box-minus-apart")) == 9);
+  // Where every literal's box meets the others' (the ball and the bar both cut the box),
+  // nothing is pruned and nothing changes.
+  const CsgPruning two =
+      measure_csg_pruning(config, make_parity_scene("box-minus-two"), program, 2);
+  CHECK(two.passes_pruned == two.passes_whole);
+  CHECK(two.differing == 0);
+}
+
 TEST_CASE("Rossignac's epsilon test at z + epsilon keeps what the erosion loses", "[csg]") {
   const MachineConfig config = small_screen();
   const Program plain = program_named("parity", config);

@@ -165,6 +165,22 @@ CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Pr
                        int threads, double margin = 0.75);
 std::string format_csg_render(const std::vector<CsgMeasure>& rows);
 
+// Goldfeather's pruning (models/gp/pass_plan.hpp) measured: the plan's passes with and
+// without it, and the machine's result depth `z` rendered both ways, compared pixel by
+// pixel (they must not differ). The CSG scenes and "box-minus-apart", where a bar apart from
+// the box is subtracted from it and intersected with the ball (both pruned away).
+std::vector<std::string> csg_pruning_scene_names();  // made by make_parity_scene
+struct CsgPruning {
+  std::string scene, program, expression, pruned_expression;
+  int passes_whole = 0, passes_pruned = 0;
+  std::int64_t surface = 0;                 // pixels where the unpruned plan leaves a surface
+  std::int64_t differing = 0;               // pixels whose `z` differs between the two
+  std::string cycles_whole, cycles_pruned;  // FrameCost::cells()
+};
+CsgPruning measure_csg_pruning(const MachineConfig& config, const Scene& scene,
+                               const Program& program, int threads);
+std::string format_csg_pruning(const std::vector<CsgPruning>& rows);
+
 // Cross-sections with capping (section.pp5 under the point-in-solid pass plan): a scene of
 // one quad in no solid (the cutting plane) and one closed solid. The truth is the ray
 // caster's first surface of the solid intersected with the half-space behind the plane (the

@@ -31,6 +31,7 @@ struct CsgOptions {
   std::vector<std::string> interference = {"interference", "interference_accurate"};
   std::vector<std::string> csg_scenes;
   std::vector<std::string> csg_programs = {"csg", "csg_accurate", "csg_layers"};
+  std::string pruning_program = "csg";
   std::vector<std::string> transparency_scenes;
   std::vector<std::string> transparency_programs = {"transparent", "transparent_interval"};
   std::vector<int> layers = {2, 4, 8};
@@ -113,6 +114,15 @@ int run_csg(const CsgOptions& o) {
     csg_programs.push_back(assemble_file(resolve_firmware(name), assembler_options(config)));
     csg_programs.back().name = name;
   }
+  std::vector<Scene> pruning_scenes;
+  std::vector<Program> pruning_programs;
+  if (rendering) {
+    for (const std::string& name : csg_pruning_scene_names())
+      pruning_scenes.push_back(make_parity_scene(name));
+    pruning_programs.push_back(
+        assemble_file(resolve_firmware(o.pruning_program), assembler_options(config)));
+    pruning_programs.back().name = o.pruning_program;
+  }
   std::vector<std::string> assembly_names = o.assemblies;
   if (assembly_names.empty()) assembly_names = interference_scene_names();
   std::vector<Scene> assemblies;
@@ -128,6 +138,7 @@ int run_csg(const CsgOptions& o) {
   std::vector<ParityMeasure> epsilon_rows;
   std::vector<InterferenceMeasure> interfering;
   std::vector<CsgMeasure> rendered;
+  std::vector<CsgPruning> pruning;
   std::vector<TransparencyMeasure> composited;
   std::vector<SectionMeasure> capped;
   // Every input is read: only now the output folder (a bad scene or program leaves none).
@@ -170,6 +181,11 @@ int run_csg(const CsgOptions& o) {
       images(scene.name, program.name, rendered.back().image, rendered.back().difference);
     }
   }
+  for (const Scene& scene : pruning_scenes) {
+    for (const Program& program : pruning_programs) {
+      pruning.push_back(measure_csg_pruning(config, scene, program, o.threads));
+    }
+  }
   for (const Scene& scene : see_through) {
     for (int layers : o.layers) {
       MachineConfig c = config;
@@ -192,7 +208,10 @@ int run_csg(const CsgOptions& o) {
   if (parity) tables += format_parity(rows) + "\n";
   if (regularised) tables += format_epsilon(epsilon_rows) + "\n";
   if (assembly) tables += format_interference(interfering) + "\n";
-  if (rendering) tables += format_csg_render(rendered) + "\n";
+  if (rendering) {
+    tables += format_csg_render(rendered) + "\n";
+    tables += format_csg_pruning(pruning) + "\n";
+  }
   if (transparency) tables += format_transparency(composited) + "\n";
   if (sections) tables += format_section(capped) + "\n";
   outputs.add((fs::path(o.out_dir) / "csg.md").string(), tables);
@@ -246,6 +265,9 @@ Command add_csg_command(CLI::App& app) {
   cmd->add_option(
       "--csg-program", o->csg_programs,
       "A program defining 'surface' (repeatable; default csg, csg_accurate and csg_layers)");
+  cmd->add_option("--pruning-program", o->pruning_program,
+                  "The program whose CSG pass plan is measured with and without Goldfeather's "
+                  "pruning (default csg), on the mesh CSG scenes and box-minus-apart");
   cmd->add_option("--epsilon-program", o->epsilon_programs,
                   "A program defining 'parity' for the epsilon table (repeatable; default "
                   "parity, parity_epsilon (erosion) and parity_behind (the test at z + epsilon)); "
