@@ -45,19 +45,26 @@ struct PlanBox {
 
 PlanBox solid_box(const Scene& scene, const Solid& s) {
   PlanBox b;
-  for (int t = s.first; t < s.last; ++t) {
+  const int triangles = static_cast<int>(scene.mesh.triangles.size());
+  const int spheres = static_cast<int>(scene.spheres.size());
+  for (int t = s.first; t < std::min(s.last, triangles); ++t) {
     for (int k = 0; k < 3; ++k) {
-      const glm::vec3 p =
-          scene.mesh.vertices[scene.mesh.triangles[static_cast<std::size_t>(t)][k]].position;
+      const auto v = scene.mesh.triangles[static_cast<std::size_t>(t)][k];
+      if (v >= scene.mesh.vertices.size()) continue;
+      const glm::vec3 p = scene.mesh.vertices[v].position;
       b.lo = glm::min(b.lo, p);
       b.hi = glm::max(b.hi, p);
     }
   }
-  for (int i = s.first_sphere; i < s.last_sphere; ++i) {
+  for (int i = s.first_sphere; i < std::min(s.last_sphere, spheres); ++i) {
     const Sphere& sp = scene.spheres[static_cast<std::size_t>(i)];
     b.lo = glm::min(b.lo, sp.center - glm::vec3(sp.radius));
     b.hi = glm::max(b.hi, sp.center + glm::vec3(sp.radius));
   }
+  // A solid with no geometry in the scene (a plan made before the mesh) bounds nothing.
+  if (b.empty())
+    b = {glm::vec3(-std::numeric_limits<float>::max()),
+         glm::vec3(std::numeric_limits<float>::max())};
   return b;
 }
 

@@ -233,12 +233,15 @@ Scene make_parity_scene(const std::string& name) {
   } else {
     // Every scene this function makes, not only the defaults of one application.
     std::vector<std::string> all = parity_scene_names();
-    for (const std::string& n : epsilon_scene_names()) all.push_back(n);
+    all.push_back("plane-slab");
     for (const std::string& n : interference_scene_names()) all.push_back(n);
     for (const std::string& n : csg_scene_names()) all.push_back(n);
     for (const std::string& n : csg_quadric_scene_names()) all.push_back(n);
     all.push_back("box-minus-apart");
     for (const std::string& n : section_scene_names()) all.push_back(n);
+    for (const std::string& n : epsilon_scene_names()) {
+      if (std::find(all.begin(), all.end(), n) == all.end()) all.push_back(n);
+    }
     throw std::invalid_argument(
         fmt::format("no parity scene '{}' (there are: {})", name, fmt::join(all, ", ")));
   }

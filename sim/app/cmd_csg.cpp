@@ -159,7 +159,8 @@ int run_csg(const CsgOptions& o) {
   for (const Scene& scene : epsilon_scenes) {
     for (const Program& program : epsilon_programs) {
       epsilon_rows.push_back(measure_parity(config, scene, program, o.threads));
-      images(scene.name, program.name, epsilon_rows.back().image, epsilon_rows.back().difference);
+      images("epsilon-" + scene.name, program.name, epsilon_rows.back().image,
+             epsilon_rows.back().difference);
     }
   }
   for (const Scene& scene : assemblies) {
@@ -216,14 +217,17 @@ int run_csg(const CsgOptions& o) {
   if (sections) tables += format_section(capped) + "\n";
   outputs.add((fs::path(o.out_dir) / "csg.md").string(), tables);
   outputs.commit();
-  std::cout << fmt::format(
-                   "{} x {} screen; pixels compared with a double-precision reference at "
-                   "the pixel centre (a ray caster; for transparency every layer composited), "
-                   "those within 0.75 pixel of a change left out\n\n",
-                   config.screen.width, config.screen.height)
-            << tables
-            << fmt::format("wrote {0}/csg.md and {0}/SCENE-PROGRAM{{,-difference}}.png\n",
-                           o.out_dir);
+  std::cout
+      << fmt::format(
+             "{} x {} screen; pixels compared with a double-precision reference at "
+             "the pixel centre (a ray caster; for transparency every layer composited), "
+             "those within 0.75 pixel of a change left out\n\n",
+             config.screen.width, config.screen.height)
+      << tables
+      << fmt::format(
+             "wrote {0}/csg.md and {0}/SCENE-PROGRAM{{,-difference}}.png (the epsilon table's "
+             "as epsilon-SCENE-PROGRAM)\n",
+             o.out_dir);
   return 0;
 }
 
