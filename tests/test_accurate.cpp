@@ -1,6 +1,8 @@
 // Accurate scan conversion (Rossignac, 9.4): the GP's side planes (models/gp/
 // accurate_expressions.hpp), accurate.pp5 against phong.pp5 on the provoking scene and on a
 // curved closed mesh (sim/analysis/scan_conversion.hpp), and edges without one neighbour.
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>
@@ -258,6 +260,20 @@ TEST_CASE("accurate: neither ingredient alone, both together, remove the edge er
     CHECK(b.accurate.edge_max_error <= kDepthResolution);
     CHECK(b.accurate.show_through == 0);
     CHECK(a.accurate.show_through + b.standard.show_through > 0);
+    // The table's column: the share of the accurate set-up's edge tests that fall back to
+    // the edge's own line (most of the folded slab's, a third of the closed torus's, whose
+    // every edge has a neighbour: its own line where the planes are nearly coplanar).
+    const std::uint64_t own = b.sides[static_cast<int>(SideKind::boundary)] +
+                              b.sides[static_cast<int>(SideKind::non_manifold)] +
+                              b.sides[static_cast<int>(SideKind::degenerate)] +
+                              b.sides[static_cast<int>(SideKind::coplanar)];
+    std::uint64_t all = 0;
+    for (std::uint64_t n : b.sides) all += n;
+    REQUIRE(all > 0);
+    const double share = static_cast<double>(own) / static_cast<double>(all);
+    CHECK((std::string(name) == "torus" ? share < 0.5 : share > 0.5));
+    const std::string table = format_scan_conversion_ablation({{a, b}});
+    CHECK_THAT(table, Catch::Contains(fmt::format("{:.1f}% ({} of {})", 100 * share, own, all)));
   }
 }
 

@@ -538,28 +538,43 @@ Program with_depth_expression(const Program& program, const std::string& source,
 std::string format_scan_conversion_ablation(const std::vector<ScanConversionAblation>& rows) {
   std::string out =
       "| scene | classification | depth plane | edge px | max error | mean error | shared-edge "
-      "max | layer-edge max | interior max | hidden shows | parity errors | cycles/tri | GP "
-      "clocks/tri | words/packet |\n"
-      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+      "max | layer-edge max | interior max | hidden shows | parity errors | edge tests by the "
+      "edge's own line | cycles/tri | GP clocks/tri | words/packet |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  // The share of the accurate set-up's edge tests that fall back to the unsnapped edge's own
+  // line (no neighbour, non-manifold, edge-on, coplanar), of every edge test it sent; the
+  // standard program tests every edge by its snapped line.
+  auto own_line = [](const ScanConversionReport& r) {
+    std::uint64_t all = 0, own = 0;
+    for (int k = 0; k < static_cast<int>(SideKind::count); ++k) {
+      const std::uint64_t n = r.sides[static_cast<std::size_t>(k)];
+      all += n;
+      const auto kind = static_cast<SideKind>(k);
+      if (kind != SideKind::plane && kind != SideKind::clipped) own += n;
+    }
+    if (all == 0) return std::string("-");
+    return fmt::format("{:.1f}% ({} of {})", 100.0 * static_cast<double>(own) / all, own, all);
+  };
   for (const ScanConversionAblation& r : rows) {
     const struct {
       const ScanConversionMethod* m;
       const char* edges;
       const char* plane;
-    } lines[] = {{&r.a.standard, "snapped edges", "snapped vertices"},
-                 {&r.b.standard, "snapped edges", "unsnapped vertices"},
-                 {&r.a.accurate, "neighbour planes", "snapped vertices"},
-                 {&r.b.accurate, "neighbour planes", "unsnapped vertices"}};
+      std::string own;
+    } lines[] = {{&r.a.standard, "snapped edges", "snapped vertices", "-"},
+                 {&r.b.standard, "snapped edges", "unsnapped vertices", "-"},
+                 {&r.a.accurate, "neighbour planes", "snapped vertices", own_line(r.a)},
+                 {&r.b.accurate, "neighbour planes", "unsnapped vertices", own_line(r.b)}};
     bool first = true;
     for (const auto& l : lines) {
       const ScanConversionMethod& m = *l.m;
       out += fmt::format(
-          "| {} | {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.0f} | {:.0f} | {} | {} | {} | "
+          "| {} | {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.0f} | {:.0f} | {} | {} | {} | {} | "
           "{:.0f} | {} |\n",
           first ? r.a.scene : "", l.edges, l.plane, m.edge_pixels, m.edge_max_error,
           m.edge_mean_error, m.shared_edge_max_error, m.layer_max_error, m.interior_max_error,
           m.show_through,
-          m.parity_errors < 0 ? std::string("open") : std::to_string(m.parity_errors),
+          m.parity_errors < 0 ? std::string("open") : std::to_string(m.parity_errors), l.own,
           m.triangle_cycles, m.gp_clocks_per_triangle, m.packet_words);
       first = false;
     }
