@@ -1,10 +1,14 @@
 // Accurate scan conversion (Rossignac, 9.4): the GP's side planes (models/gp/
 // accurate_expressions.hpp), accurate.pp5 against phong.pp5 on the provoking scene and on a
 // curved closed mesh (sim/analysis/scan_conversion.hpp), and edges without one neighbour.
+#include <fmt/format.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>
 
+#include "common/read_file.hpp"
+#include "firmware/assembler/assembler.hpp"
 #include "models/display_list/mesh_adjacency.hpp"
 #include "models/gp/accurate_expressions.hpp"
 #include "models/gp/geometry.hpp"
@@ -217,6 +221,59 @@ TEST_CASE("accurate: at the i860's single precision the accurate program still w
     CHECK(r.accurate.parity_errors == 0);
     CHECK(r.accurate.edge_max_error < 100.0 * kDepthResolution);
     CHECK(100.0 * r.accurate.edge_max_error < r.standard.shared_edge_max_error);
+  }
+}
+
+TEST_CASE("accurate: neither ingredient alone, both together, remove the edge error",
+          "[accurate]") {
+  // The ablation of pp5sim scanconvert --ablation: the standard program with its depth drawn
+  // through the unsnapped vertices, and the accurate program's classification with the
+  // snapped vertices' depth. Only the two together keep every edge pixel on its own plane.
+  const MachineConfig config = machine(4);
+  const AssemblerOptions options = assembler_options(config);
+  const std::string dir = std::string(PP5_SOURCE_DIR) + "/firmware/programs/";
+  const Program phong = test::load_program("phong", config);
+  const Program accurate = test::load_program("accurate", config);
+  auto text = [&](const char* name) {
+    return read_regular_file(dir + name + ".pp5", kMaxProgramBytes, "a firmware program");
+  };
+  const Program phong_unsnapped =
+      with_depth_expression(phong, text("phong"), "depth", "plane_depth", options);
+  const Program accurate_snapped =
+      with_depth_expression(accurate, text("accurate"), "plane_depth", "depth", options);
+  CHECK_THROWS_WITH(with_depth_expression(phong, text("phong"), "plane_depth", "depth", options),
+                    Catch::Contains("no line 'qcmp.lt z, plane_depth'"));
+  for (const char* name : {"folded-slab", "torus"}) {
+    INFO(name);
+    const Scene scene = make_builtin_scene(name);
+    const ScanConversionReport a =
+        measure_scan_conversion(config, scene, phong, accurate_snapped, 2);
+    const ScanConversionReport b =
+        measure_scan_conversion(config, scene, phong_unsnapped, accurate, 2);
+    // Unsnapped planes alone: the interior is exact, the edges are not.
+    CHECK(b.standard.interior_max_error <= a.standard.interior_max_error);
+    CHECK(b.standard.edge_max_error > 1000.0 * kDepthResolution);
+    // Neighbour planes alone: the snapped plane's error stays, inside and at the edges.
+    CHECK(a.accurate.edge_max_error > 1000.0 * kDepthResolution);
+    CHECK(a.accurate.interior_max_error > 100.0 * kDepthResolution);
+    // Both: the z-buffer's resolution everywhere, nothing hidden shows.
+    CHECK(b.accurate.edge_max_error <= kDepthResolution);
+    CHECK(b.accurate.show_through == 0);
+    CHECK(a.accurate.show_through + b.standard.show_through > 0);
+    // The table's column: the share of the accurate set-up's edge tests that fall back to
+    // the edge's own line (most of the folded slab's, a third of the closed torus's, whose
+    // every edge has a neighbour: its own line where the planes are nearly coplanar).
+    const std::uint64_t own = b.sides[static_cast<int>(SideKind::boundary)] +
+                              b.sides[static_cast<int>(SideKind::non_manifold)] +
+                              b.sides[static_cast<int>(SideKind::degenerate)] +
+                              b.sides[static_cast<int>(SideKind::coplanar)];
+    std::uint64_t all = 0;
+    for (std::uint64_t n : b.sides) all += n;
+    REQUIRE(all > 0);
+    const double share = static_cast<double>(own) / static_cast<double>(all);
+    CHECK((std::string(name) == "torus" ? share < 0.5 : share > 0.5));
+    const std::string table = format_scan_conversion_ablation({{a, b}});
+    CHECK_THAT(table, Catch::Contains(fmt::format("{:.1f}% ({} of {})", 100 * share, own, all)));
   }
 }
 

@@ -434,6 +434,64 @@ TEST_CASE("epsilon-regularised parity: a solid thinner than epsilon vanishes", "
   CHECK(measure_parity(zero, slab, epsilon, 2).disagree == 0);
 }
 
+TEST_CASE("Goldfeather's pruning saves passes and draws the same pixels", "[csg]") {
+  const MachineConfig config = small_screen();
+  const Program program = program_named("csg", config);
+  // The bar lies apart from the box and the ball: its literal goes from the first product
+  // and the second product (bar & ball) goes whole: 13 passes become 4.
+  const CsgPruning apart =
+      measure_csg_pruning(config, make_parity_scene("box-minus-apart"), program, 2);
+  CHECK(apart.pruned_expression == "box & !ball");
+  CHECK(apart.passes_whole == 13);
+  CHECK(apart.passes_pruned == 4);
+  CHECK(apart.surface > 5000);
+  CHECK(apart.differing == 0);
+  CHECK(pruned_passes(program, make_parity_scene("box-minus-apart")) == 9);
+  // Where every literal's box meets the others' (the ball and the bar both cut the box),
+  // nothing is pruned and nothing changes.
+  const CsgPruning two =
+      measure_csg_pruning(config, make_parity_scene("box-minus-two"), program, 2);
+  CHECK(two.passes_pruned == two.passes_whole);
+  CHECK(two.differing == 0);
+}
+
+TEST_CASE("Rossignac's epsilon test at z + epsilon keeps what the erosion loses", "[csg]") {
+  const MachineConfig config = small_screen();
+  const Program plain = program_named("parity", config);
+  const Program erosion = program_named("parity_epsilon", config);
+  const Program behind = program_named("parity_behind", config);
+  // Points inside a thick box, within epsilon below its top face: the ray caster and exact
+  // parity find them inside; the erosion loses every one; the test at z + epsilon none.
+  const Scene in = make_parity_scene("plane-in-box");
+  const ParityMeasure exact_in = measure_parity(config, in, plain, 2);
+  REQUIRE(exact_in.inside > 10000);
+  CHECK(exact_in.disagree == 0);
+  const ParityMeasure eroded_in = measure_parity(config, in, erosion, 2);
+  CHECK(eroded_in.lost == exact_in.inside);
+  const ParityMeasure behind_in = measure_parity(config, in, behind, 2);
+  CHECK(behind_in.inside == exact_in.inside);
+  CHECK(behind_in.disagree == 0);
+  // Points within epsilon above the top face (nearly coincident faces, figure 9.4): outside
+  // by the ray caster, exact parity and the erosion; inside by the test at z + epsilon, over
+  // the whole face (as many points as the plane inside the box has, give or take the
+  // outline's pixels).
+  const Scene over = make_parity_scene("plane-over-box");
+  CHECK(measure_parity(config, over, plain, 2).machine_inside == 0);
+  CHECK(measure_parity(config, over, erosion, 2).machine_inside == 0);
+  const ParityMeasure behind_over = measure_parity(config, over, behind, 2);
+  CHECK(behind_over.gained == behind_over.machine_inside);
+  CHECK(behind_over.gained > exact_in.inside * 99 / 100);
+  CHECK(behind_over.gained < exact_in.inside * 103 / 100);
+  // On a thick solid of the default table both stay within 1/1000 of the ray caster.
+  const ParityMeasure ball = measure_parity(config, make_parity_scene("plane-sphere"), behind, 2);
+  CHECK(ball.inside > 1000);
+  CHECK(ball.disagree * 1000 < ball.inside);
+  // With epsilon 0 it is exact parity again.
+  MachineConfig zero = config;
+  zero.set(std::vector<std::string>{"frame.threshold=0"});
+  CHECK(measure_parity(zero, over, behind, 2).machine_inside == 0);
+}
+
 TEST_CASE("interference is found exactly when two solids overlap, and as epsilon says", "[csg]") {
   const MachineConfig config = small_screen();
   MachineConfig exact = config;

@@ -95,6 +95,9 @@ struct Scene {
   std::vector<Solid> solids;
   // The scene file's "csg" over its solids, normalised; empty for none.
   CsgProducts csg;
+  // Whether the GP prunes the expression by the solids' bounding boxes before planning its
+  // passes (Goldfeather's geometric pruning, models/gp/pass_plan.hpp); off only to measure it.
+  bool prune_csg = true;
 
   // The solid triangle t belongs to, -1 for none.
   int solid_of_triangle(int t) const {

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <glm/glm.hpp>
+#include <limits>
 #include <stdexcept>
 
 namespace pp5 {
@@ -35,6 +37,37 @@ void check_sphere_solids(const Program& program, const Scene& scene, Procedure p
   }
 }
 
+// A solid's bounding box in world space (its triangles' vertices and spheres).
+struct PlanBox {
+  glm::vec3 lo{std::numeric_limits<float>::max()}, hi{-std::numeric_limits<float>::max()};
+  bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
+};
+
+PlanBox solid_box(const Scene& scene, const Solid& s) {
+  PlanBox b;
+  const int triangles = static_cast<int>(scene.mesh.triangles.size());
+  const int spheres = static_cast<int>(scene.spheres.size());
+  for (int t = s.first; t < std::min(s.last, triangles); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const auto v = scene.mesh.triangles[static_cast<std::size_t>(t)][k];
+      if (v >= scene.mesh.vertices.size()) continue;
+      const glm::vec3 p = scene.mesh.vertices[v].position;
+      b.lo = glm::min(b.lo, p);
+      b.hi = glm::max(b.hi, p);
+    }
+  }
+  for (int i = s.first_sphere; i < std::min(s.last_sphere, spheres); ++i) {
+    const Sphere& sp = scene.spheres[static_cast<std::size_t>(i)];
+    b.lo = glm::min(b.lo, sp.center - glm::vec3(sp.radius));
+    b.hi = glm::max(b.hi, sp.center + glm::vec3(sp.radius));
+  }
+  // A solid with no geometry in the scene (a plan made before the mesh) bounds nothing.
+  if (b.empty())
+    b = {glm::vec3(-std::numeric_limits<float>::max()),
+         glm::vec3(std::numeric_limits<float>::max())};
+  return b;
+}
+
 // `layers`: the rounds (surface and classification passes) of each literal of a product of
 // two or more literals; 1 for a program that does not peel.
 void csg_plan(const Scene& scene, int layers, std::vector<PlannedPass>& plan,
@@ -46,7 +79,7 @@ void csg_plan(const Scene& scene, int layers, std::vector<PlannedPass>& plan,
   } else {
     owed.push_back(Procedure::clear);
   }
-  for (const std::vector<CsgLiteral>& product : scene.csg) {
+  for (const std::vector<CsgLiteral>& product : pruned_csg(scene)) {
     // A literal alone is its own result: its nearest surface is the visible one.
     const int rounds = product.size() > 1 ? layers : 1;
     for (const CsgLiteral& literal : product) {
@@ -68,6 +101,48 @@ void csg_plan(const Scene& scene, int layers, std::vector<PlannedPass>& plan,
 }
 
 }  // namespace
+
+CsgProducts pruned_csg(const Scene& scene) {
+  if (!scene.prune_csg) return scene.csg;
+  std::vector<PlanBox> boxes;
+  for (const Solid& s : scene.solids) boxes.push_back(solid_box(scene, s));
+  CsgProducts out;
+  for (const std::vector<CsgLiteral>& product : scene.csg) {
+    PlanBox common;
+    bool positive = false;
+    for (const CsgLiteral& l : product) {
+      if (l.negated) continue;
+      const PlanBox& b = boxes[static_cast<std::size_t>(l.solid)];
+      common = positive ? PlanBox{glm::max(common.lo, b.lo), glm::min(common.hi, b.hi)} : b;
+      positive = true;
+    }
+    if (!positive) {
+      out.push_back(product);
+      continue;
+    }
+    if (common.empty()) continue;  // the positive literals share no point
+    std::vector<CsgLiteral> kept;
+    for (const CsgLiteral& l : product) {
+      if (l.negated) {
+        const PlanBox& b = boxes[static_cast<std::size_t>(l.solid)];
+        const PlanBox meet{glm::max(common.lo, b.lo), glm::min(common.hi, b.hi)};
+        if (meet.empty()) continue;  // subtracts nothing from the product
+      }
+      kept.push_back(l);
+    }
+    out.push_back(kept);
+  }
+  return out;
+}
+
+int pruned_passes(const Program& program, const Scene& scene) {
+  Scene whole = scene;
+  whole.prune_csg = false;
+  Scene pruned = scene;
+  pruned.prune_csg = true;
+  return static_cast<int>(make_pass_plan(program, whole).size()) -
+         static_cast<int>(make_pass_plan(program, pruned).size());
+}
 
 std::vector<PlannedPass> make_pass_plan(const Program& program, const Scene& scene) {
   FrameValues values;

@@ -26,6 +26,12 @@
 //    frame parameter, from the FrameValues; 1 if they hold none), the repeats opened by
 //    `next_layer` instead of `candidate`, so that its k-th nearest surface is a candidate in
 //    round k. On a scene without a CSG expression such a program gets no plan.
+//  - Goldfeather's geometric pruning comes first (when Scene::prune_csg): with each solid's
+//    bounding box (its triangles' vertices and its spheres, in world space), a product whose
+//    positive literals' boxes have an empty intersection is dropped (it is empty), and a
+//    complemented literal whose box misses that intersection is dropped from its product
+//    (subtracting it removes nothing). Boxes that touch are kept. A product with no positive
+//    literal is kept whole. The pixels drawn are the same; passes are saved.
 //  - Any other program gets no plan: its own `option passes`, every packet, its own procedure
 //    (every existing program and golden).
 //  - `parity` and `surface` may use only expressions `triangle` uses (the packet is the
@@ -49,6 +55,11 @@ std::vector<PlannedPass> make_pass_plan(const Program& program, const Scene& sce
 // The plan's passes and its closing procedures, into `values` (whose frame parameters give
 // `layers`).
 void set_pass_plan(const Program& program, const Scene& scene, FrameValues& values);
+
+// The scene's expression after Goldfeather's pruning (the scene's own if !prune_csg), and the
+// passes the pruning saves for `program` on `scene` (0 for a program without a CSG plan).
+CsgProducts pruned_csg(const Scene& scene);
+int pruned_passes(const Program& program, const Scene& scene);
 
 // Throws std::runtime_error if the program's plan procedures need what its packets lack.
 void check_pass_plan(const Program& program);

@@ -83,6 +83,10 @@ void add_torus(Mesh& mesh, float big, float small, float degrees, glm::vec3 colo
 
 std::vector<std::string> parity_scene_names() { return {"plane-sphere", "plane-boxes"}; }
 
+std::vector<std::string> epsilon_scene_names() {
+  return {"plane-sphere", "plane-boxes", "plane-slab", "plane-in-box", "plane-over-box"};
+}
+
 std::vector<std::string> interference_scene_names() {
   return {"boxes-overlap", "boxes-apart", "boxes-touching"};
 }
@@ -202,6 +206,23 @@ Scene make_parity_scene(const std::string& name) {
         mesh.triangles.emplace_back(base + f[0], base + f[2], base + f[3]);
       }
     });
+  } else if (name == "box-minus-apart") {
+    description =
+        "box-minus-ball, also minus a bar apart from the box, or the bar and the ball (which "
+        "never meet): (a & !b & !c) | (c & b)";
+    solid("box", [&] { add_box(mesh, {0.0f, 0.0f, 0.0f}, {0.8f, 0.6f, 0.7f}, 20.0f, sand); });
+    ball("ball", {0.45f, 0.55f, 0.4f}, 0.6f, teal);
+    solid("bar", [&] { add_box(mesh, {-1.6f, -0.2f, 0.2f}, {0.2f, 0.5f, 0.2f}, 0.0f, rose); });
+    csg = {{a, not_b, not_c}, {CsgLiteral{2, false}, b}};
+  } else if (name == "plane-in-box" || name == "plane-over-box") {
+    // The points lie 0.001 below the box's top face or 0.0005 above it (along the rays, less
+    // than the default epsilon in depth): inside a thick solid near its surface, or just
+    // outside it (nearly coincident faces, Rossignac's figure 9.4).
+    const bool in = name == "plane-in-box";
+    description = in ? "a level plane of points 0.001 inside a thick box, below its top face"
+                     : "a level plane of points 0.0005 above a thick box's top face";
+    add_plane(mesh, 0.0f, 0.0f, in ? 0.499f : 0.5005f, 1.3f);
+    solid("box", [&] { add_box(mesh, {0.0f, 0.0f, 0.0f}, {0.8f, 0.5f, 0.7f}, 20.0f, sand); });
   } else if (name == "boxes-overlap" || name == "boxes-apart" || name == "boxes-touching") {
     // Two boxes side by side along x; the second starts 0.3 inside the first, 0.1 past it, or
     // 0.0002 past it (closer than the default epsilon along the rays through both).
@@ -216,7 +237,11 @@ Scene make_parity_scene(const std::string& name) {
     for (const std::string& n : interference_scene_names()) all.push_back(n);
     for (const std::string& n : csg_scene_names()) all.push_back(n);
     for (const std::string& n : csg_quadric_scene_names()) all.push_back(n);
+    all.push_back("box-minus-apart");
     for (const std::string& n : section_scene_names()) all.push_back(n);
+    for (const std::string& n : epsilon_scene_names()) {
+      if (std::find(all.begin(), all.end(), n) == all.end()) all.push_back(n);
+    }
     throw std::invalid_argument(
         fmt::format("no parity scene '{}' (there are: {})", name, fmt::join(all, ", ")));
   }
@@ -379,8 +404,10 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
       m.points += ref.inside[i] >= 0;
       m.inside += ref.inside[i] == 1;
       const bool machine = field.values[i] != 0;
+      m.machine_inside += machine;
       if (machine != (ref.inside[i] == 1)) {
         ++m.disagree;
+        ++(machine ? m.gained : m.lost);
         shade = 255;
       }
     }
@@ -907,6 +934,72 @@ std::string format_parity(const std::vector<ParityMeasure>& rows) {
         fmt::format("| point in solid | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
                     m.scene, m.program, m.compared, m.points, m.inside, m.disagree, m.uncertain,
                     m.edge_disagree, m.passes, m.bits, m.cost.cells());
+  }
+  return out;
+}
+
+std::string format_epsilon(const std::vector<ParityMeasure>& rows) {
+  std::string out =
+      "| scene | program | pixels compared | with a point | inside (ray caster) | inside "
+      "(machine) | lost (inside, taken as outside) | gained (outside, taken as inside) | bits | "
+      "Renderer cycles | frame ms | frames/s |\n"
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const ParityMeasure& m : rows) {
+    out += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", m.scene, m.program,
+                       m.compared, m.points, m.inside, m.machine_inside, m.lost, m.gained, m.bits,
+                       m.cost.cells());
+  }
+  return out;
+}
+
+std::vector<std::string> csg_pruning_scene_names() {
+  std::vector<std::string> names = csg_scene_names();
+  names.push_back("box-minus-apart");
+  return names;
+}
+
+CsgPruning measure_csg_pruning(const MachineConfig& config, const Scene& scene,
+                               const Program& program, int threads) {
+  CsgPruning m;
+  m.scene = scene.name;
+  m.program = program.name;
+  std::vector<std::string> names;
+  for (const Solid& s : scene.solids) names.push_back(s.name);
+  m.expression = format_csg(scene.csg, names);
+  m.pruned_expression = format_csg(pruned_csg(scene), names);
+  Scene whole = scene, pruned = scene;
+  whole.prune_csg = false;
+  pruned.prune_csg = true;
+  m.passes_whole = static_cast<int>(make_pass_plan(program, whole).size());
+  m.passes_pruned = static_cast<int>(make_pass_plan(program, pruned).size());
+  const FieldFrame a = render_field(config, whole, program, "z", threads);
+  const FieldFrame b = render_field(config, pruned, program, "z", threads);
+  const std::uint64_t background = (std::uint64_t{1} << config.gp.depth_bits) - 1;
+  for (std::size_t i = 0; i < a.values.size(); ++i) {
+    m.surface += a.values[i] != background;
+    m.differing += a.values[i] != b.values[i];
+  }
+  m.cycles_whole = frame_cost(config, whole, program, threads).cells();
+  m.cycles_pruned = frame_cost(config, pruned, program, threads).cells();
+  return m;
+}
+
+std::string format_csg_pruning(const std::vector<CsgPruning>& rows) {
+  std::string out =
+      "| scene | program | expression | pruned | passes unpruned | passes pruned | passes saved "
+      "| pixels with a surface | pixels differing (z) | unpruned: Renderer cycles | frame ms | "
+      "frames/s | pruned: Renderer cycles | frame ms | frames/s |\n"
+      "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  auto cell = [](std::string e) {  // a union's '|' inside a table cell
+    for (std::size_t i = e.find('|'); i != std::string::npos; i = e.find('|', i + 2))
+      e.replace(i, 1, "\\|");
+    return e;
+  };
+  for (const CsgPruning& m : rows) {
+    out += fmt::format("| {} | {} | `{}` | `{}` | {} | {} | {} | {} | {} | {} | {} |\n", m.scene,
+                       m.program, cell(m.expression), cell(m.pruned_expression), m.passes_whole,
+                       m.passes_pruned, m.passes_whole - m.passes_pruned, m.surface, m.differing,
+                       m.cycles_whole, m.cycles_pruned);
   }
   return out;
 }

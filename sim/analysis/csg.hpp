@@ -63,6 +63,9 @@ struct ParityMeasure {
   // Of those, where the machine differs from the ray through the centre itself (reported,
   // not required: a centre on a shared edge is where standard scan conversion miscounts).
   std::int64_t edge_disagree = 0;
+  std::int64_t machine_inside = 0;  // certain pixels where the machine's `inside` is set
+  std::int64_t lost = 0;            // of `disagree`, inside by the ray caster, not by the machine
+  std::int64_t gained = 0;          // of `disagree`, inside by the machine only
   int passes = 0;
   int bits = 0;
   FrameCost cost;
@@ -77,6 +80,14 @@ ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
                              const Program& program, int threads);
 
 std::string format_parity(const std::vector<ParityMeasure>& rows);
+
+// Epsilon regularisation, the two methods on the same scenes (the parity scenes, the slab
+// thinner than epsilon and "plane-in-box", points inside a thick solid within epsilon of its
+// face): parity_epsilon (an erosion: inside at both z - epsilon and z + epsilon) and
+// parity_behind (Rossignac's test at z + epsilon, figure 9.4), beside exact parity. The table
+// splits the disagreements into points lost and points gained.
+std::vector<std::string> epsilon_scene_names();
+std::string format_epsilon(const std::vector<ParityMeasure>& rows);
 
 // Interference of an assembly's first two solids (interference.pp5 under the same pass plan):
 // the machine's flag, lo and hi fields read back; the truth is the ray caster's: a pixel
@@ -153,6 +164,22 @@ struct CsgMeasure {
 CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Program& program,
                        int threads, double margin = 0.75);
 std::string format_csg_render(const std::vector<CsgMeasure>& rows);
+
+// Goldfeather's pruning (models/gp/pass_plan.hpp) measured: the plan's passes with and
+// without it, and the machine's result depth `z` rendered both ways, compared pixel by
+// pixel (they must not differ). The CSG scenes and "box-minus-apart", where a bar apart from
+// the box is subtracted from it and intersected with the ball (both pruned away).
+std::vector<std::string> csg_pruning_scene_names();  // made by make_parity_scene
+struct CsgPruning {
+  std::string scene, program, expression, pruned_expression;
+  int passes_whole = 0, passes_pruned = 0;
+  std::int64_t surface = 0;                 // pixels where the unpruned plan leaves a surface
+  std::int64_t differing = 0;               // pixels whose `z` differs between the two
+  std::string cycles_whole, cycles_pruned;  // FrameCost::cells()
+};
+CsgPruning measure_csg_pruning(const MachineConfig& config, const Scene& scene,
+                               const Program& program, int threads);
+std::string format_csg_pruning(const std::vector<CsgPruning>& rows);
 
 // Cross-sections with capping (section.pp5 under the point-in-solid pass plan): a scene of
 // one quad in no solid (the cutting plane) and one closed solid. The truth is the ray

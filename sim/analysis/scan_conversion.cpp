@@ -127,8 +127,32 @@ Reference reference(const MachineConfig& config, const Scene& scene, double E) {
   const double depth_max = std::ldexp(1.0, config.gp.depth_bits) - 1.0;
   std::vector<ScreenTriangle> pieces;
   SetupCounts counts;
+  // The reference projects the scene itself, from the camera's view and projection in double
+  // (no code of the GP's transform): a triangle wholly inside the view volume is one piece.
+  // Only a triangle the view volume clips is taken from the GP's transform, which clips it.
+  const float aspect = static_cast<float>(config.screen.width) / static_cast<float>(r.height);
+  const glm::dmat4 view_projection =
+      glm::dmat4(projection_matrix(scene.camera, aspect)) * glm::dmat4(view_matrix(scene.camera));
   for (int i = 0; i < static_cast<int>(scene.mesh.triangles.size()); ++i) {
-    geometry.transform(i, pieces, counts);
+    ScreenTriangle t;
+    t.source = i;
+    bool inside = true;
+    for (int k = 0; k < 3 && inside; ++k) {
+      const glm::dvec3 p(
+          scene.mesh.vertices[scene.mesh.triangles[static_cast<std::size_t>(i)][k]].position);
+      const glm::dvec4 c = view_projection * glm::dvec4(p, 1.0);
+      inside = c.w > 0 && std::fabs(c.x) <= c.w && std::fabs(c.y) <= c.w && std::fabs(c.z) <= c.w;
+      if (!inside) break;
+      const glm::dvec3 ndc = glm::dvec3(c) / c.w;
+      t.v[static_cast<std::size_t>(k)].position = {(ndc.x * 0.5 + 0.5) * r.width,
+                                                   (0.5 - ndc.y * 0.5) * r.height};
+      t.v[static_cast<std::size_t>(k)].depth = std::clamp(ndc.z * 0.5 + 0.5, 0.0, 1.0);
+    }
+    if (inside) {
+      pieces.push_back(t);
+    } else {
+      geometry.transform(i, pieces, counts);
+    }
   }
   // Per scene triangle: its one whole piece, or -1 if it was clipped into several or away.
   std::vector<int> whole(scene.mesh.triangles.size(), -1);
@@ -489,6 +513,73 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
     }
   }
   return report;
+}
+
+Program with_depth_expression(const Program& program, const std::string& source,
+                              const std::string& from, const std::string& to,
+                              const AssemblerOptions& options) {
+  std::string text = source;
+  for (const std::string& op : {std::string("qcmp.lt z, "), std::string("qload z, ")}) {
+    const std::string line = op + from + "\n";
+    const std::size_t at = text.find("proc triangle");
+    const std::size_t end = text.find("\nend", at);
+    const std::size_t hit = at == std::string::npos ? at : text.find(line, at);
+    if (hit == std::string::npos || hit > end) {
+      throw std::invalid_argument(
+          fmt::format("program '{}': its triangle procedure has no line '{}{}' to ablate",
+                      program.name, op, from));
+    }
+    text.replace(hit, line.size(), op + to + "\n");
+  }
+  Program out = assemble(text, program.name + " (" + to + ")", options);
+  return out;
+}
+
+std::string format_scan_conversion_ablation(const std::vector<ScanConversionAblation>& rows) {
+  std::string out =
+      "| scene | classification | depth plane | edge px | max error | mean error | shared-edge "
+      "max | layer-edge max | interior max | hidden shows | parity errors | edge tests by the "
+      "edge's own line | cycles/tri | GP clocks/tri | words/packet |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  // The share of the accurate set-up's edge tests that fall back to the unsnapped edge's own
+  // line (no neighbour, non-manifold, edge-on, coplanar), of every edge test it sent; the
+  // standard program tests every edge by its snapped line.
+  auto own_line = [](const ScanConversionReport& r) {
+    std::uint64_t all = 0, own = 0;
+    for (int k = 0; k < static_cast<int>(SideKind::count); ++k) {
+      const std::uint64_t n = r.sides[static_cast<std::size_t>(k)];
+      all += n;
+      const auto kind = static_cast<SideKind>(k);
+      if (kind != SideKind::plane && kind != SideKind::clipped) own += n;
+    }
+    if (all == 0) return std::string("-");
+    return fmt::format("{:.1f}% ({} of {})", 100.0 * static_cast<double>(own) / all, own, all);
+  };
+  for (const ScanConversionAblation& r : rows) {
+    const struct {
+      const ScanConversionMethod* m;
+      const char* edges;
+      const char* plane;
+      std::string own;
+    } lines[] = {{&r.a.standard, "snapped edges", "snapped vertices", "-"},
+                 {&r.b.standard, "snapped edges", "unsnapped vertices", "-"},
+                 {&r.a.accurate, "neighbour planes", "snapped vertices", own_line(r.a)},
+                 {&r.b.accurate, "neighbour planes", "unsnapped vertices", own_line(r.b)}};
+    bool first = true;
+    for (const auto& l : lines) {
+      const ScanConversionMethod& m = *l.m;
+      out += fmt::format(
+          "| {} | {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.0f} | {:.0f} | {} | {} | {} | {} | "
+          "{:.0f} | {} |\n",
+          first ? r.a.scene : "", l.edges, l.plane, m.edge_pixels, m.edge_max_error,
+          m.edge_mean_error, m.shared_edge_max_error, m.layer_max_error, m.interior_max_error,
+          m.show_through,
+          m.parity_errors < 0 ? std::string("open") : std::to_string(m.parity_errors), l.own,
+          m.triangle_cycles, m.gp_clocks_per_triangle, m.packet_words);
+      first = false;
+    }
+  }
+  return out;
 }
 
 std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports) {

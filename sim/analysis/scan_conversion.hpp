@@ -8,7 +8,10 @@
 // own `z` field, read back (render_field). Parity is counted by firmware too: a program per
 // method that adds 1 to a per-pixel counter for every triangle that owns the centre, with that
 // method's tests (the snapped edges; the enlarged area and the side tests). The reference is
-// computed in double precision from the projected, unsnapped triangles.
+// computed in double precision from the projected, unsnapped triangles, projected by the
+// reference itself from the camera's view and projection matrices (it shares no code with the
+// GP's transform); only a triangle the view volume clips is taken, clipped, from the GP's
+// transform (the built-in scenes have none).
 //
 // Contract (the terms of the report):
 //  - Exact depth at pixel (X, Y): the smallest depth, in depth units (0 .. 2^gp.depth_bits - 1),
@@ -122,6 +125,24 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
 
 // A Markdown table, one row per scene and method.
 std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports);
+
+// The ablation of accurate scan conversion's two ingredients, each alone: the standard
+// program with its depth drawn through the unsnapped vertices (plane_depth instead of depth),
+// and the accurate program's classification (enlarged area and side tests) with the snapped
+// vertices' depth (depth instead of plane_depth). Made from the two programs' text by
+// replacing the depth expression of the triangle procedure's z-buffer test and load
+// (`qcmp.lt z, E` and `qload z, E`); throws std::invalid_argument naming the program when
+// either line is missing.
+Program with_depth_expression(const Program& program, const std::string& source,
+                              const std::string& from, const std::string& to,
+                              const AssemblerOptions& options);
+// Per scene, four rows: standard; snapped edges with unsnapped planes; the accurate program's
+// classification over snapped planes; the full accurate program. `a` measured (standard,
+// accurate with snapped planes), `b` (standard with unsnapped planes, accurate).
+struct ScanConversionAblation {
+  ScanConversionReport a, b;
+};
+std::string format_scan_conversion_ablation(const std::vector<ScanConversionAblation>& rows);
 
 // The firmware that counts, per pixel, the triangles that own its centre by accurate.pp5's
 // tests (the enlarged area and the three side tests), in the red output.

@@ -26,10 +26,12 @@ namespace fs = std::filesystem;
 struct CsgOptions {
   std::vector<std::string> scenes;
   std::vector<std::string> programs = {"parity", "parity_accurate"};
+  std::vector<std::string> epsilon_programs = {"parity", "parity_epsilon", "parity_behind"};
   std::vector<std::string> assemblies;
   std::vector<std::string> interference = {"interference", "interference_accurate"};
   std::vector<std::string> csg_scenes;
   std::vector<std::string> csg_programs = {"csg", "csg_accurate", "csg_layers"};
+  std::string pruning_program = "csg";
   std::vector<std::string> transparency_scenes;
   std::vector<std::string> transparency_programs = {"transparent", "transparent_interval"};
   std::vector<int> layers = {2, 4, 8};
@@ -55,6 +57,16 @@ int run_csg(const CsgOptions& o) {
     programs.back().name = name;
   }
   const bool parity = o.application == "parity" || o.application == "all";
+  const bool regularised = o.application == "epsilon" || o.application == "all";
+  std::vector<Scene> epsilon_scenes;
+  for (const std::string& name : regularised ? epsilon_scene_names() : std::vector<std::string>{}) {
+    epsilon_scenes.push_back(make_parity_scene(name));
+  }
+  std::vector<Program> epsilon_programs;
+  for (const std::string& name : regularised ? o.epsilon_programs : std::vector<std::string>{}) {
+    epsilon_programs.push_back(assemble_file(resolve_firmware(name), assembler_options(config)));
+    epsilon_programs.back().name = name;
+  }
   const bool assembly = o.application == "interference" || o.application == "all";
   const bool rendering = o.application == "csg" || o.application == "all";
   const bool transparency = o.application == "transparency" || o.application == "all";
@@ -102,6 +114,15 @@ int run_csg(const CsgOptions& o) {
     csg_programs.push_back(assemble_file(resolve_firmware(name), assembler_options(config)));
     csg_programs.back().name = name;
   }
+  std::vector<Scene> pruning_scenes;
+  std::vector<Program> pruning_programs;
+  if (rendering) {
+    for (const std::string& name : csg_pruning_scene_names())
+      pruning_scenes.push_back(make_parity_scene(name));
+    pruning_programs.push_back(
+        assemble_file(resolve_firmware(o.pruning_program), assembler_options(config)));
+    pruning_programs.back().name = o.pruning_program;
+  }
   std::vector<std::string> assembly_names = o.assemblies;
   if (assembly_names.empty()) assembly_names = interference_scene_names();
   std::vector<Scene> assemblies;
@@ -114,8 +135,10 @@ int run_csg(const CsgOptions& o) {
     interference.back().name = name;
   }
   std::vector<ParityMeasure> rows;
+  std::vector<ParityMeasure> epsilon_rows;
   std::vector<InterferenceMeasure> interfering;
   std::vector<CsgMeasure> rendered;
+  std::vector<CsgPruning> pruning;
   std::vector<TransparencyMeasure> composited;
   std::vector<SectionMeasure> capped;
   // Every input is read: only now the output folder (a bad scene or program leaves none).
@@ -131,6 +154,13 @@ int run_csg(const CsgOptions& o) {
     for (const Program& program : programs) {
       rows.push_back(measure_parity(config, scene, program, o.threads));
       images(scene.name, program.name, rows.back().image, rows.back().difference);
+    }
+  }
+  for (const Scene& scene : epsilon_scenes) {
+    for (const Program& program : epsilon_programs) {
+      epsilon_rows.push_back(measure_parity(config, scene, program, o.threads));
+      images("epsilon-" + scene.name, program.name, epsilon_rows.back().image,
+             epsilon_rows.back().difference);
     }
   }
   for (const Scene& scene : assemblies) {
@@ -150,6 +180,11 @@ int run_csg(const CsgOptions& o) {
       }
       rendered.push_back(measure_csg(config, scene, program, o.threads));
       images(scene.name, program.name, rendered.back().image, rendered.back().difference);
+    }
+  }
+  for (const Scene& scene : pruning_scenes) {
+    for (const Program& program : pruning_programs) {
+      pruning.push_back(measure_csg_pruning(config, scene, program, o.threads));
     }
   }
   for (const Scene& scene : see_through) {
@@ -172,20 +207,27 @@ int run_csg(const CsgOptions& o) {
   }
   std::string tables;
   if (parity) tables += format_parity(rows) + "\n";
+  if (regularised) tables += format_epsilon(epsilon_rows) + "\n";
   if (assembly) tables += format_interference(interfering) + "\n";
-  if (rendering) tables += format_csg_render(rendered) + "\n";
+  if (rendering) {
+    tables += format_csg_render(rendered) + "\n";
+    tables += format_csg_pruning(pruning) + "\n";
+  }
   if (transparency) tables += format_transparency(composited) + "\n";
   if (sections) tables += format_section(capped) + "\n";
   outputs.add((fs::path(o.out_dir) / "csg.md").string(), tables);
   outputs.commit();
-  std::cout << fmt::format(
-                   "{} x {} screen; pixels compared with a double-precision reference at "
-                   "the pixel centre (a ray caster; for transparency every layer composited), "
-                   "those within 0.75 pixel of a change left out\n\n",
-                   config.screen.width, config.screen.height)
-            << tables
-            << fmt::format("wrote {0}/csg.md and {0}/SCENE-PROGRAM{{,-difference}}.png\n",
-                           o.out_dir);
+  std::cout
+      << fmt::format(
+             "{} x {} screen; pixels compared with a double-precision reference at "
+             "the pixel centre (a ray caster; for transparency every layer composited), "
+             "those within 0.75 pixel of a change left out\n\n",
+             config.screen.width, config.screen.height)
+      << tables
+      << fmt::format(
+             "wrote {0}/csg.md and {0}/SCENE-PROGRAM{{,-difference}}.png (the epsilon table's "
+             "as epsilon-SCENE-PROGRAM)\n",
+             o.out_dir);
   return 0;
 }
 
@@ -197,7 +239,9 @@ Command add_csg_command(CLI::App& app) {
       "csg",
       "The parity and depth-interval applications (Rossignac 9.2.2 to 9.2.4) on the machine, each "
       "against a double-precision ground truth (--application, all by default): parity, point "
-      "in solid (parity, parity_accurate); interference of two solids by depth intervals "
+      "in solid (parity, parity_accurate); epsilon, the erosion (parity_epsilon) and the test "
+      "at z + epsilon (parity_behind) beside exact parity; interference of two solids by depth "
+      "intervals "
       "(interference, interference_accurate); csg, CSG rendering by Goldfeather's multipass "
       "algorithm over meshes and quadric spheres (csg, csg_accurate, csg_layers); "
       "transparency, front to back and back to front with a depth-interval buffer "
@@ -225,6 +269,13 @@ Command add_csg_command(CLI::App& app) {
   cmd->add_option(
       "--csg-program", o->csg_programs,
       "A program defining 'surface' (repeatable; default csg, csg_accurate and csg_layers)");
+  cmd->add_option("--pruning-program", o->pruning_program,
+                  "The program whose CSG pass plan is measured with and without Goldfeather's "
+                  "pruning (default csg), on the mesh CSG scenes and box-minus-apart");
+  cmd->add_option("--epsilon-program", o->epsilon_programs,
+                  "A program defining 'parity' for the epsilon table (repeatable; default "
+                  "parity, parity_epsilon (erosion) and parity_behind (the test at z + epsilon)); "
+                  "scenes plane-sphere, plane-boxes, plane-slab, plane-in-box");
   cmd->add_option("--transparency-scene", o->transparency_scenes,
                   "A scene for transparency (repeatable): a built-in name, a mesh file or a scene "
                   "file; default torus");
@@ -245,10 +296,12 @@ Command add_csg_command(CLI::App& app) {
   cmd->add_option("--section-program", o->section_programs,
                   "A cross-section program defining 'parity' (repeatable; default section and "
                   "section_accurate)");
-  cmd->add_option("--application", o->application,
-                  "parity, interference, csg (rendering), transparency, section or all (default "
-                  "all)")
-      ->check(CLI::IsMember({"parity", "interference", "csg", "transparency", "section", "all"}));
+  cmd->add_option(
+         "--application", o->application,
+         "parity, epsilon (the two epsilon regularisations), interference, csg (rendering), "
+         "transparency, section or all (default all)")
+      ->check(CLI::IsMember(
+          {"parity", "epsilon", "interference", "csg", "transparency", "section", "all"}));
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/csg)");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 
+#include "common/read_file.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
 #include "sim/analysis/scan_conversion.hpp"
@@ -26,6 +27,7 @@ struct ScanConvertOptions {
   std::string config_path;
   std::vector<std::string> sets;
   std::string out_dir = "out/scanconvert";
+  bool ablation = false;
   int threads = default_threads();
 };
 
@@ -47,6 +49,31 @@ int run_scanconvert(const ScanConvertOptions& o) {
   Program accurate = assemble_file(resolve_firmware(o.accurate), options);
   standard.name = o.standard;
   accurate.name = o.accurate;
+  if (o.ablation) {
+    // Each ingredient of the accurate program alone (scan_conversion.hpp).
+    const Program standard_unsnapped = with_depth_expression(
+        standard,
+        read_regular_file(resolve_firmware(o.standard), kMaxProgramBytes, "a firmware program"),
+        "depth", "plane_depth", options);
+    const Program accurate_snapped = with_depth_expression(
+        accurate,
+        read_regular_file(resolve_firmware(o.accurate), kMaxProgramBytes, "a firmware program"),
+        "plane_depth", "depth", options);
+    std::vector<ScanConversionAblation> rows;
+    for (const Scene& scene : scenes) {
+      ScanConversionAblation r;
+      r.a = measure_scan_conversion(config, scene, standard, accurate_snapped, o.threads);
+      r.b = measure_scan_conversion(config, scene, standard_unsnapped, accurate, o.threads);
+      rows.push_back(std::move(r));
+    }
+    const int n = config.gp.significand_bits;
+    std::cout << fmt::format(
+                     "{} x {} screen, vertices snapped to 1/{} pixel, the GP's coefficients {}\n\n",
+                     config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits,
+                     n < 62 ? fmt::format("kept to {} significant bits", n) : std::string("exact"))
+              << format_scan_conversion_ablation(rows);
+    return 0;
+  }
   prepare_output_folder(o.out_dir, "--out");
 
   std::vector<ScanConversionReport> reports;
@@ -107,6 +134,11 @@ Command add_scanconvert_command(CLI::App& app) {
                   "file; default every built-in scene of triangles (not the sphere scenes)");
   cmd->add_option("--standard", o->standard, "The standard program (default phong)");
   cmd->add_option("--accurate", o->accurate, "The accurate program (default accurate)");
+  cmd->add_flag("--ablation", o->ablation,
+                "Instead of the table and images, the accurate program's two ingredients each "
+                "alone: the standard program with depth through the unsnapped vertices, and the "
+                "accurate program's classification with the snapped vertices' depth (four rows "
+                "per scene; writes nothing)");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/scanconvert)");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
