@@ -5,30 +5,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/splitmix.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 
 namespace pp5 {
-
-namespace {
-
-// splitmix64: a generator whose sequence is fixed by its seed on every host.
-struct GridRandom {
-  std::uint64_t state;
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  int below(int n) { return static_cast<int>(next() % static_cast<std::uint64_t>(n)); }
-  template <class T>
-  const T& pick(const std::vector<T>& v) {
-    return v[static_cast<std::size_t>(below(static_cast<int>(v.size())))];
-  }
-};
-
-}  // namespace
 
 std::string GridMachine::label() const {
   std::string out = scene + " " + program;
@@ -55,7 +36,7 @@ std::vector<GridMachine> analytic_tuning_grid() {
 }
 
 std::vector<GridMachine> analytic_heldout_grid(int count, std::uint64_t seed) {
-  GridRandom random{seed};
+  SplitMix64 random{seed};
   // Triangle scenes with any program; sphere scenes with the programs that draw spheres.
   const std::vector<std::string> triangle_scenes = {"torus", "sphere", "figure-eight",
                                                     "folded-slab"};

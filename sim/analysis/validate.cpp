@@ -10,6 +10,7 @@
 #define SC_INCLUDE_DYNAMIC_PROCESSES
 #include <systemc>
 
+#include "common/splitmix.hpp"
 #include "models/gp/setup_memo.hpp"
 #include "models/machine.hpp"
 #include "models/pixel_array/backends.hpp"
@@ -361,18 +362,6 @@ SensitivityTable sensitivity(const MachineConfig& base, const ProgramLoader& loa
 
 namespace {
 
-// splitmix64: the joint sample's generator, fixed by its seed on every host.
-struct JointRandom {
-  std::uint64_t state;
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  double unit() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-};
-
 // One end of a range as a single numeric assignment of `key`, if it is one.
 bool numeric_end(const std::vector<std::string>& end, const std::string& key, double& value) {
   if (end.size() != 1 || end[0].rfind(key + "=", 0) != 0) return false;
@@ -441,7 +430,7 @@ JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoade
        "painter's: back faces removed first", "painter's: splitting", "painter's: per region bin",
        "painter's: sort x gp.overhead_factor"});
   const int n = std::max(1, options.samples);
-  JointRandom random{options.seed};
+  SplitMix64 random{options.seed};
   // Latin hypercube: each dimension's n strata in a random order, a random point in each.
   std::vector<std::vector<double>> u(dimensions, std::vector<double>(static_cast<std::size_t>(n)));
   for (auto& column : u) {

@@ -191,6 +191,29 @@ bool split_piece(const PaintPiece& piece, const PlaneEquation& plane,
   return true;
 }
 
+// Each painted polygon as a piece: an unclipped triangle with its world vertices (it can be
+// split), a clipped one as its screen polygon.
+std::vector<PaintPiece> paint_pieces(const Scene& scene,
+                                     const std::vector<ScreenPolygon>& painted) {
+  std::vector<PaintPiece> pieces;
+  for (const ScreenPolygon& poly : painted) {
+    PaintPiece piece;
+    piece.source = poly.source;
+    if (poly.v.size() == 3 && poly.w.size() == 3) {
+      const glm::uvec3& tri = scene.mesh.triangles[static_cast<std::size_t>(poly.source)];
+      for (std::size_t k = 0; k < 3; ++k) {
+        piece.v[k].world = scene.mesh.vertices[tri[static_cast<glm::length_t>(k)]];
+        piece.v[k].screen = poly.v[k];
+        piece.v[k].w = poly.w[k];
+      }
+    } else {
+      piece.clipped = poly.v;
+    }
+    pieces.push_back(std::move(piece));
+  }
+  return pieces;
+}
+
 SortPolygon sort_polygon(const PaintPiece& p) {
   if (!p.clipped.empty()) return {p.clipped};
   return {{p.v[0].screen, p.v[1].screen, p.v[2].screen}};
@@ -293,22 +316,7 @@ PainterTiming painter_against_zbuffer(const MachineConfig& config_in, const Scen
   PainterTiming t;
   t.zbuffer_seconds = project_frame(config, scene, zbuffer).frame_seconds;
   const std::vector<ScreenPolygon> painted = project_scene(painter_config, scene);
-  std::vector<PaintPiece> pieces;
-  for (const ScreenPolygon& poly : painted) {
-    PaintPiece piece;
-    piece.source = poly.source;
-    if (poly.v.size() == 3 && poly.w.size() == 3) {
-      const glm::uvec3& tri = scene.mesh.triangles[static_cast<std::size_t>(poly.source)];
-      for (std::size_t k = 0; k < 3; ++k) {
-        piece.v[k].world = scene.mesh.vertices[tri[static_cast<glm::length_t>(k)]];
-        piece.v[k].screen = poly.v[k];
-        piece.v[k].w = poly.w[k];
-      }
-    } else {
-      piece.clipped = poly.v;
-    }
-    pieces.push_back(std::move(piece));
-  }
+  std::vector<PaintPiece> pieces = paint_pieces(scene, painted);
   VisibleSceneReport scratch;
   std::vector<std::vector<SortPolygon>> earlier;
   std::vector<DepthSortResult> earlier_sorts;
@@ -367,24 +375,7 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
   const std::vector<ScreenPolygon> front =
       painter_options.remove_back_faces ? project_scene(culling, scene) : polygons;
   const std::vector<ScreenPolygon>& painted = painter_options.remove_back_faces ? front : polygons;
-  // Each painted polygon as a piece: an unclipped triangle with its world vertices (it can
-  // be split), a clipped one as its scene triangle.
-  std::vector<PaintPiece> pieces;
-  for (const ScreenPolygon& poly : painted) {
-    PaintPiece piece;
-    piece.source = poly.source;
-    if (poly.v.size() == 3 && poly.w.size() == 3) {
-      const glm::uvec3& tri = scene.mesh.triangles[static_cast<std::size_t>(poly.source)];
-      for (std::size_t k = 0; k < 3; ++k) {
-        piece.v[k].world = scene.mesh.vertices[tri[static_cast<glm::length_t>(k)]];
-        piece.v[k].screen = poly.v[k];
-        piece.v[k].w = poly.w[k];
-      }
-    } else {
-      piece.clipped = poly.v;
-    }
-    pieces.push_back(std::move(piece));
-  }
+  std::vector<PaintPiece> pieces = paint_pieces(scene, painted);
   std::vector<std::vector<SortPolygon>> earlier;
   std::vector<DepthSortResult> earlier_sorts;
   rep.sort = sort_with_splitting(pieces, config.gp.count, painter_options.split_rounds, rep,
