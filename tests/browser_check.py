@@ -15,6 +15,7 @@ Screenshots (the first screen, and the whole page at half scale) go to DIR when 
 Exit status: 0 all pass, 1 a check failed, 77 no Chromium (the test then skips).
 """
 import base64
+import fcntl
 import json
 import os
 import shutil
@@ -37,10 +38,20 @@ def find_chromium():
 class Browser:
     def __init__(self, binary, profile):
         # fd 3: commands to the browser; fd 4: its replies and events.
-        to_browser_r, self.to_browser = os.pipe()
-        self.from_browser, from_browser_w = os.pipe()
+        # The pipes are moved above fd 9 first: where the test runs with stdin, stdout or
+        # stderr closed (as a CI runner may), os.pipe() hands out 0, 1 or 2, which Popen then
+        # overwrites with /dev/null before child_fds runs, and the browser reads an empty pipe.
+        def high(fd):
+            moved = fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 10)
+            os.close(fd)
+            return moved
+
+        to_browser_r, self.to_browser = (high(fd) for fd in os.pipe())
+        self.from_browser, from_browser_w = (high(fd) for fd in os.pipe())
         os.set_inheritable(to_browser_r, True)
         os.set_inheritable(from_browser_w, True)
+        self.log_path = os.path.join(profile, "chromium-stderr.log")
+        log = open(self.log_path, "wb")
 
         def child_fds():
             os.dup2(to_browser_r, 3)
@@ -52,13 +63,22 @@ class Browser:
              "--disable-extensions", "--disable-background-networking",
              "--disable-component-update", "--disable-sync", "--hide-scrollbars",
              f"--user-data-dir={profile}", "about:blank"],
-            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=log,
             preexec_fn=child_fds, close_fds=False)
+        log.close()
         os.close(to_browser_r)
         os.close(from_browser_w)
         self.buffer = b""
         self.next_id = 0
         self.events = []
+
+    def stderr_tail(self, lines=20):
+        try:
+            with open(self.log_path, "rb") as f:
+                text = f.read().decode("utf-8", "replace").splitlines()
+        except OSError as e:
+            return f"(no log: {e})"
+        return "\n".join(text[-lines:]) or "(nothing)"
 
     def close(self):
         try:
@@ -82,7 +102,8 @@ class Browser:
                 continue
             chunk = os.read(self.from_browser, 1 << 20)
             if not chunk:
-                raise RuntimeError("the browser closed its pipe (did it start?)")
+                raise RuntimeError("the browser closed its pipe; its last words:\n" +
+                                   self.stderr_tail())
             self.buffer += chunk
         message, self.buffer = self.buffer.split(b"\0", 1)
         return json.loads(message)
