@@ -64,6 +64,8 @@ for run in gp.count-1 gp.count-2; do
   [ -s "$weird/$run/stats.json" ] || fail "task $run did not write into the folder named"
 done
 [ "$(grep -c . "$weird/sweep.csv")" -eq 3 ] || fail "sweep.csv: $(cat "$weird/sweep.csv")"
+# The aggregate job writes the sweep's report too.
+grep -q '<html' "$weird/report.html" 2>/dev/null || fail "the aggregate job wrote no report.html"
 # Slurm's logs land in the folder, with the folder's own '%' kept as it is.
 [ -e "$weird/slurm-100_0.out" ] && [ -e "$weird/slurm-aggregate-101.out" ] \
   || fail "sbatch --output did not keep the folder's '%': $(ls "$tmp/work")"

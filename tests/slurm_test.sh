@@ -125,6 +125,7 @@ head -1 "$csv" | grep -q "^gp.count,renderer.count,frame_seconds" || fail "heade
 for point in 1,1 1,2 2,1 2,2; do
   grep -q "^$point," "$csv" || fail "no row for $point: $(cat "$csv")"
 done
+grep -q '<html' sweep/report.html 2>/dev/null || fail "the aggregate job wrote no report.html"
 for d in sweep/gp.count-*_renderer.count-*; do
   [ -s "$d/stats.json" ] || fail "no stats.json in $d"
 done

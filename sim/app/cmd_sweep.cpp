@@ -140,8 +140,8 @@ constexpr std::uint64_t kSlurmDefaultMaxArraySize = 1001;
 
 // --slurm FILE: OUT/commands.txt, one `pp5sim render` command per grid point (as
 // --print-commands prints them, for `parallel < OUT/commands.txt`), and FILE, a bash script
-// that submits them to Slurm: a job array whose task i runs line i + 1, then `sweep aggregate`
-// as a job that starts only once every task has succeeded (afterok; a failed task cancels it).
+// that submits them to Slurm: a job array whose task i runs line i + 1, then `sweep aggregate
+// --report` (sweep.csv and report.html) as a job that starts only once every task has succeeded (afterok; a failed task cancels it).
 // Both files are written, or neither. Paths in the jobs are relative to the folder `sweep` ran
 // in, which the jobs start in (--chdir).
 int write_slurm_job(const SweepOptions& o, const std::string& program_path, std::uint64_t points,
@@ -164,8 +164,8 @@ int write_slurm_job(const SweepOptions& o, const std::string& program_path, std:
 #   bash {self}
 # - a job array of {points} tasks, one per grid point: task i runs line i + 1 of
 #   {commands} (the commands `--print-commands` prints, for GNU parallel);
-# - `pp5sim sweep aggregate` into {out}/sweep.csv, as a job that starts once every task
-#   has succeeded (afterok).
+# - `pp5sim sweep aggregate --report` into {out}/sweep.csv and {out}/report.html, as a job
+#   that starts once every task has succeeded (afterok).
 # Each task's output goes to {out}/slurm-JOB_TASK.out. Extra sbatch options (partition,
 # account, time limit) come from PP5_SBATCH_OPTIONS, e.g. PP5_SBATCH_OPTIONS="-p short".
 # Slurm refuses arrays larger than its MaxArraySize (1001 by default).
@@ -193,7 +193,7 @@ echo "$array $aggregate" > {out}/slurm-jobs.txt
       fmt::arg("self", shell_quote(o.slurm, "--slurm")), fmt::arg("points", points),
       fmt::arg("commands", q_commands), fmt::arg("last", points - 1), fmt::arg("cwd", q_cwd),
       fmt::arg("aggregate",
-               shell_quote(fmt::format("{} sweep aggregate {} -o {}",
+               shell_quote(fmt::format("{} sweep aggregate {} -o {} --report",
                                        shell_quote(program_path, "the pp5sim executable's path"),
                                        q_out, shell_quote((out / "sweep.csv").string(), "--out")),
                            "--out")));
@@ -205,7 +205,7 @@ echo "$array $aggregate" > {out}/slurm-jobs.txt
                   fs::perm_options::add);
   std::cout << fmt::format(
       "wrote {} ({} commands, for `parallel < {}`) and {} (a Slurm job array "
-      "of {} tasks and a dependent `sweep aggregate`: bash {})\n",
+      "of {} tasks and a dependent `sweep aggregate --report`: bash {})\n",
       commands.string(), points, commands.string(), o.slurm, points, o.slurm);
   if (points > kSlurmDefaultMaxArraySize) {
     std::cerr << fmt::format(
@@ -803,7 +803,8 @@ Command add_sweep_command(CLI::App& app) {
   sweep
       ->add_option("--slurm", o->slurm,
                    "Do not run: write FILE, a bash script that submits one Slurm job-array task "
-                   "per run and `sweep aggregate` as a job after them (afterok), and "
+                   "per run and `sweep aggregate --report` (OUT/sweep.csv, OUT/report.html) as a "
+                   "job after them (afterok), and "
                    "OUT/commands.txt, the runs' commands (also for `parallel < OUT/commands.txt`)")
       ->excludes("--print-commands");
   sweep->add_option("-j,--threads", o->threads, "Host threads for each run's pixel arrays")
