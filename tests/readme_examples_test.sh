@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Every pp5sim command shown in the code blocks of README.md and docs/ runs as written: each is
-# run from a scratch folder that sees the checkout's examples/, firmware/ and tests/ and a
-# build/pp5sim that is the binary under test, and must exit 0 (the one documented exception:
-# `extremes --scene torus` reports its failing case with status 1).
+# Every pp5sim command shown in the code blocks of README.md, traces/README.md and docs/ runs
+# as written: each is run from a scratch folder that sees the checkout's examples/, firmware/
+# and tests/ and a build/pp5sim that is the binary under test, and must exit 0 (the one
+# documented exception: `extremes --scene torus` reports its failing case with status 1).
 #   tests/readme_examples_test.sh PP5SIM [--all]
 # Without --all the `highlight` examples (minutes each) are listed, not run; CI runs the rest.
 set -u
@@ -20,7 +20,7 @@ for d in examples firmware tests; do ln -s "$root/$d" "$tmp/$d"; done
 commands=$(python3 - "$root" <<'PY'
 import glob, os, re, sys
 root = sys.argv[1]
-files = ["README.md"] + sorted(os.path.relpath(f, root)
+files = ["README.md", "traces/README.md"] + sorted(os.path.relpath(f, root)
                                for f in glob.glob(os.path.join(root, "docs", "**", "*.md"), recursive=True))
 bad = []
 for name in files:
@@ -47,7 +47,7 @@ if bad:
 PY
 )
 [ $? -eq 0 ] || { echo "FAIL: give each of these its own --out folder (above)"; exit 1; }
-[ -n "$commands" ] || { echo "FAIL: no commands found in README.md and docs/"; exit 1; }
+[ -n "$commands" ] || { echo "FAIL: no commands found in README.md, traces/README.md and docs/"; exit 1; }
 ran=0 skipped=0 failed=0
 while IFS= read -r command; do
   if [[ "$command" =~ ^build/pp5sim\ highlight( |$) && "$all" != "--all" ]]; then
