@@ -53,12 +53,18 @@ expect_error "give --describe or a stats.json file" stats
 printf '{"frame": {"bogus": 1}}' > "$tmp/bogus.json"
 expect_error "'frame.bogus' is not a statistic" stats "$tmp/bogus.json"
 "$bin" highlight --scenes two-triangles --firmware exactmatch epsilon --speed-scene '' \
-  --set screen.width=256 --set screen.height=256 --out "$tmp/hl" >"$tmp/hl.log" 2>&1 \
+  --set screen.width=256 --set screen.height=256 --out "$tmp/hl" --report >"$tmp/hl.log" 2>&1 \
   || fail "highlight failed: $(cat "$tmp/hl.log")"
 grep -q "| epsilon | two-triangles |" "$tmp/hl.log" || fail "no epsilon row in the table"
-for f in highlight.md highlight.csv two-triangles/epsilon.png two-triangles/epsilon-overlay.png; do
+for f in highlight.md highlight.csv highlight-curves-two-triangles.csv report.html \
+  two-triangles/epsilon.png two-triangles/epsilon-overlay.png; do
   [ -s "$tmp/hl/$f" ] || fail "highlight did not write $f"
 done
+# Its CSV is the Markdown table's rows, with the values (not the text) in the cells.
+[ "$(head -1 "$tmp/hl/highlight.csv")" = "program,scene,truth_pixels,flagged_pixels,recall,recall_ceiling,precision,width_mean,width_sd,coverage,order_change,bits_used,spilled,polygons_per_second,polygons_per_second_compiled" ] \
+  || fail "highlight.csv's heading: $(head -1 "$tmp/hl/highlight.csv")"
+[ "$(grep -c '^epsilon,two-triangles,' "$tmp/hl/highlight.csv")" -eq 1 ] || fail "highlight.csv: $(cat "$tmp/hl/highlight.csv")"
+grep -q '<table' "$tmp/hl/report.html" || fail "highlight's report.html has no table"
 "$bin" --help | grep -q render || fail "--help does not list render"
 # The extremes report: every synthetic case passes; a scene's failures are named, exit 1.
 "$bin" extremes -j 2 >"$tmp/ext.log" 2>&1 || fail "extremes failed: $(cat "$tmp/ext.log")"

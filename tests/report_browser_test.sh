@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every kind of HTML report, opened in headless Chromium (tests/browser_check.py): a frame's
 # (bit-level pixels and event timing), a timing-only frame's (analytic: no image, no
-# timeline), a sweep's and an analysis's (extremes). Fails on a console error, a request
+# timeline), a sweep's and the analyses' (extremes; csg and scanconvert, with their tables
+# and images). Fails on a console error, a request
 # outside the page, an image that does not decode, a blank first screen, a table that does
 # not sort or a plot that draws nothing. Skips (77) where Chromium is not installed
 # (scripts/install-deps.sh test installs Debian's chromium).
@@ -31,9 +32,19 @@ diff <(cut -d, -f1-3 "$tmp/sweep/sweep.csv") <(cut -d, -f1-3 "$tmp/sweep2/sweep.
 mkdir -p "$tmp/extremes"
 "$bin" extremes -j 2 --report "$tmp/extremes/report.html" >"$tmp/log" 2>&1 \
   || fail "extremes --report: $(cat "$tmp/log")"
+"$bin" csg --application parity -s plane-slab -p parity --set screen.width=128 \
+  --set screen.height=128 -j 2 --out "$tmp/csg" --report >"$tmp/log" 2>&1 \
+  || fail "csg --report: $(cat "$tmp/log")"
+[ -s "$tmp/csg/csg-parity.csv" ] || fail "csg --report wrote no csg-parity.csv"
+grep -q '<img' "$tmp/csg/report.html" || fail "the csg report has no image"
+"$bin" scanconvert -s two-triangles --set screen.width=128 --set screen.height=128 -j 2 \
+  --out "$tmp/scanconvert" --report >"$tmp/log" 2>&1 || fail "scanconvert --report: $(cat "$tmp/log")"
+[ -s "$tmp/scanconvert/scanconvert.csv" ] || fail "scanconvert --report wrote no scanconvert.csv"
+pages=()
+for kind in frame analytic sweep sweep2 extremes csg scanconvert; do pages+=("$tmp/$kind/report.html"); done
 
 # Self-contained: no address outside the page in any of them.
-for f in "$tmp"/{frame,analytic,sweep,sweep2,extremes}/report.html; do
+for f in "${pages[@]}"; do
   [ -s "$f" ] || fail "no $f"
   if grep -Eo '(src|href)="[a-z]+:[^"]{0,30}' "$f" | grep -v '="data:' | grep -q .; then
     fail "$f links outside itself: $(grep -Eo '(src|href)="[a-z]+:[^"]{0,30}' "$f" | grep -v '="data:' | head -3)"
@@ -42,5 +53,5 @@ done
 args=()
 [ -n "$shots" ] && args=(--screenshots "$shots")
 timeout 300 python3 "$(dirname "$0")/browser_check.py" "${args[@]}" \
-  "$tmp"/{frame,analytic,sweep,sweep2,extremes}/report.html || fail "the browser found faults (above)"
+  "${pages[@]}" || fail "the browser found faults (above)"
 echo "report_browser_test: passed"

@@ -847,3 +847,49 @@ TEST_CASE("a cross-section without the parity is caught by the comparison", "[cs
     CHECK(m.surface.disagree >= m.cap);
   }
 }
+
+TEST_CASE("the csg tables come from the report writer with the text they always had", "[csg]") {
+  // A pruning row and a transparency row, as `pp5sim csg` printed them when it formatted its
+  // Markdown by hand: headings, alignment, a union's '|' escaped inside backticks, the cost
+  // columns' precision. The CSV keeps the values.
+  CsgPruning p;
+  p.scene = "s";
+  p.program = "csg";
+  p.expression = "a | b";
+  p.pruned_expression = "a";
+  p.passes_whole = 6;
+  p.passes_pruned = 4;
+  p.surface = 100;
+  p.cost_whole = {1000, 0.002};
+  p.cost_pruned = {800, 0.001};
+  const report::Table pruning = csg_pruning_table({p});
+  CHECK(report::markdown(pruning) ==
+        "| scene | program | expression | pruned | passes unpruned | passes pruned | passes saved "
+        "| pixels with a surface | pixels differing (z) | unpruned: Renderer cycles | frame ms | "
+        "frames/s | pruned: Renderer cycles | frame ms | frames/s |\n"
+        "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+        "| s | csg | `a \\| b` | `a` | 6 | 4 | 2 | 100 | 0 | 1000 | 2.000 | 500.0 | 800 | 1.000 | "
+        "1000.0 |\n");
+  CHECK_THAT(report::csv(pruning),
+             Catch::Contains("s,csg,a | b,a,6,4,2,100,0,1000,2,500,800,1,1000"));
+  TransparencyMeasure t;
+  t.scene = "glass";
+  t.program = "transparent";
+  t.layers = 2;
+  t.compared = 10;
+  t.covered = 8;
+  t.too_many = 3;
+  t.most = 6;
+  t.max_error = 2.3;
+  t.max_error_within = 1;
+  t.bits = 173;
+  t.cost = {5, 0.5};
+  CHECK(report::markdown(transparency_table({t})) ==
+        "| application | scene | program | layers (passes) | pixels compared | with a surface | "
+        "with more layers than passes (most) | differing by more than 3 of 255 | largest error | "
+        "largest error where layers <= passes | near an outline (not compared) | bits | "
+        "Renderer cycles | frame ms | frames/s |\n"
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+        "| transparency | glass | transparent | 2 | 10 | 8 | 3 (6) | 0 | 2.3 | 1.0 | 0 | 173 | 5 | "
+        "500.000 | 2.0 |\n");
+}

@@ -141,24 +141,41 @@ AnalyticValidation validate_analytic(const std::string& grid,
   return v;
 }
 
-std::string analytic_validation_markdown(const std::vector<AnalyticValidation>& grids) {
-  std::string out =
-      "| grid | machines | model | mean error | worst error | bottleneck agrees | Kendall tau | "
-      "worst machine |\n|---|---|---|---|---|---|---|---|\n";
+report::Table analytic_validation_table(const std::vector<AnalyticValidation>& grids) {
+  using namespace report;
+  auto left = [](Column c) { return headed(c, c.name, Align::left); };
+  Table t;
+  t.id = "analytic-grids";
+  t.columns = {
+      text_column("grid", "tuning (the machines it was adjusted on) or held-out"),
+      left(integer_column("machines", "machines")),
+      text_column("model", "The analytic level's recurrence, or a closed form without contention"),
+      left(real_column("mean error", "%", 1, "Mean |frame-time error| against the event level")),
+      left(real_column("worst error", "%", 1, "Largest |frame-time error|")),
+      left(integer_column("bottleneck agrees", "machines",
+                          "Machines where the bottleneck agrees with the event level's")),
+      left(real_column("Kendall tau", "", 3,
+                       "Rank correlation of the frame times with the event level's")),
+      text_column("worst machine", "Where the recurrence's error is largest"),
+  };
+  // "12.3%": the unit follows the number in the cell, as the table always showed it.
+  auto pct = [](double share) {
+    return Cell::shown_as(100 * share, fmt::format("{:.1f}%", 100 * share));
+  };
   for (const AnalyticValidation& v : grids) {
-    const auto n = v.points.size();
-    out += fmt::format(
-        "| {} | {} | contention recurrence | {:.1f}% | {:.1f}% | {} of {} | {:.3f} | "
-        "{} |\n",
-        v.grid, n, 100 * v.mean_error, 100 * v.worst_error, v.bottleneck_agree, n, v.kendall_tau,
-        v.worst_at);
-    out += fmt::format(
-        "| {} | {} | closed form, no contention | {:.1f}% | {:.1f}% | - | {:.3f} | "
-        "|\n",
-        v.grid, n, 100 * v.closed_form_mean_error, 100 * v.closed_form_worst_error,
-        v.closed_form_tau);
+    const auto n = static_cast<std::int64_t>(v.points.size());
+    t.add_row({v.grid, n, "contention recurrence", pct(v.mean_error), pct(v.worst_error),
+               Cell::shown_as(static_cast<std::int64_t>(v.bottleneck_agree),
+                              fmt::format("{} of {}", v.bottleneck_agree, n)),
+               v.kendall_tau, v.worst_at});
+    t.add_row({v.grid, n, "closed form, no contention", pct(v.closed_form_mean_error),
+               pct(v.closed_form_worst_error), Cell::missing(), v.closed_form_tau, ""});
   }
-  return out;
+  return t;
+}
+
+std::string analytic_validation_markdown(const std::vector<AnalyticValidation>& grids) {
+  return report::markdown(analytic_validation_table(grids));
 }
 
 }  // namespace pp5

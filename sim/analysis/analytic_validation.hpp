@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "sim/analysis/validate.hpp"
+#include "sim/output/report.hpp"
 
 namespace pp5 {
 
@@ -69,6 +70,8 @@ AnalyticValidation validate_analytic(const std::string& grid,
 // Kendall's tau-b of two equally long series (ties in either counted as neither).
 double kendall_tau(const std::vector<double>& x, const std::vector<double>& y);
 
+// The grids' table (sim/output/report.hpp), and it in Markdown.
+report::Table analytic_validation_table(const std::vector<AnalyticValidation>& grids);
 std::string analytic_validation_markdown(const std::vector<AnalyticValidation>& grids);
 
 }  // namespace pp5

@@ -800,44 +800,109 @@ SectionMeasure measure_section(const MachineConfig& config, const Scene& scene,
   return m;
 }
 
-std::string format_section(const std::vector<SectionMeasure>& rows) {
-  std::string out =
-      "| application | scene | program | pixels compared | with a surface (ray caster) | cap "
-      "(ray caster) | cap disagreeing | surface disagreeing | of those, coverage | near an "
-      "outline (not compared) | depth error where agreeing, median / largest (depth units) | "
-      "passes | bits | Renderer cycles | frame ms | frames/s |\n"
-      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  for (const SectionMeasure& s : rows) {
-    const CsgMeasure& m = s.surface;
-    out += fmt::format(
-        "| cross-section | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} / {:.0f} | {} | "
-        "{} | {} |\n",
-        m.scene, m.program, m.compared, m.surface, s.cap, s.cap_disagree, m.disagree, m.coverage,
-        m.uncertain, m.median_depth_error, m.max_depth_error, m.passes, m.bits, m.cost.cells());
-  }
-  return out;
+// Columns of the csg tables: a count of pixels, a text, a real; each keeps its heading as
+// written (no unit appended).
+namespace {
+
+report::Column csg_pixels(const std::string& heading, const std::string& description) {
+  return report::headed(report::integer_column(heading, "pixels", description), heading);
 }
 
-std::string format_csg_render(const std::vector<CsgMeasure>& rows) {
-  std::string out =
-      "| application | scene | expression | program | pixels compared | with a surface (ray "
-      "caster) | disagreeing | of those, coverage | near an outline (not compared) | depth error "
-      "where agreeing, median / largest (depth units) | passes | bits | Renderer cycles | frame ms "
-      "| frames/s |\n"
-      "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  for (const CsgMeasure& m : rows) {
-    std::string expression;  // a table cell: its unions' bars escaped
-    for (char c : m.expression) {
-      if (c == '|') expression += '\\';
-      expression += c;
-    }
-    out += fmt::format(
-        "| CSG rendering | {} | `{}` | {} | {} | {} | {} | {} | {} | {:.1f} / {:.0f} | {} | {} | "
-        "{} |\n",
-        m.scene, expression, m.program, m.compared, m.surface, m.disagree, m.coverage, m.uncertain,
-        m.median_depth_error, m.max_depth_error, m.passes, m.bits, m.cost.cells());
+report::Column csg_count(const std::string& heading, const std::string& unit,
+                         const std::string& description) {
+  return report::headed(report::integer_column(heading, unit, description), heading);
+}
+
+report::Column csg_text(const std::string& heading, const std::string& description = {}) {
+  return report::headed(report::text_column(heading, description), heading);
+}
+
+report::Column csg_depth_error_column() {
+  return report::headed(report::real_column("depth error where agreeing", "depth units", 1,
+                                            "Median / largest depth error over the agreeing "
+                                            "covered pixels"),
+                        "depth error where agreeing, median / largest (depth units)",
+                        report::Align::right);
+}
+
+report::Cell csg_depth_error_cell(const CsgMeasure& m) {
+  return report::Cell::shown_as(
+      m.max_depth_error, fmt::format("{:.1f} / {:.0f}", m.median_depth_error, m.max_depth_error));
+}
+
+}  // namespace
+
+report::Table section_table(const std::vector<SectionMeasure>& rows) {
+  using namespace report;
+  Table t;
+  t.id = "csg-section";
+  t.columns = {
+      csg_text("application"),
+      csg_text("scene"),
+      csg_text("program"),
+      csg_pixels("pixels compared", "Pixels far from an outline"),
+      csg_pixels("with a surface (ray caster)",
+                 "Compared pixels where the ray caster finds a surface"),
+      csg_pixels("cap (ray caster)", "Compared pixels where the ray caster shows the cap"),
+      csg_pixels("cap disagreeing", "Compared pixels where the machine's cap differs"),
+      csg_pixels("surface disagreeing",
+                 "Compared pixels where coverage or depth differs from the ray caster"),
+      csg_pixels("of those, coverage", "Of those, where one shows a surface and the other not"),
+      csg_pixels("near an outline (not compared)", "Pixels near an outline"),
+      csg_depth_error_column(),
+      csg_count("passes", "passes", "Passes of the frame's pass plan"),
+      csg_count("bits", "bits", "Pixel-memory bits the program uses")};
+  add_cost_columns(t.columns);
+  for (const SectionMeasure& s : rows) {
+    const CsgMeasure& m = s.surface;
+    std::vector<Cell> row = {"cross-section",
+                             m.scene,
+                             m.program,
+                             m.compared,
+                             m.surface,
+                             s.cap,
+                             s.cap_disagree,
+                             m.disagree,
+                             m.coverage,
+                             m.uncertain,
+                             csg_depth_error_cell(m),
+                             m.passes,
+                             m.bits};
+    add_cost_cells(row, m.cost);
+    t.add_row(std::move(row));
   }
-  return out;
+  return t;
+}
+
+report::Table csg_render_table(const std::vector<CsgMeasure>& rows) {
+  using namespace report;
+  Table t;
+  t.id = "csg-render";
+  t.columns = {
+      csg_text("application"),
+      csg_text("scene"),
+      headed(code_column("expression", "The CSG expression over the scene's solids"), "expression"),
+      csg_text("program"),
+      csg_pixels("pixels compared", "Pixels far from an outline"),
+      csg_pixels("with a surface (ray caster)",
+                 "Compared pixels where the ray caster finds a surface"),
+      csg_pixels("disagreeing",
+                 "Compared pixels where coverage or depth differs from the ray caster"),
+      csg_pixels("of those, coverage", "Of those, where one shows a surface and the other not"),
+      csg_pixels("near an outline (not compared)", "Pixels near an outline"),
+      csg_depth_error_column(),
+      csg_count("passes", "passes", "Passes of the frame's pass plan"),
+      csg_count("bits", "bits", "Pixel-memory bits the program uses")};
+  add_cost_columns(t.columns);
+  for (const CsgMeasure& m : rows) {
+    std::vector<Cell> row = {
+        "CSG rendering", m.scene,    m.expression, m.program,   m.compared,
+        m.surface,       m.disagree, m.coverage,   m.uncertain, csg_depth_error_cell(m),
+        m.passes,        m.bits};
+    add_cost_cells(row, m.cost);
+    t.add_row(std::move(row));
+  }
+  return t;
 }
 
 InterferenceMeasure measure_interference(const MachineConfig& config, const Scene& scene,
@@ -905,51 +970,97 @@ InterferenceMeasure measure_interference(const MachineConfig& config, const Scen
   return m;
 }
 
-std::string format_interference(const std::vector<InterferenceMeasure>& rows) {
-  std::string out =
-      "| application | scene | program | pixels compared | of those, interfering (ray caster) | "
-      "of those, flagged (machine) | of those, disagreeing | near an edge (not compared) | of "
-      "those, flagged | overlap depth range | passes | bits | Renderer cycles | frame ms | "
-      "frames/s |\n"
-      "|---|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
+report::Table interference_table(const std::vector<InterferenceMeasure>& rows) {
+  using namespace report;
+  Table t;
+  t.id = "csg-interference";
+  t.columns = {csg_text("application"),
+               csg_text("scene"),
+               csg_text("program"),
+               csg_pixels("pixels compared", "Pixels far from an edge of the interference"),
+               csg_pixels("of those, interfering (ray caster)",
+                          "Compared pixels where the two solids' intersection has a surface"),
+               csg_pixels("of those, flagged (machine)", "Compared pixels the machine flags"),
+               csg_pixels("of those, disagreeing", "Compared pixels where the two differ"),
+               csg_pixels("near an edge (not compared)", "Pixels near an edge of the interference"),
+               csg_pixels("of those, flagged", "Of those, the pixels the machine flags"),
+               csg_text("overlap depth range",
+                        "The depth range of every flagged pixel's overlap, 0 near .. 1 far"),
+               csg_count("passes", "passes", "Passes of the frame's pass plan"),
+               csg_count("bits", "bits", "Pixel-memory bits the program uses")};
+  add_cost_columns(t.columns);
   for (const InterferenceMeasure& m : rows) {
-    out += fmt::format(
-        "| interference | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", m.scene,
-        m.program, m.compared, m.truth, m.flagged, m.disagree, m.uncertain, m.flagged_uncertain,
-        m.flagged + m.flagged_uncertain ? fmt::format("{:.5f} .. {:.5f}", m.lo, m.hi)
-                                        : std::string("-"),
-        m.passes, m.bits, m.cost.cells());
+    std::vector<Cell> row = {"interference",
+                             m.scene,
+                             m.program,
+                             m.compared,
+                             m.truth,
+                             m.flagged,
+                             m.disagree,
+                             m.uncertain,
+                             m.flagged_uncertain,
+                             m.flagged + m.flagged_uncertain
+                                 ? Cell(fmt::format("{:.5f} .. {:.5f}", m.lo, m.hi))
+                                 : Cell::missing(),
+                             m.passes,
+                             m.bits};
+    add_cost_cells(row, m.cost);
+    t.add_row(std::move(row));
   }
-  return out;
+  return t;
 }
 
-std::string format_parity(const std::vector<ParityMeasure>& rows) {
-  std::string out =
-      "| application | scene | program | pixels compared | with a point | inside | disagreeing "
-      "with the ray caster | near an edge (not compared) | of those, differing from the centre's "
-      "ray | passes | bits | Renderer cycles | frame ms | frames/s |\n"
-      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+report::Table parity_table(const std::vector<ParityMeasure>& rows) {
+  using namespace report;
+  Table t;
+  t.id = "csg-parity";
+  t.columns = {csg_text("application"),
+               csg_text("scene"),
+               csg_text("program"),
+               csg_pixels("pixels compared", "Pixels far from an edge"),
+               csg_pixels("with a point", "Compared pixels with a point to classify"),
+               csg_pixels("inside", "Compared pixels the ray caster finds inside"),
+               csg_pixels("disagreeing with the ray caster",
+                          "Compared pixels where the machine's inside differs"),
+               csg_pixels("near an edge (not compared)", "Pixels near an edge"),
+               csg_pixels("of those, differing from the centre's ray",
+                          "Of those, where the machine differs from the ray through the centre"),
+               csg_count("passes", "passes", "Passes of the frame's pass plan"),
+               csg_count("bits", "bits", "Pixel-memory bits the program uses")};
+  add_cost_columns(t.columns);
   for (const ParityMeasure& m : rows) {
-    out +=
-        fmt::format("| point in solid | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-                    m.scene, m.program, m.compared, m.points, m.inside, m.disagree, m.uncertain,
-                    m.edge_disagree, m.passes, m.bits, m.cost.cells());
+    std::vector<Cell> row = {"point in solid", m.scene,  m.program,  m.compared,
+                             m.points,         m.inside, m.disagree, m.uncertain,
+                             m.edge_disagree,  m.passes, m.bits};
+    add_cost_cells(row, m.cost);
+    t.add_row(std::move(row));
   }
-  return out;
+  return t;
 }
 
-std::string format_epsilon(const std::vector<ParityMeasure>& rows) {
-  std::string out =
-      "| scene | program | pixels compared | with a point | inside (ray caster) | inside "
-      "(machine) | lost (inside, taken as outside) | gained (outside, taken as inside) | bits | "
-      "Renderer cycles | frame ms | frames/s |\n"
-      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+report::Table epsilon_table(const std::vector<ParityMeasure>& rows) {
+  using namespace report;
+  Table t;
+  t.id = "csg-epsilon";
+  t.columns = {csg_text("scene"),
+               csg_text("program"),
+               csg_pixels("pixels compared", "Pixels far from an edge"),
+               csg_pixels("with a point", "Compared pixels with a point to classify"),
+               csg_pixels("inside (ray caster)", "Compared pixels the ray caster finds inside"),
+               csg_pixels("inside (machine)", "Compared pixels the machine finds inside"),
+               csg_pixels("lost (inside, taken as outside)",
+                          "Inside by the ray caster, outside by the machine"),
+               csg_pixels("gained (outside, taken as inside)",
+                          "Outside by the ray caster, inside by the machine"),
+               csg_count("bits", "bits", "Pixel-memory bits the program uses")};
+  add_cost_columns(t.columns);
   for (const ParityMeasure& m : rows) {
-    out += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", m.scene, m.program,
-                       m.compared, m.points, m.inside, m.machine_inside, m.lost, m.gained, m.bits,
-                       m.cost.cells());
+    std::vector<Cell> row = {m.scene,          m.program, m.compared, m.points, m.inside,
+                             m.machine_inside, m.lost,    m.gained,   m.bits};
+    add_cost_cells(row, m.cost);
+    t.add_row(std::move(row));
   }
-  return out;
+  return t;
 }
 
 std::vector<std::string> csg_pruning_scene_names() {
@@ -979,29 +1090,42 @@ CsgPruning measure_csg_pruning(const MachineConfig& config, const Scene& scene,
     m.surface += a.values[i] != background;
     m.differing += a.values[i] != b.values[i];
   }
-  m.cycles_whole = frame_cost(config, whole, program, threads).cells();
-  m.cycles_pruned = frame_cost(config, pruned, program, threads).cells();
+  m.cost_whole = frame_cost(config, whole, program, threads);
+  m.cost_pruned = frame_cost(config, pruned, program, threads);
   return m;
 }
 
-std::string format_csg_pruning(const std::vector<CsgPruning>& rows) {
-  std::string out =
-      "| scene | program | expression | pruned | passes unpruned | passes pruned | passes saved "
-      "| pixels with a surface | pixels differing (z) | unpruned: Renderer cycles | frame ms | "
-      "frames/s | pruned: Renderer cycles | frame ms | frames/s |\n"
-      "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  auto cell = [](std::string e) {  // a union's '|' inside a table cell
-    for (std::size_t i = e.find('|'); i != std::string::npos; i = e.find('|', i + 2))
-      e.replace(i, 1, "\\|");
-    return e;
-  };
+report::Table csg_pruning_table(const std::vector<CsgPruning>& rows) {
+  using namespace report;
+  Table t;
+  t.id = "csg-pruning";
+  t.columns = {
+      csg_text("scene"),
+      csg_text("program"),
+      headed(code_column("expression", "The CSG expression"), "expression"),
+      headed(code_column("pruned", "The expression after Goldfeather's pruning"), "pruned"),
+      csg_count("passes unpruned", "passes", "Passes of the plan without pruning"),
+      csg_count("passes pruned", "passes", "Passes of the pruned plan"),
+      csg_count("passes saved", "passes", "Passes the pruning saves"),
+      csg_pixels("pixels with a surface", "Pixels where the unpruned plan leaves a surface"),
+      csg_pixels("pixels differing (z)", "Pixels whose depth differs between the two plans")};
+  add_cost_columns(t.columns, "unpruned: ");
+  add_cost_columns(t.columns, "pruned: ");
   for (const CsgPruning& m : rows) {
-    out += fmt::format("| {} | {} | `{}` | `{}` | {} | {} | {} | {} | {} | {} | {} |\n", m.scene,
-                       m.program, cell(m.expression), cell(m.pruned_expression), m.passes_whole,
-                       m.passes_pruned, m.passes_whole - m.passes_pruned, m.surface, m.differing,
-                       m.cycles_whole, m.cycles_pruned);
+    std::vector<Cell> row = {m.scene,
+                             m.program,
+                             m.expression,
+                             m.pruned_expression,
+                             m.passes_whole,
+                             m.passes_pruned,
+                             m.passes_whole - m.passes_pruned,
+                             m.surface,
+                             m.differing};
+    add_cost_cells(row, m.cost_whole);
+    add_cost_cells(row, m.cost_pruned);
+    t.add_row(std::move(row));
   }
-  return out;
+  return t;
 }
 
 }  // namespace pp5

@@ -79,7 +79,7 @@ struct ParityMeasure {
 ParityMeasure measure_parity(const MachineConfig& config, const Scene& scene,
                              const Program& program, int threads);
 
-std::string format_parity(const std::vector<ParityMeasure>& rows);
+report::Table parity_table(const std::vector<ParityMeasure>& rows);
 
 // Epsilon regularisation, the two methods on the same scenes (the parity scenes, the slab
 // thinner than epsilon and "plane-in-box", points inside a thick solid within epsilon of its
@@ -87,7 +87,7 @@ std::string format_parity(const std::vector<ParityMeasure>& rows);
 // parity_behind (Rossignac's test at z + epsilon, figure 9.4), beside exact parity. The table
 // splits the disagreements into points lost and points gained.
 std::vector<std::string> epsilon_scene_names();
-std::string format_epsilon(const std::vector<ParityMeasure>& rows);
+report::Table epsilon_table(const std::vector<ParityMeasure>& rows);
 
 // Interference of an assembly's first two solids (interference.pp5 under the same pass plan):
 // the machine's flag, lo and hi fields read back; the truth is the ray caster's: a pixel
@@ -107,7 +107,7 @@ struct InterferenceMeasure {
 };
 InterferenceMeasure measure_interference(const MachineConfig& config, const Scene& scene,
                                          const Program& program, int threads, double margin = 0.75);
-std::string format_interference(const std::vector<InterferenceMeasure>& rows);
+report::Table interference_table(const std::vector<InterferenceMeasure>& rows);
 
 // The CPU ray caster of a CSG expression (Scene::csg over Scene::solids), double precision:
 // along the ray origin + t direction (t > 0), every hit of every solid's triangles in order;
@@ -163,7 +163,7 @@ struct CsgMeasure {
 };
 CsgMeasure measure_csg(const MachineConfig& config, const Scene& scene, const Program& program,
                        int threads, double margin = 0.75);
-std::string format_csg_render(const std::vector<CsgMeasure>& rows);
+report::Table csg_render_table(const std::vector<CsgMeasure>& rows);
 
 // Goldfeather's pruning (models/gp/pass_plan.hpp) measured: the plan's passes with and
 // without it, and the machine's result depth `z` rendered both ways, compared pixel by
@@ -173,13 +173,13 @@ std::vector<std::string> csg_pruning_scene_names();  // made by make_parity_scen
 struct CsgPruning {
   std::string scene, program, expression, pruned_expression;
   int passes_whole = 0, passes_pruned = 0;
-  std::int64_t surface = 0;                 // pixels where the unpruned plan leaves a surface
-  std::int64_t differing = 0;               // pixels whose `z` differs between the two
-  std::string cycles_whole, cycles_pruned;  // FrameCost::cells()
+  std::int64_t surface = 0;    // pixels where the unpruned plan leaves a surface
+  std::int64_t differing = 0;  // pixels whose `z` differs between the two
+  FrameCost cost_whole, cost_pruned;
 };
 CsgPruning measure_csg_pruning(const MachineConfig& config, const Scene& scene,
                                const Program& program, int threads);
-std::string format_csg_pruning(const std::vector<CsgPruning>& rows);
+report::Table csg_pruning_table(const std::vector<CsgPruning>& rows);
 
 // Cross-sections with capping (section.pp5 under the point-in-solid pass plan): a scene of
 // one quad in no solid (the cutting plane) and one closed solid. The truth is the ray
@@ -196,6 +196,6 @@ struct SectionMeasure {
 };
 SectionMeasure measure_section(const MachineConfig& config, const Scene& scene,
                                const Program& program, int threads, double margin = 0.75);
-std::string format_section(const std::vector<SectionMeasure>& rows);
+report::Table section_table(const std::vector<SectionMeasure>& rows);
 
 }  // namespace pp5

@@ -535,12 +535,45 @@ Program with_depth_expression(const Program& program, const std::string& source,
   return out;
 }
 
-std::string format_scan_conversion_ablation(const std::vector<ScanConversionAblation>& rows) {
-  std::string out =
-      "| scene | classification | depth plane | edge px | max error | mean error | shared-edge "
-      "max | layer-edge max | interior max | hidden shows | parity errors | edge tests by the "
-      "edge's own line | cycles/tri | GP clocks/tri | words/packet |\n"
-      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+report::Table scan_conversion_ablation_table(const std::vector<ScanConversionAblation>& rows) {
+  using namespace report;
+  Table t;
+  t.id = "scanconvert-ablation";
+  t.columns = {
+      text_column("scene"),
+      text_column("classification", "How a pixel is classified inside or outside a triangle"),
+      text_column("depth plane", "The vertices the depth plane is drawn through"),
+      integer_column("edge px", "pixels", "Covered pixels within 2E of an edge"),
+      headed(real_column("max error", "depth units", 0, "Largest depth error at edge pixels"),
+             "max error"),
+      headed(real_column("mean error", "depth units", 2, "Mean depth error at edge pixels"),
+             "mean error"),
+      headed(real_column("shared-edge max", "depth units", 0,
+                         "Largest depth error near a shared, non-silhouette edge"),
+             "shared-edge max"),
+      headed(real_column("layer-edge max", "depth units", 0,
+                         "Largest depth error near a silhouette, boundary or clipped edge"),
+             "layer-edge max"),
+      headed(real_column("interior max", "depth units", 0,
+                         "Largest depth error at the other covered pixels"),
+             "interior max"),
+      integer_column("hidden shows", "pixels", "Pixels where a hidden surface shows"),
+      headed(integer_column("parity errors", "pixels",
+                            "Pixels of odd coverage on a closed mesh ('open': not closed)"),
+             "parity errors", Align::right),
+      headed(real_column("edge tests by the edge's own line", "%", 1,
+                         "The accurate set-up's edge tests that fall back to the unsnapped "
+                         "edge's own line, of every edge test it sent"),
+             "edge tests by the edge's own line", Align::right),
+      integer_column("cycles/tri", "array cycles", "Array cycles of one triangle invocation"),
+      headed(real_column("GP clocks/tri", "i860 clocks", 0,
+                         "i860 clocks over the GPs per scene triangle"),
+             "GP clocks/tri"),
+      integer_column("words/packet", "ring words", "Ring words of one triangle packet"),
+  };
+  for (auto& c : t.columns) {
+    if (c.heading.empty()) c.heading = c.name;
+  }
   // The share of the accurate set-up's edge tests that fall back to the unsnapped edge's own
   // line (no neighbour, non-manifold, edge-on, coplanar), of every edge test it sent; the
   // standard program tests every edge by its snapped line.
@@ -552,60 +585,86 @@ std::string format_scan_conversion_ablation(const std::vector<ScanConversionAbla
       const auto kind = static_cast<SideKind>(k);
       if (kind != SideKind::plane && kind != SideKind::clipped) own += n;
     }
-    if (all == 0) return std::string("-");
-    return fmt::format("{:.1f}% ({} of {})", 100.0 * static_cast<double>(own) / all, own, all);
+    if (all == 0) return Cell::missing();
+    const double share = 100.0 * static_cast<double>(own) / all;
+    return Cell::shown_as(share, fmt::format("{:.1f}% ({} of {})", share, own, all));
   };
   for (const ScanConversionAblation& r : rows) {
     const struct {
       const ScanConversionMethod* m;
       const char* edges;
       const char* plane;
-      std::string own;
-    } lines[] = {{&r.a.standard, "snapped edges", "snapped vertices", "-"},
-                 {&r.b.standard, "snapped edges", "unsnapped vertices", "-"},
+      Cell own;
+    } lines[] = {{&r.a.standard, "snapped edges", "snapped vertices", Cell::missing()},
+                 {&r.b.standard, "snapped edges", "unsnapped vertices", Cell::missing()},
                  {&r.a.accurate, "neighbour planes", "snapped vertices", own_line(r.a)},
                  {&r.b.accurate, "neighbour planes", "unsnapped vertices", own_line(r.b)}};
     bool first = true;
     for (const auto& l : lines) {
       const ScanConversionMethod& m = *l.m;
-      out += fmt::format(
-          "| {} | {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.0f} | {:.0f} | {} | {} | {} | {} | "
-          "{:.0f} | {} |\n",
-          first ? r.a.scene : "", l.edges, l.plane, m.edge_pixels, m.edge_max_error,
-          m.edge_mean_error, m.shared_edge_max_error, m.layer_max_error, m.interior_max_error,
-          m.show_through,
-          m.parity_errors < 0 ? std::string("open") : std::to_string(m.parity_errors), l.own,
-          m.triangle_cycles, m.gp_clocks_per_triangle, m.packet_words);
+      t.add_row(
+          {first ? r.a.scene : std::string(), l.edges, l.plane, m.edge_pixels, m.edge_max_error,
+           m.edge_mean_error, m.shared_edge_max_error, m.layer_max_error, m.interior_max_error,
+           m.show_through,
+           m.parity_errors < 0 ? Cell::shown_as(Cell::missing(), "open") : Cell(m.parity_errors),
+           l.own, m.triangle_cycles, m.gp_clocks_per_triangle, m.packet_words});
       first = false;
     }
   }
-  return out;
+  return t;
 }
 
-std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports) {
-  std::string out =
-      "| scene | method | edge px | max error | mean error | shared-edge max | / 2ME | "
-      "layer-edge max | / ME | interior max | hidden shows | parity errors | cycles/tri | bits | "
-      "GP clocks/tri | "
-      "words/packet | frame ms |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+std::string format_scan_conversion_ablation(const std::vector<ScanConversionAblation>& rows) {
+  return report::markdown(scan_conversion_ablation_table(rows));
+}
+
+report::Table scan_conversion_table(const std::vector<ScanConversionReport>& reports) {
+  using namespace report;
+  auto left = [](Column c) {
+    c.heading = c.name;
+    c.align = Align::left;
+    return c;
+  };
+  Table t;
+  t.id = "scanconvert";
+  t.columns = {
+      text_column("scene"),
+      text_column("method", "standard (phong) or accurate"),
+      left(integer_column("edge px", "pixels", "Covered pixels within 2E of an edge")),
+      left(real_column("max error", "depth units", 0, "Largest depth error at edge pixels")),
+      left(real_column("mean error", "depth units", 2, "Mean depth error at edge pixels")),
+      left(real_column("shared-edge max", "depth units", 0,
+                       "Largest depth error near a shared, non-silhouette edge")),
+      left(real_column("/ 2ME", "", 3,
+                       "The shared-edge error over the paper's bound 2 M E (1: at the bound)")),
+      left(real_column("layer-edge max", "depth units", 0,
+                       "Largest depth error near a silhouette, boundary or clipped edge")),
+      left(real_column("/ ME", "", 3, "The layer-edge error over its bound (1: at the bound)")),
+      left(real_column("interior max", "depth units", 0,
+                       "Largest depth error at the other covered pixels")),
+      left(integer_column("hidden shows", "pixels", "Pixels where a hidden surface shows")),
+      left(integer_column("parity errors", "pixels",
+                          "Pixels of odd coverage on a closed mesh ('open': not closed)")),
+      left(integer_column("cycles/tri", "array cycles", "Array cycles of one triangle invocation")),
+      left(integer_column("bits", "bits", "Pixel-memory bits the program uses")),
+      left(real_column("GP clocks/tri", "i860 clocks", 0,
+                       "i860 clocks over the GPs per scene triangle")),
+      left(integer_column("words/packet", "ring words", "Ring words of one triangle packet")),
+      left(real_column("frame ms", "ms", 2, "Simulated frame time")),
+  };
   for (const ScanConversionReport& r : reports) {
     for (const ScanConversionMethod* m : {&r.standard, &r.accurate}) {
       const bool first = m == &r.standard;
-      out += fmt::format(
-          "| {} | {} | {} | {:.0f} | {:.2f} | {:.0f} | {:.3f} | {:.0f} | {:.3f} | {:.0f} | {} | {} "
-          "| "
-          "{} | {} | "
-          "{:.0f} | {} | {:.2f} |\n",
-          first ? r.scene : "", first ? "standard" : "accurate", m->edge_pixels, m->edge_max_error,
-          m->edge_mean_error, m->shared_edge_max_error, m->bound_ratio, m->layer_max_error,
-          m->layer_bound_ratio, m->interior_max_error, m->show_through,
-          m->parity_errors < 0 ? std::string("open") : std::to_string(m->parity_errors),
-          m->triangle_cycles, m->bits, m->gp_clocks_per_triangle, m->packet_words,
-          m->frame_seconds * 1e3);
+      t.add_row(
+          {first ? r.scene : std::string(), first ? "standard" : "accurate", m->edge_pixels,
+           m->edge_max_error, m->edge_mean_error, m->shared_edge_max_error, m->bound_ratio,
+           m->layer_max_error, m->layer_bound_ratio, m->interior_max_error, m->show_through,
+           m->parity_errors < 0 ? Cell::shown_as(Cell::missing(), "open") : Cell(m->parity_errors),
+           m->triangle_cycles, m->bits, m->gp_clocks_per_triangle, m->packet_words,
+           m->frame_seconds * 1e3});
     }
   }
-  return out;
+  return t;
 }
 
 }  // namespace pp5

@@ -62,6 +62,7 @@
 #include "models/config/machine_config.hpp"
 #include "models/gp/accurate_expressions.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/output/report.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {
@@ -123,8 +124,8 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
                                              const Program& standard, const Program& accurate,
                                              int threads);
 
-// A Markdown table, one row per scene and method.
-std::string format_scan_conversion(const std::vector<ScanConversionReport>& reports);
+// The table, one row per scene and method (sim/output/report.hpp).
+report::Table scan_conversion_table(const std::vector<ScanConversionReport>& reports);
 
 // The ablation of accurate scan conversion's two ingredients, each alone: the standard
 // program with its depth drawn through the unsnapped vertices (plane_depth instead of depth),
@@ -142,6 +143,7 @@ Program with_depth_expression(const Program& program, const std::string& source,
 struct ScanConversionAblation {
   ScanConversionReport a, b;
 };
+report::Table scan_conversion_ablation_table(const std::vector<ScanConversionAblation>& rows);
 std::string format_scan_conversion_ablation(const std::vector<ScanConversionAblation>& rows);
 
 // The firmware that counts, per pixel, the triangles that own its centre by accurate.pp5's

@@ -190,23 +190,52 @@ TransparencyMeasure measure_transparency(const MachineConfig& config, const Scen
   return m;
 }
 
-std::string format_transparency(const std::vector<TransparencyMeasure>& rows) {
-  std::string out = fmt::format(
-      "| application | scene | program | layers (passes) | pixels compared | with a surface | with "
-      "more "
-      "layers than passes (most) | differing by more than {:g} of 255 | largest error | "
-      "largest error where layers <= passes | near an outline (not compared) | bits | Renderer "
-      "cycles | frame ms | frames/s |\n"
-      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
-      kTransparencyTolerance);
+report::Table transparency_table(const std::vector<TransparencyMeasure>& rows) {
+  using namespace report;
+  auto pixels = [](const std::string& heading, const std::string& description) {
+    return headed(integer_column(heading, "pixels", description), heading);
+  };
+  Table t;
+  t.id = "csg-transparency";
+  t.columns = {
+      headed(text_column("application"), "application"),
+      headed(text_column("scene"), "scene"),
+      headed(text_column("program"), "program"),
+      headed(integer_column("layers (passes)", "layers", "The layers the program composites"),
+             "layers (passes)"),
+      pixels("pixels compared", "Pixels far from an outline"),
+      pixels("with a surface", "Compared pixels with at least one layer"),
+      headed(integer_column("with more layers than passes", "pixels",
+                            "Compared pixels with more layers than the program composites (the "
+                            "most layers at a pixel)"),
+             "with more layers than passes (most)", Align::right),
+      pixels(fmt::format("differing by more than {:g} of 255", kTransparencyTolerance),
+             "Compared pixels off the reference by more than the tolerance"),
+      headed(real_column("largest error", "levels of 255", 1, "Over the compared pixels"),
+             "largest error"),
+      headed(real_column("largest error where layers <= passes", "levels of 255", 1,
+                         "Over the compared pixels with no more layers than passes"),
+             "largest error where layers <= passes"),
+      pixels("near an outline (not compared)", "Pixels near an outline"),
+      headed(integer_column("bits", "bits", "Pixel-memory bits the program uses"), "bits")};
+  add_cost_columns(t.columns);
   for (const TransparencyMeasure& m : rows) {
-    out += fmt::format(
-        "| transparency | {} | {} | {} | {} | {} | {} ({}) | {} | {:.1f} | {:.1f} | {} | {} | {} "
-        "|\n",
-        m.scene, m.program, m.layers, m.compared, m.covered, m.too_many, m.most, m.differ,
-        m.max_error, m.max_error_within, m.uncertain, m.bits, m.cost.cells());
+    std::vector<Cell> row = {"transparency",
+                             m.scene,
+                             m.program,
+                             m.layers,
+                             m.compared,
+                             m.covered,
+                             Cell::shown_as(m.too_many, fmt::format("{} ({})", m.too_many, m.most)),
+                             m.differ,
+                             m.max_error,
+                             m.max_error_within,
+                             m.uncertain,
+                             m.bits};
+    add_cost_cells(row, m.cost);
+    t.add_row(std::move(row));
   }
-  return out;
+  return t;
 }
 
 }  // namespace pp5

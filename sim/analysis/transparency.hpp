@@ -62,6 +62,6 @@ struct TransparencyMeasure {
 // pass count), compares its frame with the reference and runs the frame's timing.
 TransparencyMeasure measure_transparency(const MachineConfig& config, const Scene& scene,
                                          const Program& program, int threads);
-std::string format_transparency(const std::vector<TransparencyMeasure>& rows);
+report::Table transparency_table(const std::vector<TransparencyMeasure>& rows);
 
 }  // namespace pp5

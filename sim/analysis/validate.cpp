@@ -174,19 +174,6 @@ std::string value_text(double v, const std::string& unit) {
   return thousands(v);
 }
 
-std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char ch : s) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
-  return out + "\"";
-}
-
-std::string md(const std::string& s) {
-  std::string out;
-  for (char ch : s) out += ch == '|' ? std::string("\\|") : std::string(1, ch);
-  return out;
-}
-
 }  // namespace
 
 std::vector<ValidationRow> validate_against_record(const MachineConfig& base,
@@ -525,24 +512,71 @@ JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoade
   return out;
 }
 
+report::Table joint_sensitivity_table(const JointSensitivity& j) {
+  using namespace report;
+  auto left = [](Column c) { return headed(c, c.name, Align::left); };
+  Table t;
+  t.id = "joint-conclusions";
+  t.columns = {
+      text_column("conclusion", "What the default machine says"),
+      text_column("measure", "What is measured per sample"),
+      left(real_column("5% .. 95% (median)", "%", 0,
+                       "The measure's 5th to 95th percentile over the samples (its median)")),
+      left(real_column("min .. max", "%", 0, "The measure's range over the samples")),
+      left(real_column("holds in", "%", 0, "The samples where the conclusion holds")),
+  };
+  for (const ConclusionShare& c : j.conclusions) {
+    const bool percent = c.measure.find("share") == std::string::npos;
+    auto v = [percent](double x) {
+      return percent ? fmt::format("{:+.0f}%", 100 * x) : fmt::format("{:.0f}%", 100 * x);
+    };
+    const double holds = c.samples ? 100.0 * c.holds / c.samples : 0.0;
+    t.add_row(
+        {c.conclusion, c.measure,
+         Cell::shown_as(100 * c.median,
+                        fmt::format("{} .. {} ({})", v(c.low), v(c.high), v(c.median))),
+         Cell::shown_as(100 * c.max, fmt::format("{} .. {}", v(c.min), v(c.max))),
+         Cell::shown_as(holds, fmt::format("{} of {} ({:.0f}%)", c.holds, c.samples, holds))});
+  }
+  return t;
+}
+
+report::Table joint_samples_table(const JointSensitivity& j) {
+  using namespace report;
+  Table t;
+  t.id = "joint";
+  t.columns = {integer_column("sample"),
+               text_column("scene"),
+               integer_column("triangles", "triangles"),
+               real_column("rate", "triangles/s", -1, "Projected rate, one frame"),
+               real_column("pipelined_rate", "triangles/s", -1, "Projected rate, frames pipelined"),
+               text_column("bottleneck"),
+               real_column("painter_over_zbuffer", "", -1,
+                           "Painter's time (frame + sort) / z-buffer frame - 1"),
+               text_column("painter_choices"),
+               text_column("sets", "The sample's assignments")};
+  for (auto& c : t.columns) c.key = c.name;
+  for (std::size_t k = 0; k < j.points.size(); ++k) {
+    const JointSample& p = j.points[k];
+    t.add_row({static_cast<std::int64_t>(k), p.scene, static_cast<std::int64_t>(p.triangles),
+               p.rate, p.pipelined_rate, p.bottleneck, p.painter_over_zbuffer, p.painter_choices,
+               fmt::format("{}", fmt::join(p.sets, " "))});
+  }
+  return t;
+}
+
 std::string joint_sensitivity_markdown(const JointSensitivity& j) {
   std::string out = fmt::format(
       "{} samples (Latin hypercube, seed {:#x}, {} timing; {} drawn, {} not a "
       "machine), varying together: {}.\n\n",
       j.points.size(), j.options.seed, j.options.level, j.points.size() + j.skipped.size(),
       j.skipped.size(), fmt::join(j.varied, ", "));
-  out +=
-      "| conclusion | measure | 5% .. 95% (median) | min .. max | holds in |\n"
-      "|---|---|---|---|---|\n";
-  for (const ConclusionShare& c : j.conclusions) {
-    const bool percent = c.measure.find("share") == std::string::npos;
-    auto v = [percent](double x) {
-      return percent ? fmt::format("{:+.0f}%", 100 * x) : fmt::format("{:.0f}%", 100 * x);
-    };
-    out += fmt::format("| {} | {} | {} .. {} ({}) | {} .. {} | {} of {} ({:.0f}%) |\n",
-                       c.conclusion, c.measure, v(c.low), v(c.high), v(c.median), v(c.min),
-                       v(c.max), c.holds, c.samples, c.samples ? 100.0 * c.holds / c.samples : 0.0);
-  }
+  out += report::markdown(joint_sensitivity_table(j));
+  out += joint_bottleneck_text(j);
+  return out;
+}
+
+std::string joint_bottleneck_text(const JointSensitivity& j) {
   // Which bottleneck the samples name.
   int gps = 0, ring = 0, ren = 0;
   for (const JointSample& p : j.points) {
@@ -550,9 +584,8 @@ std::string joint_sensitivity_markdown(const JointSensitivity& j) {
     ring += p.bottleneck == "ring";
     ren += p.bottleneck == "Renderers";
   }
-  out += fmt::format("\nBottleneck over the samples: Renderers {}, GPs {}, ring {}.\n", ren, gps,
+  return fmt::format("\nBottleneck over the samples: Renderers {}, GPs {}, ring {}.\n", ren, gps,
                      ring);
-  return out;
 }
 
 namespace {
@@ -564,18 +597,34 @@ std::string consumed_text(const ValidationRow& r) {
 }
 }  // namespace
 
-std::string validation_markdown(const std::vector<ValidationRow>& rows) {
-  std::string out =
-      "| published figure | source | published | simulated | difference | status | consumed "
-      "by the fit of | evidence | simulated workload | note |\n"
-      "|---|---|---|---|---|---|---|---|---|---|\n";
+report::Table validation_table(const std::vector<ValidationRow>& rows) {
+  using namespace report;
+  auto left = [](Column c) { return headed(c, c.name, Align::left); };
+  Table t;
+  t.id = "validate";
+  t.columns = {
+      text_column("published figure", "What the record says"),
+      text_column("source", "Where, with its confidence (P, S)"),
+      text_column("published", "The figure as the source gives it"),
+      left(real_column("simulated", "", -1, "The simulator's projection, in the row's unit")),
+      left(real_column("difference", "%", 0, "(simulated - published) / published")),
+      text_column("status", "fitted, derived or predicted"),
+      text_column("consumed by the fit of", "The configuration keys fitted to this figure"),
+      text_column("evidence", "Whether the figure tests the model (a prediction)"),
+      text_column("simulated workload", "What the simulator ran"),
+      text_column("note", "What else the run showed"),
+  };
   for (const ValidationRow& r : rows) {
-    out += fmt::format("| {} | {} | {} | {} {} | {:+.0f}% | {} | {} | {} | {} | {} |\n",
-                       md(r.figure), md(r.source), md(r.published), value_text(r.simulated, r.unit),
-                       r.unit, 100 * r.difference(), r.status, consumed_text(r),
-                       r.evidence() ? "yes" : "no", md(r.workload), md(r.note));
+    t.add_row({r.figure, r.source, r.published,
+               Cell::shown_as(r.simulated, value_text(r.simulated, r.unit) + " " + r.unit),
+               Cell::shown_as(100 * r.difference(), fmt::format("{:+.0f}%", 100 * r.difference())),
+               r.status, consumed_text(r), r.evidence() ? "yes" : "no", r.workload, r.note});
   }
-  return out;
+  return t;
+}
+
+std::string validation_markdown(const std::vector<ValidationRow>& rows) {
+  return report::markdown(validation_table(rows));
 }
 
 std::string evidence_summary(const std::vector<ValidationRow>& rows) {
@@ -603,18 +652,28 @@ std::string evidence_summary(const std::vector<ValidationRow>& rows) {
 }
 
 std::string validation_csv(const std::vector<ValidationRow>& rows) {
-  std::string out =
-      "figure,source,published,published_value,simulated,unit,difference,status,consumed_by,"
-      "evidence,workload,note\n";
+  using namespace report;
+  Table t;
+  t.id = "validate";
+  t.columns = {text_column("figure"),
+               text_column("source"),
+               text_column("published"),
+               real_column("published_value", "", -1),
+               real_column("simulated", "", -1),
+               text_column("unit"),
+               real_column("difference", "", -1),
+               text_column("status"),
+               text_column("consumed_by"),
+               integer_column("evidence"),
+               text_column("workload"),
+               text_column("note")};
   for (const ValidationRow& r : rows) {
     std::string consumed;
     for (const std::string& k : r.consumed_by) consumed += (consumed.empty() ? "" : " ") + k;
-    out += fmt::format("{},{},{},{:.9g},{:.9g},{},{:.6f},{},{},{},{},{}\n", csv_field(r.figure),
-                       csv_field(r.source), csv_field(r.published), r.published_value, r.simulated,
-                       csv_field(r.unit), r.difference(), r.status, csv_field(consumed),
-                       r.evidence() ? 1 : 0, csv_field(r.workload), csv_field(r.note));
+    t.add_row({r.figure, r.source, r.published, r.published_value, r.simulated, r.unit,
+               r.difference(), r.status, consumed, r.evidence() ? 1 : 0, r.workload, r.note});
   }
-  return out;
+  return csv(t);
 }
 
 namespace {
@@ -640,39 +699,70 @@ std::string change(double rate, double base) {
 }
 }  // namespace
 
-std::string sensitivity_markdown(const SensitivityTable& t) {
-  std::string out = "| constant | mark | low | high |";
-  std::string rule = "|---|---|---|---|";
-  for (const SensitivityWorkload& w : t.workloads) {
-    out += fmt::format(" {} |", w.label());
-    rule += "---|";
+report::Table sensitivity_table(const SensitivityTable& table) {
+  using namespace report;
+  auto left = [](Column c) { return headed(c, c.name, Align::left); };
+  Table t;
+  t.id = "sensitivity";
+  t.columns = {code_column("constant", "A fitted or assumed configuration key"),
+               text_column("mark", "fitted or assumed"),
+               text_column("low", "The low end of its plausible range (linked keys after it)"),
+               text_column("high", "The high end of its plausible range (linked keys after it)")};
+  for (const SensitivityWorkload& w : table.workloads) {
+    t.columns.push_back(left(real_column(
+        w.label(), "K triangles/s", 0,
+        fmt::format("Projected triangles/s of the torus with {}, at the low .. high end (the "
+                    "change from the defaults); sorted by the low end",
+                    w.label()))));
   }
-  out += "\n" + rule + "\n| (defaults) | | | |";
-  for (double d : t.defaults) out += fmt::format(" {} K |", kilo(d));
-  out += "\n";
-  for (const SensitivityRow& r : t.rows) {
-    out += fmt::format("| `{}` | {} | {} | {} |", r.key, calibration_name(r.calibration),
-                       md(assignments_text(r.low, r.key)), md(assignments_text(r.high, r.key)));
+  // The defaults' row: its first cell plain text in the code column (a missing value shown
+  // as "(defaults)" is not put in backticks).
+  std::vector<Cell> defaults = {Cell::shown_as(Cell::missing(), "(defaults)"), "", "", ""};
+  for (double d : table.defaults) {
+    defaults.push_back(std::isnan(d) ? Cell::shown_as(Cell::missing(), "- K")
+                                     : Cell::shown_as(d / 1e3, kilo(d) + " K"));
+  }
+  t.add_row(std::move(defaults));
+  for (const SensitivityRow& r : table.rows) {
+    std::vector<Cell> row = {r.key, std::string(calibration_name(r.calibration)),
+                             assignments_text(r.low, r.key), assignments_text(r.high, r.key)};
     for (const auto& v : r.rates) {
-      out += fmt::format(" {} .. {} K ({} .. {}) |", kilo(v[0]), kilo(v[2]), change(v[0], v[1]),
-                         change(v[2], v[1]));
+      const std::string text = fmt::format("{} .. {} K ({} .. {})", kilo(v[0]), kilo(v[2]),
+                                           change(v[0], v[1]), change(v[2], v[1]));
+      row.push_back(std::isnan(v[0]) ? Cell::shown_as(Cell::missing(), text)
+                                     : Cell::shown_as(v[0] / 1e3, text));
     }
-    out += "\n";
+    t.add_row(std::move(row));
   }
-  return out;
+  return t;
 }
 
-std::string sensitivity_csv(const SensitivityTable& t) {
-  std::string out = "key,mark,low,high,workload,rate_low,rate_default,rate_high\n";
-  for (const SensitivityRow& r : t.rows) {
-    for (std::size_t k = 0; k < t.workloads.size(); ++k) {
-      out += fmt::format(
-          "{},{},{},{},{},{:.9g},{:.9g},{:.9g}\n", r.key, calibration_name(r.calibration),
-          csv_field(assignments_text(r.low, r.key)), csv_field(assignments_text(r.high, r.key)),
-          csv_field(t.workloads[k].label()), r.rates[k][0], r.rates[k][1], r.rates[k][2]);
+std::string sensitivity_markdown(const SensitivityTable& t) {
+  return report::markdown(sensitivity_table(t));
+}
+
+std::string sensitivity_csv(const SensitivityTable& table) {
+  using namespace report;
+  Table t;
+  t.id = "sensitivity";
+  t.columns = {text_column("key"),
+               text_column("mark"),
+               text_column("low"),
+               text_column("high"),
+               text_column("workload"),
+               real_column("rate_low", "", -1),
+               real_column("rate_default", "", -1),
+               real_column("rate_high", "", -1)};
+  auto rate = [](double v) { return std::isnan(v) ? Cell::missing() : Cell(v); };
+  for (const SensitivityRow& r : table.rows) {
+    for (std::size_t k = 0; k < table.workloads.size(); ++k) {
+      t.add_row({r.key, std::string(calibration_name(r.calibration)),
+                 assignments_text(r.low, r.key), assignments_text(r.high, r.key),
+                 table.workloads[k].label(), rate(r.rates[k][0]), rate(r.rates[k][1]),
+                 rate(r.rates[k][2])});
     }
   }
-  return out;
+  return csv(t);
 }
 
 }  // namespace pp5

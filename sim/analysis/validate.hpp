@@ -29,6 +29,7 @@
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
+#include "sim/output/report.hpp"
 
 namespace pp5 {
 
@@ -155,13 +156,23 @@ struct JointSensitivity {
 
 JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoader& load,
                                    const JointSensitivityOptions& options = {});
+// The joint sensitivity as tables (sim/output/report.hpp): the conclusions, and every sample
+// (written as joint.csv); then as Markdown: a line of what was sampled, the conclusions'
+// table and the line of bottlenecks (joint_bottleneck_text).
+report::Table joint_sensitivity_table(const JointSensitivity& joint);
+report::Table joint_samples_table(const JointSensitivity& joint);
+std::string joint_bottleneck_text(const JointSensitivity& joint);
 std::string joint_sensitivity_markdown(const JointSensitivity& joint);
 
+// The record's table (Markdown through the report writer), and CSV of the same rows with
+// the values at full precision.
+report::Table validation_table(const std::vector<ValidationRow>& rows);
 std::string validation_markdown(const std::vector<ValidationRow>& rows);
 // Which figures are evidence: the predictions, each with its difference, and the figures a
 // fit consumed (with the keys), which are not.
 std::string evidence_summary(const std::vector<ValidationRow>& rows);
 std::string validation_csv(const std::vector<ValidationRow>& rows);
+report::Table sensitivity_table(const SensitivityTable& table);
 std::string sensitivity_markdown(const SensitivityTable& table);
 std::string sensitivity_csv(const SensitivityTable& table);
 

@@ -601,24 +601,59 @@ Statistics visible_statistics(const std::vector<VisibleSceneReport>& reports) {
   return stats;
 }
 
-std::string format_visible_report(const std::vector<VisibleSceneReport>& reports,
-                                  const MachineConfig& config) {
-  std::string out =
-      "| scene | algorithm | pixels differing (uncertain) | regions with differences | bits | "
-      "GP clocks / primitive | Renderer cycles | primitives / s |\n"
-      "|---|---|---|---|---|---|---|---|\n";
+report::Table visible_table(const std::vector<VisibleSceneReport>& reports,
+                            const MachineConfig& config) {
+  using namespace report;
+  auto left = [](Column c, const char* heading) {
+    return headed(std::move(c), heading, Align::left);
+  };
+  Table t;
+  t.id = "visible";
+  t.columns = {
+      text_column("scene"),
+      text_column("algorithm"),
+      left(integer_column("pixels differing", "pixels",
+                          "Certain pixels that differ from the reference (in brackets: "
+                          "uncertain pixels that differ, not counted)"),
+           "pixels differing (uncertain)"),
+      text_column("regions with differences",
+                  "Regions with a differing pixel, and how they cluster"),
+      left(integer_column("bits", "bits", "Pixel-memory bits the program uses"), "bits"),
+      left(real_column("GP clocks / primitive", "i860 clocks", 0,
+                       "GP clocks per triangle, depth sort included ('-': a CPU reference)"),
+           "GP clocks / primitive"),
+      left(integer_column("Renderer cycles", "array cycles",
+                          "Renderer busy cycles of the shaded run ('-': a CPU reference)"),
+           "Renderer cycles"),
+      left(real_column("primitives / s", "triangles/s", -1,
+                       "Projected triangles per second ('-': a CPU reference)"),
+           "primitives / s"),
+  };
   for (const VisibleSceneReport& r : reports) {
     for (const AlgorithmRow& a : r.rows) {
       const bool machine = a.renderer_cycles > 0;
-      out += fmt::format("| {} | {} | {} ({}) | {} | {} | {} | {} | {} |\n", r.scene, a.name,
-                         a.difference.differing, a.difference.uncertain,
-                         region_text(a.difference, config), a.bits,
-                         machine ? fmt::format("{:.0f}", a.gp_clocks_per_primitive) : "-",
-                         machine ? std::to_string(a.renderer_cycles) : "-",
-                         machine ? fmt::format("{:.3g}", a.primitives_per_second) : "-");
+      t.add_row(
+          {r.scene, a.name,
+           Cell::shown_as(static_cast<std::int64_t>(a.difference.differing),
+                          fmt::format("{} ({})", a.difference.differing, a.difference.uncertain)),
+           region_text(a.difference, config), a.bits,
+           machine ? Cell(a.gp_clocks_per_primitive) : Cell::missing(),
+           machine ? Cell(static_cast<std::int64_t>(a.renderer_cycles)) : Cell::missing(),
+           machine ? Cell::shown_as(a.primitives_per_second,
+                                    fmt::format("{:.3g}", a.primitives_per_second))
+                   : Cell::missing()});
     }
   }
-  out += "\n";
+  return t;
+}
+
+std::string format_visible_report(const std::vector<VisibleSceneReport>& reports,
+                                  const MachineConfig& config) {
+  return report::markdown(visible_table(reports, config)) + "\n" + visible_notes(reports);
+}
+
+std::string visible_notes(const std::vector<VisibleSceneReport>& reports) {
+  std::string out;
   for (const VisibleSceneReport& r : reports) {
     const DepthSortResult& s = r.sort;
     out += fmt::format("- {}: {} triangles, {} after the transform.\n", r.scene, r.triangles,

@@ -34,6 +34,7 @@
 #include "models/config/machine_config.hpp"
 #include "models/frame_buffer/image.hpp"
 #include "models/gp/depth_sort.hpp"
+#include "sim/output/report.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {
@@ -204,7 +205,11 @@ PainterTiming painter_against_zbuffer(const MachineConfig& config, const Scene& 
 // Renderer cycles, GP clocks per primitive and primitives per second, the perspective flips
 // and back-face removal.
 Statistics visible_statistics(const std::vector<VisibleSceneReport>& reports);
-// `config` gives the region size the clusters are counted in.
+// The comparison table (`config` gives the region size the clusters are counted in), the
+// per-scene notes (a Markdown list), and the two as Markdown, the table first.
+report::Table visible_table(const std::vector<VisibleSceneReport>& reports,
+                            const MachineConfig& config);
+std::string visible_notes(const std::vector<VisibleSceneReport>& reports);
 std::string format_visible_report(const std::vector<VisibleSceneReport>& reports,
                                   const MachineConfig& config);
 

@@ -42,6 +42,7 @@ struct CsgOptions {
   std::string config_path;
   std::vector<std::string> sets;
   std::string out_dir = "out/csg";
+  bool report = false;  // also OUT/report.html
   int threads = default_threads();
 };
 
@@ -144,10 +145,21 @@ int run_csg(const CsgOptions& o) {
   // Every input is read: only now the output folder (a bad scene or program leaves none).
   prepare_output_folder(o.out_dir, "--out");
   OutputSet outputs;
+  std::vector<report::Figure> figures;  // --report: each frame the machine drew
   auto images = [&](const std::string& scene, const std::string& program, const RgbImage& image,
                     const RgbImage& difference) {
-    const std::string base = (fs::path(o.out_dir) / fmt::format("{}-{}", scene, program)).string();
-    outputs.add(base + ".png", encode_png(image));
+    const std::string stem = fmt::format("{}-{}", scene, program);
+    const std::string base = (fs::path(o.out_dir) / stem).string();
+    std::string png = encode_png(image);
+    if (o.report) {
+      figures.push_back({stem, fmt::format("{}, {}", scene, program),
+                         fmt::format("The machine's frame ({0}-difference.png: white where it "
+                                     "disagrees with the reference, grey where not compared)",
+                                     stem),
+                         "image/png", png, fmt::format("{} drawn by {}", scene, program),
+                         stem + ".png"});
+    }
+    outputs.add(base + ".png", std::move(png));
     outputs.add(base + "-difference.png", encode_png(difference));
   };
   for (const Scene& scene : parity ? scenes : std::vector<Scene>{}) {
@@ -205,29 +217,42 @@ int run_csg(const CsgOptions& o) {
              capped.back().surface.difference);
     }
   }
+  const std::string heading = fmt::format(
+      "{} x {} screen; pixels compared with a double-precision reference at "
+      "the pixel centre (a ray caster; for transparency every layer composited), "
+      "those within 0.75 pixel of a change left out",
+      config.screen.width, config.screen.height);
+  report::Report r;
+  r.title = "Rossignac's applications on the machine";
+  r.subtitle = heading;
   std::string tables;
-  if (parity) tables += format_parity(rows) + "\n";
-  if (regularised) tables += format_epsilon(epsilon_rows) + "\n";
-  if (assembly) tables += format_interference(interfering) + "\n";
+  auto add = [&](const std::string& id, const std::string& title, report::Table table) {
+    tables += report::markdown(table) + "\n";
+    r.add_section(id, title).blocks.push_back(std::move(table));
+  };
+  if (parity) add("parity", "Point in solid (parity)", parity_table(rows));
+  if (regularised) add("epsilon", "Epsilon regularisation", epsilon_table(epsilon_rows));
+  if (assembly) add("interference", "Interference", interference_table(interfering));
   if (rendering) {
-    tables += format_csg_render(rendered) + "\n";
-    tables += format_csg_pruning(pruning) + "\n";
+    add("csg", "CSG rendering", csg_render_table(rendered));
+    add("pruning", "Goldfeather's pruning", csg_pruning_table(pruning));
   }
-  if (transparency) tables += format_transparency(composited) + "\n";
-  if (sections) tables += format_section(capped) + "\n";
+  if (transparency) add("transparency", "Transparency", transparency_table(composited));
+  if (sections) add("section", "Cross-sections", section_table(capped));
+  if (!figures.empty()) {
+    report::Section& frames = r.add_section("frames", "Frames");
+    for (report::Figure& f : figures) frames.blocks.push_back(std::move(f));
+  }
   outputs.add((fs::path(o.out_dir) / "csg.md").string(), tables);
+  add_report_outputs(outputs, o.out_dir, r, o.report);
   outputs.commit();
-  std::cout
-      << fmt::format(
-             "{} x {} screen; pixels compared with a double-precision reference at "
-             "the pixel centre (a ray caster; for transparency every layer composited), "
-             "those within 0.75 pixel of a change left out\n\n",
-             config.screen.width, config.screen.height)
-      << tables
-      << fmt::format(
-             "wrote {0}/csg.md and {0}/SCENE-PROGRAM{{,-difference}}.png (the epsilon table's "
-             "as epsilon-SCENE-PROGRAM)\n",
-             o.out_dir);
+  std::cout << heading << "\n\n"
+            << tables
+            << fmt::format(
+                   "wrote {0}/csg.md, a CSV of each table ({0}/csg-*.csv){1} and "
+                   "{0}/SCENE-PROGRAM{{,-difference}}.png (the epsilon table's as "
+                   "epsilon-SCENE-PROGRAM)\n",
+                   o.out_dir, o.report ? fmt::format(", {}/report.html", o.out_dir) : "");
   return 0;
 }
 
@@ -304,6 +329,7 @@ Command add_csg_command(CLI::App& app) {
           {"parity", "epsilon", "interference", "csg", "transparency", "section", "all"}));
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/csg)");
+  add_report_flag(*cmd, o->report, "OUT");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
   return {cmd, [o] { return run_csg(*o); }};

@@ -17,6 +17,7 @@
 #include "sim/analysis/analytic_validation.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/output/output_set.hpp"
+#include "sim/output/report_html.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
@@ -46,6 +47,7 @@ struct FidelityOptions {
   int runs = 3;
   int threads = default_threads();
   std::string out_dir = "out/fidelity";
+  bool report = false;  // also OUT/report.html
   bool analytic_grids = true;
   int heldout = 120;
 };
@@ -175,29 +177,54 @@ int run_fidelity(FidelityOptions o) {
   }
 
   auto pct = [](double e) { return fmt::format("{:+.2f}%", 100 * e); };
-  std::string md = fmt::format(
-      "| scene | program | level | host s (min of {}) | speed-up | frame ms | frame-time error | "
-      "bottleneck | agrees | pixels differing | memory bits differing |\n"
-      "|---|---|---|---:|---:|---:|---:|---|---|---:|---:|\n",
-      o.runs);
-  std::string csv =
-      "scene,program,level,host_seconds,speedup,frame_seconds,frame_time_error,bottleneck,"
-      "bottleneck_agrees,pixels_differing,memory_bits_differing\n";
-  for (const Row& r : rows) {
-    const std::string pixels = r.has_pixels ? std::to_string(r.pixels_differing) : "no image";
-    const std::string bits = r.has_memory   ? std::to_string(r.bits_differing)
-                             : r.has_pixels ? "not compared"
-                                            : "no memory";
-    md += fmt::format("| {} | {} | {} | {:.4f} | {:.1f} | {:.3f} | {} | {} | {} | {} | {} |\n",
-                      markdown_cell(r.scene), markdown_cell(r.program), r.level, r.host_seconds,
-                      r.speedup, r.frame_seconds * 1e3, pct(r.frame_error), r.bottleneck,
-                      r.bottleneck_agrees ? "yes" : "no", pixels, bits);
-    csv += fmt::format("{},{},{},{:.6f},{:.3f},{:.9g},{:.6g},{},{},{},{}\n", r.scene, r.program,
-                       r.level, r.host_seconds, r.speedup, r.frame_seconds, r.frame_error,
-                       r.bottleneck, r.bottleneck_agrees ? 1 : 0,
-                       r.has_pixels ? std::to_string(r.pixels_differing) : "",
-                       r.has_memory ? std::to_string(r.bits_differing) : "");
+  report::Table table;
+  table.id = "fidelity";
+  {
+    using namespace report;
+    auto keyed = [](Column c, const std::string& heading, const std::string& key) {
+      c.heading = heading;
+      c.key = key;
+      return c;
+    };
+    table.columns = {
+        keyed(text_column("scene"), "scene", "scene"),
+        keyed(text_column("program"), "program", "program"),
+        keyed(text_column("level", "The fidelity level"), "level", "level"),
+        keyed(real_column("host s", "s", 4, "Host seconds of the run, the fastest of --runs"),
+              fmt::format("host s (min of {})", o.runs), "host_seconds"),
+        keyed(real_column("speed-up", "", 1, "The bit level's host time / this level's"),
+              "speed-up", "speedup"),
+        keyed(real_column("frame ms", "ms", 3, "Simulated frame time"), "frame ms", "frame_ms"),
+        keyed(real_column("frame-time error", "%", 2, "Against the bit level's frame time"),
+              "frame-time error", "frame_time_error_percent"),
+        keyed(text_column("bottleneck"), "bottleneck", "bottleneck"),
+        keyed(text_column("agrees", "Whether the bottleneck is the bit level's"), "agrees",
+              "bottleneck_agrees"),
+        keyed(headed(integer_column("pixels differing", "pixels", "Pixels that differ from bit's"),
+                     "pixels differing", Align::right),
+              "pixels differing", "pixels_differing"),
+        keyed(headed(integer_column("memory bits differing", "bits",
+                                    "Pixel-memory bits (every region's whole memory, compared "
+                                    "after the region) that differ from bit's"),
+                     "memory bits differing", Align::right),
+              "memory bits differing", "memory_bits_differing"),
+    };
   }
+  for (const Row& r : rows) {
+    using report::Cell;
+    const Cell pixels =
+        r.has_pixels ? Cell(r.pixels_differing) : Cell::shown_as(Cell::missing(), "no image");
+    const Cell bits = r.has_memory   ? Cell(r.bits_differing)
+                      : r.has_pixels ? Cell::shown_as(Cell::missing(), "not compared")
+                                     : Cell::shown_as(Cell::missing(), "no memory");
+    table.add_row({r.scene, r.program, r.level, r.host_seconds, r.speedup, r.frame_seconds * 1e3,
+                   Cell::shown_as(100 * r.frame_error, pct(r.frame_error)), r.bottleneck,
+                   r.bottleneck_agrees ? "yes" : "no", pixels, bits});
+  }
+  std::string md = report::markdown(table);
+  report::Report page;
+  page.title = "Fidelity levels against the bit level";
+  page.add_section("fidelity", "Levels").blocks.push_back(table);
   std::string analytic_csv;
   if (o.analytic_grids) {
     // The analytic level against the event level on machines it was not adjusted on: the
@@ -208,34 +235,46 @@ int run_fidelity(FidelityOptions o) {
     const std::vector<AnalyticValidation> grids = {
         validate_analytic("tuning", analytic_tuning_grid(), load),
         validate_analytic("held-out", analytic_heldout_grid(o.heldout), load)};
-    md +=
-        "\nThe analytic level against the event level (frame time, no pixels), on the grid "
+    const std::string heading =
+        "The analytic level against the event level (frame time, no pixels), on the grid "
         "it was adjusted on and on a held-out grid of seeded machines (scenes, programs, "
         "screens, GPs, Renderers, channels, queue words, balancing, shipping, hop latency, "
-        "double buffering, code profile):\n\n" +
-        analytic_validation_markdown(grids);
-    analytic_csv =
-        "grid,machine,event_seconds,analytic_seconds,error,closed_form_seconds,"
-        "event_bottleneck,analytic_bottleneck\n";
+        "double buffering, code profile):";
+    const report::Table grid_table = analytic_validation_table(grids);
+    md += "\n" + heading + "\n\n" + report::markdown(grid_table);
+    report::Section& section = page.add_section("analytic", "The analytic level's validation");
+    section.blocks.push_back(report::Paragraph{heading});
+    section.blocks.push_back(grid_table);
+    report::Table points;
+    points.id = "analytic_validation";
+    points.columns = {report::text_column("grid"),
+                      report::text_column("machine"),
+                      report::real_column("event_seconds", "", -1),
+                      report::real_column("analytic_seconds", "", -1),
+                      report::real_column("error", "", -1),
+                      report::real_column("closed_form_seconds", "", -1),
+                      report::text_column("event_bottleneck"),
+                      report::text_column("analytic_bottleneck")};
     for (const AnalyticValidation& v : grids) {
       for (const AnalyticPoint& p : v.points) {
-        analytic_csv +=
-            fmt::format("{},{},{:.9g},{:.9g},{:.6f},{:.9g},{},{}\n", v.grid, p.machine.label(),
-                        p.event_seconds, p.analytic_seconds, p.error(), p.closed_form_seconds,
-                        p.event_bottleneck, p.analytic_bottleneck);
+        points.add_row({v.grid, p.machine.label(), p.event_seconds, p.analytic_seconds, p.error(),
+                        p.closed_form_seconds, p.event_bottleneck, p.analytic_bottleneck});
       }
     }
+    analytic_csv = report::csv(points);
   }
   const fs::path dir(o.out_dir);
   OutputSet outputs;
   outputs.add((dir / "fidelity.md").string(), md);
-  outputs.add((dir / "fidelity.csv").string(), csv);
+  outputs.add((dir / "fidelity.csv").string(), report::csv(table));
   if (!analytic_csv.empty()) outputs.add((dir / "analytic_validation.csv").string(), analytic_csv);
+  if (o.report) outputs.add((dir / "report.html").string(), report::html(page));
   outputs.commit();
   std::cout << md;
   std::cout << fmt::format(
-      "\nwrote {}/fidelity.md, {}/fidelity.csv{}\n", o.out_dir, o.out_dir,
-      analytic_csv.empty() ? "" : ", " + o.out_dir + "/analytic_validation.csv");
+      "\nwrote {}/fidelity.md, {}/fidelity.csv{}{}\n", o.out_dir, o.out_dir,
+      analytic_csv.empty() ? "" : ", " + o.out_dir + "/analytic_validation.csv",
+      o.report ? ", " + o.out_dir + "/report.html" : "");
   return 0;
 }
 
@@ -261,6 +300,7 @@ Command add_fidelity_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("-o,--out", o->out_dir, "Output folder for fidelity.md and fidelity.csv")
       ->capture_default_str();
+  add_report_flag(*cmd, o->report, "OUT");
   cmd->add_flag("!--no-analytic-grids", o->analytic_grids,
                 "Skip the analytic level's validation on the tuning and held-out grids");
   cmd->add_option("--heldout", o->heldout, "Machines of the held-out grid")

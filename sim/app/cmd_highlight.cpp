@@ -44,6 +44,7 @@ struct HighlightOptions {
   int threads = default_threads();
   std::string order = "given";
   std::string compare_order = "reversed";
+  bool report = false;  // also OUT/report.html
 };
 
 std::string spilled_fields(const Program& p) {
@@ -103,20 +104,64 @@ int run_highlight(const HighlightOptions& o) {
     }
   }
 
-  std::string table = fmt::format(
-      "| program | scene | truth px | flagged px | recall | recall ceiling | precision | width "
-      "mean | "
-      "width sd | coverage | {} | bits of {} | spilled | {} polygons/s ({} GP code) | {} "
-      "polygons/s (compiled GP code) "
-      "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-      compare ? fmt::format("changed by {} order", other.text()) : std::string("order change"),
-      config.renderer.memory_bits, o.speed_scene, name_of(config.gp.code), o.speed_scene);
-  std::string curve_table;
-  std::string csv =
-      "program,scene,truth_pixels,flagged_pixels,recall,recall_ceiling,precision,width_mean,width_"
-      "sd,coverage,"
-      "order,compare_order,order_changed_pixels,order_change,bits_used,memory_bits,spilled,"
-      "polygons_per_second,polygons_per_second_compiled\n";
+  // The main table: one row per program x scene, every column left-aligned as it always was.
+  auto left = [](report::Column c, const std::string& heading, const std::string& key) {
+    c.heading = heading;
+    c.key = key;
+    c.align = report::Align::left;
+    return c;
+  };
+  report::Table table;
+  table.id = "highlight";
+  table.columns = {
+      left(report::text_column("program"), "program", "program"),
+      left(report::text_column("scene"), "scene", "scene"),
+      left(report::integer_column("truth px", "pixels", "Pixels on a true intersection curve"),
+           "truth px", "truth_pixels"),
+      left(report::integer_column("flagged px", "pixels", "Pixels the firmware flags"),
+           "flagged px", "flagged_pixels"),
+      left(report::real_column("recall", "", 3, "Truth pixels flagged, of the truth pixels"),
+           "recall", "recall"),
+      left(report::real_column("recall ceiling", "", 3,
+                               "Truth pixels reached by two or more surfaces, of the truth pixels "
+                               "(the most a per-pixel test can find)"),
+           "recall ceiling", "recall_ceiling"),
+      left(report::real_column("precision", "", 3,
+                               "Flagged pixels near a true curve, of the "
+                               "flagged pixels"),
+           "precision", "precision"),
+      left(report::real_column("width mean", "pixels", 2,
+                               "Mean width of the flagged band across the true curve"),
+           "width mean", "width_mean"),
+      left(report::real_column("width sd", "pixels", 2, "Its standard deviation"), "width sd",
+           "width_sd"),
+      left(report::real_column("coverage", "", 3, "Share of the true curve's length flagged"),
+           "coverage", "coverage"),
+      left(report::real_column("order change", "", 4,
+                               fmt::format("Pixels whose flag differs in {} order, as a share of "
+                                           "the flagged pixels",
+                                           compare ? other.text() : std::string("another"))),
+           compare ? fmt::format("changed by {} order", other.text()) : std::string("order change"),
+           "order_change"),
+      left(report::integer_column("bits", "bits", "Pixel-memory bits the program uses"),
+           fmt::format("bits of {}", config.renderer.memory_bits), "bits_used"),
+      left(report::text_column("spilled", "Fields spilled to the backing store"), "spilled",
+           "spilled"),
+      left(report::real_column("polygons/s", "polygons/s", 0,
+                               fmt::format("Projected polygons per second on {}, with the "
+                                           "configured GP code",
+                                           o.speed_scene)),
+           fmt::format("{} polygons/s ({} GP code)", o.speed_scene, name_of(config.gp.code)),
+           "polygons_per_second"),
+      left(report::real_column("polygons/s compiled", "polygons/s", 0,
+                               fmt::format("Projected polygons per second on {}, with the "
+                                           "compiled GP code",
+                                           o.speed_scene)),
+           fmt::format("{} polygons/s (compiled GP code)", o.speed_scene),
+           "polygons_per_second_compiled"),
+  };
+  // Per scene of a few separate curves, the width along each (its caption line, its table).
+  std::vector<std::pair<std::string, report::Table>> curve_tables;
   for (const Scene& scene : scenes) {
     const std::string& scene_name = scene.name;
     const GeometryEngine geometry(geometry_params(config), scene);
@@ -145,13 +190,22 @@ int run_highlight(const HighlightOptions& o) {
     if (by_curve) {
       const glm::dvec3 eye(scene.camera.eye);
       const glm::dvec3 axis = glm::normalize(glm::dvec3(scene.camera.target) - eye);
-      curve_table += fmt::format(
-          "\nwidth in pixels along each curve of {} (mean +- sd):\n\n| program |", scene_name);
-      for (const Segment3& c : curves)
-        curve_table += fmt::format(" eye depth {:.2f} |", glm::dot(0.5 * (c.a + c.b) - eye, axis));
-      curve_table += "\n|---|";
-      for (std::size_t i = 0; i < curves.size(); ++i) curve_table += "---|";
-      curve_table += "\n";
+      report::Table t;
+      t.id = "highlight-curves-" + scene_name;
+      t.columns.push_back(report::text_column("program"));
+      for (const Segment3& c : curves) {
+        const double depth = glm::dot(0.5 * (c.a + c.b) - eye, axis);
+        report::Column column = report::real_column(
+            fmt::format("eye depth {:.2f}", depth), "pixels", 2,
+            "Mean width (+- its standard deviation) of the flagged band along the curve whose "
+            "midpoint is at this eye depth");
+        column.heading = column.name;
+        column.align = report::Align::left;
+        t.columns.push_back(column);
+      }
+      curve_tables.emplace_back(
+          fmt::format("width in pixels along each curve of {} (mean +- sd):", scene_name),
+          std::move(t));
     }
     const fs::path dir = fs::path(o.out_dir) / scene_name;
     fs::create_directories(dir);
@@ -162,62 +216,61 @@ int run_highlight(const HighlightOptions& o) {
       for (std::size_t p = 0; p < flagged.size(); ++p) flagged[p] = frame.values[p] != 0;
       const Accuracy a = measure_accuracy(truth, flagged);
       if (by_curve) {
-        curve_table += fmt::format("| {} |", e.name);
+        std::vector<report::Cell> row = {e.name};
         for (const Accuracy& c : measure_width_by_segment(truth, flagged)) {
-          curve_table += c.width_samples
-                             ? fmt::format(" {:.2f} +- {:.2f} |", c.width_mean, c.width_sd)
-                             : std::string(" - |");
+          row.push_back(c.width_samples ? report::Cell::shown_as(
+                                              c.width_mean, fmt::format("{:.2f} +- {:.2f}",
+                                                                        c.width_mean, c.width_sd))
+                                        : report::Cell::missing());
         }
-        curve_table += "\n";
+        curve_tables.back().second.add_row(std::move(row));
       }
       // Order sensitivity: pixels whose flag differs in the other order, as a share of the
       // pixels flagged in this one.
       std::size_t changed = 0;
-      std::string change = "-";
+      report::Cell change = report::Cell::missing();
       if (compare) {
         const FieldFrame second = render_field(config, reordered, e.program, "iflag", o.threads);
         for (std::size_t p = 0; p < flagged.size(); ++p)
           changed += (second.values[p] != 0) != (flagged[p] != 0);
-        change = fmt::format(
-            "{:.4f} ({} px)",
-            a.flagged ? static_cast<double>(changed) / a.flagged : static_cast<double>(changed),
-            changed);
+        const double share =
+            a.flagged ? static_cast<double>(changed) / a.flagged : static_cast<double>(changed);
+        change = report::Cell::shown_as(share, fmt::format("{:.4f} ({} px)", share, changed));
       }
       outputs.add((dir / (e.name + ".png")).string(), encode_png(frame.image));
       outputs.add((dir / (e.name + "-overlay.png")).string(),
                   encode_png(overlay_image(frame.image, truth, flagged)));
-      const std::string speed = o.speed_scene.empty() ? "-" : fmt::format("{:.0f}", e.speed);
-      const std::string speed_compiled =
-          o.speed_scene.empty() ? "-" : fmt::format("{:.0f}", e.speed_compiled);
-      table += fmt::format(
-          "| {} | {} | {} | {} | {:.3f} | {:.3f} | {:.3f} | {:.2f} | {:.2f} | {:.3f} | {} | {} | "
-          "{} "
-          "| {} | {} |\n",
-          e.name, scene_name, a.truth, a.flagged, a.recall, a.ceiling, a.precision, a.width_mean,
-          a.width_sd, a.coverage, change, e.program.bits_used(), spilled_fields(e.program), speed,
-          speed_compiled);
-      csv += fmt::format(
-          "{},{},{},{},{:.6f},{:.6f},{:.6f},{:.4f},{:.4f},{:.6f},{},{},{},{},{},{},{},{},{}\n",
-          e.name, scene_name, a.truth, a.flagged, a.recall, a.ceiling, a.precision, a.width_mean,
-          a.width_sd, a.coverage, order.text(), compare ? other.text() : "none",
-          compare ? changed : 0,
-          compare && a.flagged ? static_cast<double>(changed) / a.flagged : 0.0,
-          e.program.bits_used(), config.renderer.memory_bits, spilled_fields(e.program), speed,
-          speed_compiled);
+      auto speed = [&](double v) {
+        return o.speed_scene.empty() ? report::Cell::missing() : report::Cell(v);
+      };
+      table.add_row({e.name, scene_name, static_cast<std::int64_t>(a.truth),
+                     static_cast<std::int64_t>(a.flagged), a.recall, a.ceiling, a.precision,
+                     a.width_mean, a.width_sd, a.coverage, change, e.program.bits_used(),
+                     spilled_fields(e.program), speed(e.speed), speed(e.speed_compiled)});
     }
   }
-  table += curve_table;
-  outputs.add((fs::path(o.out_dir) / "highlight.md").string(), table);
-  outputs.add((fs::path(o.out_dir) / "highlight.csv").string(), csv);
+  std::string text = report::markdown(table);
+  report::Report r;
+  r.title = "Intersection highlighting";
+  const std::string legend = fmt::format(
+      "widths in pixels across the true curve (delta = {} px half-width); overlays: green = "
+      "flagged and true, red = flagged only, blue = missed",
+      static_cast<double>(resolved_frame_parameter(config, Parameter::delta)) / 16.0);
+  r.subtitle = legend;
+  r.add_section("highlight", "Programs and scenes").blocks.push_back(table);
+  for (auto& [caption, t] : curve_tables) {
+    text += "\n" + caption + "\n\n" + report::markdown(t);
+    r.add_section(t.id, caption.substr(0, caption.size() - 1)).blocks.push_back(std::move(t));
+  }
+  outputs.add((fs::path(o.out_dir) / "highlight.md").string(), text);
+  add_report_outputs(outputs, o.out_dir, r, o.report);
   // The tables and every image together, or none of them (sim/output).
   outputs.commit();
-  std::cout << table;
+  std::cout << text;
   std::cout << fmt::format(
-      "\nwidths in pixels across the true curve (delta = {} px half-width); overlays: green = "
-      "flagged and true, red = flagged only, blue = missed\nwrote {}/highlight.md, "
-      "{}/highlight.csv and {}/SCENE/PROGRAM[-overlay].png\n",
-      static_cast<double>(resolved_frame_parameter(config, Parameter::delta)) / 16.0, o.out_dir,
-      o.out_dir, o.out_dir);
+      "\n{}\nwrote {}/highlight.md, {}/highlight.csv{} and {}/SCENE/PROGRAM[-overlay].png\n",
+      legend, o.out_dir, o.out_dir, o.report ? fmt::format(", {}/report.html", o.out_dir) : "",
+      o.out_dir);
   return 0;
 }
 
@@ -250,6 +303,7 @@ Command add_highlight_command(CLI::App& app) {
   add_fidelity_option(*cmd, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder for the table and images")
       ->capture_default_str();
+  add_report_flag(*cmd, o->report, "OUT");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any number)")
       ->check(CLI::Range(1, 256))
       ->capture_default_str();

@@ -207,11 +207,33 @@ std::string rewrites_table(const MachineConfig& config, const Scene& scene,
     m.compiled = project_frame(compiled, scene, program).triangles_per_second;
     return m;
   };
-  std::string out = fmt::format(
-      "| program, before -> after | bits of {} | cycles per triangle packet | {} polygons/s, "
-      "hand-coded GP code | {} polygons/s, compiled GP code | cycles saved, by instruction |\n"
-      "|---|---|---|---|---|---|\n",
-      config.renderer.memory_bits, scene.name, scene.name);
+  // Each cell "before -> after"; its value (CSV, sorting) the after figure.
+  auto left = [](report::Column c, std::string heading) {
+    return report::headed(std::move(c), std::move(heading), report::Align::left);
+  };
+  report::Table table;
+  table.id = "rewrites";
+  table.columns = {
+      left(report::text_column("program", "The program before -> after the rewrite"),
+           "program, before -> after"),
+      left(report::integer_column("bits", "bits", "Pixel-memory bits, before -> after"),
+           fmt::format("bits of {}", config.renderer.memory_bits)),
+      left(report::integer_column("cycles per triangle packet", "array cycles",
+                                  "The triangle procedure's cycles, before -> after"),
+           "cycles per triangle packet"),
+      left(report::real_column("polygons/s, hand-coded", "polygons/s", 0,
+                               "Projected rate with hand-coded GP code, before -> after"),
+           fmt::format("{} polygons/s, hand-coded GP code", scene.name)),
+      left(report::real_column("polygons/s, compiled", "polygons/s", 0,
+                               "Projected rate with compiled GP code, before -> after"),
+           fmt::format("{} polygons/s, compiled GP code", scene.name)),
+      left(report::text_column("cycles saved, by instruction",
+                               "Cycles the rewrite saves, per instruction (negative: spends)"),
+           "cycles saved, by instruction"),
+  };
+  auto arrow = [](report::Cell after, const std::string& a, const std::string& b) {
+    return report::Cell::shown_as(std::move(after), fmt::format("{} -> {}", a, b));
+  };
   std::vector<const char*> notes;
   for (const std::string& pair : pairs) {
     const auto colon = pair.find(':');
@@ -252,15 +274,17 @@ std::string rewrites_table(const MachineConfig& config, const Scene& scene,
           fmt::format("(constant expressions broadcast{})",
                       std::string(static_cast<std::size_t>(at - notes.begin()) + 1, '*')));
     }
-    out += fmt::format(
-        "| {} -> {} | {} -> {} | {} -> {} | {} -> {} | {} -> {} | {} |\n", pair.substr(0, colon),
-        pair.substr(colon + 1), a.bits, b.bits, grouped(a.cycles), grouped(b.cycles),
-        grouped(static_cast<std::uint64_t>(std::llround(a.assembly))),
-        grouped(static_cast<std::uint64_t>(std::llround(b.assembly))),
-        grouped(static_cast<std::uint64_t>(std::llround(a.compiled))),
-        grouped(static_cast<std::uint64_t>(std::llround(b.compiled))),
-        saved.empty() ? std::string("-") : fmt::format("{}", fmt::join(saved, ", ")));
+    table.add_row({arrow(pair.substr(colon + 1), pair.substr(0, colon), pair.substr(colon + 1)),
+                   arrow(b.bits, std::to_string(a.bits), std::to_string(b.bits)),
+                   arrow(b.cycles, grouped(a.cycles), grouped(b.cycles)),
+                   arrow(b.assembly, grouped(static_cast<std::uint64_t>(std::llround(a.assembly))),
+                         grouped(static_cast<std::uint64_t>(std::llround(b.assembly)))),
+                   arrow(b.compiled, grouped(static_cast<std::uint64_t>(std::llround(a.compiled))),
+                         grouped(static_cast<std::uint64_t>(std::llround(b.compiled)))),
+                   saved.empty() ? report::Cell::missing()
+                                 : report::Cell(fmt::format("{}", fmt::join(saved, ", ")))});
   }
+  std::string out = report::markdown(table);
   for (std::size_t k = 0; k < notes.size(); ++k) {
     out += fmt::format("\n`{}` the figure rests on {}.\n", std::string(k + 1, '*'), notes[k]);
   }
@@ -280,9 +304,25 @@ std::string multiply_microcode_table(const MachineConfig& config, const Scene& s
   const TimingParams t_window = timing_params(window);
   OwnedValues values{};
   values.parameters = GeometryEngine(geometry_params(config), scene).frame_parameters();
-  std::string out =
-      "| program | procedure | mul | cycles per packet, full | cycles per packet, window* | "
-      "saved |\n|---|---|---|---|---|---|\n";
+  auto left = [](report::Column c, std::string heading) {
+    return report::headed(std::move(c), std::move(heading), report::Align::left);
+  };
+  report::Table table;
+  table.id = "multiply-microcode";
+  table.columns = {
+      left(report::text_column("program"), "program"),
+      left(report::text_column("procedure"), "procedure"),
+      left(report::integer_column("mul", "instructions", "mul instructions in the procedure"),
+           "mul"),
+      left(report::integer_column("cycles per packet, full", "array cycles",
+                                  "renderer.multiply_microcode = full"),
+           "cycles per packet, full"),
+      left(report::integer_column("cycles per packet, window", "array cycles",
+                                  "renderer.multiply_microcode = window"),
+           "cycles per packet, window*"),
+      left(report::integer_column("saved", "array cycles", "full - window (the share of full)"),
+           "saved"),
+  };
   for (const std::string& name : builtin_program_names()) {
     const Program program = assemble_file(resolve_firmware(name), assembler_options(config));
     for (int p = 0; p < static_cast<int>(Procedure::count); ++p) {
@@ -292,11 +332,14 @@ std::string multiply_microcode_table(const MachineConfig& config, const Scene& s
       if (!code.defined || muls == 0) continue;
       const std::uint64_t a = procedure_cost(code, t_full, values).count;
       const std::uint64_t b = procedure_cost(code, t_window, values).count;
-      out += fmt::format("| {} | {} | {} | {} | {} | {} ({:.0f}%) |\n", name, kProcedureNames[p],
-                         muls, grouped(a), grouped(b), grouped(a - b),
-                         100.0 * static_cast<double>(a - b) / static_cast<double>(a));
+      table.add_row({name, kProcedureNames[p], static_cast<std::int64_t>(muls),
+                     report::Cell::shown_as(a, grouped(a)), report::Cell::shown_as(b, grouped(b)),
+                     report::Cell::shown_as(a - b, fmt::format("{} ({:.0f}%)", grouped(a - b),
+                                                               100.0 * static_cast<double>(a - b) /
+                                                                   static_cast<double>(a)))});
     }
   }
+  std::string out = report::markdown(table);
   out += fmt::format("\n`*` the figure rests on {}.\n", instruction_info(Opcode::mul).basis);
   return out;
 }

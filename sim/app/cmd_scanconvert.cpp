@@ -28,6 +28,7 @@ struct ScanConvertOptions {
   std::vector<std::string> sets;
   std::string out_dir = "out/scanconvert";
   bool ablation = false;
+  bool report = false;  // also OUT/report.html
   int threads = default_threads();
 };
 
@@ -67,11 +68,25 @@ int run_scanconvert(const ScanConvertOptions& o) {
       rows.push_back(std::move(r));
     }
     const int n = config.gp.significand_bits;
-    std::cout << fmt::format(
-                     "{} x {} screen, vertices snapped to 1/{} pixel, the GP's coefficients {}\n\n",
-                     config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits,
-                     n < 62 ? fmt::format("kept to {} significant bits", n) : std::string("exact"))
-              << format_scan_conversion_ablation(rows);
+    const std::string heading =
+        fmt::format("{} x {} screen, vertices snapped to 1/{} pixel, the GP's coefficients {}",
+                    config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits,
+                    n < 62 ? fmt::format("kept to {} significant bits", n) : std::string("exact"));
+    const report::Table table = scan_conversion_ablation_table(rows);
+    std::cout << heading << "\n\n" << report::markdown(table);
+    if (o.report) {
+      // --report: the table as CSV and the page, into --out.
+      report::Report r;
+      r.title = "Scan conversion: each ingredient of the accurate program alone";
+      r.subtitle = heading;
+      r.add_section("ablation", "Ablation").blocks.push_back(table);
+      prepare_output_folder(o.out_dir, "--out");
+      OutputSet outputs;
+      add_report_outputs(outputs, o.out_dir, r, true);
+      outputs.commit();
+      std::cout << fmt::format("\nwrote {}/scanconvert-ablation.csv and {}/report.html\n",
+                               o.out_dir, o.out_dir);
+    }
     return 0;
   }
   prepare_output_folder(o.out_dir, "--out");
@@ -79,13 +94,23 @@ int run_scanconvert(const ScanConvertOptions& o) {
   std::vector<ScanConversionReport> reports;
   OutputSet outputs;
   std::string notes;
+  std::vector<report::Figure> figures;
   for (std::size_t k = 0; k < scenes.size(); ++k) {
     reports.push_back(measure_scan_conversion(config, scenes[k], standard, accurate, o.threads));
     const ScanConversionReport& r = reports.back();
     const std::string base = (fs::path(o.out_dir) / file_name(names[k])).string();
     outputs.add(base + "-standard.png", encode_png(r.standard.image));
     outputs.add(base + "-accurate.png", encode_png(r.accurate.image));
-    outputs.add(base + "-marked.png", encode_png(r.marked));
+    std::string marked = encode_png(r.marked);
+    if (o.report) {
+      const std::string file = file_name(names[k]) + "-marked.png";
+      figures.push_back({file, r.scene,
+                         "The accurate program's image, dimmed, with the pixels that differ from "
+                         "the standard one in red and those where the standard one shows a "
+                         "hidden surface marked",
+                         "image/png", marked, r.scene + ": the pixels that differ", file});
+    }
+    outputs.add(base + "-marked.png", std::move(marked));
     auto sides = [&r](SideKind k) { return r.sides[static_cast<std::size_t>(k)]; };
     notes += fmt::format(
         "{}: {} triangles, {} edges ({} boundary, {} non-manifold); accurate set-up, triangle "
@@ -99,20 +124,39 @@ int run_scanconvert(const ScanConvertOptions& o) {
         sides(SideKind::degenerate), sides(SideKind::coplanar), sides(SideKind::clipped), r.M, r.E,
         r.E_snap, r.E_edge, r.standard.layer_pixels, r.differing);
   }
-  const std::string table = format_scan_conversion(reports);
+  const report::Table tab = scan_conversion_table(reports);
+  const std::string table = report::markdown(tab);
   outputs.add((fs::path(o.out_dir) / "scanconvert.md").string(), table + "\n" + notes);
+  const int n = config.gp.significand_bits;
+  const std::string heading =
+      fmt::format("{} x {} screen, vertices snapped to 1/{} pixel, the GP's coefficients {}",
+                  config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits,
+                  n < 62 ? fmt::format("kept to {} significant bits", n) : std::string("exact"));
+  report::Report rep;
+  rep.title = "Scan conversion: standard against accurate";
+  rep.subtitle = heading;
+  report::Section& section = rep.add_section("scanconvert", "Standard against accurate");
+  section.blocks.push_back(tab);
+  // The per-scene notes, a paragraph each.
+  for (std::size_t at = 0, end; at < notes.size(); at = end + 1) {
+    end = notes.find('\n', at);
+    if (end == std::string::npos) end = notes.size();
+    section.blocks.push_back(report::Paragraph{notes.substr(at, end - at)});
+  }
+  if (!figures.empty()) {
+    report::Section& images = rep.add_section("images", "Where the two differ");
+    for (report::Figure& f : figures) images.blocks.push_back(std::move(f));
+  }
+  add_report_outputs(outputs, o.out_dir, rep, o.report);
   // The table and every image together, or none of them (sim/output).
   outputs.commit();
-  const int n = config.gp.significand_bits;
-  std::cout << fmt::format(
-                   "{} x {} screen, vertices snapped to 1/{} pixel, the GP's coefficients {}\n\n",
-                   config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits,
-                   n < 62 ? fmt::format("kept to {} significant bits", n) : std::string("exact"))
+  std::cout << heading << "\n\n"
             << table << "\n"
             << notes
             << fmt::format(
-                   "wrote {}/scanconvert.md and {}/SCENE-{{standard,accurate,marked}}.png\n",
-                   o.out_dir, o.out_dir);
+                   "wrote {}/scanconvert.md, scanconvert.csv{} and "
+                   "{}/SCENE-{{standard,accurate,marked}}.png\n",
+                   o.out_dir, o.report ? ", report.html" : "", o.out_dir);
   return 0;
 }
 
@@ -141,6 +185,7 @@ Command add_scanconvert_command(CLI::App& app) {
                 "per scene; writes nothing)");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/scanconvert)");
+  add_report_flag(*cmd, o->report, "OUT");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
   return {cmd, [o] { return run_scanconvert(*o); }};

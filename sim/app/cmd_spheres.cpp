@@ -12,6 +12,7 @@
 #include "models/machine.hpp"
 #include "sim/analysis/spheres.hpp"
 #include "sim/app/commands.hpp"
+#include "sim/output/output_set.hpp"
 #include "sim/scene/scene_loader.hpp"
 #include "sim/scene/sphere_scenes.hpp"
 #include "sim/simulation.hpp"
@@ -27,6 +28,8 @@ struct SpheresOptions {
   std::string config_path;
   std::vector<std::string> sets;
   int threads = default_threads();
+  std::string out_dir;  // "" for none: only the table on stdout
+  bool report = false;
 };
 
 struct SphereRow {
@@ -40,6 +43,83 @@ std::uint64_t sum(const Statistics& s, const char* group, const char* name) {
   std::uint64_t t = 0;
   for (std::size_t k = 0; k < s.elements(group); ++k) {
     t += static_cast<std::uint64_t>(s.integer(fmt::format("{}.{}.{}", group, k, name)));
+  }
+  return t;
+}
+
+// One row per way of drawing the spheres (the typed values in CSV, the text as before).
+report::Table spheres_table(const std::vector<SphereRow>& rows) {
+  using namespace report;
+  auto right = [](Column c, const char* heading) {
+    c.heading = heading;
+    c.align = Align::right;
+    return c;
+  };
+  Table t;
+  t.id = "spheres";
+  Column what = text_column("spheres as", "Sphere primitives, or UV spheres of U x V");
+  Column gp = real_column("GP clocks", "i860 clocks", 0, "GP geometry clocks per sphere");
+  gp.heading = "GP clocks";
+  Column packet = real_column("packet words", "words", 0, "Set-up packet words per sphere");
+  packet.heading = "packet words";
+  Column ring = real_column("ring words", "words", 0, "Ring words per sphere");
+  ring.heading = "ring words";
+  Column cycles = real_column("Renderer cycles", "array cycles", 0,
+                              "Renderer busy cycles per sphere, all Renderers");
+  cycles.heading = "Renderer cycles";
+  Column rate = real_column("spheres/s", "spheres/s", -1,
+                            "Spheres per second the GPs or the Renderers could sustain, "
+                            "whichever is less");
+  rate.heading = "spheres/s";
+  t.columns = {
+      what,
+      gp,
+      packet,
+      ring,
+      cycles,
+      rate,
+      right(integer_column("coverage errors", "pixels",
+                           "Pixels covered only by the drawing (extra) / only by the ray cast "
+                           "(missing), of the pixels the ray cast covers"),
+            "coverage errors (extra / missing of covered)"),
+      right(real_column("depth error max", "z units", 0,
+                        "Largest / mean depth error against the ray cast"),
+            "depth error max / mean"),
+      right(real_column("normal error max", "degrees", 1,
+                        "Largest / mean angle between the drawn and the exact normal"),
+            "normal error max / mean"),
+      right(integer_column("overlap pixels: depth nearer another sphere", "pixels",
+                           "Pixels where two spheres overlap and the depth is of the wrong one, "
+                           "of the overlap pixels"),
+            "overlap pixels: depth nearer another sphere"),
+      right(integer_column("overlap pixels: showing another primitive", "pixels",
+                           "Overlap pixels showing a primitive other than the ray cast's, of "
+                           "the overlap pixels"),
+            "overlap pixels: showing another primitive"),
+      right(integer_column("intersection-curve pixels: showing another primitive", "pixels",
+                           "Pixels on a curve where spheres meet showing a primitive other than "
+                           "the ray cast's, of the curve pixels"),
+            "intersection-curve pixels: showing another primitive"),
+  };
+  for (const SphereRow& r : rows) {
+    const SphereAccuracy& a = r.accuracy;
+    t.add_row(
+        {r.what, r.gp_clocks, r.packet_words, r.ring_words, r.renderer_cycles,
+         Cell::shown_as(r.rate, fmt::format("{:.3g}", r.rate)),
+         Cell::shown_as(
+             static_cast<std::int64_t>(a.coverage_extra + a.coverage_missing),
+             fmt::format("{} / {} of {}", a.coverage_extra, a.coverage_missing, a.pixels)),
+         Cell::shown_as(static_cast<double>(a.depth_max_error),
+                        fmt::format("{:.0f} / {:.1f}", a.depth_max_error, a.depth_mean_error)),
+         Cell::shown_as(static_cast<double>(a.normal_max_error_degrees),
+                        fmt::format("{:.1f}° / {:.2f}°", a.normal_max_error_degrees,
+                                    a.normal_mean_error_degrees)),
+         Cell::shown_as(static_cast<std::int64_t>(a.overlap_depth_wrong),
+                        fmt::format("{} of {}", a.overlap_depth_wrong, a.overlap_pixels)),
+         Cell::shown_as(static_cast<std::int64_t>(a.overlap_shown_wrong),
+                        fmt::format("{} of {}", a.overlap_shown_wrong, a.overlap_pixels)),
+         Cell::shown_as(static_cast<std::int64_t>(a.curve_shown_wrong),
+                        fmt::format("{} of {}", a.curve_shown_wrong, a.curve_pixels))});
   }
   return t;
 }
@@ -112,29 +192,27 @@ int run_spheres(const SpheresOptions& o) {
     rows.push_back(row(fmt::format("{} ({} triangles)", t, 2 * u * (v - 1)), tess, stands_for));
   }
 
-  std::cout << fmt::format(
+  const std::string heading = fmt::format(
       "scene '{}': {} spheres, {} x {} screen, firmware {} ({} bits of pixel memory); per "
       "sphere, less a frame without the spheres; rate: spheres/s the GPs or the Renderers "
-      "could sustain, whichever is less\n\n",
+      "could sustain, whichever is less",
       scene.name, scene.spheres.size(), config.screen.width, config.screen.height, o.firmware,
       program.bits_used());
-  std::cout << "| spheres as | GP clocks | packet words | ring words | Renderer cycles | spheres/s "
-               "| coverage "
-               "errors (extra / missing of covered) | depth error max / mean | normal error max "
-               "/ mean | overlap pixels: depth nearer another sphere | overlap pixels: showing "
-               "another primitive | intersection-curve pixels: showing another primitive |\n";
-  std::cout << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  for (const SphereRow& r : rows) {
-    const SphereAccuracy& a = r.accuracy;
-    std::cout << fmt::format(
-        "| {} | {:.0f} | {:.0f} | {:.0f} | {:.0f} | {:.3g} | {} / {} of {} | {:.0f} / {:.1f} | "
-        "{:.1f}° / "
-        "{:.2f}° | {} of {} | {} of {} | {} of {} |\n",
-        r.what, r.gp_clocks, r.packet_words, r.ring_words, r.renderer_cycles, r.rate,
-        a.coverage_extra, a.coverage_missing, a.pixels, a.depth_max_error, a.depth_mean_error,
-        a.normal_max_error_degrees, a.normal_mean_error_degrees, a.overlap_depth_wrong,
-        a.overlap_pixels, a.overlap_shown_wrong, a.overlap_pixels, a.curve_shown_wrong,
-        a.curve_pixels);
+  const report::Table table = spheres_table(rows);
+  std::cout << heading << "\n\n" << report::markdown(table);
+  if (!o.out_dir.empty() || o.report) {
+    const std::string dir = o.out_dir.empty() ? std::string("out/spheres") : o.out_dir;
+    report::Report r;
+    r.title = "Spheres: quadric against tessellated";
+    r.subtitle = heading;
+    r.add_section("spheres", "Per sphere").blocks.push_back(table);
+    prepare_output_folder(dir, "--out");
+    OutputSet outputs;
+    outputs.add(dir + "/spheres.md", heading + "\n\n" + report::markdown(table));
+    add_report_outputs(outputs, dir, r, o.report);
+    outputs.commit();
+    std::cout << fmt::format("\nwrote {}/spheres.md, spheres.csv{}\n", dir,
+                             o.report ? " and report.html" : "");
   }
   return 0;
 }
@@ -160,6 +238,10 @@ Command add_spheres_command(CLI::App& app) {
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
+  cmd->add_option("-o,--out", o->out_dir,
+                  "Also write the table to OUT/spheres.md and OUT/spheres.csv (with --report "
+                  "and no --out, OUT is out/spheres)");
+  add_report_flag(*cmd, o->report, "OUT");
   return {cmd, [o] { return run_spheres(*o); }};
 }
 

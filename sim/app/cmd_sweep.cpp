@@ -141,9 +141,9 @@ constexpr std::uint64_t kSlurmDefaultMaxArraySize = 1001;
 // --slurm FILE: OUT/commands.txt, one `pp5sim render` command per grid point (as
 // --print-commands prints them, for `parallel < OUT/commands.txt`), and FILE, a bash script
 // that submits them to Slurm: a job array whose task i runs line i + 1, then `sweep aggregate
-// --report` (sweep.csv and report.html) as a job that starts only once every task has succeeded (afterok; a failed task cancels it).
-// Both files are written, or neither. Paths in the jobs are relative to the folder `sweep` ran
-// in, which the jobs start in (--chdir).
+// --report` (sweep.csv and report.html) as a job that starts only once every task has succeeded
+// (afterok; a failed task cancels it). Both files are written, or neither. Paths in the jobs are
+// relative to the folder `sweep` ran in, which the jobs start in (--chdir).
 int write_slurm_job(const SweepOptions& o, const std::string& program_path, std::uint64_t points,
                     const std::function<std::string(std::uint64_t)>& command) {
   const fs::path cwd = fs::current_path();

@@ -9,6 +9,7 @@
 #include "sim/analysis/validate.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/output/output_set.hpp"
+#include "sim/output/report_html.hpp"
 
 namespace pp5 {
 
@@ -21,6 +22,7 @@ struct ValidateOptions {
   bool sensitivity = true;
   std::vector<int> tessellation{512, 128};
   int joint = 64;
+  bool report = false;  // also OUT/report.html
 };
 
 int run_validate(const ValidateOptions& o) {
@@ -33,19 +35,36 @@ int run_validate(const ValidateOptions& o) {
   options.tessellation_u = o.tessellation[0];
   options.tessellation_v = o.tessellation[1];
   const auto rows = validate_against_record(config, load, options);
-  std::string report =
-      "Published figures beside the simulator's projection of the same workload:\n\n" +
-      validation_markdown(rows) + "\n" + evidence_summary(rows);
+  const std::string record_heading =
+      "Published figures beside the simulator's projection of the same workload:";
+  std::string text =
+      record_heading + "\n\n" + validation_markdown(rows) + "\n" + evidence_summary(rows);
+  // The page: each table of validate.md with the text around it.
+  report::Report page;
+  page.title = "The simulator beside the published record";
+  {
+    report::Section& s = page.add_section("record", "Published figures");
+    s.blocks.push_back(report::Paragraph{record_heading});
+    report::Table t = validation_table(rows);
+    t.id = "record";  // validate.csv is written below with every value
+    s.blocks.push_back(std::move(t));
+    s.blocks.push_back(report::Preformatted{evidence_summary(rows)});
+  }
   OutputSet outputs;
   outputs.add(o.out + "/validate.csv", validation_csv(rows));
   if (o.sensitivity) {
     const SensitivityTable table = sensitivity(config, load, default_sensitivity_workloads());
-    report +=
-        "\nSensitivity: projected triangles/s of the torus (8,192 triangles) at the low and high "
+    const std::string heading =
+        "Sensitivity: projected triangles/s of the torus (8,192 triangles) at the low and high "
         "end of each fitted or assumed constant's plausible range, the others at their "
-        "values:\n\n" +
-        sensitivity_markdown(table);
+        "values:";
+    text += "\n" + heading + "\n\n" + sensitivity_markdown(table);
     outputs.add(o.out + "/sensitivity.csv", sensitivity_csv(table));
+    report::Section& s = page.add_section("sensitivity", "Sensitivity");
+    s.blocks.push_back(report::Paragraph{heading});
+    report::Table t = sensitivity_table(table);
+    t.id = "sensitivity-table";  // sensitivity.csv holds one row per constant and workload
+    s.blocks.push_back(std::move(t));
   }
   if (o.joint > 0) {
     JointSensitivityOptions joint;
@@ -53,25 +72,31 @@ int run_validate(const ValidateOptions& o) {
     joint.tessellation_u = o.tessellation[0];
     joint.tessellation_v = o.tessellation[1];
     const JointSensitivity j = joint_sensitivity(config, load, joint);
-    report +=
-        "\nJoint sensitivity of the conclusions: the design goal's workload (phong, hand-coded "
+    const std::string heading =
+        "Joint sensitivity of the conclusions: the design goal's workload (phong, hand-coded "
         "GPs) with every fitted and assumed constant and the workload choices varied "
-        "together:\n\n" +
-        joint_sensitivity_markdown(j);
-    std::string csv =
-        "sample,scene,triangles,rate,pipelined_rate,bottleneck,painter_over_zbuffer,"
-        "painter_choices,sets\n";
-    for (std::size_t k = 0; k < j.points.size(); ++k) {
-      const JointSample& p = j.points[k];
-      csv += fmt::format("{},{},{},{:.9g},{:.9g},{},{:.6g},{},{}\n", k, p.scene, p.triangles,
-                         p.rate, p.pipelined_rate, p.bottleneck, p.painter_over_zbuffer,
-                         p.painter_choices, fmt::join(p.sets, " "));
-    }
-    outputs.add(o.out + "/joint.csv", csv);
+        "together:";
+    const std::string markdown = joint_sensitivity_markdown(j);
+    text += "\n" + heading + "\n\n" + markdown;
+    const report::Table samples = joint_samples_table(j);
+    outputs.add(o.out + "/joint.csv", report::csv(samples));
+    report::Section& s = page.add_section("joint", "Joint sensitivity");
+    s.blocks.push_back(report::Paragraph{heading + " " + markdown.substr(0, markdown.find('\n'))});
+    s.blocks.push_back(joint_sensitivity_table(j));
+    s.blocks.push_back(report::Paragraph{joint_bottleneck_text(j).substr(1)});
+    report::Table all = samples;
+    all.id = "joint-samples";
+    all.title = "Every sample";
+    s.blocks.push_back(std::move(all));
   }
-  outputs.add(o.out + "/validate.md", report);
+  outputs.add(o.out + "/validate.md", text);
+  if (o.report) {
+    // The page only: its tables' data are the CSVs above.
+    outputs.add(o.out + "/report.html", report::html(page));
+  }
   outputs.commit();
-  std::cout << report;
+  std::cout << text;
+  if (o.report) std::cout << fmt::format("\nwrote {}/report.html\n", o.out);
   return 0;
 }
 
@@ -90,6 +115,7 @@ Command add_validate_command(CLI::App& app) {
       "joint.csv into --out.");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out, "Output folder (default out/validate)");
+  add_report_flag(*cmd, o->report, "OUT");
   cmd->add_flag("!--no-sensitivity", o->sensitivity,
                 "Skip the sensitivity table (about 170 projections of the torus, some seconds)");
   cmd->add_option("--joint", o->joint,

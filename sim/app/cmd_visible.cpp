@@ -24,6 +24,7 @@ struct VisibleOptions {
   std::string out_dir = "out/visible";
   int threads = default_threads();
   PainterOptions painter;
+  bool report = false;  // also OUT/report.html
 };
 
 // A scene's name as a file-name prefix: letters, digits, '-' and '_' kept, others '_'.
@@ -50,8 +51,26 @@ int run_visible(const VisibleOptions& o) {
   for (const Scene& s : scenes) {
     reports.push_back(analyse_visible_surfaces(config, s, zbuffer, painter, o.threads, o.painter));
   }
-  const std::string table = format_visible_report(reports, config);
+  const report::Table comparison = visible_table(reports, config);
+  const std::string notes = visible_notes(reports);
+  const std::string table = report::markdown(comparison) + "\n" + notes;
   std::cout << table;
+  report::Report rep;
+  rep.title = "Visible-surface algorithms compared";
+  rep.subtitle = fmt::format("{} x {} screen; each algorithm against an exact per-pixel ray cast",
+                             config.screen.width, config.screen.height);
+  report::Section& section = rep.add_section("visible", "Comparison");
+  section.blocks.push_back(comparison);
+  // The per-scene notes (a Markdown list), a paragraph per item.
+  for (std::size_t at = 0, end; at < notes.size(); at = end + 1) {
+    end = notes.find('\n', at);
+    if (end == std::string::npos) end = notes.size();
+    const std::string line = notes.substr(at, end - at);
+    const std::size_t text = line.find("- ");
+    if (text != std::string::npos)
+      section.blocks.push_back(report::Paragraph{line.substr(text + 2)});
+  }
+  report::Section& frames = rep.add_section("frames", "Frames and differences");
 
   prepare_output_folder(o.out_dir, "--out");
   const std::filesystem::path dir(o.out_dir);
@@ -59,20 +78,31 @@ int run_visible(const VisibleOptions& o) {
   const char* const row_files[] = {"diff-zbuffer", "diff-painter", "diff-scanline", "diff-warnock"};
   for (const VisibleSceneReport& r : reports) {
     const std::string stem = file_stem(r.scene);
-    outputs.add((dir / (stem + "-zbuffer.png")).string(), encode_png(r.zbuffer_frame));
-    outputs.add((dir / (stem + "-painter.png")).string(), encode_png(r.painter_frame));
+    auto image = [&](const std::string& file, const RgbImage& picture, const std::string& what) {
+      std::string png = encode_png(picture);
+      if (o.report) {
+        frames.blocks.push_back(report::Figure{file, fmt::format("{}: {}", r.scene, what), "",
+                                               "image/png", png,
+                                               fmt::format("{} of {}", what, r.scene), file});
+      }
+      outputs.add((dir / file).string(), std::move(png));
+    };
+    image(stem + "-zbuffer.png", r.zbuffer_frame, "the z-buffer's frame");
+    image(stem + "-painter.png", r.painter_frame, "painter's frame");
     for (std::size_t k = 0; k < r.rows.size(); ++k) {
-      outputs.add((dir / (stem + "-" + row_files[k] + ".png")).string(),
-                  encode_png(r.rows[k].image));
+      image(stem + "-" + row_files[k] + ".png", r.rows[k].image,
+            r.rows[k].name + " against the reference (red: differs)");
     }
     outputs.add((dir / (stem + "-depth-flips.png")).string(), encode_png(r.flip_image));
   }
   outputs.add((dir / "visible.md").string(), table);
+  add_report_outputs(outputs, o.out_dir, rep, o.report);
   outputs.add((dir / "visible.json").string(),
               visible_statistics(reports).to_json().dump(2) + "\n");
   outputs.commit();
-  std::cout << fmt::format("\nwrote {}/visible.md, visible.json and the difference images\n",
-                           o.out_dir);
+  std::cout << fmt::format(
+      "\nwrote {}/visible.md, visible.csv, visible.json{} and the difference images\n", o.out_dir,
+      o.report ? ", report.html" : "");
   return 0;
 }
 
@@ -95,6 +125,7 @@ Command add_visible_command(CLI::App& app) {
                   "file; default every built-in scene of triangles (not the sphere scenes)");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/visible)");
+  add_report_flag(*cmd, o->report, "OUT");
   cmd->add_flag("!--painter-every-face", o->painter.remove_back_faces,
                 "Painter's sorts and draws every face (two-sided); by default back faces are "
                 "removed before the sort, as the slides' drawing algorithm does");

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "models/config/machine_config.hpp"
+#include "sim/output/output_set.hpp"
+#include "sim/output/report.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace pp5 {
@@ -88,8 +90,13 @@ std::string shell_quote(const std::string& s, const std::string& what);
 // A path as a literal in an sbatch --output/--error file-name pattern: '%' doubled.
 std::string slurm_pattern_literal(const std::string& s);
 
-// Markdown table cells must not contain a bare '|'.
-std::string markdown_cell(const std::string& text);
+// An analysis's report files (sim/output/report.hpp), beside its Markdown: each table of `r`
+// as DIR/ID.csv (the table's id), and when `html` DIR/report.html, one self-contained page.
+// Added to `outputs`, so they are written with the analysis's other files, or none of them.
+void add_report_outputs(OutputSet& outputs, const std::string& dir, const report::Report& r,
+                        bool html);
+// The --report flag of an analysis that writes into the folder `out_help` names.
+void add_report_flag(CLI::App& command, bool& report, const std::string& out_help);
 
 // A sensible default for --threads: the host's hardware threads.
 int default_threads();

@@ -11,6 +11,7 @@
 
 #include "common/escape.hpp"
 #include "sim/app/commands.hpp"
+#include "sim/output/report_html.hpp"
 
 namespace fs = std::filesystem;
 
@@ -254,10 +255,25 @@ std::string slurm_pattern_literal(const std::string& s) {
   return out;
 }
 
-std::string markdown_cell(const std::string& text) {
-  std::string out;
-  for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
-  return out;
+void add_report_outputs(OutputSet& outputs, const std::string& dir, const report::Report& r,
+                        bool html) {
+  const std::filesystem::path folder(dir);
+  for (const report::Section& section : r.sections) {
+    for (const report::Block& block : section.blocks) {
+      if (const auto* table = std::get_if<report::Table>(&block)) {
+        if (table->id.empty()) throw std::logic_error("add_report_outputs: a table without an id");
+        outputs.add((folder / (table->id + ".csv")).string(), report::csv(*table));
+      }
+    }
+  }
+  if (html) outputs.add((folder / "report.html").string(), report::html(r));
+}
+
+void add_report_flag(CLI::App& command, bool& report, const std::string& out_help) {
+  command.add_flag("--report", report,
+                   "Also write " + out_help +
+                       "/report.html: one self-contained page with the tables (sortable, "
+                       "searchable, each column's unit and meaning in its tooltip) and images");
 }
 
 int default_threads() {

@@ -48,6 +48,12 @@ Column real_column(std::string name, std::string unit, int precision, std::strin
   return c;
 }
 
+Column headed(Column c, std::string heading, Align align) {
+  c.heading = std::move(heading);
+  c.align = align;
+  return c;
+}
+
 Cell Cell::shown_as(Cell value, std::string text) {
   value.shown = std::move(text);
   return value;

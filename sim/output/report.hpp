@@ -51,6 +51,9 @@ Column text_column(std::string name, std::string description = {});
 Column code_column(std::string name, std::string description = {});
 Column integer_column(std::string name, std::string unit = {}, std::string description = {});
 Column real_column(std::string name, std::string unit, int precision, std::string description = {});
+// `c` with its heading text fixed and its alignment chosen: a table converted from
+// hand-written Markdown keeps its text (the unit still in Column::unit, for HTML and CSV).
+Column headed(Column c, std::string heading, Align align = Align::automatic);
 
 struct Cell {
   std::variant<std::monostate, std::int64_t, double, std::string> value;
