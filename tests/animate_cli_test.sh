@@ -56,6 +56,15 @@ done
 diff <(cut -d, -f1-14 "$tmp/a1/frames.csv") <(cut -d, -f1-14 "$tmp/a2/frames.csv") >/dev/null ||
   fail "frames.csv differs between -j 1 and -j 2 (beyond host_ms)"
 
+# Into the same folder again, fewer frames and a report: the earlier run's extra frame goes.
+"$bin" animate --scene torus --frames 2 --tessellation 48 12 "${small[@]}" --report \
+  --out "$tmp/a2" >"$tmp/r.log" 2>&1 || fail "animate --report failed: $(cat "$tmp/r.log")"
+[ -e "$tmp/a2/frame-0002.png" ] && fail "a frame of the earlier run was left"
+[ -s "$tmp/a2/frame-0001.png" ] || fail "no frame-0001.png"
+grep -q 'data:image/gif;base64,' "$tmp/a2/report.html" || fail "the report holds no animation"
+grep -q 'id="frame-1"' "$tmp/a2/report.html" || fail "the report holds no frame 1"
+grep -q 'id="timeline-chart"' "$tmp/a2/report.html" || fail "no timeline"
+
 # A scene file's keyframes; bad ones are refused, naming the key, with no output.
 "$bin" animate --scene "$root/examples/scenes/orbit.json" --frames 2 "${small[@]}" \
   --out "$tmp/orbit" >/dev/null 2>&1 || fail "the orbit example failed"

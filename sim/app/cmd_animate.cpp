@@ -3,6 +3,7 @@
 // a timeline over all of them.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -13,11 +14,13 @@
 #include "models/gp/machine_plan.hpp"
 #include "models/machine.hpp"
 #include "sim/animation.hpp"
+#include "sim/animation_report.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
 #include "sim/image/region_map.hpp"
 #include "sim/output/gif.hpp"
 #include "sim/output/output_set.hpp"
+#include "sim/output/report_html.hpp"
 #include "sim/simulation.hpp"
 
 namespace fs = std::filesystem;
@@ -37,6 +40,7 @@ struct AnimateOptions {
   double fps = 0;
   std::vector<int> tessellation;
   bool no_timeline = false;
+  bool report = false;  // also OUT/report.html (sim/animation_report.hpp)
 };
 
 // frames.csv: one row per frame. Units are in the column names.
@@ -106,6 +110,7 @@ int run_animate(AnimateOptions o) {
   std::vector<RgbImage> images;
   std::map<int, RegionLoad> summed;  // by region
   FrameResult last;
+  AnimationReportInput report_in;
   double start = 0;
   std::vector<std::pair<double, double>> frame_spans;  // per frame: start and length, seconds
   for (int k = 0; k < frames; ++k) {
@@ -120,9 +125,21 @@ int run_animate(AnimateOptions o) {
     nlohmann::json frame_stats = r.stats_json;
     stats["frames"].push_back(std::move(frame_stats));
     if (pixels) {
-      outputs.add((dir / fmt::format("frame-{:04d}.png", k)).string(), encode_png(r.image));
+      std::string png = encode_png(r.image);
+      if (o.report) report_in.frame_pngs.push_back(png);
+      outputs.add((dir / fmt::format("frame-{:04d}.png", k)).string(), std::move(png));
       images.push_back(r.image.flat());
     }
+    AnimationFrameRow row;
+    row.start_seconds = start;
+    row.frame_seconds = r.frame_seconds;
+    row.triangles_per_second = r.triangles_per_second;
+    row.bottleneck = r.stats.text("timing.bottleneck");
+    row.gp_utilisation_max = r.stats.real("timing.gp_utilisation_max");
+    row.renderer_utilisation_max = r.stats.real("timing.renderer_utilisation_max");
+    row.ring_utilisation = r.stats.real("timing.ring_utilisation");
+    for (const RegionLoad& l : r.regions) row.renderer_busy_cycles += l.busy_cycles;
+    report_in.frames.push_back(row);
     for (const RegionLoad& l : r.regions) {
       auto [it, added] = summed.try_emplace(l.region, l);
       if (!added) {
@@ -146,15 +163,18 @@ int run_animate(AnimateOptions o) {
     std::vector<const RgbImage*> list;
     for (const RgbImage& i : images) list.push_back(&i);
     const int delay = std::max(2, static_cast<int>(std::lround(100.0 / animation.fps())));
-    outputs.add((dir / "animation.gif").string(), encode_gif(list, delay));
+    std::string gif = encode_gif(list, delay);
+    if (o.report) report_in.gif = gif;
+    outputs.add((dir / "animation.gif").string(), std::move(gif));
   }
   std::vector<RegionLoad> loads;
   for (const auto& [region, load] : summed) loads.push_back(load);
   if (!loads.empty()) {
     const RegionHeatMap map(last.image, loads);
-    outputs.add((dir / "regions.png").string(),
-                encode_png(map.width(), map.height(),
-                           [&map](int y, std::uint8_t* row) { map.row(y, row); }));
+    std::string png = encode_png(map.width(), map.height(),
+                                 [&map](int y, std::uint8_t* row) { map.row(y, row); });
+    if (o.report) report_in.regions_png = png;
+    outputs.add((dir / "regions.png").string(), std::move(png));
   }
   outputs.add((dir / "frames.csv").string(), std::move(csv));
   outputs.add((dir / "stats.json").string(), stats.dump(1) + "\n");
@@ -183,7 +203,39 @@ int run_animate(AnimateOptions o) {
     }
   }
   if (record_timeline) outputs.add((dir / "timeline.json").string(), timeline.dump() + "\n");
+  if (o.report) {
+    report_in.title = fmt::format("animation of scene '{}' ({} triangles, {} spheres), firmware {}",
+                                  animation.name(), first.mesh.triangles.size(),
+                                  first.spheres.size(), fs::path(program->name).stem().string());
+    report_in.subtitle = fmt::format("{}: {} frames", animation.motion(), frames);
+    report_in.config = &config;
+    report_in.summary = summary;
+    report_in.fps = animation.fps();
+    report_in.timeline = record_timeline ? &timeline : nullptr;
+    outputs.add((dir / "report.html").string(), report::html(animation_report(report_in)));
+  }
   outputs.commit();
+  // What an earlier run into this folder left and this run did not write is not this run's:
+  // its report, GIF, heat map, timeline, and frames beyond this run's.
+  {
+    std::error_code ignored;
+    if (!o.report) fs::remove(dir / "report.html", ignored);
+    if (!pixels) fs::remove(dir / "animation.gif", ignored);
+    if (loads.empty()) fs::remove(dir / "regions.png", ignored);
+    if (!record_timeline) fs::remove(dir / "timeline.json", ignored);
+    const int kept = pixels ? frames : 0;
+    std::vector<fs::path> stale;
+    for (const auto& entry : fs::directory_iterator(dir, ignored)) {
+      const std::string name = entry.path().filename().string();
+      if (name.size() == 14 && name.rfind("frame-", 0) == 0 && name.compare(10, 4, ".png") == 0 &&
+          std::all_of(name.begin() + 6, name.begin() + 10,
+                      [](char ch) { return ch >= '0' && ch <= '9'; }) &&
+          std::stoi(name.substr(6, 4)) >= kept) {
+        stale.push_back(entry.path());
+      }
+    }
+    for (const fs::path& p : stale) fs::remove(p, ignored);
+  }
 
   std::cout << summary.text();
   std::cout << fmt::format(
@@ -196,6 +248,7 @@ int run_animate(AnimateOptions o) {
       loads.empty() ? "" : fmt::format(", {}/regions.png (summed over the frames)", o.out_dir),
       record_timeline ? fmt::format(", {}/timeline.json (open it in ui.perfetto.dev)", o.out_dir)
                       : "");
+  if (o.report) std::cout << fmt::format("wrote {}/report.html\n", o.out_dir);
   return 0;
 }
 
@@ -230,6 +283,9 @@ Command add_animate_command(CLI::App& app) {
   c->add_option("--tessellation", o->tessellation, "Tessellation U V of the torus or sphere")
       ->expected(2);
   c->add_flag("--no-timeline", o->no_timeline, "Do not record OUT/timeline.json");
+  c->add_flag("--report", o->report,
+              "Also write OUT/report.html: one self-contained page with the animation, every "
+              "frame's figures and image, the summed heat map, the timeline and the configuration");
   return {c, [o] { return run_animate(*o); }};
 }
 
