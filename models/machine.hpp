@@ -95,6 +95,9 @@ class Machine : public sc_core::sc_module {
   // starts; begin_frame(n), between kernel runs, resets every unit and begins frame n at the
   // current simulated time, which the next kernel run then simulates.
   void begin_frame(int frame);
+  // The scene of the frames from the next begin_frame on (MachinePlan::set_scene: the same
+  // primitives, moved); between kernel runs. `scene` must outlive the machine or the next call.
+  void set_scene(const Scene& scene) { plan_.set_scene(scene); }
   // When the current frame ends, in the run's time: its last region's arrival at the frame
   // buffer, which may lie after the units' last event (a region's trip is booked, not
   // waited for, when shipping overlaps). The host runs the kernel up to it before

@@ -627,8 +627,33 @@ FrameResult Session::counted(FrameResult r) {
 
 const Machine* Session::machine() const { return event_ ? event_->machine.get() : nullptr; }
 
+void Session::set_scene(std::shared_ptr<const Scene> scene) { next_scene_ = std::move(scene); }
+
 FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& observe,
                            nlohmann::json* timeline, bool pixels) {
+  // set_scene's scene takes over once the last frame has ended (the machine's units are idle).
+  if (event_ && frames_ > 0 && next_scene_) event_->kernel.run_until(event_->machine->frame_end());
+  if (next_scene_) {
+    std::shared_ptr<const Scene> next = std::move(next_scene_);
+    next_scene_.reset();
+    if (event_) {
+      check_memory(config_, *next, *program_, threads_);
+      event_->machine->set_scene(*next);  // drops the machine's set-up memo
+    }
+    if (!event_ || memo_ != event_->own_memo.get()) memo_ = nullptr;
+    if (event_) {
+      event_->own_memo.reset();
+      Machine& machine = *event_->machine;
+      if (setup_parts(machine.plan(), threads_) > 1) {
+        memo_ = (event_->own_memo = std::make_unique<SetupMemo>(*next)).get();
+        machine.use_setup_memo(*memo_);
+        fill_setup_memo(machine.plan(), threads_);
+      } else {
+        memo_ = nullptr;
+      }
+    }
+    scene_ = std::move(next);
+  }
   const MachineConfig& config = config_;
   const Scene& scene = *scene_;
   const Program& program = *program_;

@@ -97,6 +97,11 @@ class Session {
   const MachineConfig& config() const { return config_; }
   const Scene& scene() const { return *scene_; }
   const Program& program() const { return *program_; }
+  // The scene of the frames from the next frame() on (an animation: sim/animation.hpp). It
+  // must hold as many primitives of each kind as the session's scene (the GPs' shares of the
+  // display list stay), else the next frame() throws std::runtime_error naming both counts.
+  // The set-up memo is made again for it (one given to the constructor is no longer used).
+  void set_scene(std::shared_ptr<const Scene> scene);
   // The event model's machine (null at fidelity.timing=analytic).
   const Machine* machine() const;
 
@@ -104,6 +109,7 @@ class Session {
   struct Event;
   MachineConfig config_;
   std::shared_ptr<const Scene> scene_;
+  std::shared_ptr<const Scene> next_scene_;  // set_scene's, until the next frame()
   std::shared_ptr<const Program> program_;
   int threads_;
   SetupMemo* memo_;

@@ -18,6 +18,7 @@
 #include <fstream>
 #include <string>
 
+#include "sim/animation.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 #include "support.hpp"
@@ -171,5 +172,47 @@ TEST_CASE("golden frames: the torus at 1280 x 1024 with phong and threshold", "[
   const Scene scene = make_builtin_scene("torus");
   for (const char* program : {"phong", "threshold"}) {
     SECTION(program) { check_golden(std::string("torus-1280-") + program, config, scene, program); }
+  }
+}
+
+// Three frames of the torus turning in 4-space (sim/animation.hpp) in one session, at
+// 128 x 128: each frame's image hash and statistics, as pp5sim animate draws them.
+TEST_CASE("golden animation: three frames of the turning torus, 128 x 128", "[golden]") {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=128", "screen.height=128", "gp.count=2", "renderer.count=1"});
+  AnimationOptions options;
+  options.scene.tessellation_u = 48;
+  options.scene.tessellation_v = 12;
+  options.frames = 3;
+  const Animation animation = load_animation("torus", options);
+  auto program = std::make_shared<const Program>(test::load_program("phong", config));
+  Session session(config, std::make_shared<const Scene>(animation.scene(0)), program, 2);
+  nlohmann::json got = {
+      {"scene", "torus"},         {"motion", animation.motion()},
+      {"firmware", "phong"},      {"screen", {config.screen.width, config.screen.height}},
+      {"tessellation", {48, 12}}, {"frames", nlohmann::json::array()}};
+  for (int k = 0; k < 3; ++k) {
+    if (k > 0) session.set_scene(std::make_shared<const Scene>(animation.scene(k)));
+    const FrameResult r = session.frame();
+    nlohmann::json stats = test::without_host(r.stats_json);
+    stats["frame"]["firmware"] = "phong";
+    got["frames"].push_back({{"image_fnv1a64", image_hash(r.image.flat())}, {"stats", stats}});
+  }
+  const std::string name = "animation-torus-3-phong";
+  const fs::path path = golden_path(name);
+  const char* update = std::getenv("PP5_UPDATE_GOLDENS");
+  if (update && std::string(update) == "1") {
+    std::ofstream(path) << got.dump(1) << "\n";
+    return;
+  }
+  std::ifstream in(path);
+  INFO("golden " << path.string() << " (PP5_UPDATE_GOLDENS=1 writes it)");
+  REQUIRE(in.good());
+  const nlohmann::json want = nlohmann::json::parse(in);
+  REQUIRE(want["frames"].size() == 3);
+  for (int k = 0; k < 3; ++k) {
+    INFO("frame " << k);
+    CHECK(want["frames"][k]["image_fnv1a64"] == got["frames"][k]["image_fnv1a64"]);
+    compare(want["frames"][k]["stats"], got["frames"][k]["stats"], name);
   }
 }

@@ -161,7 +161,7 @@ struct Model {
 };
 
 // A source operand, both as the array sees it and as the model evaluates it.
-struct Source {
+struct OperandSource {
   enum class Kind { field, constant, planes };
   Kind kind = Kind::field;
   Field f{};
@@ -526,23 +526,23 @@ class Harness {
 
   // A field source never overlaps `avoid` (the contract allows aliasing only at the same
   // alignment, which alias_source() draws on purpose).
-  Source random_source(int max_width = 64, const Field* avoid = nullptr) {
-    Source s;
+  OperandSource random_source(int max_width = 64, const Field* avoid = nullptr) {
+    OperandSource s;
     switch (uniform(0, 3)) {
       case 0:
       case 1:
-        s.kind = Source::Kind::field;
+        s.kind = OperandSource::Kind::field;
         do {
           s.f = random_field(random_width(max_width));
         } while (avoid != nullptr && overlaps(s.f, *avoid));
         maybe_specials(s.f);
         break;
       case 2:
-        s.kind = Source::Kind::constant;
+        s.kind = OperandSource::Kind::constant;
         s.k = random_constant();
         break;
       default:
-        s.kind = Source::Kind::planes;
+        s.kind = OperandSource::Kind::planes;
         s.count = random_width();
         s.is_signed = rng() & 1;
         s.buf.assign(static_cast<std::size_t>(s.count) * words(), 0);
@@ -563,8 +563,8 @@ class Harness {
 
   // A field source at dst's own alignment: the same width, wider (either signedness), or
   // narrower and unsigned (its extension is the zero plane, never a plane of dst).
-  Source alias_source(const Field& dst) {
-    Source s;
+  OperandSource alias_source(const Field& dst) {
+    OperandSource s;
     s.f = dst;
     s.f.is_signed = rng() & 1;
     const int room = std::min(64, geo().memory_bits - dst.lo);
@@ -578,9 +578,9 @@ class Harness {
   }
 
   // Makes a field source equal (or off by one) to the other operand on many pixels.
-  void equalize(Source& s, const Source& other) {
-    if (s.kind != Source::Kind::field) return;
-    if (other.kind == Source::Kind::field && overlaps(s.f, other.f)) return;
+  void equalize(OperandSource& s, const OperandSource& other) {
+    if (s.kind != OperandSource::Kind::field) return;
+    if (other.kind == OperandSource::Kind::field && overlaps(s.f, other.f)) return;
     const int w = s.f.width;
     const i128 lo = s.f.is_signed ? -(i128{1} << (w - 1)) : 0;
     const i128 hi = s.f.is_signed ? (i128{1} << (w - 1)) - 1 : (i128{1} << w) - 1;
@@ -615,8 +615,8 @@ class Harness {
       case Op::logic: {
         const Field dst = random_field(random_width());
         maybe_specials(dst);
-        const Source a = one_in(4) ? alias_source(dst) : random_source(64, &dst);
-        const Source b = one_in(4) ? alias_source(dst) : random_source(64, &dst);
+        const OperandSource a = one_in(4) ? alias_source(dst) : random_source(64, &dst);
+        const OperandSource b = one_in(4) ? alias_source(dst) : random_source(64, &dst);
         const Logic lop = static_cast<Logic>(uniform(0, 2));
         std::vector<std::uint8_t> carries(model.pixels, 0);
         const int w = dst.width;
@@ -675,11 +675,11 @@ class Harness {
       }
       case Op::multiply: {
         // Narrow source fields leave room for a destination that overlaps neither.
-        const Source a = random_source(geo().memory_bits / 4);
-        const Source b = random_source(geo().memory_bits / 4);
+        const OperandSource a = random_source(geo().memory_bits / 4);
+        const OperandSource b = random_source(geo().memory_bits / 4);
         std::vector<Field> avoid;
-        if (a.kind == Source::Kind::field) avoid.push_back(a.f);
-        if (b.kind == Source::Kind::field) avoid.push_back(b.f);
+        if (a.kind == OperandSource::Kind::field) avoid.push_back(a.f);
+        if (b.kind == OperandSource::Kind::field) avoid.push_back(b.f);
         const Field dst = random_field_avoiding(avoid);
         arr.multiply(dst, a.bits(arr), b.bits(arr));
         what += "multiply " + describe(dst) + " <- " + a.describe() + " * " + b.describe();
@@ -692,9 +692,9 @@ class Harness {
         break;
       }
       case Op::mac: {
-        const Source a = random_source(geo().memory_bits / 4);
+        const OperandSource a = random_source(geo().memory_bits / 4);
         std::vector<Field> avoid;
-        if (a.kind == Source::Kind::field) avoid.push_back(a.f);
+        if (a.kind == OperandSource::Kind::field) avoid.push_back(a.f);
         const Field dst = random_field_avoiding(avoid);
         maybe_specials(dst);
         const std::int64_t k = random_constant();
@@ -711,8 +711,8 @@ class Harness {
       case Op::compare: {
         // Compare only narrows E, so start from a fresh mask more often.
         if (what.empty() && one_in(2)) what += new_mask();
-        Source a = random_source();
-        Source b = random_source();
+        OperandSource a = random_source();
+        OperandSource b = random_source();
         if (one_in(2)) equalize(a, b);
         const Compare c = kCompares[uniform(0, 5)];
         arr.compare(a.bits(arr), b.bits(arr), c);
@@ -920,9 +920,9 @@ TEST_CASE("pixel array: compare mixes widths and signedness exactly", "[pixel_ar
       h.model.set(p, pr.a, h.random_raw(pr.a.width));
       h.model.set(p, pr.b, h.random_raw(pr.b.width));
     }
-    Source sa;
+    OperandSource sa;
     sa.f = pr.a;
-    Source sb;
+    OperandSource sb;
     sb.f = pr.b;
     h.equalize(sb, sa);
     for (const Compare c : kCompares) {
@@ -1061,7 +1061,7 @@ TEST_CASE("pixel array: a destination may alias a source at the same alignment",
   for (int i = 0; i < 40; ++i) {
     h.set_enable(h.random_mask(&name));
     const Field f = h.random_field(h.random_width());
-    const Source s = h.alias_source(f);
+    const OperandSource s = h.alias_source(f);
     const Bits x = h.arr.bits_of(f);
     const Bits y = s.bits(h.arr);
     const int op = h.uniform(0, 5);

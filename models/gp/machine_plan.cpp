@@ -77,19 +77,51 @@ RingParams ring_params(const MachineConfig& c) {
 
 MachinePlan::MachinePlan(const MachineConfig& config, const Scene& scene, const Program& program)
     : config_(config),
-      scene_(scene),
+      scene_(&scene),
       program_(program),
-      geometry_(geometry_params(config), scene),
+      geometry_(std::in_place, geometry_params(config), scene),
       timing_(timing_params(config)),
-      frame_values_(geometry_.frame_values()),
       i860_(i860_params(config)),
       ring_(ring_params(config)),
       ring_cycle_(1.0 / ring_.clock_hz, sc_core::SC_SEC) {
   check_pass_plan(program);
+  derive_from_scene();
+}
+
+void MachinePlan::set_scene(const Scene& scene) {
+  const std::vector<int> before = primitive_counts(*scene_);
+  const std::vector<int> after = primitive_counts(scene);
+  for (std::size_t k = 0; k < before.size(); ++k) {
+    if (before[k] != after[k]) {
+      throw std::runtime_error(fmt::format(
+          "scene '{}' has {} {}s where the machine's scene '{}' has {}: a scene changed between "
+          "frames keeps its primitives (only their positions, colours, the camera and the "
+          "lights change)",
+          scene.name, after[k], primitive_kinds()[k]->name(), scene_->name, before[k]));
+    }
+  }
+  scene_ = &scene;
+  geometry_.emplace(geometry_params(config_), scene);
+  setup_memo_ = nullptr;
+  busy_gps_ = 0;
+  derive_from_scene();
+}
+
+std::vector<int> MachinePlan::primitive_counts(const Scene& scene) {
+  std::vector<int> counts;
+  for (const PrimitiveKind* kind : primitive_kinds()) counts.push_back(kind->count(scene));
+  return counts;
+}
+
+void MachinePlan::derive_from_scene() {
+  const Program& program = program_;
+  const Scene& scene = *scene_;
+  const MachineConfig& config = config_;
+  frame_values_ = geometry_->frame_values();
   set_pass_plan(program, scene, frame_values_);
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);
   workload_.expressions = triangle.expressions;
-  workload_.lights = geometry_.lights();
+  workload_.lights = geometry_->lights();
   workload_.packet_words = packet_words(triangle.expressions);
   if (workload_.packet_words + 1 > static_cast<std::uint64_t>(config.renderer.queue_words)) {
     throw std::runtime_error(fmt::format(
@@ -134,7 +166,7 @@ MachinePlan::MachinePlan(const MachineConfig& config, const Scene& scene, const 
 }
 
 std::pair<int, int> MachinePlan::gp_block(int k) const {
-  const auto n = static_cast<long long>(geometry_.display_list().size());
+  const auto n = static_cast<long long>(geometry_->display_list().size());
   const long long gps = gp_count();
   return {static_cast<int>(n * k / gps), static_cast<int>(n * (k + 1) / gps)};
 }
@@ -144,18 +176,18 @@ sc_core::sc_time MachinePlan::hop_delay(int from, int to) const {
 }
 
 void MachinePlan::use_setup_memo(SetupMemo& memo) {
-  if (&memo.scene() != &scene_) {
+  if (&memo.scene() != scene_) {
     throw std::invalid_argument(
         fmt::format("a set-up memo of scene '{}' given to a machine of scene '{}'",
-                    memo.scene().name, scene_.name));
+                    memo.scene().name, scene_->name));
   }
   SetupMemo::Key key;
-  key.params = geometry_.params();
+  key.params = geometry_->params();
   for (const PrimitiveKind* k : primitive_kinds()) {
     key.expressions.push_back(program_.procedure(k->procedure()).expressions);
     key.words.push_back(packet_words(key.expressions.back()));
   }
-  memo.bind(key, geometry_.display_list().size());
+  memo.bind(key, geometry_->display_list().size());
   setup_memo_ = &memo;
 }
 

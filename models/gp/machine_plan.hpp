@@ -13,7 +13,9 @@
 //  - The host spreads the display list over the GPs in contiguous blocks (gp_block), so that
 //    the concatenation of the GPs' bins is in display-list order.
 #include <cstdint>
+#include <optional>
 #include <utility>
+#include <vector>
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/config/machine_config.hpp"
@@ -40,8 +42,8 @@ class MachinePlan {
 
   const MachineConfig& config() const { return config_; }
   const Program& program() const { return program_; }
-  const Scene& scene() const { return scene_; }
-  const GeometryEngine& geometry() const { return geometry_; }
+  const Scene& scene() const { return *scene_; }
+  const GeometryEngine& geometry() const { return *geometry_; }
   const TimingParams& timing() const { return timing_; }
   // The values of clear, pass and shade, and of each light's `light` procedure; a packet
   // binds frame.parameters when it runs (RegionStream); it never carries them.
@@ -82,11 +84,23 @@ class MachinePlan {
   void use_setup_memo(SetupMemo& memo);
   SetupMemo* setup_memo() const { return setup_memo_; }
 
+  // The next frame's scene, between frames (an animation): the geometry, frame values and
+  // pass plan are those of `scene`, checked as the constructor checks them. It must have as
+  // many primitives of each kind as the current scene (the GPs' shares of the display list
+  // are fixed when the machine is built), else std::runtime_error naming both counts. The
+  // set-up memo is dropped (it was made for the other scene). `scene` must outlive the plan.
+  void set_scene(const Scene& scene);
+
  private:
+  // What the constructor and set_scene derive from the scene, with their checks.
+  void derive_from_scene();
+  // Per primitive kind (primitive_kinds()), its primitives in `scene`.
+  static std::vector<int> primitive_counts(const Scene& scene);
   MachineConfig config_;
-  const Scene& scene_;
+  const Scene* scene_;
   const Program& program_;
-  GeometryEngine geometry_;
+  // In place, so that a reference to it stays valid across set_scene.
+  std::optional<GeometryEngine> geometry_;
   TimingParams timing_;
   FrameValues frame_values_;
   I860Model i860_;

@@ -8,6 +8,7 @@
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
+#include "sim/animation.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
 #include "sim/output/output_set.hpp"
@@ -33,8 +34,17 @@ struct RunOptions {
   std::vector<std::string> sets;
   int threads = default_threads();
   std::vector<int> tessellation;
+  int frame = -1;  // --frame K: frame K of the scene's animation (pp5sim animate)
+  int animation_frames = 0;
 
   void add(CLI::App& c) {
+    c.add_option("--frame", frame,
+                 "Frame K of the scene's animation, as 'pp5sim animate' draws it: the session "
+                 "runs frames 0 .. K-1 (their timing only) and this command looks at frame K")
+        ->check(CLI::Range(0, 100000));
+    c.add_option("--animation-frames", animation_frames,
+                 "Frames of that animation (animate's --frames) [the scene file's, else 24]")
+        ->check(CLI::Range(1, 100000));
     c.add_option("-s,--scene", scene_name,
                  "Scene: a built-in name (pp5sim scenes), a mesh file or a scene file")
         ->capture_default_str();
@@ -45,13 +55,43 @@ struct RunOptions {
     c.add_option("--tessellation", tessellation, "Tessellation U V of the torus or sphere")
         ->expected(2);
   }
-  Scene scene() const {
+  SceneOptions scene_options() const {
     SceneOptions so;
     if (tessellation.size() == 2) {
       so.tessellation_u = tessellation[0];
       so.tessellation_v = tessellation[1];
     }
-    return load_scene(scene_name, so);
+    return so;
+  }
+  std::optional<Animation> animation() const {
+    if (frame < 0) {
+      if (animation_frames > 0) throw std::runtime_error("--animation-frames needs --frame");
+      return std::nullopt;
+    }
+    AnimationOptions ao;
+    ao.scene = scene_options();
+    ao.frames = animation_frames;
+    return load_animation(scene_name, ao);
+  }
+  // The scene looked at: the built-in or file, or frame K of its animation.
+  Scene scene() const {
+    if (const auto a = animation()) return a->scene(frame);
+    return load_scene(scene_name, scene_options());
+  }
+  // The frame looked at, with `observe` on its Renderers: one frame, or frame K of the
+  // animation's session, after frames 0 .. K-1.
+  FrameResult simulate(const MachineConfig& config, const Scene& scene, const Program& program,
+                       const std::function<BoardObserver*(int renderer)>& observe) const {
+    const auto a = animation();
+    if (!a) return simulate_frame(config, scene, program, threads, observe);
+    Session session(config, std::make_shared<const Scene>(a->scene(0)),
+                    std::shared_ptr<const Program>(&program, [](const Program*) {}), threads);
+    for (int k = 0; k < frame; ++k) {
+      if (k > 0) session.set_scene(std::make_shared<const Scene>(a->scene(k)));
+      session.frame({}, nullptr, false);
+    }
+    if (frame > 0) session.set_scene(std::make_shared<const Scene>(scene));
+    return session.frame(observe);
   }
 };
 
@@ -89,14 +129,14 @@ int run_record(const RecordOptions& o) {
     sel.instructions = trace::parse_range(o.instructions, "--instructions");
   if (!o.primitives.empty()) sel.primitives = trace::parse_range(o.primitives, "--primitives");
   if (!o.frames.empty()) sel.frames = trace::parse_range(o.frames, "--frames");
-  trace::Recorder recorder(config, scene, program, sel);
+  trace::Recorder recorder(config, scene, program, sel, std::max(0, o.run.frame));
   const std::string out =
       o.out.empty() ? (fs::path("out") / scene.name / "trace.pp5t").string() : o.out;
   if (fs::path(out).has_parent_path()) fs::create_directories(fs::path(out).parent_path());
 
   for (int k = 0; k < config.renderer.count; ++k) recorder.observer(k);
-  const FrameResult result = simulate_frame(config, scene, program, o.run.threads,
-                                            [&](int k) { return recorder.observer(k); });
+  const FrameResult result =
+      o.run.simulate(config, scene, program, [&](int k) { return recorder.observer(k); });
   recorder.write(out);
   std::uint64_t count = 0;
   const auto bytes = recorder.records(count).size();
@@ -288,8 +328,7 @@ Command add_trace_command(CLI::App& app) {
          std::optional<std::uint64_t> after;
          if (so->after >= 0) after = static_cast<std::uint64_t>(so->after);
          trace::SnapshotTaker taker(config, program, region, after);
-         simulate_frame(config, scene, program, so->run.threads,
-                        [&](int k) { return taker.observer(k); });
+         so->run.simulate(config, scene, program, [&](int k) { return taker.observer(k); });
          const trace::Snapshot& s = taker.snapshot();
          for (const auto& f : so->png) trace::field_image(s, f);  // check names
          const std::string path =

@@ -37,6 +37,7 @@ Command add_fidelity_command(CLI::App& app);
 Command add_scanconvert_command(CLI::App& app);
 Command add_csg_command(CLI::App& app);
 Command add_spheres_command(CLI::App& app);
+Command add_animate_command(CLI::App& app);
 
 // Shared by the commands.
 

@@ -171,6 +171,7 @@ int main(int argc, char** argv) {
       add_scanconvert_command(app),
       add_spheres_command(app),
       add_csg_command(app),
+      add_animate_command(app),
   };
 
   // After the commands are added: they keep the default formatter, with full descriptions.

@@ -60,18 +60,30 @@ Scene finish_scene(std::string name, std::string description, Mesh mesh, glm::ve
 // into a knotted tube that passes through itself at the three crossings (kEyeW exceeds
 // |w| <= 1.2, so every scale factor is positive and bounded). The final cyclic permutation of
 // the axes, a rotation, puts the knot diagram in the xy-plane, facing a camera on +z.
-glm::dvec3 torus_point(double s, double t) {
-  constexpr double kEyeW = 3.0;
+//
+// `turn` (radians) first rotates the 4-D surface in the zw-plane, which changes its projected
+// shape (a rotation in the xw-plane would only slide t); `eye_w` is the projection's eye. The
+// static scene is turn 0 with the eye at w = 3.
+glm::dvec3 torus_point(double s, double t, double turn, double eye_w) {
   const double x = 0.8 - 0.4 * std::sin(3.0 * s);
   const double y = std::sin(s) + 2.0 * std::sin(2.0 * s);
-  const double z = std::cos(s) - 2.0 * std::cos(2.0 * s);
-  const double w = x * std::sin(t);
-  const double scale = kEyeW / (kEyeW - w);
+  double z = std::cos(s) - 2.0 * std::cos(2.0 * s);
+  double w = x * std::sin(t);
+  if (turn != 0.0) {
+    const double z0 = z;
+    z = z0 * std::cos(turn) - w * std::sin(turn);
+    w = z0 * std::sin(turn) + w * std::cos(turn);
+  }
+  const double scale = eye_w / (eye_w - w);
   const glm::dvec3 p(x * std::cos(t) * scale, y * scale, z * scale);
   return glm::dvec3(p.y, p.z, p.x);
 }
 
-Scene make_torus(const SceneOptions& options) {
+constexpr double kTorusEyeW = 3.0;
+
+}  // namespace
+
+Scene make_turned_torus(const SceneOptions& options, double turn, double eye_w) {
   const int nu = segments(options.tessellation_u, 128, 3, "torus", "tessellation_u");
   const int nv = segments(options.tessellation_v, 32, 3, "torus", "tessellation_v");
   Mesh mesh;
@@ -83,7 +95,7 @@ Scene make_torus(const SceneOptions& options) {
     for (int j = 0; j < nv; ++j) {
       const double v = static_cast<double>(j) / nv;
       mesh.vertices.push_back(
-          {glm::vec3(torus_point(kTwoPi * u, kTwoPi * v)), glm::vec3(0.0f), color});
+          {glm::vec3(torus_point(kTwoPi * u, kTwoPi * v, turn, eye_w)), glm::vec3(0.0f), color});
     }
   }
   // Vertex (i, j) has index i * nv + j; both directions wrap, so the seams share vertices and
@@ -103,6 +115,12 @@ Scene make_torus(const SceneOptions& options) {
                       "Banks' self-intersecting torus: a trefoil knot spun through the xw-plane of "
                       "4-space and projected to 3-D in perspective",
                       std::move(mesh), glm::vec3(0.3f, 0.5f, 1.0f));
+}
+
+namespace {
+
+Scene make_torus(const SceneOptions& options) {
+  return make_turned_torus(options, 0.0, kTorusEyeW);
 }
 
 Scene make_two_triangles() {

@@ -42,6 +42,12 @@ std::vector<std::string> builtin_triangle_scene_names();
 //   folded-slab: 1,696 triangles, 850 vertices (sim/scene/builtin_folded_slab.hpp).
 Scene make_builtin_scene(const std::string& name, const SceneOptions& options = {});
 
+// The torus turned by `turn` radians in the zw-plane of 4-space before its perspective
+// projection from the eye (0, 0, 0, eye_w) (eye_w must exceed the surface's |w|, 3.3 at any
+// turn); make_builtin_scene("torus") is turn 0 with eye_w 3. Its camera is framed to this
+// turn's mesh.
+Scene make_turned_torus(const SceneOptions& options, double turn, double eye_w);
+
 struct BoundingSphere {
   glm::vec3 center;
   float radius;

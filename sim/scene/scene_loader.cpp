@@ -303,7 +303,7 @@ void append_spheres(const Node& e, const std::map<std::string, Material>& materi
 }
 
 Scene parse_scene_json(const std::string& text, const std::string& origin,
-                       const std::string& base_dir, const LoadLimits& limits) {
+                       const std::string& base_dir, const LoadLimits& limits, SceneParts* parts) {
   json doc;
   try {
     // Syntax errors, numbers beyond double's range and duplicate keys (in the scene, its
@@ -318,7 +318,7 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
         fmt::format("{}: a scene file must be a JSON object (got {})", origin, doc.type_name()));
   }
   root.check_keys({"name", "description", "meshes", "spheres", "materials", "camera", "ambient",
-                   "light", "lights", "background", "firmware", "parameters", "csg"});
+                   "light", "lights", "background", "firmware", "parameters", "csg", "animation"});
   if (!root.has("meshes") && !root.has("spheres")) {
     throw SceneError(origin + ": missing key 'meshes' (an array of meshes) or 'spheres'");
   }
@@ -381,7 +381,11 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     }
     for (Vertex& v : part.vertices) v.opacity = material.opacity;
     const int first = static_cast<int>(scene.mesh.triangles.size());
+    const int first_vertex = static_cast<int>(scene.mesh.vertices.size());
     append(scene.mesh, part, mesh_transform(m), m, limits);
+    if (parts != nullptr) {
+      parts->mesh_vertices.emplace_back(first_vertex, static_cast<int>(scene.mesh.vertices.size()));
+    }
     // A named mesh is a closed solid for point in solid and CSG.
     if (m.has("name")) {
       const std::string name = m.at("name").string();
@@ -411,7 +415,11 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     const Node spheres = root.at("spheres");
     if (spheres.array().empty()) spheres.fail("must hold at least one sphere");
     for (std::size_t i = 0; i < spheres.value.size(); ++i) {
+      const int first_sphere = static_cast<int>(scene.spheres.size());
       append_spheres(spheres.at(i), materials, base_dir, scene.spheres);
+      if (parts != nullptr) {
+        parts->spheres.emplace_back(first_sphere, static_cast<int>(scene.spheres.size()));
+      }
     }
   }
 
@@ -517,7 +525,8 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
   return scene;
 }
 
-Scene load_scene_file(const std::string& path, const LoadLimits& limits) {
+Scene load_scene_file(const std::string& path, const LoadLimits& limits, SceneParts* parts,
+                      std::string* text_out) {
   std::string text;
   try {
     // A scene file names its meshes; 16 MiB is far beyond any such list.
@@ -526,7 +535,9 @@ Scene load_scene_file(const std::string& path, const LoadLimits& limits) {
     throw SceneError(e.what());
   }
   const std::string base = fs::path(path).parent_path().string();
-  return parse_scene_json(text, path, base.empty() ? "." : base, limits);
+  Scene scene = parse_scene_json(text, path, base.empty() ? "." : base, limits, parts);
+  if (text_out != nullptr) *text_out = std::move(text);
+  return scene;
 }
 
 Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {

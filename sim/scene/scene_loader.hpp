@@ -52,6 +52,8 @@
 // keep the mesh file's own line numbers.
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "sim/scene/mesh_loader.hpp"
 #include "sim/scene/scene.hpp"
@@ -63,11 +65,22 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Where each entry of a scene file landed in the Scene: per "meshes" entry its vertices
+// [first, second), per "spheres" entry its spheres [first, second). An animation's
+// per-object keyframes move them (sim/animation.hpp).
+struct SceneParts {
+  std::vector<std::pair<int, int>> mesh_vertices;
+  std::vector<std::pair<int, int>> spheres;
+};
+
 // Parses a scene description; `origin` names it in messages and `base_dir` resolves
-// relative mesh paths.
+// relative mesh paths. Its "animation" is read by sim/animation.hpp, not here.
 Scene parse_scene_json(const std::string& text, const std::string& origin,
-                       const std::string& base_dir, const LoadLimits& limits = {});
-Scene load_scene_file(const std::string& path, const LoadLimits& limits = {});
+                       const std::string& base_dir, const LoadLimits& limits = {},
+                       SceneParts* parts = nullptr);
+// `text_out`, if given, receives the file's text.
+Scene load_scene_file(const std::string& path, const LoadLimits& limits = {},
+                      SceneParts* parts = nullptr, std::string* text_out = nullptr);
 
 // A built-in scene name, a mesh file (.obj .ply .stl .off) or a scene file (.json).
 Scene load_scene(const std::string& name_or_path, const SceneOptions& options = {});

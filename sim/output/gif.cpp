@@ -1,0 +1,298 @@
+#include "sim/output/gif.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace pp5 {
+
+namespace {
+
+constexpr int kGifMinCodeSize = 8;  // 256 palette entries
+constexpr int kGifClear = 1 << kGifMinCodeSize;
+constexpr int kGifEnd = kGifClear + 1;
+constexpr int kGifMaxCodes = 4096;  // codes are at most 12 bits
+constexpr int kGifRed = 6, kGifGreen = 7, kGifBlue = 6;
+
+// The nearest of `levels` evenly spaced levels of 0..255 to v.
+int gif_level(std::uint8_t v, int levels) { return (v * (levels - 1) + 127) / 255; }
+std::uint8_t gif_level_value(int level, int levels) {
+  return static_cast<std::uint8_t>((level * 255 + (levels - 1) / 2) / (levels - 1));
+}
+
+void put16(std::string& out, int v) {
+  out.push_back(static_cast<char>(v & 0xff));
+  out.push_back(static_cast<char>((v >> 8) & 0xff));
+}
+
+// Codes packed least significant bit first into sub-blocks of at most 255 bytes.
+class GifBitWriter {
+ public:
+  explicit GifBitWriter(std::string& out) : out_(out) {}
+  void code(int value, int bits) {
+    acc_ |= static_cast<std::uint32_t>(value) << count_;
+    count_ += bits;
+    while (count_ >= 8) {
+      byte(static_cast<std::uint8_t>(acc_ & 0xff));
+      acc_ >>= 8;
+      count_ -= 8;
+    }
+  }
+  void finish() {
+    if (count_ > 0) byte(static_cast<std::uint8_t>(acc_ & 0xff));
+    acc_ = 0;
+    count_ = 0;
+    flush();
+    out_.push_back('\0');  // the block terminator
+  }
+
+ private:
+  void byte(std::uint8_t b) {
+    block_[block_size_++] = b;
+    if (block_size_ == 255) flush();
+  }
+  void flush() {
+    if (block_size_ == 0) return;
+    out_.push_back(static_cast<char>(block_size_));
+    out_.append(reinterpret_cast<const char*>(block_), block_size_);
+    block_size_ = 0;
+  }
+  std::string& out_;
+  std::uint32_t acc_ = 0;
+  int count_ = 0;
+  std::uint8_t block_[255] = {};
+  std::size_t block_size_ = 0;
+};
+
+// The image data of one frame of palette indices: LZW over a code table held as a trie
+// (child of code c by byte b), its entries stamped with the table's generation so that a
+// clear empties it without touching it.
+class GifLzw {
+ public:
+  GifLzw() : child_(static_cast<std::size_t>(kGifMaxCodes) * 256), stamp_(child_.size(), 0) {}
+  void encode(const std::vector<std::uint8_t>& pixels, std::string& out) {
+    out.push_back(static_cast<char>(kGifMinCodeSize));
+    GifBitWriter w(out);
+    int size = kGifMinCodeSize + 1;
+    int max_code = kGifEnd;
+    ++generation_;
+    w.code(kGifClear, size);
+    int current = -1;
+    for (const std::uint8_t p : pixels) {
+      if (current < 0) {
+        current = p;
+        continue;
+      }
+      const std::size_t slot = static_cast<std::size_t>(current) * 256 + p;
+      if (stamp_[slot] == generation_) {
+        current = child_[slot];
+        continue;
+      }
+      w.code(current, size);
+      ++max_code;
+      child_[slot] = static_cast<std::uint16_t>(max_code);
+      stamp_[slot] = generation_;
+      if (max_code >= (1 << size)) ++size;
+      if (max_code == kGifMaxCodes - 1) {
+        w.code(kGifClear, size);
+        ++generation_;
+        size = kGifMinCodeSize + 1;
+        max_code = kGifEnd;
+      }
+      current = p;
+    }
+    if (current >= 0) w.code(current, size);
+    w.code(kGifEnd, size);
+    w.finish();
+  }
+
+ private:
+  std::vector<std::uint16_t> child_;
+  std::vector<std::uint32_t> stamp_;
+  std::uint32_t generation_ = 0;
+};
+
+}  // namespace
+
+std::uint8_t gif_palette_index(const std::uint8_t rgb[3]) {
+  return static_cast<std::uint8_t>(gif_level(rgb[0], kGifRed) * kGifGreen * kGifBlue +
+                                   gif_level(rgb[1], kGifGreen) * kGifBlue +
+                                   gif_level(rgb[2], kGifBlue));
+}
+
+void gif_palette_colour(std::uint8_t index, std::uint8_t rgb[3]) {
+  if (index >= kGifRed * kGifGreen * kGifBlue) {
+    rgb[0] = rgb[1] = rgb[2] = 0;
+    return;
+  }
+  rgb[0] = gif_level_value(index / (kGifGreen * kGifBlue), kGifRed);
+  rgb[1] = gif_level_value((index / kGifBlue) % kGifGreen, kGifGreen);
+  rgb[2] = gif_level_value(index % kGifBlue, kGifBlue);
+}
+
+std::string encode_gif(const std::vector<const RgbImage*>& frames, int delay_centiseconds) {
+  if (frames.empty()) throw std::invalid_argument("an animated GIF needs at least one frame");
+  const int width = frames[0]->width, height = frames[0]->height;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const RgbImage& f = *frames[k];
+    if (f.width != width || f.height != height) {
+      throw std::invalid_argument(
+          fmt::format("GIF frame {} is {}x{}, frame 0 {}x{}", k, f.width, f.height, width, height));
+    }
+    if (f.width < 1 || f.height < 1 || f.width > 65535 || f.height > 65535 ||
+        f.rgb.size() != static_cast<std::size_t>(f.width) * f.height * 3) {
+      throw std::invalid_argument(fmt::format("GIF frame {} is {}x{} with {} bytes of pixels", k,
+                                              f.width, f.height, f.rgb.size()));
+    }
+  }
+  std::string out = "GIF89a";
+  put16(out, width);
+  put16(out, height);
+  out.push_back(static_cast<char>(0xF7));  // a global table of 256 colours, 8 bits each
+  out.push_back('\0');                     // background colour index
+  out.push_back('\0');                     // square pixels
+  for (int i = 0; i < 256; ++i) {
+    std::uint8_t rgb[3];
+    gif_palette_colour(static_cast<std::uint8_t>(i), rgb);
+    out.append(reinterpret_cast<const char*>(rgb), 3);
+  }
+  // Loop forever.
+  out += std::string("\x21\xFF\x0B", 3) + "NETSCAPE2.0" + std::string("\x03\x01\x00\x00\x00", 5);
+  GifLzw lzw;
+  std::vector<std::uint8_t> indices(static_cast<std::size_t>(width) * height);
+  for (const RgbImage* f : frames) {
+    for (std::size_t i = 0; i < indices.size(); ++i) indices[i] = gif_palette_index(&f->rgb[3 * i]);
+    // Graphic control: no disposal, the delay, no transparent colour.
+    out += std::string("\x21\xF9\x04\x04", 4);
+    put16(out, delay_centiseconds);
+    out += std::string("\x00\x00", 2);
+    out.push_back(static_cast<char>(0x2C));
+    put16(out, 0);
+    put16(out, 0);
+    put16(out, width);
+    put16(out, height);
+    out.push_back('\0');  // no local table, not interlaced
+    lzw.encode(indices, out);
+  }
+  out.push_back(static_cast<char>(0x3B));
+  return out;
+}
+
+DecodedGif decode_gif(const std::string& bytes) {
+  std::size_t pos = 0;
+  auto need = [&](std::size_t n) {
+    if (pos + n > bytes.size()) throw std::runtime_error("GIF: truncated");
+  };
+  auto u8 = [&]() {
+    need(1);
+    return static_cast<std::uint8_t>(bytes[pos++]);
+  };
+  auto u16 = [&]() {
+    const int lo = u8();
+    return lo | (u8() << 8);
+  };
+  need(6);
+  if (bytes.compare(0, 6, "GIF89a") != 0) throw std::runtime_error("GIF: not GIF89a");
+  pos = 6;
+  DecodedGif gif;
+  gif.width = u16();
+  gif.height = u16();
+  const std::uint8_t packed = u8();
+  pos += 2;
+  if (packed & 0x80) pos += 3u * (2u << (packed & 7));
+  int delay = 0;
+  for (;;) {
+    const std::uint8_t tag = u8();
+    if (tag == 0x3B) break;
+    if (tag == 0x21) {
+      const std::uint8_t label = u8();
+      std::string data;
+      for (std::uint8_t n = u8(); n != 0; n = u8()) {
+        need(n);
+        data.append(bytes, pos, n);
+        pos += n;
+      }
+      if (label == 0xF9 && data.size() == 4) {
+        delay = static_cast<std::uint8_t>(data[1]) | (static_cast<std::uint8_t>(data[2]) << 8);
+      }
+      continue;
+    }
+    if (tag != 0x2C) throw std::runtime_error(fmt::format("GIF: unexpected block {:#x}", tag));
+    pos += 8;
+    if (u8() != 0) throw std::runtime_error("GIF: local tables and interlace are not read");
+    const int min_size = u8();
+    std::string data;
+    for (std::uint8_t n = u8(); n != 0; n = u8()) {
+      need(n);
+      data.append(bytes, pos, n);
+      pos += n;
+    }
+    const int clear = 1 << min_size, end = clear + 1;
+    // The code table as prefix code + last byte, with each string's first byte and length.
+    std::vector<int> prefix(kGifMaxCodes, -1), first(kGifMaxCodes, 0), length(kGifMaxCodes, 0);
+    std::vector<std::uint8_t> last(kGifMaxCodes, 0);
+    for (int i = 0; i < clear; ++i) {
+      last[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(i);
+      first[static_cast<std::size_t>(i)] = i;
+      length[static_cast<std::size_t>(i)] = 1;
+    }
+    std::vector<std::uint8_t> pixels;
+    auto emit = [&](int code) {
+      const std::size_t n = static_cast<std::size_t>(length[static_cast<std::size_t>(code)]);
+      pixels.resize(pixels.size() + n);
+      std::size_t at = pixels.size();
+      for (int c = code; c >= 0; c = prefix[static_cast<std::size_t>(c)]) {
+        pixels[--at] = last[static_cast<std::size_t>(c)];
+      }
+    };
+    int size = min_size + 1, prev = -1, next = end + 1;
+    std::size_t bit = 0;
+    for (;;) {
+      if (bit + static_cast<std::size_t>(size) > data.size() * 8) {
+        throw std::runtime_error("GIF: image data ends without an end code");
+      }
+      int code = 0;
+      for (int b = 0; b < size; ++b, ++bit) {
+        code |= ((static_cast<std::uint8_t>(data[bit / 8]) >> (bit % 8)) & 1) << b;
+      }
+      if (code == clear) {
+        size = min_size + 1;
+        next = end + 1;
+        prev = -1;
+        continue;
+      }
+      if (code == end) break;
+      if (prev < 0) {
+        if (code >= clear) throw std::runtime_error("GIF: bad first code");
+        emit(code);
+        prev = code;
+        continue;
+      }
+      if (code > next || (code >= clear && code <= end)) {
+        throw std::runtime_error("GIF: code beyond the table");
+      }
+      const int head = code < next ? first[static_cast<std::size_t>(code)]
+                                   : first[static_cast<std::size_t>(prev)];
+      if (next < kGifMaxCodes) {
+        const auto e = static_cast<std::size_t>(next);
+        prefix[e] = prev;
+        last[e] = static_cast<std::uint8_t>(head);
+        first[e] = first[static_cast<std::size_t>(prev)];
+        length[e] = length[static_cast<std::size_t>(prev)] + 1;
+        ++next;
+      }
+      emit(code);
+      if (next == (1 << size) && size < 12) ++size;
+      prev = code;
+    }
+    if (pixels.size() != static_cast<std::size_t>(gif.width) * gif.height) {
+      throw std::runtime_error(fmt::format("GIF: frame {} has {} pixels, not {}", gif.frames.size(),
+                                           pixels.size(), gif.width * gif.height));
+    }
+    gif.frames.push_back(std::move(pixels));
+    gif.delays.push_back(delay);
+  }
+  return gif;
+}
+
+}  // namespace pp5

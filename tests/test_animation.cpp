@@ -1,0 +1,194 @@
+// Animation: keyframes, the per-frame scene, Session::set_scene and the GIF encoder.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "sim/animation.hpp"
+#include "sim/output/gif.hpp"
+#include "sim/scene/scene_loader.hpp"
+#include "sim/simulation.hpp"
+#include "support.hpp"
+
+using namespace pp5;
+
+namespace {
+
+MachineConfig tiny_machine() {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=128", "screen.height=128", "gp.count=2", "renderer.count=1"});
+  return config;
+}
+
+AnimationOptions tiny_torus(int frames) {
+  AnimationOptions o;
+  o.scene.tessellation_u = 24;
+  o.scene.tessellation_v = 8;
+  o.frames = frames;
+  return o;
+}
+
+// A scene file's text with `animation` as its "animation".
+std::string anim_file(const std::string& animation) {
+  return R"({"meshes": [{"builtin": "two-triangles"}, {"builtin": "two-triangles",
+             "translate": [3, 0, 0]}],
+             "camera": {"eye": [0, 0, 10], "target": [0, 0, 0], "near": 1, "far": 30},
+             "animation": )" +
+         animation + "}";
+}
+
+Animation parse_anim(const std::string& animation, int frames = 0) {
+  const std::string text = anim_file(animation);
+  SceneParts parts;
+  Scene base = parse_scene_json(text, "anim.json", ".", {}, &parts);
+  AnimationOptions o;
+  o.frames = frames;
+  return parse_animation_json(text, "anim.json", std::move(base), parts, o);
+}
+
+}  // namespace
+
+TEST_CASE("animation: camera keys interpolate linearly and hold outside the keys", "[animation]") {
+  const Animation a = parse_anim(R"({"frames": 5, "fps": 10, "camera": [
+      {"frame": 1, "eye": [0, 0, 10], "target": [0, 0, 0]},
+      {"frame": 3, "eye": [4, 0, 10], "target": [2, 0, 0], "fov_y_degrees": 60}]})");
+  CHECK(a.frames() == 5);
+  CHECK(a.fps() == 10);
+  CHECK(a.scene(0).camera.eye.x == 0.0f);  // held before the first key
+  CHECK(a.scene(2).camera.eye.x == 2.0f);  // halfway
+  CHECK(a.scene(2).camera.target.x == 1.0f);
+  CHECK(a.scene(2).camera.fov_y_degrees == 50.0f);  // the first key took the file's 40
+  CHECK(a.scene(4).camera.eye.x == 4.0f);           // held after the last
+}
+
+TEST_CASE("animation: object keys move only their entry, about its centre", "[animation]") {
+  const Animation a = parse_anim(R"({"objects": [{"mesh": 1, "keys": [
+      {"frame": 0}, {"frame": 4, "translate": [0, 2, 0], "rotate_degrees": [0, 0, 180]}]}]})",
+                                 8);
+  CHECK(a.frames() == 8);  // --frames wins over the file's
+  const Scene s0 = a.scene(0), s2 = a.scene(2), s4 = a.scene(4);
+  REQUIRE(s0.mesh.vertices.size() == s4.mesh.vertices.size());
+  // The first mesh does not move.
+  for (std::size_t i = 0; i < 6; ++i)
+    CHECK(s4.mesh.vertices[i].position == s0.mesh.vertices[i].position);
+  // The second mesh's centre moves by half the translation at frame 2, all of it at 4, and a
+  // half turn about z maps its bounding box onto itself.
+  auto centre = [](const Scene& s) {
+    glm::dvec3 sum(0);
+    for (std::size_t i = 6; i < s.mesh.vertices.size(); ++i)
+      sum += glm::dvec3(s.mesh.vertices[i].position);
+    return sum / static_cast<double>(s.mesh.vertices.size() - 6);
+  };
+  CHECK(std::abs(centre(s2).y - centre(s0).y - 1.0) < 1e-5);
+  CHECK(std::abs(centre(s4).y - centre(s0).y - 2.0) < 1e-5);
+  CHECK(s4.mesh.vertices[6].position != s0.mesh.vertices[6].position);
+  CHECK(s0.mesh.triangles == s4.mesh.triangles);
+}
+
+TEST_CASE("animation: bad keyframes name the file, the key and what was expected", "[animation]") {
+  CHECK_THROWS_WITH(parse_anim(R"({"camera": [{"frame": 2, "eye": [0,0,9], "target": [0,0,0]},
+                                   {"frame": 2, "eye": [1,0,9], "target": [0,0,0]}]})"),
+                    Catch::Contains("anim.json: key 'animation.camera[1].frame' must be "
+                                    "greater than the previous key's frame 2"));
+  CHECK_THROWS_WITH(parse_anim(R"({"camera": [{"frame": 0, "eye": [0,0,9]}]})"),
+                    Catch::Contains("'animation.camera[0]' needs 'eye' and 'target'"));
+  CHECK_THROWS_WITH(parse_anim(R"({"objects": [{"mesh": 2, "keys": [{"frame": 0}]}]})"),
+                    Catch::Contains("'animation.objects[0].mesh' must be in [0, 1] (got 2)"));
+  CHECK_THROWS_WITH(parse_anim(R"({"spin": 1})"), Catch::Contains("unknown key 'animation.spin'"));
+  CHECK_THROWS_WITH(parse_anim(R"({"objects": [{"mesh": 0, "keys": [{"frame": -1}]}]})"),
+                    Catch::Contains("'animation.objects[0].keys[0].frame' must be in"));
+}
+
+TEST_CASE("animation: the torus turns in 4-space, its primitives stay", "[animation]") {
+  const Animation a = load_animation("torus", tiny_torus(4));
+  const Scene s0 = a.scene(0), s1 = a.scene(1);
+  REQUIRE(s0.mesh.triangles == s1.mesh.triangles);
+  CHECK(s0.camera.eye == s1.camera.eye);  // one camera for every frame
+  // The projected shape changes: not a rigid motion, so some edge changes length.
+  bool stretched = false;
+  for (const glm::uvec3& t : s0.mesh.triangles) {
+    const float l0 = glm::length(s0.mesh.vertices[t.x].position - s0.mesh.vertices[t.y].position);
+    const float l1 = glm::length(s1.mesh.vertices[t.x].position - s1.mesh.vertices[t.y].position);
+    stretched = stretched || std::abs(l0 - l1) > 1e-2f * l0;
+  }
+  CHECK(stretched);
+  // A full turn comes back: frame 4 of 4 is frame 0.
+  const Scene s4 = a.scene(4);
+  for (std::size_t i = 0; i < s0.mesh.vertices.size(); ++i) {
+    CHECK(glm::length(s4.mesh.vertices[i].position - s0.mesh.vertices[i].position) < 1e-4f);
+  }
+}
+
+TEST_CASE("animation: a session's frame k is what a one-frame run of frame k's scene gives",
+          "[animation]") {
+  const MachineConfig config = tiny_machine();
+  const Animation a = load_animation("torus", tiny_torus(3));
+  auto program = std::make_shared<const Program>(test::load_program("phong", config));
+  // Each frame alone first (SystemC contexts do not nest: one run at a time).
+  std::vector<FrameResult> alone;
+  for (int k = 0; k < 3; ++k) alone.push_back(simulate_frame(config, a.scene(k), *program, 1));
+  // Frames differ: the scene does change.
+  CHECK(alone[0].image.flat().rgb != alone[1].image.flat().rgb);
+  CHECK(alone[1].image.flat().rgb != alone[2].image.flat().rgb);
+  Session session(config, std::make_shared<const Scene>(a.scene(0)), program, 2);
+  for (int k = 0; k < 3; ++k) {
+    if (k > 0) session.set_scene(std::make_shared<const Scene>(a.scene(k)));
+    const FrameResult in_session = session.frame();
+    INFO("frame " << k);
+    CHECK(in_session.image.flat().rgb == alone[k].image.flat().rgb);
+    CHECK(in_session.frame_seconds == alone[k].frame_seconds);
+    CHECK(test::without_host(in_session.stats_json) == test::without_host(alone[k].stats_json));
+  }
+  CHECK(session.summary().frames == 3);
+}
+
+TEST_CASE("animation: set_scene refuses a scene with other primitives", "[animation]") {
+  const MachineConfig config = tiny_machine();
+  auto program = std::make_shared<const Program>(test::load_program("phong", config));
+  Session session(config, std::make_shared<const Scene>(make_builtin_scene("two-triangles")),
+                  program, 1);
+  session.frame();
+  session.set_scene(std::make_shared<const Scene>(make_builtin_scene("crossing-quads")));
+  CHECK_THROWS_WITH(session.frame(), Catch::Contains("has 4 triangles where the machine's "
+                                                     "scene 'two-triangles' has 2"));
+}
+
+TEST_CASE("gif: what encode_gif writes decodes to the palette colours of every pixel",
+          "[animation]") {
+  // Three frames of many colours, so that the code table fills and clears several times.
+  std::vector<RgbImage> frames(3);
+  std::uint32_t x = 12345;
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    RgbImage& i = frames[f];
+    i.width = 203;
+    i.height = 97 + static_cast<int>(f) * 0;
+    i.rgb.resize(static_cast<std::size_t>(i.width) * i.height * 3);
+    for (std::size_t p = 0; p < i.rgb.size(); ++p) {
+      x = x * 1103515245u + 12345u;
+      // Runs of one colour (long strings) and noise (short ones), per frame.
+      i.rgb[p] = (p / 600) % 2 == f % 2 ? static_cast<std::uint8_t>(p / 3000 * 40)
+                                        : static_cast<std::uint8_t>(x >> 24);
+    }
+  }
+  std::vector<const RgbImage*> list;
+  for (const RgbImage& i : frames) list.push_back(&i);
+  const std::string bytes = encode_gif(list, 8);
+  CHECK(bytes == encode_gif(list, 8));
+  const DecodedGif gif = decode_gif(bytes);
+  REQUIRE(gif.frames.size() == 3);
+  CHECK(gif.width == 203);
+  CHECK(gif.height == 97);
+  CHECK(gif.delays == std::vector<int>{8, 8, 8});
+  for (std::size_t f = 0; f < 3; ++f) {
+    std::size_t wrong = 0;
+    for (std::size_t p = 0; p < gif.frames[f].size(); ++p) {
+      wrong += gif.frames[f][p] != gif_palette_index(&frames[f].rgb[3 * p]);
+    }
+    CHECK(wrong == 0);
+  }
+  // The palette is near: no channel more than half a level away.
+  const std::uint8_t c[3] = {200, 13, 128};
+  std::uint8_t back[3];
+  gif_palette_colour(gif_palette_index(c), back);
+  CHECK(std::abs(back[0] - 200) <= 26);
+  CHECK(std::abs(back[1] - 13) <= 22);
+  CHECK(std::abs(back[2] - 128) <= 26);
+}
