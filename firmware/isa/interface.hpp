@@ -115,6 +115,10 @@ enum class Expression {
   sphere_red,
   sphere_green,
   sphere_blue,
+  sphere_depth_paraboloid,
+  sphere_depth_base,
+  sphere_radicand,
+  sphere_root_shift,
   depth_minus_threshold,
   depth_plus_threshold,
   count
@@ -124,6 +128,10 @@ enum class Expression {
 // to a signed 16-bit range: steeper planes (near edge-on) saturate rather than wrap.
 inline constexpr int kSlopeShift = 6;
 inline constexpr int kSlopeLimit = 32767;
+// A sphere's exact depth is drawn in pixel memory as sphere_depth_base - 2^sphere_root_shift *
+// floor(sqrt(sphere_radicand)); the GP picks the shift that keeps the square root below
+// 2^kSphereRootBits, so the radicand fits 2 * kSphereRootBits bits (firmware sphere_sqrt.pp5).
+inline constexpr int kSphereRootBits = 13;
 struct ExpressionInfo {
   const char* name;
   const char* meaning;
@@ -185,6 +193,24 @@ inline constexpr ExpressionInfo kExpressions[] = {
     {"sphere_red", "a sphere's unlit material red, 0..255, constant", true},
     {"sphere_green", "a sphere's material green, 0..255, constant", true},
     {"sphere_blue", "a sphere's material blue, 0..255, constant", true},
+    {"sphere_depth_paraboloid",
+     "a sphere's depth as Pixel-Planes 4 drew it, quadratic: the square root of the conic "
+     "replaced by the line through its ends (a paraboloid exact at the outline and at the "
+     "nearest point; error up to twice sphere_depth's, all on the far side)"},
+    {"sphere_depth_base",
+     "the linear part of a sphere's exact depth, depth units (linear): the depth is "
+     "sphere_depth_base - 2^sphere_root_shift * floor(sqrt(sphere_radicand)) (its far "
+     "hemisphere's, + instead of -); half a step of the root is folded in, so the truncated "
+     "root errs by at most 2^(sphere_root_shift - 1) + 1/2 units either way"},
+    {"sphere_radicand",
+     "the conic scaled to depth units squared and divided by 4^sphere_root_shift, below "
+     "2^26 inside the outline (quadratic): its square root, 13 bits, times "
+     "2^sphere_root_shift is the depth below sphere_depth_base"},
+    {"sphere_root_shift",
+     "the least shift (0..15; 11 or less within the depth range) that keeps sqrt(sphere_radicand) "
+     "below 2^13 - 1 over the "
+     "sphere, constant",
+     true},
     {"depth_minus_threshold",
      "depth - threshold (the frame parameter, folded into the plane's constant term by the GP): "
      "-threshold .. 2^gp.depth_bits - 1, negative near the near plane"},

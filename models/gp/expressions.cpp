@@ -127,6 +127,32 @@ bool sphere_normal(const SetupContext& c, QuadraticCoefficients& out) {
   return sphere_fixed_point(s.normal[axis], c.f_scale, s.x0, s.y0, c.params, out);
 }
 
+bool sphere_depth_paraboloid(const SetupContext& c, QuadraticCoefficients& out) {
+  if (c.sphere == nullptr) return (out = {}, true);
+  const ScreenSphere& s = *c.sphere;
+  return sphere_fixed_point(s.paraboloid, c.f_scale, s.x0, s.y0, c.params, out);
+}
+
+// The exact depth's parts (sphere_sqrt.pp5): the linear part and the radicand at 2^fraction_bits
+// about the anchor, the root's shift a constant.
+bool sphere_depth_base(const SetupContext& c, QuadraticCoefficients& out) {
+  if (c.sphere == nullptr) return (out = {}, true);
+  const ScreenSphere& s = *c.sphere;
+  return sphere_fixed_point(s.depth_base, c.f_scale, s.x0, s.y0, c.params, out);
+}
+
+bool sphere_radicand(const SetupContext& c, QuadraticCoefficients& out) {
+  if (c.sphere == nullptr) return (out = {}, true);
+  const ScreenSphere& s = *c.sphere;
+  return sphere_fixed_point(s.radicand, c.f_scale, s.x0, s.y0, c.params, out);
+}
+
+bool sphere_root_shift(const SetupContext& c, QuadraticCoefficients& out) {
+  if (c.sphere == nullptr) return (out = {}, true);
+  out = c.constant(c.sphere->root_shift);
+  return true;
+}
+
 template <int channel>
 bool sphere_colour(const SetupContext& c, QuadraticCoefficients& out) {
   if (c.sphere == nullptr) return (out = {}, true);
@@ -161,6 +187,15 @@ constexpr OpCounts kSphereDepthCost{6 + 4 + 4, 16 + 8 + 10, 0, 0, 16, 0, 4};
 // A normal component's least-squares fit: its 6 coefficients from the 13 fit points (78
 // multiply-adds), rewritten from the disc's coordinates to pixels (10 multiplies, 4 adds)
 // and about the anchor (6, 6), then as any quadratic.
+// The exact depth's linear part: H / k (a reciprocal, 1 multiply), its three coefficients
+// (3 multiplies), the half step 2^(n - 1) folded into the constant (1 add, 1 integer); scaled
+// (3 multiplies) and converted (3), expanded to the screen's origin (2 multiplies, 2 integer
+// adds) and wrapped (3 integer masks).
+constexpr OpCounts kSphereDepthBaseCost{2 + 1 + 3, 5 + 1 + 3 + 3 + 2, 0, 0, 1 + 2 + 3, 0, 4};
+// The radicand: (H / k)^2 (1 multiply), the shift n from the exponent of the relief (H / k)
+// sqrt(Qm) (a reciprocal square root, 1 multiply; integer: 4, a compare and branch) and 4^-n
+// folded into the scale (1 multiply), then the six coefficients as any sphere quadratic.
+constexpr OpCounts kSphereRadicandCost{3 + 6, 8 + 16, 0, 0, 4 + 16, 1, 2 + 2};
 constexpr OpCounts kSphereNormalCost{78 + 4 + 6 + 6, 78 + 10 + 6 + 16, 0, 0, 16, 0, 4};
 
 constexpr std::array<ExpressionEntry, static_cast<int>(Expression::count)> kRegistry = {{
@@ -199,6 +234,10 @@ constexpr std::array<ExpressionEntry, static_cast<int>(Expression::count)> kRegi
     {E::sphere_red, F::constant, kConstantCost, false, sphere_colour<0>},
     {E::sphere_green, F::constant, kConstantCost, false, sphere_colour<1>},
     {E::sphere_blue, F::constant, kConstantCost, false, sphere_colour<2>},
+    {E::sphere_depth_paraboloid, F::quadratic, kSphereDepthCost, false, sphere_depth_paraboloid},
+    {E::sphere_depth_base, F::linear, kSphereDepthBaseCost, false, sphere_depth_base},
+    {E::sphere_radicand, F::quadratic, kSphereRadicandCost, false, sphere_radicand},
+    {E::sphere_root_shift, F::constant, kConstantCost, false, sphere_root_shift},
     {E::depth_minus_threshold, F::linear, kDepthOffsetCost, false, depth_threshold<-1>, false,
      true},
     {E::depth_plus_threshold, F::linear, kDepthOffsetCost, false, depth_threshold<+1>, false, true},

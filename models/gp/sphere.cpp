@@ -125,7 +125,7 @@ double sphere_rounding_bound(double dx, double dy) {
 
 bool is_sphere_expression(Expression e) {
   return static_cast<int>(e) >= static_cast<int>(Expression::sphere_inside) &&
-         static_cast<int>(e) <= static_cast<int>(Expression::sphere_blue);
+         static_cast<int>(e) <= static_cast<int>(Expression::sphere_root_shift);
 }
 
 SphereProjector::SphereProjector(const GeometryParams& params, const Camera& camera)
@@ -255,6 +255,26 @@ bool SphereProjector::project(const Sphere& sphere, int index, ScreenSphere& out
   z.e = -hk * (ly + root * q.e / s);
   z.f = g_ - hk * (l0 + root * (q.f / s + s / 8.0));
   out.depth_approximation_bound = hk * s / 8.0;
+  // Pixel-Planes 4's paraboloid: the line through the square root's ends, Q / sqrt(Qm), exact
+  // at the outline (Q = 0) and at the conic's centre (Q = Qm), too deep by up to sqrt(Qm) / 4
+  // (at Q = Qm / 4): the same line as above without the minimax offset sqrt(Qm) / 8.
+  out.paraboloid = z;
+  out.paraboloid.f = g_ - hk * (l0 + root * q.f / s);
+  // The exact depth, G - (H / k) d.c -+ (H / k) sqrt(Q), for a square root in pixel memory
+  // (sphere_sqrt.pp5): the radicand (H / k)^2 Q / 4^n, with the least n that keeps its root
+  // (at most (H / k) sqrt(Qm) / 2^n, the relief at the conic's centre) below 2^13 - 1, so
+  // that 13 root bits and 26 radicand bits hold it; the firmware subtracts the truncated
+  // root times 2^n from the linear part, which has half a root step and half a unit (for its
+  // own floor) folded in so that both truncations err either way.
+  const double relief = hk * s;
+  const double root_limit = std::ldexp(1.0, kSphereRootBits) - 2.0;
+  int root_shift = 0;
+  while (std::ldexp(relief, -root_shift) > root_limit) ++root_shift;
+  out.root_shift = root_shift;
+  const double p = hk * hk * std::ldexp(1.0, -2 * root_shift);
+  out.radicand = CentredQuadratic{p * q.a, p * q.b, p * q.c, p * q.d, p * q.e, p * q.f};
+  out.depth_base = CentredQuadratic{
+      0, 0, 0, -hk * lx, -hk * ly, g_ - hk * l0 - root * std::ldexp(1.0, root_shift - 1) + 0.5};
   const double ex = std::max(std::fabs(out.x_min - static_cast<double>(out.x0)),
                              std::fabs(out.x_max - static_cast<double>(out.x0)));
   const double ey = std::max(std::fabs(out.y_min - static_cast<double>(out.y0)),

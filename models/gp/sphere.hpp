@@ -18,6 +18,17 @@
 //    Q / sqrt(Qm) + sqrt(Qm) / 8, whose error is at most sqrt(Qm) / 8 (equioscillating at
 //    Q = 0, Qm / 4 and Qm). The depth error is therefore at most (H / k) sqrt(Qm) / 8 depth
 //    units, plus the fixed-point rounding below: ScreenSphere::depth_bound.
+//    Pixel-Planes 4 drew the line through the ends, Q / sqrt(Qm), with no offset: a paraboloid
+//    exact at the outline and the nearest point, too deep by up to sqrt(Qm) / 4 between
+//    (`sphere_depth_paraboloid`; H. Fuchs et al., "Fast spheres, shadows, textures,
+//    transparencies, and image enhancements in Pixel-planes", SIGGRAPH 1985).
+//    The exact depth instead takes the square root in pixel memory (sphere_sqrt.pp5): the GP
+//    sends the linear part G - (H / k) d.c (`sphere_depth_base`) and the radicand
+//    (H / k)^2 Q / 4^n (`sphere_radicand`), n (`sphere_root_shift`) the least shift keeping
+//    its root below 2^13 - 1 (kSphereRootBits), so that it fits the evaluator's integer bits
+//    (26 of the 28 that 40 result bits less 12 fraction bits leave); the firmware subtracts
+//    2^n times the truncated root. The error is at most 2^(n - 1) + 1/2 units plus the
+//    fixed-point rounding: a relief of 2^22 units (n = 9) is drawn to within 257 units.
 //  - Shading inputs. `sphere_nx/ny/nz` are 127 times the eye-space normal (p - c) / r at the
 //    hit p = t d, each fitted by least squares with a quadratic over 13 fixed points of the
 //    unit disc mapped onto the ellipse (the centre, 6 at radius 0.55, 6 at 0.92); the fit's
@@ -84,11 +95,16 @@ struct ScreenSphere {
   CentredQuadratic conic;                  // Q, >= 0 inside
   int conic_shift = 0;                     // the conic's scale is 2^conic_shift
   CentredQuadratic depth;                  // depth units
+  CentredQuadratic paraboloid;             // depth units, Pixel-Planes 4's (no offset)
   std::array<CentredQuadratic, 3> normal;  // 127 * the normal's x, y, z
-  double centre_x = 0, centre_y = 0;       // the conic's centre, relative to the anchor
-  double q_max = 0;                        // Q at the centre
-  double depth_approximation_bound = 0;    // (H / k) sqrt(Qm) / 8
-  double depth_bound = 0;                  // the above + rounding over the bounding box + 1 (floor)
+  // The exact depth in pixel memory: depth_base -+ 2^root_shift sqrt(radicand) (near: -).
+  CentredQuadratic depth_base;           // linear, depth units, half a root step folded in
+  CentredQuadratic radicand;             // (H / k)^2 Q / 4^root_shift, depth units^2 / 4^root_shift
+  int root_shift = 0;                    // 0..11: the root stays below 2^kSphereRootBits - 1
+  double centre_x = 0, centre_y = 0;     // the conic's centre, relative to the anchor
+  double q_max = 0;                      // Q at the centre
+  double depth_approximation_bound = 0;  // (H / k) sqrt(Qm) / 8
+  double depth_bound = 0;                // the above + rounding over the bounding box + 1 (floor)
   int x_min = 0, x_max = -1, y_min = 0, y_max = -1;  // pixel-centre bounding box, inclusive
 };
 

@@ -168,19 +168,6 @@ DrawnSpheres draw_spheres(const MachineConfig& config, const Scene& scene, const
 
 std::vector<int> shown_spheres(const MachineConfig& config, const Scene& drawn,
                                const std::vector<int>& triangle_sphere, int threads) {
-  const int triangles = static_cast<int>(drawn.mesh.triangles.size());
-  if (static_cast<std::size_t>(triangles) + drawn.spheres.size() >= (std::size_t{1} << 24) - 1)
-    throw std::invalid_argument(
-        fmt::format("scene '{}': too many primitives for 24-bit visibility colours", drawn.name));
-  // Triangles coloured t + 1 (visibility_scene), spheres triangles + k + 1; colours exact
-  // multiples of 1/255, so the GP's constant is the byte itself.
-  Scene ids = visibility_scene(drawn, {});
-  for (std::size_t k = 0; k < ids.spheres.size(); ++k) {
-    const auto id = static_cast<unsigned>(triangles) + static_cast<unsigned>(k) + 1;
-    ids.spheres[k].color = glm::vec3(static_cast<float>(id & 0xFF) / 255.0f,
-                                     static_cast<float>((id >> 8) & 0xFF) / 255.0f,
-                                     static_cast<float>((id >> 16) & 0xFF) / 255.0f);
-  }
   const std::string text = zbuffer_colour_firmware(
                                "Visibility with spheres: each pixel keeps the nearest "
                                "primitive's index, z-buffered on depth and sphere_depth.",
@@ -197,6 +184,25 @@ proc sphere
 end
 )";
   const Program program = assemble(text, "visibility-spheres", assembler_options(config));
+  return shown_spheres_by(config, drawn, triangle_sphere, program, threads);
+}
+
+std::vector<int> shown_spheres_by(const MachineConfig& config, const Scene& drawn,
+                                  const std::vector<int>& triangle_sphere, const Program& program,
+                                  int threads) {
+  const int triangles = static_cast<int>(drawn.mesh.triangles.size());
+  if (static_cast<std::size_t>(triangles) + drawn.spheres.size() >= (std::size_t{1} << 24) - 1)
+    throw std::invalid_argument(
+        fmt::format("scene '{}': too many primitives for 24-bit visibility colours", drawn.name));
+  // Triangles coloured t + 1 (visibility_scene), spheres triangles + k + 1; colours exact
+  // multiples of 1/255, so the GP's constant is the byte itself.
+  Scene ids = visibility_scene(drawn, {});
+  for (std::size_t k = 0; k < ids.spheres.size(); ++k) {
+    const auto id = static_cast<unsigned>(triangles) + static_cast<unsigned>(k) + 1;
+    ids.spheres[k].color = glm::vec3(static_cast<float>(id & 0xFF) / 255.0f,
+                                     static_cast<float>((id >> 8) & 0xFF) / 255.0f,
+                                     static_cast<float>((id >> 16) & 0xFF) / 255.0f);
+  }
   const IdImage id = decode_visibility(simulate_frame(config, ids, program, threads).image.flat());
   std::vector<int> out(id.id.size(), -1);
   for (std::size_t i = 0; i < out.size(); ++i) {

@@ -52,6 +52,12 @@ DrawnSpheres draw_spheres(const MachineConfig& config, const Scene& scene, const
 // triangle), or -1; empty: no triangle stands for a sphere.
 std::vector<int> shown_spheres(const MachineConfig& config, const Scene& drawn,
                                const std::vector<int>& triangle_sphere, int threads);
+// The same with `program` drawing the index colours: it must leave in its output the unlit
+// colours its `triangle` and `sphere` procedures load (sphere_depth_methods.hpp's
+// unshaded_program), so that each pixel shows the primitive the program's own depth code keeps.
+std::vector<int> shown_spheres_by(const MachineConfig& config, const Scene& drawn,
+                                  const std::vector<int>& triangle_sphere, const Program& program,
+                                  int threads);
 
 // The accuracy of a drawn frame against the ray cast.
 struct SphereAccuracy {

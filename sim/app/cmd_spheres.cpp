@@ -10,6 +10,7 @@
 
 #include "models/gp/expressions.hpp"
 #include "models/machine.hpp"
+#include "sim/analysis/sphere_depth_methods.hpp"
 #include "sim/analysis/spheres.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/output/output_set.hpp"
@@ -140,7 +141,11 @@ int run_spheres(const SpheresOptions& o) {
   const FrameResult base = simulate_frame(config, empty, program, o.threads);
   const RayCast truth = ray_cast(config, scene);
 
-  auto row = [&](const std::string& what, const Scene& s, const std::vector<int>& stands_for) {
+  // `visibility`: the program that draws the index colours (shown_spheres_by), or null for
+  // shown_spheres' own; `program` and `base` default to the --firmware's.
+  auto row = [&](const std::string& what, const Scene& s, const std::vector<int>& stands_for,
+                 const Program& program, const FrameResult& base,
+                 const Program* visibility = nullptr) {
     const FrameResult r = simulate_frame(config, s, program, o.threads);
     SphereRow out;
     out.what = what;
@@ -164,14 +169,23 @@ int run_spheres(const SpheresOptions& o) {
     const double renderer_rate =
         config.renderer.count * config.renderer.clock_hz / std::max(1.0, out.renderer_cycles);
     out.rate = std::min(gp_rate, renderer_rate);
-    out.accuracy =
-        measure_spheres(config, scene, truth, draw_spheres(config, s, program, o.threads),
-                        shown_spheres(config, s, stands_for, o.threads));
+    out.accuracy = measure_spheres(
+        config, scene, truth, draw_spheres(config, s, program, o.threads),
+        visibility != nullptr ? shown_spheres_by(config, s, stands_for, *visibility, o.threads)
+                              : shown_spheres(config, s, stands_for, o.threads));
     return out;
   };
 
   std::vector<SphereRow> rows;
-  rows.push_back(row("quadric", scene, {}));
+  rows.push_back(row("quadric", scene, {}, program, base));
+  // The other depth methods, each by its own program (sphere_depth_methods.hpp).
+  for (const SphereDepthMethod& m : sphere_depth_methods()) {
+    const std::string path = resolve_firmware(m.firmware);
+    const Program p = assemble_file(path, assembler_options(config));
+    const Program unshaded = unshaded_program(path, config);
+    rows.push_back(row(fmt::format("{} ({}, {} bits)", m.label, m.firmware, p.bits_used()), scene,
+                       {}, p, simulate_frame(config, empty, p, o.threads), &unshaded));
+  }
   for (const std::string& t : o.tessellations) {
     int u = 0, v = 0;
     if (std::sscanf(t.c_str(), "%dx%d", &u, &v) != 2 || u < 3 || v < 2 || u > 1024 || v > 1024) {
@@ -189,7 +203,8 @@ int run_spheres(const SpheresOptions& o) {
                         static_cast<int>(k));
     if (stands_for.size() != tess.mesh.triangles.size())
       throw std::logic_error("cmd_spheres: tessellation triangle count");
-    rows.push_back(row(fmt::format("{} ({} triangles)", t, 2 * u * (v - 1)), tess, stands_for));
+    rows.push_back(
+        row(fmt::format("{} ({} triangles)", t, 2 * u * (v - 1)), tess, stands_for, program, base));
   }
 
   const std::string heading = fmt::format(
