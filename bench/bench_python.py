@@ -1,0 +1,57 @@
+#!/usr/bin/env python3
+"""The Python module's cost over the command line's, measured in one run (a ratio, never an
+assertion: a timed test would fail on a loaded machine).
+
+For the default torus (1280 x 1024, phong, the default machine) at the same thread count:
+  - CLI: `pp5sim render`'s own host time for the frame (stats.json's host.seconds: the
+    machine's elaboration and the frame, timing and pixels; not the process start, the scene's
+    construction, the assembly or the PNG);
+  - Python: wall time from before pp5sim.Session(...) to the frame's image as a NumPy array
+    (scene construction, assembly, elaboration, the frame, the image copied into the array), and
+    the same with the z field read from pixel memory as well.
+Runs alternate; each figure is the fastest of RUNS. Prints Python / CLI.
+Usage: PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py [build/pp5sim] [runs=3] [threads=2]
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import pp5sim
+
+
+def main():
+    exe = sys.argv[1] if len(sys.argv) > 1 else "build/pp5sim"
+    runs = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+    threads = int(sys.argv[3]) if len(sys.argv) > 3 else 2
+    cli, py, py_frame_host, py_z = [], [], [], []
+    with tempfile.TemporaryDirectory(prefix="pp5-bench-python-") as scratch:
+        for run in range(runs):
+            out = os.path.join(scratch, f"cli{run}")
+            subprocess.run([exe, "render", "--threads", str(threads), "--out", out], check=True,
+                           stdout=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
+            with open(os.path.join(out, "stats.json")) as f:
+                cli.append(json.load(f)["host"]["seconds"])
+            t0 = time.perf_counter()
+            frame = pp5sim.Session(threads=threads).frame()
+            image = frame.image
+            py.append(time.perf_counter() - t0)
+            py_frame_host.append(frame.stat("host.seconds"))
+            assert image.shape == (1024, 1280, 3)
+            t0 = time.perf_counter()
+            frame = pp5sim.Session(threads=threads).frame(fields=["z"])
+            py_z.append(time.perf_counter() - t0)
+            del frame
+    c, p, h, z = min(cli), min(py), min(py_frame_host), min(py_z)
+    print(f"torus 1280x1024, phong, {threads} threads, fastest of {runs}:")
+    print(f"  CLI host.seconds (pp5sim render)              {c:.3f} s")
+    print(f"  Python Session().frame().image, wall          {p:.3f} s   ratio {p / c:.3f}")
+    print(f"  Python frame's own host.seconds               {h:.3f} s   ratio {h / c:.3f}")
+    print(f"  Python with the z field from pixel memory     {z:.3f} s   ratio {z / c:.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
