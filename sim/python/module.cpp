@@ -21,6 +21,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -678,11 +679,18 @@ using namespace pp5::python;
 
 PYBIND11_MODULE(_pp5sim, m) {
   m.doc() = "pp5sim's C++ half; use the package pp5sim (docs/guides/python.md)";
-  // The installed programs, relative to the installed module (the executable is python3).
+  // The installed programs and mesh reader, relative to the installed module (the
+  // executable, from which pp5sim finds them, is python3 here). In a build tree they are not
+  // there, and the build's own are found as pp5sim finds them.
   const std::string dir = module_dir();
-  if (!dir.empty())
+  if (!dir.empty()) {
     set_builtin_programs_dir(
         (fs::path(dir) / PP5_PROGRAMS_FROM_MODULE).lexically_normal().string());
+    const fs::path assimp =
+        (fs::path(dir) / PP5_ASSIMP_FROM_MODULE / "libpp5_assimp.so").lexically_normal();
+    std::error_code error;
+    if (fs::is_regular_file(assimp, error)) setenv("PP5_ASSIMP_MODULE", assimp.c_str(), 0);
+  }
 
   py::register_exception_translator([](std::exception_ptr p) {
     try {
