@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # Installs what one job of scripts/pp5 needs from Debian 12's packages, and nothing more:
-#   scripts/install-deps.sh run        build and render
+#   scripts/install-deps.sh run        build and render, and the Python module (pybind11,
+#                                      Python's headers, NumPy and pandas)
 #   scripts/install-deps.sh test       + the test suite's tools (Catch2, python3, gtkwave's
 #                                      vcd2fst, rsvg-convert, Chromium for the HTML reports'
-#                                      browser test, and the slurm group's packages)
+#                                      browser test, pytest, matplotlib and nbclient with
+#                                      ipykernel for the example notebook, and the slurm
+#                                      group's packages)
 #   scripts/install-deps.sh sanitize   the same as test (gcc's sanitizers come with gcc)
 #   scripts/install-deps.sh fuzz       + clang and its fuzzing runtime
 #   scripts/install-deps.sh bench      + Google Benchmark
@@ -18,8 +21,10 @@ set -euo pipefail
 group="${1:-all}"
 run=(build-essential cmake ninja-build pkg-config
      libsystemc-dev libglm-dev libfmt-dev nlohmann-json3-dev libcli11-dev libpng-dev zlib1g-dev libassimp-dev
-     gemmi-dev tao-pegtl-dev)
-test=(catch2 python3 gtkwave librsvg2-bin chromium)
+     gemmi-dev tao-pegtl-dev
+     pybind11-dev python3-dev python3-numpy python3-pandas)
+test=(catch2 python3 gtkwave librsvg2-bin chromium
+      python3-pytest python3-matplotlib python3-nbclient python3-nbformat python3-ipykernel)
 fuzz=(clang libclang-rt-dev)
 bench=(libbenchmark-dev)
 slurm=(slurm-wlm munge python3)

@@ -48,6 +48,9 @@ Command add_animate_command(CLI::App& app);
 // binary was built from. Throws with the list of built-in names if there is no such program.
 std::string resolve_firmware(const std::string& name);
 bool names_a_file(const std::string& firmware);
+// A folder searched first for the built-in programs: the Python module's installed programs
+// (its executable is python3, from whose folder the programs are not found).
+void set_builtin_programs_dir(const std::string& dir);
 // The built-in programs' names, sorted (empty if none are found).
 std::vector<std::string> builtin_program_names();
 // The --firmware option's help: how a name is resolved, and the built-in names.
@@ -82,6 +85,8 @@ void add_fidelity_option(CLI::App& command, std::vector<std::string>& sets);
 // level: for any other, prints an error naming `what` and the level, and returns true (the
 // caller then exits with status 2).
 bool refuse_below_bit_level(const MachineConfig& config, const std::string& what);
+// The same check's message (without "pp5sim: error: "), or empty at the bit level.
+std::string below_bit_level(const MachineConfig& config, const std::string& what);
 
 // One word for a POSIX shell (a generated script, a line of commands.txt): returned as it is
 // when it holds only [A-Za-z0-9._-/=,+], else in single quotes (a quote inside as '\''). A

@@ -22,8 +22,14 @@ namespace {
 // Where the built-in programs are, in the order searched: beside the executable as installed
 // (bin/pp5sim finds ../share/pp5sim/programs, through /proc/self/exe, so a moved installation
 // still works), then the source tree the binary was built from (the build tree's pp5sim).
+std::string& extra_programs_dir() {
+  static std::string dir;
+  return dir;
+}
+
 std::vector<fs::path> program_dirs() {
   std::vector<fs::path> dirs;
+  if (!extra_programs_dir().empty()) dirs.push_back(extra_programs_dir());
   std::error_code error;
   const fs::path exe = fs::read_symlink("/proc/self/exe", error);
   if (!error) dirs.push_back((exe.parent_path() / PP5_PROGRAMS_FROM_BIN).lexically_normal());
@@ -40,6 +46,8 @@ std::optional<fs::path> builtin_programs_dir() {
 }
 
 }  // namespace
+
+void set_builtin_programs_dir(const std::string& dir) { extra_programs_dir() = dir; }
 
 bool names_a_file(const std::string& firmware) {
   return firmware.find('/') != std::string::npos ||
@@ -215,17 +223,23 @@ void add_fidelity_option(CLI::App& command, std::vector<std::string>& sets) {
           kFidelityHelp + ". Applied after --set.");
 }
 
-bool refuse_below_bit_level(const MachineConfig& config, const std::string& what) {
+std::string below_bit_level(const MachineConfig& config, const std::string& what) {
   using F = MachineConfig::Fidelity;
   const F& f = config.fidelity;
   const bool whole =
       f.window_x == 0 && f.window_y == 0 && f.window_columns == 0 && f.window_rows == 0;
-  if (f.pixels == F::Pixels::bit && f.timing == F::Timing::event && whole) return false;
-  std::cerr << fmt::format(
-      "pp5sim: error: {} needs per-bit state, which only fidelity.pixels=bit with "
+  if (f.pixels == F::Pixels::bit && f.timing == F::Timing::event && whole) return "";
+  return fmt::format(
+      "{} needs per-bit state, which only fidelity.pixels=bit with "
       "fidelity.timing=event and every region executing has; this run asks for pixels={}, "
-      "timing={}{} (drop --fidelity, or use --fidelity bit,window=all)\n",
+      "timing={}{} (drop --fidelity, or use --fidelity bit,window=all)",
       what, name_of(f.pixels), name_of(f.timing), whole ? "" : " and a window of regions");
+}
+
+bool refuse_below_bit_level(const MachineConfig& config, const std::string& what) {
+  const std::string message = below_bit_level(config, what);
+  if (message.empty()) return false;
+  std::cerr << "pp5sim: error: " << message << "\n";
   return true;
 }
 

@@ -1,0 +1,896 @@
+// The Python module's C++ half, _pp5sim (pybind11): sessions that run frames on the
+// simulated machine, the pixel-memory fields of a frame read from the Renderer boards'
+// memory, sweeps, the assembler and per-pixel traces. pp5sim/__init__.py wraps it in the
+// Python API (docs/guides/python.md).
+//
+// Contract:
+//  - Errors are the library's own exceptions with the command line's messages: a
+//    configuration error (ConfigError) and std::invalid_argument become ValueError, any other
+//    std::exception RuntimeError.
+//  - SystemC allows one simulation context per process at a time. A Session elaborates its
+//    machine on its first frame and keeps it; when another Session (or a sweep, which makes
+//    its own) needs the kernel, the holder's machine is freed first and made again at its next
+//    frame. Each frame begins on a machine whose units begin the frame as new
+//    (Machine::begin_frame), so that gives the same frames.
+//  - Every run releases the GIL; a sweep checks for Ctrl-C (PyErr_CheckSignals) between points
+//    and Session.frames between frames.
+#include <dlfcn.h>
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+#include <tuple>
+#include <vector>
+
+#include "firmware/assembler/assembler.hpp"
+#include "firmware/isa/isa.hpp"
+#include "models/gp/geometry.hpp"
+#include "models/gp/machine_plan.hpp"
+#include "models/gp/setup_memo.hpp"
+#include "models/renderer/renderer_board.hpp"
+#include "sim/app/commands.hpp"
+#include "sim/scene/scene.hpp"
+#include "sim/scene/scene_loader.hpp"
+#include "sim/simulation.hpp"
+#include "sim/trace/inspect.hpp"
+#include "sim/trace/recorder.hpp"
+#include "sim/trace/trace_file.hpp"
+
+namespace py = pybind11;
+namespace fs = std::filesystem;
+
+namespace pp5::python {
+
+namespace {
+
+py::object json_to_python(const nlohmann::json& j) {
+  return py::module_::import("json").attr("loads")(j.dump());
+}
+
+py::object stat_to_python(const StatValue& v) {
+  if (const auto* i = std::get_if<std::int64_t>(&v)) return py::int_(*i);
+  if (const auto* d = std::get_if<double>(&v)) return py::float_(*d);
+  return py::str(std::get<std::string>(v));
+}
+
+// Every statistic by its full name, typed, in registration order (a dict keeps it).
+py::dict flat_statistics(const Statistics& stats) {
+  py::dict out;
+  for (const StatisticInfo& i : stats.infos())
+    out[py::str(i.name)] = stat_to_python(stats.value(i.name));
+  return out;
+}
+
+py::dict info_dict(const StatisticInfo& i) {
+  py::dict d;
+  d["kind"] = stat_kind_name(i.kind);
+  d["unit"] = i.unit;
+  d["description"] = i.description;
+  return d;
+}
+
+// The configuration: defaults (or a JSON file), the fidelity level, then the dict's keys as
+// --set assignments, in the dict's order.
+MachineConfig make_config(const std::string& config_file, const std::string& fidelity,
+                          const std::vector<std::pair<std::string, std::string>>& sets) {
+  std::vector<std::string> assignments;
+  for (const auto& [k, v] : sets) assignments.push_back(k + "=" + v);
+  if (!fidelity.empty()) {
+    for (std::string& s : fidelity_assignments(fidelity)) assignments.push_back(std::move(s));
+  }
+  return load_config(config_file, assignments);
+}
+
+int threads_or_default(int threads) { return threads > 0 ? threads : default_threads(); }
+
+// Program text (it holds a newline) or a firmware name or path, as --firmware takes it.
+Program load_program(const std::string& firmware, const Scene& scene, const MachineConfig& config) {
+  if (firmware.find('\n') != std::string::npos)
+    return assemble(firmware, "<program text>", assembler_options(config));
+  return assemble_file(firmware_for(firmware, scene), assembler_options(config));
+}
+
+// --- Scenes from arrays -------------------------------------------------------------------
+
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+
+void check_shape(const py::array& a, const char* name, py::ssize_t rows, py::ssize_t columns) {
+  const bool ok = columns == 0
+                      ? a.ndim() == 1 && (rows < 0 || a.shape(0) == rows)
+                      : a.ndim() == 2 && a.shape(1) == columns && (rows < 0 || a.shape(0) == rows);
+  if (!ok) {
+    std::string shape;
+    for (py::ssize_t d = 0; d < a.ndim(); ++d)
+      shape += (d ? ", " : "") + std::to_string(a.shape(d));
+    const std::string want = (rows < 0 ? std::string("N") : std::to_string(rows)) +
+                             (columns ? ", " + std::to_string(columns) : std::string(","));
+    throw std::invalid_argument(
+        fmt::format("{}: expected an array of shape ({}), got ({})", name, want, shape));
+  }
+}
+
+void check_unit_range(const FloatArray& a, const char* name) {
+  const float* p = a.data();
+  for (py::ssize_t i = 0; i < a.size(); ++i) {
+    if (!(p[i] >= 0.0f && p[i] <= 1.0f)) {
+      throw std::invalid_argument(
+          fmt::format("{}: value {} at flat index {} is outside [0, 1] (colours are RGB in [0, 1])",
+                      name, p[i], i));
+    }
+  }
+}
+
+void check_finite(const FloatArray& a, const char* name) {
+  const float* p = a.data();
+  for (py::ssize_t i = 0; i < a.size(); ++i) {
+    if (!std::isfinite(p[i]))
+      throw std::invalid_argument(fmt::format("{}: value at flat index {} is not finite", name, i));
+  }
+}
+
+Scene scene_from_arrays(const py::object& vertices, const py::object& triangles,
+                        const py::object& colors, const py::object& centers,
+                        const py::object& radii, const py::object& sphere_colors,
+                        const std::string& firmware) {
+  Scene scene;
+  scene.name = "arrays";
+  scene.description = "geometry given as NumPy arrays";
+  const glm::vec3 grey(0.8f);
+  if (!vertices.is_none()) {
+    if (triangles.is_none()) throw std::invalid_argument("vertices: given without triangles");
+    const FloatArray v = vertices.cast<FloatArray>();
+    check_shape(v, "vertices", -1, 3);
+    check_finite(v, "vertices");
+    const IndexArray t = triangles.cast<IndexArray>();
+    check_shape(t, "triangles", -1, 3);
+    const py::ssize_t n = v.shape(0);
+    std::optional<FloatArray> c;
+    if (!colors.is_none()) {
+      c = colors.cast<FloatArray>();
+      check_shape(*c, "colors", n, 3);
+      check_unit_range(*c, "colors");
+    }
+    scene.mesh.vertices.resize(static_cast<std::size_t>(n));
+    for (py::ssize_t i = 0; i < n; ++i) {
+      Vertex& out = scene.mesh.vertices[static_cast<std::size_t>(i)];
+      out.position = glm::vec3(v.at(i, 0), v.at(i, 1), v.at(i, 2));
+      out.color = c ? glm::vec3(c->at(i, 0), c->at(i, 1), c->at(i, 2)) : grey;
+    }
+    for (py::ssize_t i = 0; i < t.shape(0); ++i) {
+      glm::uvec3 tri;
+      for (int k = 0; k < 3; ++k) {
+        const std::int64_t index = t.at(i, k);
+        if (index < 0 || index >= n) {
+          throw std::invalid_argument(fmt::format(
+              "triangles: row {} has vertex index {}, expected 0..{}", i, index, n - 1));
+        }
+        tri[k] = static_cast<unsigned>(index);
+      }
+      scene.mesh.triangles.push_back(tri);
+    }
+    compute_smooth_normals(scene.mesh);
+  } else if (!triangles.is_none() || !colors.is_none()) {
+    throw std::invalid_argument("triangles, colors: given without vertices");
+  }
+  if (!centers.is_none()) {
+    const FloatArray p = centers.cast<FloatArray>();
+    check_shape(p, "sphere_centers", -1, 3);
+    check_finite(p, "sphere_centers");
+    const py::ssize_t n = p.shape(0);
+    if (radii.is_none()) throw std::invalid_argument("sphere_centers: given without sphere_radii");
+    const FloatArray r = radii.cast<FloatArray>();
+    check_shape(r, "sphere_radii", n, 0);
+    std::optional<FloatArray> c;
+    if (!sphere_colors.is_none()) {
+      c = sphere_colors.cast<FloatArray>();
+      check_shape(*c, "sphere_colors", n, 3);
+      check_unit_range(*c, "sphere_colors");
+    }
+    for (py::ssize_t i = 0; i < n; ++i) {
+      Sphere s;
+      s.center = glm::vec3(p.at(i, 0), p.at(i, 1), p.at(i, 2));
+      s.radius = r.at(i);
+      if (!(s.radius > 0.0f && std::isfinite(s.radius))) {
+        throw std::invalid_argument(
+            fmt::format("sphere_radii: radius {} at index {} is not positive", s.radius, i));
+      }
+      if (c) s.color = glm::vec3(c->at(i, 0), c->at(i, 1), c->at(i, 2));
+      scene.spheres.push_back(s);
+    }
+  } else if (!radii.is_none() || !sphere_colors.is_none()) {
+    throw std::invalid_argument("sphere_radii, sphere_colors: given without sphere_centers");
+  }
+  if (scene.mesh.triangles.empty() && scene.spheres.empty())
+    throw std::invalid_argument("the scene has no triangles and no spheres");
+  // The camera framed on every vertex and every sphere's bounding box, as a mesh file is.
+  Mesh points;
+  points.vertices = scene.mesh.vertices;
+  for (const Sphere& s : scene.spheres) {
+    for (int corner = 0; corner < 8; ++corner) {
+      Vertex v;
+      v.position = s.center + s.radius * glm::vec3(corner & 1 ? 1 : -1, corner & 2 ? 1 : -1,
+                                                   corner & 4 ? 1 : -1);
+      points.vertices.push_back(v);
+    }
+  }
+  scene.camera = frame_mesh(points, glm::vec3(0.3f, 0.4f, 1.0f), kBuiltinFovYDegrees);
+  scene.lights = {default_light(scene.camera)};
+  scene.background = kBuiltinBackground;
+  scene.firmware = firmware.find('\n') == std::string::npos ? firmware : "";
+  return scene;
+}
+
+// --- Fields read from pixel memory --------------------------------------------------------
+
+// One requested field and the NumPy array it fills (screen height x width, of a dtype that
+// holds the field: the smallest of 8, 16, 32, 64 bits, signed for a signed field).
+struct FieldTarget {
+  std::string name;
+  Field field;
+  int bytes = 8;
+  char* data = nullptr;
+};
+
+template <typename T>
+void scatter(const std::uint64_t* values, const Field& f, int region_width, int x0, int y0,
+             int columns, int rows, int screen_width, char* data) {
+  T* out = reinterpret_cast<T*>(data);
+  const unsigned shift = 64u - static_cast<unsigned>(f.width);
+  for (int py = 0; py < rows; ++py) {
+    const std::uint64_t* in = values + static_cast<std::size_t>(py) * region_width;
+    T* row = out + static_cast<std::size_t>(y0 + py) * screen_width + x0;
+    for (int px = 0; px < columns; ++px) {
+      std::uint64_t v = in[px];
+      if (f.is_signed && f.width < 64)
+        v = static_cast<std::uint64_t>(static_cast<std::int64_t>(v << shift) >> shift);
+      row[px] = static_cast<T>(v);
+    }
+  }
+}
+
+// Attached to every Renderer board: at the end of each region, each requested field of the
+// region's pixel memory goes into its place on the screen. Regions are disjoint, so boards on
+// different host threads write different pixels.
+class FieldCapture {
+ public:
+  FieldCapture(const MachineConfig& config, std::vector<FieldTarget> targets)
+      : config_(config), targets_(std::move(targets)) {
+    for (int k = 0; k < config.renderer.count; ++k)
+      boards_.push_back(std::make_unique<Board>(*this));
+  }
+  BoardObserver* observer(int renderer) {
+    return boards_.at(static_cast<std::size_t>(renderer)).get();
+  }
+
+ private:
+  class Board : public BoardObserver {
+   public:
+    explicit Board(FieldCapture& c) : c_(c) {}
+    void begin_packet(const PacketContext&, const ProcedureCode&, const RendererBoard&) override {}
+    void after_instruction(int, const Instruction&, ArrayCycles, const RendererBoard&) override {}
+    void end_region(int region, const RendererBoard& board) override {
+      const PixelBackend& a = board.array();
+      const MachineConfig& config = c_.config_;
+      const int x0 = config.region_x0(region), y0 = config.region_y0(region);
+      const int columns = std::min(a.width(), config.screen.width - x0);
+      const int rows = std::min(a.height(), config.screen.height - y0);
+      values_.resize(static_cast<std::size_t>(a.width()) * a.height());
+      for (const FieldTarget& t : c_.targets_) {
+        a.read_field(t.field, values_.data());
+        const int w = config.screen.width;
+        switch (t.bytes) {
+          case 1:
+            scatter<std::uint8_t>(values_.data(), t.field, a.width(), x0, y0, columns, rows, w,
+                                  t.data);
+            break;
+          case 2:
+            scatter<std::uint16_t>(values_.data(), t.field, a.width(), x0, y0, columns, rows, w,
+                                   t.data);
+            break;
+          case 4:
+            scatter<std::uint32_t>(values_.data(), t.field, a.width(), x0, y0, columns, rows, w,
+                                   t.data);
+            break;
+          default:
+            scatter<std::uint64_t>(values_.data(), t.field, a.width(), x0, y0, columns, rows, w,
+                                   t.data);
+            break;
+        }
+      }
+    }
+
+   private:
+    FieldCapture& c_;
+    std::vector<std::uint64_t> values_;  // one region of one field, reused
+  };
+  MachineConfig config_;
+  std::vector<FieldTarget> targets_;
+  std::vector<std::unique_ptr<Board>> boards_;
+};
+
+int field_bytes(int width) { return width <= 8 ? 1 : width <= 16 ? 2 : width <= 32 ? 4 : 8; }
+
+py::dtype field_dtype(const Field& f) {
+  const int bytes = field_bytes(f.width);
+  return py::dtype(fmt::format("{}{}", f.is_signed ? 'i' : 'u', bytes));
+}
+
+// --- Programs -----------------------------------------------------------------------------
+
+py::dict bit_budget_dict(const Program& p) {
+  py::dict d;
+  d["program"] = p.name;
+  d["memory_bits"] = p.memory_bits;
+  d["bits_used"] = p.bits_used();
+  d["resident_bits"] = p.resident_bits;
+  d["overlay_bits"] = p.overlay_bits;
+  d["staging_bits"] = p.staging_bits;
+  int field_bits = 0, scratch_bits = 0, spilled_bits = 0;
+  for (const FieldDecl& f : p.fields) {
+    (f.spilled ? spilled_bits : f.scratch ? scratch_bits : field_bits) += f.width;
+  }
+  d["field_bits"] = field_bits;
+  d["scratch_bits"] = scratch_bits;
+  d["spilled_bits"] = spilled_bits;
+  return d;
+}
+
+py::list field_map(const Program& p) {
+  py::list out;
+  for (const FieldDecl& f : p.fields) {
+    py::dict d;
+    d["name"] = f.name;
+    d["width"] = f.width;
+    d["signed"] = f.is_signed;
+    d["lo"] = f.spilled ? py::object(py::none()) : py::object(py::int_(f.lo));
+    d["scratch"] = f.scratch;
+    d["spilled"] = f.spilled;
+    d["block"] = f.spilled ? py::object(py::int_(f.block)) : py::object(py::none());
+    d["line"] = f.line;
+    py::list users;
+    for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
+      if (f.uses[static_cast<std::size_t>(k)]) users.append(kProcedureNames[k]);
+    }
+    d["procedures"] = users;
+    out.append(d);
+  }
+  return out;
+}
+
+// Each defined procedure's instructions with their cycles, priced as `pp5sim asm` prices them
+// (the instruction table's cost, with the scene's frame parameters).
+py::dict cycle_costs(const Program& p, const TimingParams& timing, const ParameterValues& params) {
+  OwnedValues values{};
+  values.parameters = params;
+  py::dict out;
+  for (int k = 0; k < static_cast<int>(Procedure::count); ++k) {
+    const ProcedureCode& code = p.procedures[static_cast<std::size_t>(k)];
+    if (!code.defined) continue;
+    py::list rows;
+    std::uint64_t total = 0;
+    for (const Instruction& ins : code.code) {
+      const std::uint64_t cycles = instruction_cost(ins, timing, values).count;
+      total += cycles;
+      rows.append(py::make_tuple(ins.line, disassemble(ins), cycles, ins.line == 0));
+    }
+    py::dict d;
+    d["instructions"] = rows;
+    d["total"] = total;
+    out[kProcedureNames[k]] = d;
+  }
+  return out;
+}
+
+struct PyProgram {
+  std::shared_ptr<const Program> program;
+  MachineConfig config;
+  std::shared_ptr<const Scene> scene;
+  ParameterValues parameters() const {
+    return GeometryEngine(geometry_params(config), *scene).frame_parameters();
+  }
+};
+
+// --- Frames -------------------------------------------------------------------------------
+
+struct PyFrame {
+  int index = 0;
+  py::object image;  // (height, width, 3) uint8, or None for a timing-only frame
+  py::dict fields;   // name -> (height, width) array
+  FrameResult result;
+  std::shared_ptr<const Program> program;
+  MachineConfig config;
+};
+
+// --- Sessions -----------------------------------------------------------------------------
+
+class PySession;
+PySession* g_kernel_holder = nullptr;  // the session whose machine holds SystemC's context
+
+class PySession {
+ public:
+  PySession(const MachineConfig& config, std::shared_ptr<const Scene> scene,
+            std::shared_ptr<const Program> program, int threads)
+      : config_(config),
+        scene_(std::move(scene)),
+        program_(std::move(program)),
+        threads_(threads) {}
+  ~PySession() { close(); }
+
+  // Frees the machine (and SystemC's context); the next frame makes them again.
+  void close() {
+    if (session_) accumulate_closed();
+    session_.reset();
+    if (g_kernel_holder == this) g_kernel_holder = nullptr;
+  }
+
+  PyFrame frame(const std::vector<std::string>& field_names, bool pixels) {
+    using F = MachineConfig::Fidelity;
+    std::vector<FieldTarget> targets;
+    PyFrame f;
+    for (const std::string& name : field_names) {
+      const FieldDecl* d = program_->find_field(name);
+      if (d == nullptr) {
+        std::vector<std::string> names;
+        for (const FieldDecl& x : program_->fields) names.push_back(x.name);
+        throw std::invalid_argument(fmt::format("fields: program {} has no field '{}' (fields: {})",
+                                                program_->name, name, fmt::join(names, " ")));
+      }
+      if (d->spilled) {
+        throw std::invalid_argument(fmt::format(
+            "fields: '{}' of program {} lives in the backing store, not in pixel memory", name,
+            program_->name));
+      }
+      if (!pixels || config_.fidelity.pixels == F::Pixels::none) {
+        throw std::invalid_argument(fmt::format(
+            "fields: '{}' is read from pixel memory, which a timing-only frame does not execute "
+            "(fidelity.pixels=none or pixels=False)",
+            name));
+      }
+      FieldTarget t;
+      t.name = name;
+      t.field = Field{d->lo, d->width, d->is_signed};
+      t.bytes = field_bytes(d->width);
+      py::array a(field_dtype(t.field), {config_.screen.height, config_.screen.width});
+      std::memset(a.mutable_data(), 0, static_cast<std::size_t>(a.nbytes()));
+      t.data = static_cast<char*>(a.mutable_data());
+      f.fields[py::str(name)] = a;
+      targets.push_back(t);
+    }
+    std::unique_ptr<FieldCapture> capture;
+    if (!targets.empty()) capture = std::make_unique<FieldCapture>(config_, std::move(targets));
+    std::function<BoardObserver*(int)> observe;
+    if (capture) observe = [&](int k) { return capture->observer(k); };
+    f.result = run(observe, pixels);
+    f.index = frames_ - 1;
+    f.program = program_;
+    f.config = config_;
+    const FrameImage& image = f.result.image;
+    if (image.has_pixels()) {
+      // The frame buffer's rows, copied once into the array.
+      py::array_t<std::uint8_t> a({image.height(), image.width(), 3});
+      std::uint8_t* out = a.mutable_data();
+      for (int y = 0; y < image.height(); ++y)
+        image.row(y, out + static_cast<std::size_t>(y) * image.width() * 3);
+      f.image = a;
+    } else {
+      f.image = py::none();
+    }
+    f.result.image = FrameImage();  // the array holds the pixels now
+    return f;
+  }
+
+  // A frame recorded for pixel (x, y), and `pp5sim trace why`'s explanation of it.
+  std::string why(int x, int y) {
+    const std::string refused = below_bit_level(config_, "why");
+    if (!refused.empty()) throw std::invalid_argument(refused);
+    trace::Selection sel;
+    sel.rects.push_back(trace::Rect{x, y, 1, 1});
+    trace::Recorder recorder(config_, *scene_, *program_, sel, frames_);
+    for (int k = 0; k < config_.renderer.count; ++k) recorder.observer(k);
+    run([&](int k) { return recorder.observer(k); }, true);
+    std::uint64_t count = 0;
+    const std::vector<std::uint8_t> records = recorder.records(count);
+    const trace::Trace tr =
+        trace::parse_trace(trace::encode_trace(recorder.header(), records, count), "<session>");
+    return trace::why_report(tr, trace::Pixel{x, y});
+  }
+
+  int frames() const { return frames_; }
+  const MachineConfig& config() const { return config_; }
+  const Scene& scene() const { return *scene_; }
+  std::shared_ptr<const Scene> scene_ptr() const { return scene_; }
+  std::shared_ptr<const Program> program() const { return program_; }
+  int threads() const { return threads_; }
+  RunSummary summary() const {
+    RunSummary s = closed_;
+    if (session_) add(s, session_->summary());
+    return s;
+  }
+
+ private:
+  FrameResult run(const std::function<BoardObserver*(int)>& observe, bool pixels) {
+    using F = MachineConfig::Fidelity;
+    const bool kernel = config_.fidelity.timing == F::Timing::event;
+    if (kernel && g_kernel_holder != nullptr && g_kernel_holder != this) g_kernel_holder->close();
+    if (!session_) {
+      py::gil_scoped_release release;
+      session_ = std::make_unique<Session>(config_, scene_, program_, threads_);
+    }
+    if (kernel) g_kernel_holder = this;
+    FrameResult r;
+    {
+      py::gil_scoped_release release;
+      r = session_->frame(observe, nullptr, pixels);
+    }
+    ++frames_;
+    return r;
+  }
+  static void add(RunSummary& a, const RunSummary& b) {
+    if (b.frames == 0) return;
+    a.shortest_frame_seconds = a.frames
+                                   ? std::min(a.shortest_frame_seconds, b.shortest_frame_seconds)
+                                   : b.shortest_frame_seconds;
+    a.longest_frame_seconds = std::max(a.longest_frame_seconds, b.longest_frame_seconds);
+    a.frames += b.frames;
+    a.simulated_seconds += b.simulated_seconds;
+    a.host_seconds += b.host_seconds;
+  }
+  void accumulate_closed() { add(closed_, session_->summary()); }
+
+  MachineConfig config_;
+  std::shared_ptr<const Scene> scene_;
+  std::shared_ptr<const Program> program_;
+  int threads_;
+  std::unique_ptr<Session> session_;
+  int frames_ = 0;
+  RunSummary closed_;  // the frames of machines freed so far
+};
+
+void release_kernel() {
+  if (g_kernel_holder != nullptr) g_kernel_holder->close();
+}
+
+// --- Sweeps -------------------------------------------------------------------------------
+
+// The columns sweep.csv holds for each run (`pp5sim sweep aggregate`), in its order.
+const std::vector<std::pair<std::string, std::string>>& csv_metric_columns() {
+  static const std::vector<std::pair<std::string, std::string>> columns = {
+      {"frame_seconds", "frame.simulated_seconds"},
+      {"triangles_per_second", "frame.projected_triangles_per_second"},
+      {"pipelined_triangles_per_second", "frame.pipelined_triangles_per_second"},
+      {"gp_clocks_per_triangle", "frame.gp_clocks_per_triangle"},
+      {"bottleneck", "timing.bottleneck"},
+      {"gp_seconds", "timing.gp_seconds"},
+      {"ring_seconds", "timing.ring_seconds"},
+      {"renderer_seconds", "timing.renderer_seconds"},
+      {"gp_utilisation", "timing.gp_utilisation_mean"},
+      {"ring_utilisation", "timing.ring_utilisation"},
+      {"renderer_utilisation", "timing.renderer_utilisation_mean"},
+  };
+  return columns;
+}
+
+py::object config_value(const nlohmann::json& config, const std::string& key) {
+  const auto dot = key.find('.');
+  return json_to_python(config.at(key.substr(0, dot)).at(key.substr(dot + 1)));
+}
+
+// One row of a sweep: the swept keys (typed, as the configuration holds them), sweep.csv's
+// columns, the fidelity levels, then every statistic by name.
+py::dict sweep_row(const std::vector<std::string>& keys, const nlohmann::json& config_json,
+                   const Statistics& stats) {
+  py::dict row;
+  for (const std::string& k : keys) row[py::str(k)] = config_value(config_json, k);
+  for (const auto& [column, name] : csv_metric_columns())
+    row[py::str(column)] = stat_to_python(stats.value(name));
+  row["fidelity_pixels"] = json_to_python(config_json.at("fidelity").at("pixels"));
+  row["fidelity_timing"] = json_to_python(config_json.at("fidelity").at("timing"));
+  for (const StatisticInfo& i : stats.infos()) {
+    if (!row.contains(i.name)) row[py::str(i.name)] = stat_to_python(stats.value(i.name));
+  }
+  return row;
+}
+
+py::list sweep(const MachineConfig& base, std::shared_ptr<const Scene> scene,
+               const std::string& firmware,
+               const std::vector<std::pair<std::string, std::vector<std::string>>>& grid,
+               int threads) {
+  if (grid.empty())
+    throw std::invalid_argument("grid: give at least one key, e.g. {'gp.count': [1, 2, 4]}");
+  std::vector<std::string> keys;
+  std::uint64_t points = 1;
+  for (const auto& [key, values] : grid) {
+    if (values.empty()) throw std::invalid_argument(fmt::format("grid: no values for '{}'", key));
+    for (const std::string& v : values) {
+      MachineConfig probe = base;
+      probe.set(key + "=" + v);  // a bad key or value: the --set message, as ValueError
+    }
+    keys.push_back(key);
+    points *= values.size();
+  }
+  const std::string program_source = firmware;
+  std::map<std::tuple<int, int, int, int>, std::shared_ptr<const Program>> assembled;
+  auto program_of = [&](const MachineConfig& c) {
+    const AssemblerOptions a = assembler_options(c);
+    const auto key =
+        std::make_tuple(a.memory_bits, a.backing_store_bits, a.block_bits, a.enable_stack_depth);
+    auto it = assembled.find(key);
+    if (it == assembled.end())
+      it = assembled
+               .emplace(key,
+                        std::make_shared<const Program>(load_program(program_source, *scene, c)))
+               .first;
+    return it->second;
+  };
+  auto config_of = [&](std::uint64_t index) {
+    std::vector<std::string> sets(grid.size());
+    for (std::size_t k = grid.size(); k-- > 0;) {
+      const auto& values = grid[k].second;
+      sets[k] = grid[k].first + "=" + values[index % values.size()];
+      index /= values.size();
+    }
+    MachineConfig c = base;
+    c.set(sets);
+    return c;
+  };
+  for (std::uint64_t i = 0; i < points; ++i) program_of(config_of(i));  // check all first
+  release_kernel();
+  SetupMemo memo(*scene);
+  py::list rows;
+  for (std::uint64_t i = 0; i < points; ++i) {
+    const MachineConfig config = config_of(i);
+    const std::shared_ptr<const Program> program = program_of(config);
+    std::optional<FrameResult> r;
+    {
+      py::gil_scoped_release release;
+      r = simulate_frame(config, *scene, *program, threads, {}, nullptr, &memo);
+    }
+    rows.append(sweep_row(keys, config.to_json(), r->stats));
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  }
+  return rows;
+}
+
+// The folder this extension was loaded from.
+std::string module_dir() {
+  Dl_info info{};
+  if (dladdr(reinterpret_cast<void*>(&module_dir), &info) == 0 || info.dli_fname == nullptr)
+    return "";
+  return fs::path(info.dli_fname).parent_path().string();
+}
+
+}  // namespace
+
+}  // namespace pp5::python
+
+using namespace pp5;
+using namespace pp5::python;
+
+PYBIND11_MODULE(_pp5sim, m) {
+  m.doc() = "pp5sim's C++ half; use the package pp5sim (docs/guides/python.md)";
+  // The installed programs and mesh reader, relative to the installed module (the
+  // executable, from which pp5sim finds them, is python3 here). In a build tree they are not
+  // there, and the build's own are found as pp5sim finds them.
+  const std::string dir = module_dir();
+  if (!dir.empty()) {
+    set_builtin_programs_dir(
+        (fs::path(dir) / PP5_PROGRAMS_FROM_MODULE).lexically_normal().string());
+    const fs::path assimp =
+        (fs::path(dir) / PP5_ASSIMP_FROM_MODULE / "libpp5_assimp.so").lexically_normal();
+    std::error_code error;
+    if (fs::is_regular_file(assimp, error)) setenv("PP5_ASSIMP_MODULE", assimp.c_str(), 0);
+  }
+
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const ConfigError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    }
+  });
+
+  m.def("default_threads", &default_threads);
+  m.def("fidelity_assignments", &fidelity_assignments);
+  m.def("builtin_scenes", &builtin_scene_names);
+  m.def("builtin_programs", &builtin_program_names);
+  m.def("resolve_firmware", &resolve_firmware);
+  m.def("release_kernel", &release_kernel,
+        "Frees the machine of whichever session holds SystemC's context");
+
+  m.def("make_config", [](const std::string& file, const std::string& fidelity,
+                          const std::vector<std::pair<std::string, std::string>>& sets) {
+    return json_to_python(make_config(file, fidelity, sets).to_json());
+  });
+  m.def("describe_config", [] {
+    py::list out;
+    for (const ParameterInfo& p : describe_parameters()) {
+      py::dict d;
+      d["key"] = p.key;
+      d["unit"] = p.unit;
+      d["description"] = p.description;
+      d["default"] = p.default_value;
+      d["range"] = p.range;
+      d["computed"] = p.computed;
+      d["calibration"] = calibration_name(p.calibration);
+      d["basis"] = p.basis;
+      out.append(d);
+    }
+    return out;
+  });
+  m.def("describe_statistics",
+        [](const std::string& firmware, const std::vector<std::string>& sets) {
+          release_kernel();  // it runs a frame of its own
+          py::dict out;
+          for (const StatisticInfo& i : describe_statistics(resolve_firmware(firmware), sets))
+            out[py::str(i.name)] = info_dict(i);
+          return out;
+        });
+  m.def("statistics_from_json", [](const std::string& text, const std::string& origin) {
+    nlohmann::json doc;
+    try {
+      doc = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::exception& e) {
+      throw std::invalid_argument(fmt::format("{}: {}", origin, e.what()));
+    }
+    return flat_statistics(Statistics::from_json(doc));
+  });
+
+  py::class_<PyProgram>(m, "Program")
+      .def_property_readonly("name", [](const PyProgram& p) { return p.program->name; })
+      .def_property_readonly("listing",
+                             [](const PyProgram& p) {
+                               return listing(*p.program, timing_params(p.config), p.parameters(),
+                                              fmt::format("scene '{}'", p.scene->name));
+                             })
+      .def_property_readonly("fields", [](const PyProgram& p) { return field_map(*p.program); })
+      .def_property_readonly("cycles",
+                             [](const PyProgram& p) {
+                               return cycle_costs(*p.program, timing_params(p.config),
+                                                  p.parameters());
+                             })
+      .def_property_readonly("bit_budget",
+                             [](const PyProgram& p) { return bit_budget_dict(*p.program); })
+      .def_property_readonly("bit_budget_table", [](const PyProgram& p) {
+        return bit_budget_table(*p.program, timing_params(p.config));
+      });
+
+  m.def(
+      "assemble",
+      [](const std::string& firmware, const std::string& config_file,
+         const std::vector<std::pair<std::string, std::string>>& sets, const std::string& scene) {
+        PyProgram p;
+        p.config = make_config(config_file, "", sets);
+        p.scene = std::make_shared<const Scene>(load_scene(scene));
+        p.program = std::make_shared<const Program>(load_program(firmware, *p.scene, p.config));
+        return p;
+      },
+      py::arg("firmware"), py::arg("config_file"), py::arg("sets"), py::arg("scene"));
+
+  py::class_<PyFrame>(m, "Frame")
+      .def_readonly("index", &PyFrame::index)
+      .def_readonly("image", &PyFrame::image)
+      .def_readonly("fields", &PyFrame::fields)
+      .def_property_readonly("stats_json",
+                             [](const PyFrame& f) { return json_to_python(f.result.stats_json); })
+      .def_property_readonly("statistics",
+                             [](const PyFrame& f) { return flat_statistics(f.result.stats); })
+      .def_property_readonly("statistics_info",
+                             [](const PyFrame& f) {
+                               py::dict out;
+                               for (const StatisticInfo& i : f.result.stats.infos())
+                                 out[py::str(i.name)] = info_dict(i);
+                               return out;
+                             })
+      .def("stat",
+           [](const PyFrame& f, const std::string& name) {
+             return stat_to_python(f.result.stats.value(name));
+           })
+      .def_property_readonly("frame_seconds",
+                             [](const PyFrame& f) { return f.result.frame_seconds; })
+      .def_property_readonly("triangles_per_second",
+                             [](const PyFrame& f) { return f.result.triangles_per_second; })
+      .def_property_readonly("rates",
+                             [](const PyFrame& f) {
+                               py::dict d;
+                               for (const auto& [column, name] : csv_metric_columns())
+                                 d[py::str(column)] = stat_to_python(f.result.stats.value(name));
+                               return d;
+                             })
+      .def_property_readonly("bit_budget",
+                             [](const PyFrame& f) { return bit_budget_dict(*f.program); })
+      .def_property_readonly(
+          "bit_budget_table",
+          [](const PyFrame& f) { return bit_budget_table(*f.program, timing_params(f.config)); })
+      .def_property_readonly("summary", [](const PyFrame& f) {
+        return summary(f.result, *f.program, timing_params(f.config));
+      });
+
+  py::class_<PySession>(m, "Session")
+      .def(py::init([](const std::string& scene, const py::object& vertices,
+                       const py::object& triangles, const py::object& colors,
+                       const py::object& centers, const py::object& radii,
+                       const py::object& sphere_colors, const std::vector<int>& tessellation,
+                       const std::string& firmware, const std::string& config_file,
+                       const std::string& fidelity,
+                       const std::vector<std::pair<std::string, std::string>>& sets, int threads) {
+             MachineConfig config = make_config(config_file, fidelity, sets);
+             std::shared_ptr<const Scene> s;
+             if (!vertices.is_none() || !centers.is_none() || !triangles.is_none() ||
+                 !radii.is_none()) {
+               s = std::make_shared<const Scene>(scene_from_arrays(
+                   vertices, triangles, colors, centers, radii, sphere_colors, ""));
+             } else {
+               SceneOptions o;
+               if (!tessellation.empty()) {
+                 if (tessellation.size() != 2)
+                   throw std::invalid_argument("tessellation: expected (u, v)");
+                 o.tessellation_u = tessellation[0];
+                 o.tessellation_v = tessellation[1];
+               }
+               s = std::make_shared<const Scene>(load_scene(scene, o));
+             }
+             auto program = std::make_shared<const Program>(load_program(firmware, *s, config));
+             return std::make_unique<PySession>(config, s, program, threads_or_default(threads));
+           }),
+           py::arg("scene"), py::arg("vertices"), py::arg("triangles"), py::arg("colors"),
+           py::arg("sphere_centers"), py::arg("sphere_radii"), py::arg("sphere_colors"),
+           py::arg("tessellation"), py::arg("firmware"), py::arg("config_file"),
+           py::arg("fidelity"), py::arg("sets"), py::arg("threads"))
+      .def("frame", &PySession::frame, py::arg("fields") = std::vector<std::string>{},
+           py::arg("pixels") = true)
+      .def("why", &PySession::why, py::arg("x"), py::arg("y"))
+      .def("close", &PySession::close)
+      .def_property_readonly("frames", &PySession::frames)
+      .def_property_readonly("threads", &PySession::threads)
+      .def_property_readonly(
+          "config", [](const PySession& s) { return json_to_python(s.config().to_json()); })
+      .def_property_readonly("scene_name", [](const PySession& s) { return s.scene().name; })
+      .def_property_readonly("triangles",
+                             [](const PySession& s) { return s.scene().mesh.triangles.size(); })
+      .def_property_readonly("spheres", [](const PySession& s) { return s.scene().spheres.size(); })
+      .def_property_readonly("program",
+                             [](const PySession& s) {
+                               PyProgram p;
+                               p.program = s.program();
+                               p.config = s.config();
+                               p.scene = s.scene_ptr();
+                               return p;
+                             })
+      .def_property_readonly("summary", [](const PySession& s) {
+        const RunSummary r = s.summary();
+        py::dict d;
+        d["frames"] = r.frames;
+        d["simulated_seconds"] = r.simulated_seconds;
+        d["mean_frame_seconds"] = r.mean_frame_seconds();
+        d["shortest_frame_seconds"] = r.shortest_frame_seconds;
+        d["longest_frame_seconds"] = r.longest_frame_seconds;
+        d["host_seconds"] = r.host_seconds;
+        d["host_over_simulated"] = r.host_over_simulated();
+        d["text"] = r.text();
+        return d;
+      });
+
+  m.def("sweep",
+        [](const std::string& scene, int tess_u, int tess_v, const std::string& firmware,
+           const std::string& config_file, const std::string& fidelity,
+           const std::vector<std::pair<std::string, std::string>>& sets,
+           const std::vector<std::pair<std::string, std::vector<std::string>>>& grid, int threads) {
+          const MachineConfig base = make_config(config_file, fidelity, sets);
+          SceneOptions o;
+          o.tessellation_u = tess_u;
+          o.tessellation_v = tess_v;
+          auto s = std::make_shared<const Scene>(load_scene(scene, o));
+          return sweep(base, s, firmware, grid, threads_or_default(threads));
+        });
+}

@@ -1,0 +1,286 @@
+"""pp5sim from Python: the Pixel-Planes 5 simulator as sessions, frames, sweeps and programs.
+
+    import pp5sim
+    frame = pp5sim.Session("torus", config={"screen.width": 256, "screen.height": 256}).frame(fields=["z"])
+    frame.image            # (height, width, 3) uint8, from the frame buffer
+    frame.fields["z"]      # (height, width), read from the simulated pixel memory
+    frame.stats["frame"]   # the statistics, nested as stats.json nests them
+    frame.rates            # projected rates and the bottleneck
+
+docs/guides/python.md documents every part with an example.
+"""
+
+import json as _json
+import os as _os
+
+from . import _pp5sim as _c
+
+__all__ = [
+    "Session",
+    "Frame",
+    "Program",
+    "sweep",
+    "read_sweep",
+    "assemble",
+    "describe_statistics",
+    "describe_config",
+    "scenes",
+    "programs",
+]
+
+Program = _c.Program
+
+
+def _sets(config):
+    """A configuration dict as --set assignments (KEY, VALUE text), in the dict's order."""
+    if config is None:
+        return []
+    if not isinstance(config, dict):
+        raise TypeError("config: expected a dict of KEY: VALUE, e.g. {'gp.count': 8}")
+    out = []
+    for key, value in config.items():
+        if not isinstance(key, str):
+            raise TypeError(f"config: key {key!r} is not a string")
+        if isinstance(value, bool):
+            text = "true" if value else "false"
+        else:
+            text = str(value)
+        out.append((key, text))
+    return out
+
+
+def _firmware(firmware):
+    return "" if firmware is None else str(firmware)
+
+
+def scenes():
+    """The built-in scene names."""
+    return list(_c.builtin_scenes())
+
+
+def programs():
+    """The built-in firmware programs' names."""
+    return list(_c.builtin_programs())
+
+
+def describe_config():
+    """Every configuration key: unit, default, range, calibration and description (a DataFrame)."""
+    import pandas as pd
+
+    return pd.DataFrame(_c.describe_config()).set_index("key")
+
+
+def describe_statistics(firmware="phong", fidelity=""):
+    """What every statistic is: {pattern: {kind, unit, description}}, indices written N."""
+    return _c.describe_statistics(firmware, _c.fidelity_assignments(fidelity) if fidelity else [])
+
+
+def assemble(firmware, config=None, scene="torus", config_file=""):
+    """Assembles a program (a built-in name, a .pp5 path, or program text holding a newline)
+    for the machine `config` describes; its cycles are priced with `scene`'s frame parameters."""
+    return _c.assemble(_firmware(firmware), config_file, _sets(config), scene)
+
+
+class Frame:
+    """One simulated frame: image, pixel-memory fields, statistics, bit budget, rates."""
+
+    def __init__(self, raw):
+        self._raw = raw
+        self._stats = None
+
+    index = property(lambda self: self._raw.index, doc="The frame's number in its session (0 first)")
+    image = property(lambda self: self._raw.image,
+                     doc="(height, width, 3) uint8 RGB from the frame buffer; None when timing only")
+    fields = property(lambda self: self._raw.fields,
+                      doc="{name: (height, width) array} of the fields asked for, from pixel memory")
+
+    def field(self, name):
+        """One field asked for with Session.frame(fields=[...])."""
+        try:
+            return self._raw.fields[name]
+        except KeyError:
+            raise KeyError(f"field '{name}' was not read; ask for it: session.frame(fields=['{name}'])") from None
+
+    @property
+    def stats(self):
+        """The statistics as nested dicts (stats.json's document)."""
+        if self._stats is None:
+            self._stats = self._raw.stats_json
+        return self._stats
+
+    @property
+    def statistics(self):
+        """Every statistic by its full name, typed (int, float, str), in registration order."""
+        return self._raw.statistics
+
+    @property
+    def info(self):
+        """{full name: {kind, unit, description}} for every statistic of the frame."""
+        return self._raw.statistics_info
+
+    def stat(self, name):
+        """One statistic by name, e.g. frame.stat('timing.bottleneck')."""
+        return self._raw.stat(name)
+
+    frame_seconds = property(lambda self: self._raw.frame_seconds, doc="Simulated frame time")
+    triangles_per_second = property(lambda self: self._raw.triangles_per_second,
+                                    doc="The real machine's projected rate")
+    bottleneck = property(lambda self: self._raw.stat("timing.bottleneck"), doc="gp, ring or renderer")
+    rates = property(lambda self: self._raw.rates,
+                     doc="The projected rates, unit times and bottleneck (sweep.csv's columns)")
+    bit_budget = property(lambda self: self._raw.bit_budget, doc="The program's pixel-memory bits")
+    bit_budget_table = property(lambda self: self._raw.bit_budget_table,
+                                doc="The bit-budget table pp5sim render prints")
+    summary = property(lambda self: self._raw.summary, doc="The summary pp5sim render prints")
+
+    def __repr__(self):
+        return (f"<pp5sim.Frame {self.index}: {self.frame_seconds * 1e3:.3f} ms, "
+                f"{self.triangles_per_second:,.0f} triangles/s, bottleneck {self.bottleneck}>")
+
+
+class Session:
+    """A simulation that persists across frames: one machine, one scene, one program.
+
+    scene: a built-in name, a mesh or scene file; or geometry as arrays: vertices (N, 3) with
+    triangles (M, 3) and colors (N, 3) in [0, 1], and/or sphere_centers (K, 3) with
+    sphere_radii (K,) and sphere_colors (K, 3). firmware: a built-in name, a .pp5 path or
+    program text (it holds a newline); default the scene's, else phong. config: {KEY: VALUE}
+    with the keys, ranges and messages of --set (a bad one raises ValueError). fidelity: as
+    --fidelity ('bit', 'word', 'timing', 'analytic', or items). threads: host threads (0: all).
+    """
+
+    def __init__(self, scene="torus", *, firmware=None, config=None, config_file="", fidelity="",
+                 threads=0, tessellation=None, vertices=None, triangles=None, colors=None,
+                 sphere_centers=None, sphere_radii=None, sphere_colors=None):
+        if not isinstance(scene, (str, _os.PathLike)):
+            raise TypeError("scene: expected a built-in name or a file path; give arrays as "
+                            "vertices=..., triangles=... or sphere_centers=..., sphere_radii=...")
+        self._s = _c.Session(
+            _os.fspath(scene), vertices, triangles, colors, sphere_centers, sphere_radii,
+            sphere_colors, list(tessellation or []), _firmware(firmware), config_file,
+            fidelity or "", _sets(config), int(threads))
+
+    def frame(self, fields=(), pixels=True):
+        """Simulates the next frame. fields: pixel-memory fields to read over the whole screen
+        (e.g. ['z']); pixels=False simulates its timing only."""
+        if isinstance(fields, str):
+            fields = [fields]
+        return Frame(self._s.frame(list(fields), bool(pixels)))
+
+    def frames(self, n=None, fields=(), pixels=True):
+        """Iterates over the next n frames (without n, until the loop stops). Ctrl-C between
+        frames raises KeyboardInterrupt as usual."""
+        count = 0
+        while n is None or count < n:
+            yield self._next_frame(fields, pixels)
+            count += 1
+
+    def _next_frame(self, fields, pixels):
+        # One frame of the sequence. The scene is the session's for every frame; an animated
+        # scene would pick frame i's scene here (the C++ Session's per-frame hook).
+        return self.frame(fields, pixels)
+
+    def __iter__(self):
+        return self.frames()
+
+    def why(self, x, y):
+        """Simulates a frame recording pixel (x, y) and explains its final value, as
+        `pp5sim trace why` does (needs the bit level)."""
+        return self._s.why(int(x), int(y))
+
+    def close(self):
+        """Frees the machine now (it is made again if another frame is asked for)."""
+        self._s.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    frames_run = property(lambda self: self._s.frames, doc="Frames simulated so far")
+    summary = property(lambda self: self._s.summary, doc="The run's summary over its frames")
+    config = property(lambda self: self._s.config, doc="The whole configuration (config.json)")
+    program = property(lambda self: self._s.program, doc="The assembled Program")
+    scene_name = property(lambda self: self._s.scene_name)
+    threads = property(lambda self: self._s.threads)
+
+    def __repr__(self):
+        return (f"<pp5sim.Session scene {self.scene_name}, program {self.program.name}, "
+                f"{self.frames_run} frames>")
+
+
+def sweep(grid, scene="torus", *, firmware=None, config=None, config_file="", fidelity="",
+          threads=0, tessellation=None):
+    """Simulates one frame per point of the grid {KEY: [values]} (the first key varying
+    slowest, as pp5sim sweep) and returns a pandas DataFrame: one row per point with the swept
+    keys, sweep.csv's columns and every statistic by name, typed."""
+    import pandas as pd
+
+    if not isinstance(grid, dict) or not grid:
+        raise ValueError("grid: expected a dict {KEY: [values]}, e.g. {'gp.count': [1, 2, 4]}")
+    axes = []
+    for key, values in grid.items():
+        if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+            values = [values]
+        axes.append((key, [_sets({key: v})[0][1] for v in values]))
+    u, v = (tessellation or (0, 0))
+    rows = _c.sweep(_os.fspath(scene), int(u), int(v), _firmware(firmware), config_file,
+                    fidelity or "", _sets(config), axes, int(threads))
+    return pd.DataFrame(rows)
+
+
+def read_sweep(path):
+    """A sweep run by the command line (locally or on Slurm) as a DataFrame: a sweep.csv
+    (`pp5sim sweep aggregate`) gives its columns; a sweep's folder gives what sweep() gives,
+    every statistic included, from each run's config.json and stats.json."""
+    import pandas as pd
+
+    path = _os.fspath(path)
+    if not _os.path.isdir(path):
+        return pd.read_csv(path)
+    with open(_os.path.join(path, "sweep.json")) as f:
+        spec = _json.load(f)
+    keys = spec["order"]
+    grid = spec["grid"]
+    import itertools
+
+    rows = []
+    for values in itertools.product(*(grid[k] for k in keys)):
+        run = _os.path.join(path, "_".join(f"{k}-{v}" for k, v in zip(keys, values)))
+        stats_path = _os.path.join(run, "stats.json")
+        if not _os.path.exists(stats_path):
+            raise FileNotFoundError(f"{stats_path}: no stats.json (not run yet?)")
+        with open(_os.path.join(run, "config.json")) as f:
+            config = _json.load(f)
+        with open(stats_path) as f:
+            stats = _c.statistics_from_json(f.read(), stats_path)
+        row = {}
+        for k in keys:
+            section, name = k.split(".", 1)
+            row[k] = config[section][name]
+        for column, name in _CSV_COLUMNS:
+            row[column] = stats[name]
+        row["fidelity_pixels"] = config.get("fidelity", {}).get("pixels", "bit")
+        row["fidelity_timing"] = config.get("fidelity", {}).get("timing", "event")
+        for name, value in stats.items():
+            row.setdefault(name, value)
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+# sweep.csv's metric columns and the statistics they hold (pp5sim sweep aggregate).
+_CSV_COLUMNS = [
+    ("frame_seconds", "frame.simulated_seconds"),
+    ("triangles_per_second", "frame.projected_triangles_per_second"),
+    ("pipelined_triangles_per_second", "frame.pipelined_triangles_per_second"),
+    ("gp_clocks_per_triangle", "frame.gp_clocks_per_triangle"),
+    ("bottleneck", "timing.bottleneck"),
+    ("gp_seconds", "timing.gp_seconds"),
+    ("ring_seconds", "timing.ring_seconds"),
+    ("renderer_seconds", "timing.renderer_seconds"),
+    ("gp_utilisation", "timing.gp_utilisation_mean"),
+    ("ring_utilisation", "timing.ring_utilisation"),
+    ("renderer_utilisation", "timing.renderer_utilisation_mean"),
+]
