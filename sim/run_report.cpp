@@ -264,7 +264,7 @@ Report run_report(const RunReportInput& in) {
   int highlight = -1;
   for (const auto& [k, v] : per_renderer) {
     if (k == critical) highlight = static_cast<int>(bars.size());
-    std::string note = fmt::format("{} regions", v.first);
+    std::string note = fmt::format("{} region{}", v.first, v.first == 1 ? "" : "s");
     if (k == busiest) note += ", busiest";
     if (k == critical) note += ", critical path";
     bars.push_back({fmt::format("renderer {}", k), static_cast<double>(v.second), note});

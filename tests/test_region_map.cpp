@@ -139,4 +139,13 @@ TEST_CASE("the heat map outlines the critical-path Renderer apart from the busie
   for (int y = 128 + kLegendBarRows; y < map.height; ++y)
     for (int x = 0; x < map.width; ++x) lit += brightness(pixel(map, x, y)) == 3 * 255;
   CHECK(lit > 100);
+  // ... whole, on a frame too narrow for the long labels: the text stops short of the edge
+  // (short labels) rather than running off it, and both keys' swatches are drawn.
+  int edge = 0, swatches = 0;
+  for (int y = 128 + kLegendBarRows; y < map.height; ++y) {
+    for (int x = map.width - 4; x < map.width; ++x) edge += brightness(pixel(map, x, y)) > 0;
+    for (int x = 0; x < map.width; ++x) swatches += std::equal(cyan, cyan + 3, pixel(map, x, y));
+  }
+  CHECK(edge == 0);
+  CHECK(swatches > 0);
 }

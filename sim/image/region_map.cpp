@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace pp5 {
 
@@ -196,8 +197,28 @@ RegionHeatMap::RegionHeatMap(int width, int height,
     kx += 16;
     kx += draw_number(legend_, kx, key_top, label, white) + 16;
   };
-  if (busiest_ >= 0) key(white, "BUSIEST RENDERER " + std::to_string(busiest_));
-  if (critical_ >= 0) key(cyan, "CRITICAL PATH RENDERER " + std::to_string(critical_));
+  // The long labels where they fit the frame's width, else short ones ("BUSIEST 3",
+  // "CRITICAL 5"), so that a small frame still shows both keys whole.
+  auto labels = [&](bool long_form) {
+    std::vector<std::pair<const std::uint8_t*, std::string>> out;
+    if (busiest_ >= 0) {
+      out.emplace_back(white,
+                       (long_form ? "BUSIEST RENDERER " : "BUSIEST ") + std::to_string(busiest_));
+    }
+    if (critical_ >= 0) {
+      out.emplace_back(
+          cyan, (long_form ? "CRITICAL PATH RENDERER " : "CRITICAL ") + std::to_string(critical_));
+    }
+    return out;
+  };
+  auto fits = [&](const std::vector<std::pair<const std::uint8_t*, std::string>>& keys) {
+    int end = 4;
+    for (const auto& k : keys) end += 16 + number_width(k.second) + 16;
+    return end - 16 <= legend_.width - 4;
+  };
+  const auto long_keys = labels(true);
+  for (const auto& [colour, label] : fits(long_keys) ? long_keys : labels(false))
+    key(colour, label);
 }
 
 void RegionHeatMap::row(int y, std::uint8_t* out) const {

@@ -13,7 +13,8 @@
 //    the region, so that a Renderer that is both shows both; below it a legend of two rows:
 //    the colour bar, "0" at its left end and the busiest region's cycles at its right with
 //    the unit ("ARRAY CYCLES": busy cycles of the Renderer's array on that region), then a
-//    key to the two outlines naming each Renderer.
+//    key to the two outlines naming each Renderer ("BUSIEST RENDERER 3", "CRITICAL PATH
+//    RENDERER 5", or "BUSIEST 3", "CRITICAL 5" where those do not fit the frame's width).
 //  - It reads only its arguments: the same frame and loads give the same bytes.
 //  - Throws std::invalid_argument when a region lies outside the frame or the frame's pixel
 //    buffer does not match its size.
