@@ -240,6 +240,14 @@ TEST_CASE("the GP's arithmetic reaches every expression of every primitive kind"
     std::unique_ptr<PrimitiveWorker> a = kind->start(e_exact);
     std::unique_ptr<PrimitiveWorker> b = kind->start(e_coarse);
     std::vector<int> moved(static_cast<std::size_t>(Expression::count), 0);
+    // Whether every coefficient of the exact set-up already fits 6 significant bits (a small
+    // integer such as sphere_root_shift, 0..15): then rounding cannot move it.
+    std::vector<int> fits(static_cast<std::size_t>(Expression::count), 1);
+    auto six_bits = [](std::int64_t v) {
+      std::uint64_t m = v < 0 ? 0 - static_cast<std::uint64_t>(v) : static_cast<std::uint64_t>(v);
+      while (m != 0 && (m & 1) == 0) m >>= 1;
+      return m < 64;
+    };
     int both = 0;
     SetupCounts ca, cb;
     for (int i = 0; i < kind->count(scene); ++i) {
@@ -255,6 +263,9 @@ TEST_CASE("the GP's arithmetic reaches every expression of every primitive kind"
           const auto& r = y.values.expressions[static_cast<std::size_t>(k)];
           moved[static_cast<std::size_t>(k)] +=
               q.A != r.A || q.B != r.B || q.C != r.C || q.D != r.D || q.E != r.E || q.F != r.F;
+          if (!(six_bits(q.A) && six_bits(q.B) && six_bits(q.C) && six_bits(q.D) && six_bits(q.E) &&
+                six_bits(q.F)))
+            fits[static_cast<std::size_t>(k)] = 0;
         }
       }
     }
@@ -262,7 +273,7 @@ TEST_CASE("the GP's arithmetic reaches every expression of every primitive kind"
     for (const ExpressionEntry& e : expression_registry()) {
       if (!kind->supplies(e.id)) continue;
       INFO("expression " << e.name());
-      CHECK(moved[static_cast<std::size_t>(e.id)] > 0);
+      CHECK((moved[static_cast<std::size_t>(e.id)] > 0 || fits[static_cast<std::size_t>(e.id)]));
     }
   }
 }

@@ -96,7 +96,7 @@ TEST_CASE("the square root in pixel memory draws each sphere's depth to half a r
   if (std::string(name) == "molecule") CHECK(bits_seen == 15);
 }
 
-TEST_CASE("the square root shows the right sphere where spheres meet; the paraboloid errs more",
+TEST_CASE("the square root shows the right sphere where spheres meet, the paraboloid errs more",
           "[spheres]") {
   // Which sphere each pixel shows, read from each program with its shading taken out: the
   // square root errs at no more than a few of the 5,019 overlap pixels and 375 curve pixels

@@ -177,7 +177,10 @@ int run_spheres(const SpheresOptions& o) {
   };
 
   std::vector<SphereRow> rows;
-  rows.push_back(row("quadric", scene, {}, program, base));
+  // The first row's visibility is read from the --firmware itself, light and shade taken out,
+  // so that it follows that program's own depth code (for phong, shown_spheres' counts).
+  const Program unshaded_own = unshaded_program(resolve_firmware(o.firmware), config);
+  rows.push_back(row("quadric", scene, {}, program, base, &unshaded_own));
   // The other depth methods, each by its own program (sphere_depth_methods.hpp).
   for (const SphereDepthMethod& m : sphere_depth_methods()) {
     const std::string path = resolve_firmware(m.firmware);
