@@ -53,8 +53,34 @@ namespace pp5::python {
 
 namespace {
 
+// A JSON document as Python objects (dict, list, int, float, str, bool, None), made in C++:
+// no Python code runs, so a sweep's Ctrl-C is seen where it checks for it, between points.
 py::object json_to_python(const nlohmann::json& j) {
-  return py::module_::import("json").attr("loads")(j.dump());
+  using T = nlohmann::json::value_t;
+  switch (j.type()) {
+    case T::boolean:
+      return py::bool_(j.get<bool>());
+    case T::number_integer:
+      return py::int_(j.get<std::int64_t>());
+    case T::number_unsigned:
+      return py::int_(j.get<std::uint64_t>());
+    case T::number_float:
+      return py::float_(j.get<double>());
+    case T::string:
+      return py::str(j.get_ref<const std::string&>());
+    case T::array: {
+      py::list out;
+      for (const nlohmann::json& e : j) out.append(json_to_python(e));
+      return std::move(out);
+    }
+    case T::object: {
+      py::dict out;
+      for (const auto& [key, value] : j.items()) out[py::str(key)] = json_to_python(value);
+      return std::move(out);
+    }
+    default:
+      return py::none();
+  }
 }
 
 py::object stat_to_python(const StatValue& v) {
