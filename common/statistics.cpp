@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "common/escape.hpp"
+
 namespace pp5 {
 
 namespace {
@@ -47,7 +49,7 @@ void check_name(const std::string& name, const std::vector<std::string_view>& pa
     for (char ch : c)
       ok = ok && ((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_');
     if (!ok) {
-      throw std::invalid_argument("statistic '" + name +
+      throw std::invalid_argument("statistic '" + escape_for_message(name) +
                                   "': components must be non-empty and of [a-z0-9_]");
     }
   }
@@ -258,6 +260,11 @@ Statistics Statistics::from_json(const nlohmann::json& document) {
         }
         StatValue value;
         if (v.is_number_unsigned()) {
+          // A count past 2^63 - 1 (no run makes one) would read as a negative number.
+          if (v.get<std::uint64_t>() > static_cast<std::uint64_t>(INT64_MAX)) {
+            throw std::invalid_argument("statistic '" + escape_for_message(name) + "' = " +
+                                        v.dump() + ": out of range (integers up to 2^63 - 1)");
+          }
           value = static_cast<std::int64_t>(v.get<std::uint64_t>());
         } else if (v.is_number_integer()) {
           value = v.get<std::int64_t>();
@@ -266,7 +273,8 @@ Statistics Statistics::from_json(const nlohmann::json& document) {
         } else if (v.is_string()) {
           value = v.get<std::string>();
         } else {
-          throw std::invalid_argument("statistic '" + name + "': not a number or text");
+          throw std::invalid_argument("statistic '" + escape_for_message(name) +
+                                      "': not a number or text");
         }
         s.add({name, kind_of(value), "", ""}, nullptr);
         Entry& e = s.entries_.back();

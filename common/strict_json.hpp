@@ -94,10 +94,18 @@ inline nlohmann::json parse_strict_json(const std::string& text, const std::stri
     }
     return true;
   };
+  // nlohmann's reader ends the document at a NUL byte and ignores what follows it, so a
+  // file with a NUL (not text, or two files run together) would be read in part.
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos) {
+    throw std::runtime_error(fmt::format(
+        "{}: a NUL byte at byte {}: not JSON text (JSON cannot hold one unescaped)", origin, nul));
+  }
   try {
     return json::parse(text, check);
   } catch (const json::exception& e) {
-    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", origin, json_error_text(e)));
+    // The library's "last read: '...'" quotes the file's bytes: escaped.
+    throw std::runtime_error(
+        fmt::format("{}: not valid JSON: {}", origin, escape_for_message(json_error_text(e), 300)));
   }
 }
 

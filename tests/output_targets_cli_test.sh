@@ -138,4 +138,16 @@ done
 # A sweep never sends two runs into one folder.
 expect_error "value '2' is given twice for 'gp.count'" sweep --scene two-triangles \
   --grid gp.count=1,2,2 --out dup --print-commands
+# A regular file with other hard links is replaced through the rename like any regular file
+# (decided: all or none matters more): the name given holds the new run, and every other name
+# of the old file keeps the previous run's content, as after mv or sed -i.
+"$bin" render --scene two-triangles "${small[@]}" --out hl >/dev/null 2>&1 || fail "render hl"
+ln hl/stats.json kept.json
+before=$(cksum < kept.json)
+"$bin" render --scene crossing-quads "${small[@]}" --out hl >/dev/null 2>&1 || fail "render hl again"
+[ "$(cksum < kept.json)" = "$before" ] || fail "the other hard link was written in place"
+! cmp -s hl/stats.json kept.json \
+  || fail "the named file does not hold the new run"
+[ "$(stat -c %h kept.json)" = 1 ] && [ "$(stat -c %h hl/stats.json)" = 1 ] \
+  || fail "link counts after the rename: $(stat -c %h kept.json hl/stats.json)"
 echo "output_targets_cli: all checks passed"

@@ -133,7 +133,7 @@ TEST_CASE("every bad mesh or scene file gets its own message", "[loaders]") {
       // follows; the loader checks OFF's lines and walks a PLY body first.
       {"bad/truncated_ascii.ply",
        "truncated_ascii.ply:21: unexpected end of file in face 3 (truncated file?)"},
-      {"bad/truncated_face.off", "truncated_face.off:10: face 3: expected 3 vertex indices"},
+      {"bad/truncated_face.off", "truncated_face.off:11: face 3: expected 3 vertex indices"},
       {"bad/truncated_quad.ply",
        "truncated_quad.ply: the data ends in face 0, at byte 218 of 233 (truncated file?)"},
       // assimp would reserve what a list's count says: 2^31 indices took it 16 GB.
@@ -168,11 +168,11 @@ TEST_CASE("limits bound what a file can make the loader allocate", "[loaders]") 
   // A PLY that declares more faces than its bytes could hold is refused before reading.
   const std::string ply =
       "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float "
-      "y\nproperty float z\nelement face 3000000\nproperty list uchar int vertex_indices\n"
+      "y\nproperty float z\nelement face 1500000\nproperty list uchar int vertex_indices\n"
       "end_header\n" +
       std::string(36, '\0');
   CHECK_THAT(error_of([&] { parse_mesh(ply, "ply", "mem.ply"); }),
-             Catch::Contains("element 'face' declares 3000000 items"));
+             Catch::Contains("element 'face' declares 1500000 items"));
 }
 
 TEST_CASE("a PLY header declares its format and each element once", "[loaders]") {

@@ -296,6 +296,54 @@ TEST_CASE("truncated and corrupted trace files are rejected with a message", "[t
     CHECK_THROWS_WITH(trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t"),
                       Catch::Contains("width = 24.5: expected an integer from 1 to 64"));
   }
+  // Every header value a report reads is checked when the trace is read, not where a report
+  // happens to use it: the VCD's clock (a clock of 0 divided by zero), the scene and firmware
+  // names and instruction texts shown (control bytes, a megabyte), the opcodes, the outputs.
+  {
+    auto refused = [&](const std::function<void(nlohmann::json&)>& forge) {
+      nlohmann::json h = t.header;
+      forge(h);
+      try {
+        trace::parse_trace(trace::encode_trace(h, {}, 0), "f.pp5t");
+      } catch (const trace::TraceError& e) {
+        return std::string(e.what());
+      }
+      return std::string("accepted");
+    };
+    for (const double hz : {0.0, -5.0, 1e300, 1e-300}) {
+      CHECK_THAT(refused([&](nlohmann::json& h) { h["config"]["renderer"]["clock_hz"] = hz; }),
+                 Catch::Contains("config.renderer.clock_hz") &&
+                     Catch::Contains("expected a number from 1e6 to 1e9"));
+    }
+    CHECK_THAT(refused([](nlohmann::json& h) { h["config"]["renderer"]["clock_hz"] = "x"; }),
+               Catch::Contains("config.renderer.clock_hz = \"x\""));
+    CHECK_THAT(refused([](nlohmann::json& h) { h.erase("scene"); }),
+               Catch::Contains("key 'scene' not found") && !Catch::Contains("json.exception"));
+    CHECK_THAT(refused([](nlohmann::json& h) { h["scene"]["name"] = "\x1b[2J"; }),
+               Catch::Contains("scene.name = \"\\\\u001b[2J\": expected text"));
+    CHECK_THAT(refused([](nlohmann::json& h) { h["scene"]["name"] = std::string(100000, 'x'); }),
+               Catch::Contains("(100002 bytes)") && Catch::Contains("at most 256 bytes"));
+    CHECK_THAT(refused([](nlohmann::json& h) { h["firmware"]["name"] = 5; }),
+               Catch::Contains("firmware.name = 5: expected text"));
+    CHECK_THAT(refused([](nlohmann::json& h) { h["firmware"]["outputs"][0] = 1; }),
+               Catch::Contains("an output field's name = 1"));
+    CHECK_THAT(refused([](nlohmann::json& h) { h["firmware"]["fields"][0]["name"] = "a\nb"; }),
+               Catch::Contains("a field's name"));
+    CHECK_THAT(
+        refused(
+            [](nlohmann::json& h) { h["firmware"]["procedures"]["triangle"][0]["opcode"] = 256; }),
+        Catch::Contains("instruction 0 of procedure triangle: opcode = 256: is out of range"));
+    CHECK_THAT(refused([](nlohmann::json& h) {
+                 h["firmware"]["procedures"]["triangle"][0]["text"] = std::string(5000, 'y');
+               }),
+               Catch::Contains("instruction 0 of procedure triangle: text") &&
+                   Catch::Contains("at most 1000 bytes"));
+    // The checked values are the ones the reports use.
+    CHECK(t.clock_hz == t.header["config"]["renderer"]["clock_hz"].get<double>());
+    CHECK(t.scene_name == t.header["scene"]["name"].get<std::string>());
+    CHECK(t.procedures[1][0].opcode ==
+          t.header["firmware"]["procedures"]["triangle"][0]["opcode"].get<int>());
+  }
 
   // Records with a valid checksum but impossible contents.
   std::vector<std::uint8_t> recs;

@@ -442,11 +442,45 @@ int run_aggregate(const SweepOptions& o) {
         dir.string(), fs::exists(dir, ec) ? "is not a folder" : "no such folder"));
   }
   const nlohmann::json sweep = read_json(dir / "sweep.json");
-  const auto keys = sweep.at("order").get<std::vector<std::string>>();
-  // The runs the grid defines; other folders (from an earlier grid) are not this sweep's.
+  // sweep.json names the run folders read: it is checked to be what `sweep` writes (keys
+  // of letters, digits, '_' and '.', each swept once; values that are one folder-name
+  // component, each once), so that a forged one reads nothing outside DIR.
+  const std::string where = (dir / "sweep.json").string();
+  auto bad = [&](const std::string& what) {
+    return std::runtime_error(fmt::format("{}: {} (expected what 'pp5sim sweep' writes)", where,
+                                          escape_for_message(what)));
+  };
+  std::vector<std::string> keys;
   std::vector<Axis> axes;
-  for (const auto& k : keys)
-    axes.push_back({k, sweep.at("grid").at(k).get<std::vector<std::string>>()});
+  try {
+    if (!sweep.is_object() || !sweep.contains("order") || !sweep.contains("grid") ||
+        !sweep.at("order").is_array() || !sweep.at("grid").is_object()) {
+      throw bad("no 'order' list and 'grid' object");
+    }
+    keys = sweep.at("order").get<std::vector<std::string>>();
+    std::set<std::string> seen;
+    for (const auto& k : keys) {
+      const bool name =
+          !k.empty() && k.size() <= 64 &&
+          k.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_.") == std::string::npos;
+      if (!name) throw bad("'order' holds '" + k + "', not a configuration key");
+      if (!seen.insert(k).second) throw bad("'order' names '" + k + "' twice");
+      if (!sweep.at("grid").contains(k)) throw bad("'order' names '" + k + "', not in 'grid'");
+      Axis a{k, sweep.at("grid").at(k).get<std::vector<std::string>>()};
+      std::set<std::string> given;
+      for (const std::string& v : a.values) {
+        if (v.empty() || v.size() > 64 || v == "." || v == ".." ||
+            v.find('/') != std::string::npos || !is_display_text(v) || !given.insert(v).second) {
+          throw bad("'grid." + k + "' holds '" + v +
+                    "', not a value once (a folder name: no '/', no control bytes)");
+        }
+      }
+      axes.push_back(std::move(a));
+    }
+    if (seen.size() != sweep.at("grid").size()) throw bad("'grid' has keys 'order' does not list");
+  } catch (const nlohmann::json::exception& e) {
+    throw bad(json_error_text(e));
+  }
   std::uint64_t points = 1;
   for (const Axis& a : axes) {
     if (a.values.empty() || points > kMaxSweepPoints / a.values.size()) {
@@ -490,8 +524,11 @@ int run_aggregate(const SweepOptions& o) {
   int missing = 0;
   for (const fs::path& run : runs) {
     if (!fs::exists(run / "stats.json") || !fs::exists(run / "config.json")) {
-      std::cerr << fmt::format("pp5sim: warning: {}: no stats.json or config.json (not run yet?)\n",
-                               run.string());
+      // The first ten by name, then how many in all (a million would be a million lines).
+      if (missing < 10) {
+        std::cerr << fmt::format(
+            "pp5sim: warning: {}: no stats.json or config.json (not run yet?)\n", run.string());
+      }
       ++missing;
       continue;
     }
@@ -534,6 +571,10 @@ int run_aggregate(const SweepOptions& o) {
     }
     sorted_rows.push_back(std::move(row));
     ++rows;
+  }
+  if (missing > 10) {
+    std::cerr << fmt::format("pp5sim: warning: ... and {} more runs without them ({} of {})\n",
+                             missing - 10, missing, runs.size());
   }
   // Rows in the grid's numeric order (folder names sort as text).
   std::stable_sort(sorted_rows.begin(), sorted_rows.end(),

@@ -301,8 +301,7 @@ Command add_trace_command(CLI::App& app) {
          if (!so->from.empty()) {
            const trace::Snapshot s = trace::read_snapshot(so->from);
            for (const auto& f : so->png) trace::field_image(s, f);  // check names
-           std::cout << fmt::format("{}: region {}, {}\n", so->from, s.region,
-                                    s.header["point"].get<std::string>());
+           std::cout << fmt::format("{}: region {}, {}\n", so->from, s.region, s.point);
            for (const auto& f : so->png) {
              const std::string png =
                  fs::path(so->from).replace_extension("").string() + "-" + f + ".png";
@@ -347,8 +346,7 @@ Command add_trace_command(CLI::App& app) {
            outputs.add(pngs.back(), encode_png(trace::field_image(s, f)));
          }
          outputs.commit();
-         std::cout << fmt::format("wrote {} (region {}, {})\n", path, region,
-                                  s.header["point"].get<std::string>());
+         std::cout << fmt::format("wrote {} (region {}, {})\n", path, region, s.point);
          for (const std::string& png : pngs) std::cout << fmt::format("wrote {}\n", png);
          return 0;
        }});

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "common/escape.hpp"
+#include "common/memory_note.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/host_memory.hpp"
 #include "sim/output/output_set.hpp"
@@ -74,7 +76,7 @@ int report_parse_error(const CLI::App& app, const CLI::ParseError& e, int argc, 
           "unknown command '" + word + "'" + (near.empty() ? "" : "; did you mean '" + near + "'?");
     }
   }
-  std::cerr << "pp5sim: error: " << (hint.empty() ? std::string(e.what()) : hint) << "\n"
+  std::cerr << "pp5sim: error: " << pp5::sanitize_message(hint.empty() ? e.what() : hint) << "\n"
             << "run 'pp5sim --help' (or 'pp5sim COMMAND --help') for the usage\n";
   return 2;
 }
@@ -198,7 +200,9 @@ int main(int argc, char** argv) {
   } catch (const std::bad_alloc&) {
     remove_created_folders();
     std::cerr << "pp5sim: error: out of memory: the run needs more memory than the host could "
-                 "give; make the scene, the screen, renderer.backing_store_bits or the sweep "
+                 "give; "
+              << memory_note() << (memory_note().empty() ? "" : "; ")
+              << "make the scene, the screen, renderer.backing_store_bits or the sweep "
                  "smaller\n";
     return 1;
   } catch (const std::exception& e) {
@@ -206,11 +210,13 @@ int main(int argc, char** argv) {
     // SystemC reports an exception thrown inside a simulation process as its own error
     // (E549, "uncaught exception"), naming the original: bad_alloc is still out of memory.
     if (std::string(e.what()).find("bad_alloc") != std::string::npos) {
-      std::cerr << "pp5sim: error: out of memory during the simulation: make the scene, the "
-                   "screen or renderer.backing_store_bits smaller\n";
+      std::cerr << "pp5sim: error: out of memory during the simulation; " << memory_note()
+                << (memory_note().empty() ? "" : "; ")
+                << "make the scene, the screen or renderer.backing_store_bits smaller\n";
       return 1;
     }
-    std::cerr << "pp5sim: error: " << unwrap_systemc_error(e.what()) << "\n";
+    // Escaped and cut short here too, whatever the message took from an input.
+    std::cerr << "pp5sim: error: " << sanitize_message(unwrap_systemc_error(e.what())) << "\n";
     return 1;
   }
 }

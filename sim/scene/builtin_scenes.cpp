@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "sim/scene/builtin_folded_slab.hpp"
+#include "sim/scene/mesh_loader.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/sphere_scenes.hpp"
 
@@ -28,6 +29,18 @@ int segments(int requested, int default_value, int min_value, const char* scene,
                     min_value, kMaxSegments, requested));
   }
   return requested;
+}
+
+// A tessellation of nu x nv quads, two triangles each, within the scene bound
+// (kMaxSceneTriangles), checked before any vertex is made.
+void check_tessellation(int nu, int nv, const char* scene) {
+  const auto triangles = 2ull * static_cast<unsigned long long>(nu) * static_cast<unsigned>(nv);
+  if (triangles > kMaxSceneTriangles) {
+    throw std::invalid_argument(fmt::format(
+        "scene '{}': a tessellation of {} x {} makes {} triangles; a scene holds at most {} "
+        "(docs/inputs-and-outputs.md)",
+        scene, nu, nv, triangles, kMaxSceneTriangles));
+  }
 }
 
 // A smooth, periodic hue ramp (period 1) with every channel in [0.15, 0.95], so the colour
@@ -86,6 +99,7 @@ constexpr double kTorusEyeW = 3.0;
 Scene make_turned_torus(const SceneOptions& options, double turn, double eye_w) {
   const int nu = segments(options.tessellation_u, 128, 3, "torus", "tessellation_u");
   const int nv = segments(options.tessellation_v, 32, 3, "torus", "tessellation_v");
+  check_tessellation(nu, nv, "torus");
   Mesh mesh;
   mesh.vertices.reserve(static_cast<std::size_t>(nu) * nv);
   mesh.triangles.reserve(2 * static_cast<std::size_t>(nu) * nv);
@@ -158,6 +172,7 @@ Scene make_two_triangles() {
 Scene make_sphere(const SceneOptions& options) {
   const int nu = segments(options.tessellation_u, 64, 3, "sphere", "tessellation_u");
   const int nv = segments(options.tessellation_v, 32, 2, "sphere", "tessellation_v");
+  check_tessellation(nu, nv, "sphere");
   const glm::vec3 color(0.9f, 0.55f, 0.25f);
   // Vertex 0 is the north pole (+y), then nv - 1 rings of nu vertices from north to south, then
   // the south pole. Position and outward normal coincide on the unit sphere; the surface point
@@ -198,6 +213,7 @@ Scene make_figure_eight(const SceneOptions& options) {
   // samples of u are offset by half a step so the line runs through triangle interiors.
   const int nu = segments(options.tessellation_u, 96, 8, "figure-eight", "tessellation_u");
   const int nv = segments(options.tessellation_v, 48, 2, "figure-eight", "tessellation_v");
+  check_tessellation(nu, nv, "figure-eight");
   Mesh mesh;
   for (int j = 0; j <= nv; ++j) {
     const double y = -1.0 + 2.0 * j / nv;

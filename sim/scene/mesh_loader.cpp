@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -67,6 +68,29 @@ bool is_number(const std::string& t) {
 
 // Guards, run before assimp sees the bytes, against what assimp 5.2 (Debian 12) does with
 // some files: allocate what a header declares, crash, hang or leak. Each says which.
+
+// The text formats (OBJ, OFF, ASCII PLY and ASCII STL) hold text: a NUL or another control
+// byte (other than tab, line feed, vertical tab, form feed and carriage return) means the
+// file is not what its name says (a binary file, UTF-16 without a byte-order mark, a file a
+// crash wrote into), and assimp's readers stop at a NUL without a word, dropping the rest.
+// `first_line` is the line number of data's first byte in the file.
+void check_text(std::string_view data, const std::string& origin, const char* format,
+                int first_line = 1) {
+  int line = first_line;
+  std::size_t line_start = 0;
+  for (std::size_t k = 0; k < data.size(); ++k) {
+    const auto c = static_cast<unsigned char>(data[k]);
+    if (c == '\n') {
+      ++line;
+      line_start = k + 1;
+    } else if ((c < 0x20 && c != '\t' && c != '\v' && c != '\f' && c != '\r') || c == 0x7F) {
+      throw MeshError(fmt::format(
+          "{}:{}: byte 0x{:02X} at column {} is not text; {} is a text format (is it a binary "
+          "file, or UTF-16?)",
+          origin, line, c, k - line_start + 1, format));
+    }
+  }
+}
 
 // OFF: assimp 5.2 reserves the declared vertex and face counts (a count of 10^12 is a
 // bad_alloc, a smaller absurd one gigabytes): each vertex needs at least "0 0 0\n" and each face
@@ -141,6 +165,8 @@ void check_off(std::string_view data, const std::string& origin, const LoadLimit
                     where, counts[0], counts[1], data.size() - pos));
   }
   // The vertex and face lines, as assimp splits them: at '\n' or '\r', skipping empty ones.
+  // getline took the counts' line break, so pos is at the start of the next line.
+  ++line_no;
   for (long long item = 0; item < counts[0] + counts[1]; ++item) {
     for (; pos < data.size() && (data[pos] == '\n' || data[pos] == '\r'); ++pos) {
       line_no += data[pos] == '\n';
@@ -159,13 +185,37 @@ void check_off(std::string_view data, const std::string& origin, const LoadLimit
     }
     std::istringstream words{std::string(data.substr(pos, end - pos))};
     pos = end;
-    if (item < counts[0]) continue;
+    if (item < counts[0]) {
+      // x y z, then (COFF) a colour: numbers, which assimp would refuse only in its own words.
+      std::string w;
+      int n = 0;
+      for (; words >> w; ++n) {
+        if (!is_number(w)) {
+          throw MeshError(fmt::format("{}:{}: vertex {}: expected a number, got '{}'", origin,
+                                      line_no, item, printable(w)));
+        }
+      }
+      if (n < 3) {
+        throw MeshError(fmt::format("{}:{}: vertex {}: expected x, y and z, got {} numbers", origin,
+                                    line_no, item, n));
+      }
+      continue;
+    }
     unsigned long long size = 0, index = 0;
     const bool sized = (words >> size) && size >= 3 && size <= 9;
     for (unsigned long long k = 0; sized && k < size; ++k) {
-      if (!(words >> index)) {
+      // Read as a word: an unsigned read takes "-1" as 2^64 - 1.
+      std::string w;
+      if (!(words >> w)) {
         throw MeshError(fmt::format("{}:{}: face {}: expected {} vertex indices", origin, line_no,
                                     item - counts[0], size));
+      }
+      const auto [stop, ec] = std::from_chars(w.data(), w.data() + w.size(), index);
+      if (w[0] == '-' || stop != w.data() + w.size() || ec != std::errc()) {
+        throw MeshError(fmt::format(
+            "{}:{}: face {}: vertex index '{}' is not an index from 0 to {} (OFF counts the "
+            "vertices from 0)",
+            origin, line_no, item - counts[0], printable(w), counts[0] - 1));
       }
       if (index >= static_cast<unsigned long long>(counts[0])) {
         throw MeshError(
@@ -205,6 +255,7 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
   struct Property {
     int count_size = 0, size = 0;  // count_size 0: not a list
     bool count_signed = false, integer = false;
+    bool value_signed = false;  // an integer type that is not u...: char, short, int
   };
   auto integral = [](const std::string& type) {
     return type.find("float") == std::string::npos && type != "double";
@@ -288,8 +339,9 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
     }
     if (key == "property") {
       Element& e = elements.back();
-      e.properties.push_back(list ? Property{size_of(b), size_of(c), b[0] != 'u', integral(c)}
-                                  : Property{0, size_of(a), false, integral(a)});
+      e.properties.push_back(
+          list ? Property{size_of(b), size_of(c), b[0] != 'u', integral(c), c[0] != 'u'}
+               : Property{0, size_of(a), false, integral(a), a[0] != 'u'});
       // Text takes at least two bytes a number ("0 "); a face's list at least 3 indices.
       const bool face = list && e.name == "face";
       e.min_bytes += text   ? (face ? 8 : 2)
@@ -297,6 +349,7 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
                             : size_of(a);
     }
   }
+  if (text) check_text(data.substr(pos), origin, "an ASCII PLY (format ascii)", line + 1);
   const std::size_t bytes = data.size() - pos;
   unsigned long long used = 0;
   for (const Element& e : elements) {
@@ -384,11 +437,39 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
                                         limits.max_polygon_vertices));
           }
         }
+        // A face's vertex index is a count from 0: assimp takes a negative one (or one
+        // past its type) as a huge unsigned number and says only that it is out of range.
+        const bool indices = p.count_size > 0 && p.integer && e.name == "face";
         if (text) {
-          for (unsigned long long k = 0; k < n; ++k) word(first && k == 0, p.integer);
+          for (unsigned long long k = 0; k < n; ++k) {
+            const std::string w = word(first && k == 0, p.integer);
+            if (!indices) continue;
+            unsigned long long index = 0;
+            const auto [stop, ec] = std::from_chars(w.data(), w.data() + w.size(), index);
+            const unsigned long long top =
+                p.size >= 4 ? (p.value_signed ? 0x7FFFFFFFull : 0xFFFFFFFFull)
+                            : (1ull << (8 * p.size - (p.value_signed ? 1 : 0))) - 1;
+            if (w[0] == '-' || ec != std::errc() || stop != w.data() + w.size() || index > top) {
+              throw MeshError(fmt::format(
+                  "{}:{}: {}: vertex index '{}' is not an index from 0 to {} (the header's "
+                  "type for it)",
+                  origin, line, where, printable(w), top));
+            }
+          }
         } else if (n * p.size > data.size() - pos) {
           ends();
         } else {
+          if (indices && p.value_signed) {
+            for (unsigned long long k = 0; k < n; ++k) {
+              const auto top = static_cast<unsigned char>(
+                  data[pos + k * p.size + (big_endian ? 0 : p.size - 1)]);
+              if (top & 0x80) {
+                throw MeshError(
+                    fmt::format("{}: {}: vertex index {} of the list is negative (at byte {})",
+                                origin, where, k, pos + k * p.size));
+              }
+            }
+          }
           pos += n * p.size;
         }
         if (n > 0) first = false;
@@ -400,6 +481,19 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
       }
     }
   }
+  // Text after the last element's values: assimp ignores it, so a file with more items than
+  // its header declares (or two files run together) would lose them without a word.
+  if (text) {
+    const std::size_t rest = data.find_first_not_of(" \t\r\n\v\f", pos);
+    if (rest != std::string_view::npos) {
+      for (std::size_t k = pos; k < rest; ++k) line += data[k] == '\n';
+      throw MeshError(fmt::format(
+          "{}:{}: text after the last element the header declares ('{}'): more items than "
+          "the header's counts?",
+          origin, line,
+          printable(std::string(data.substr(rest, data.find_first_of("\r\n", rest) - rest)))));
+    }
+  }
 }
 
 // ASCII STL: assimp 5.2's reader leaks its mesh and node (about 2.5 kB, which fails the fuzz
@@ -409,7 +503,7 @@ void check_ply(std::string_view data, const std::string& origin, const LoadLimit
 // "facet normal N N N", "outer loop", three "vertex X Y Z", "endloop", "endfacet" (a normal or
 // vertex on one line), then "endsolid NAME"; more solids may follow.
 void check_ascii_stl(std::string_view data, const std::string& origin) {
-  data = data.substr(0, data.find('\0'));  // assimp reads the text up to a NUL
+  check_text(data, origin, "an ASCII STL (one that starts with 'solid')");
   std::size_t pos = 0;
   int line = 1;
   auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
@@ -474,6 +568,11 @@ void check_ascii_stl(std::string_view data, const std::string& origin) {
     }
     pos = std::min(data.find('\n', pos), data.size());
     word = next();
+    // After a solid, only another solid or the end: assimp ignores anything else.
+    if (!word.empty() && word.compare(0, 5, "solid") != 0) {
+      fail(fmt::format("expected 'solid' or the end of the file after 'endsolid', got '{}'",
+                       printable(word)));
+    }
   }
 }
 
@@ -755,6 +854,9 @@ Mesh parse_mesh(std::string_view data, const std::string& format, const std::str
   if ((format == "obj" || format == "off" || format == "ply") && data.size() >= 3 &&
       data.substr(0, 3) == "\xEF\xBB\xBF") {
     data.remove_prefix(3);
+  }
+  if (format == "obj" || format == "off") {
+    check_text(data, origin, format == "obj" ? "OBJ" : "OFF");
   }
   // OFF allows a comment, '#' to the end of the line, on any line; assimp's reader takes
   // them only in the header. They are blanked here (the lines stay, so line numbers in

@@ -160,12 +160,64 @@ std::vector<Sphere> read_molecule_file(const std::string& path) {
   return parse_molecule(text, path, ends_with(path, ".cif") || ends_with(path, ".mmcif"));
 }
 
+namespace {
+
+// PDB and mmCIF are text: a NUL or another control byte (other than tab, line feed, form
+// feed and carriage return) means the file is not one (a binary file, UTF-16), and the
+// PDB reader would skip the line it is on without a word.
+void check_molecule_text(const std::string& text, const std::string& path, bool cif) {
+  std::size_t line = 1, line_start = 0;
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const auto c = static_cast<unsigned char>(text[k]);
+    if (c == '\n') {
+      ++line;
+      line_start = k + 1;
+    } else if ((c < 0x20 && c != '\t' && c != '\f' && c != '\r' && c != '\v') || c == 0x7F) {
+      throw SceneError(fmt::format(
+          "{}:{}: byte 0x{:02X} at column {} is not text; {} is a text format (is it a binary "
+          "file, or UTF-16?)",
+          path, line, c, k - line_start + 1, cif ? "mmCIF" : "PDB"));
+    }
+  }
+}
+
+// gemmi 0.5's mmCIF reader finds its atom table only when every column it needs is there;
+// without one it reads no atom and says nothing. The columns it needs, named when missing.
+void check_atom_site_columns(const gemmi::cif::Document& doc, const std::string& path) {
+  if (doc.blocks.empty()) return;
+  const gemmi::cif::Block& block = doc.blocks[0];
+  static const char* const kRequired[] = {
+      "id",      "type_symbol", "label_alt_id", "label_asym_id",  "Cartn_x",
+      "Cartn_y", "Cartn_z",     "occupancy",    "B_iso_or_equiv", "auth_seq_id"};
+  bool any = false;
+  std::vector<std::string> missing;
+  for (const char* column : kRequired) {
+    const bool has = block.has_tag(std::string("_atom_site.") + column);
+    any = any || has;
+    if (!has) missing.push_back(std::string("_atom_site.") + column);
+  }
+  if (!any || missing.empty()) return;  // no atom table at all: "no atoms" below
+  std::string list;
+  for (const std::string& m : missing) list += (list.empty() ? "" : ", ") + m;
+  throw SceneError(fmt::format(
+      "{}: the _atom_site table lacks {} {} (the mmCIF reader needs _atom_site.id, type_symbol, "
+      "label_alt_id, label_asym_id, Cartn_x, Cartn_y, Cartn_z, occupancy, B_iso_or_equiv and "
+      "auth_seq_id)",
+      path, missing.size() == 1 ? "the column" : "the columns", list));
+}
+
+}  // namespace
+
 std::vector<Sphere> parse_molecule(const std::string& text, const std::string& path, bool cif) {
   gemmi::Structure st;
+  check_molecule_text(text, path, cif);
   try {
     if (cif) {
       check_cif_integers(text, path);
-      st = gemmi::make_structure(gemmi::cif::read_memory(text.data(), text.size(), path.c_str()));
+      const gemmi::cif::Document doc =
+          gemmi::cif::read_memory(text.data(), text.size(), path.c_str());
+      check_atom_site_columns(doc, path);
+      st = gemmi::make_structure(doc);
     } else {
       check_pdb_records(text, path);
       // Only the records a space-filling model reads reach gemmi: its 0.5 reader overflows
@@ -202,7 +254,9 @@ std::vector<Sphere> parse_molecule(const std::string& text, const std::string& p
           const gemmi::Position& p = atom.pos;
           if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
             throw SceneError(fmt::format("{}: atom {} of residue {} {} has a non-finite position",
-                                         path, atom.name, residue.name, residue.seqid.str()));
+                                         path, escape_for_message(atom.name),
+                                         escape_for_message(residue.name),
+                                         escape_for_message(residue.seqid.str())));
           }
           // PDB's own columns hold at most 9999.999; past a million angstroms a position
           // would not survive the single-precision scene and the camera that frames it.
@@ -212,7 +266,8 @@ std::vector<Sphere> parse_molecule(const std::string& text, const std::string& p
             throw SceneError(fmt::format(
                 "{}: atom {} of residue {} {} lies at ({}, {}, {}); coordinates are limited to "
                 "+-{:g} angstroms",
-                path, atom.name, residue.name, residue.seqid.str(), p.x, p.y, p.z, kMaxCoordinate));
+                path, escape_for_message(atom.name), escape_for_message(residue.name),
+                escape_for_message(residue.seqid.str()), p.x, p.y, p.z, kMaxCoordinate));
           }
           if (spheres.size() >= kMaxAtoms) {
             throw SceneError(fmt::format("{}: more than {} atoms", path, kMaxAtoms));

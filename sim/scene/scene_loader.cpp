@@ -15,6 +15,8 @@
 #include <set>
 #include <sstream>
 
+#include "common/escape.hpp"
+#include "common/memory_note.hpp"
 #include "common/read_file.hpp"
 #include "common/strict_json.hpp"
 #include "models/config/machine_config.hpp"
@@ -36,7 +38,7 @@ struct Node {
   const std::string& origin;
 
   [[noreturn]] void fail(const std::string& what) const {
-    throw SceneError(fmt::format("{}: key '{}' {}", origin, path, what));
+    throw SceneError(fmt::format("{}: key '{}' {}", origin, escape_for_message(path, 200), what));
   }
   Node at(const std::string& key) const {
     return {value.at(key), path.empty() ? key : path + "." + key, origin};
@@ -51,8 +53,9 @@ struct Node {
       if (!ok.count(item.key())) {
         std::string list;
         for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-        throw SceneError(fmt::format("{}: unknown key '{}{}' (expected one of: {})", origin,
-                                     path.empty() ? "" : path + ".", item.key(), list));
+        throw SceneError(
+            fmt::format("{}: unknown key '{}' (expected one of: {})", origin,
+                        escape_for_message((path.empty() ? "" : path + ".") + item.key()), list));
       }
     }
   }
@@ -110,11 +113,13 @@ Mesh inline_mesh(const Node& node, const LoadLimits& limits, glm::vec3 color) {
     for (int k = 0; k < 3; ++k) {
       const Node e = t.at(static_cast<std::size_t>(k));
       if (!e.value.is_number_integer()) e.fail("must be an integer vertex index");
-      const auto index = e.value.get<long long>();
-      if (index < 0 || index >= static_cast<long long>(mesh.vertices.size())) {
-        e.fail(fmt::format("is {}, outside [0, {})", index, mesh.vertices.size()));
+      // Shown as written: 2^64 - 1 read as a signed number would print as -1.
+      if (e.value.is_number_unsigned() ? e.value.get<std::uint64_t>() >= mesh.vertices.size()
+                                       : e.value.get<std::int64_t>() < 0 ||
+                                             e.value.get<std::uint64_t>() >= mesh.vertices.size()) {
+        e.fail(fmt::format("is {}, outside [0, {})", e.value.dump(), mesh.vertices.size()));
       }
-      tri[k] = static_cast<unsigned>(index);
+      tri[k] = e.value.get<unsigned>();
     }
     mesh.triangles.push_back(tri);
   }
@@ -146,8 +151,13 @@ void append(Mesh& scene_mesh, const Mesh& part, const glm::dmat4& transform, con
             const LoadLimits& limits) {
   if (scene_mesh.vertices.size() + part.vertices.size() > limits.max_vertices ||
       scene_mesh.triangles.size() + part.triangles.size() > limits.max_triangles) {
-    where.fail(fmt::format("makes the scene larger than the limits ({} vertices, {} triangles)",
-                           limits.max_vertices, limits.max_triangles));
+    where.fail(fmt::format(
+        "({} triangles, {} vertices) makes the scene {} triangles and {} vertices; a scene holds "
+        "at most {} triangles and {} vertices (docs/inputs-and-outputs.md)",
+        part.triangles.size(), part.vertices.size(),
+        scene_mesh.triangles.size() + part.triangles.size(),
+        scene_mesh.vertices.size() + part.vertices.size(), limits.max_triangles,
+        limits.max_vertices));
   }
   const auto base = static_cast<unsigned>(scene_mesh.vertices.size());
   const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(transform)));
@@ -199,9 +209,15 @@ Material mesh_material(const Node& m, const std::map<std::string, Material>& mat
   const auto it = materials.find(name);
   if (it == materials.end()) {
     std::string known;
-    for (const auto& [k, v] : materials) known += (known.empty() ? "" : ", ") + k;
-    mat.fail(fmt::format("names an unknown material '{}' (the file's 'materials': {})", name,
-                         known.empty() ? "none" : known));
+    for (const auto& [k, v] : materials) {
+      known += (known.empty() ? "" : ", ") + escape_for_message(k);
+      if (known.size() > 400) {
+        known += ", ...";
+        break;
+      }
+    }
+    mat.fail(fmt::format("names an unknown material '{}' (the file's 'materials': {})",
+                         escape_for_message(name), known.empty() ? "none" : known));
   }
   return it->second;
 }
@@ -240,9 +256,16 @@ CsgNode parse_csg(const Node& n, const std::map<std::string, int>& solids,
     const std::string name = n.value.get<std::string>();
     const auto it = solids.find(name);
     if (it == solids.end()) {
-      n.fail(fmt::format("names no mesh '{}' (the named meshes: {})", name,
-                         names.empty() ? std::string("none; give a mesh a \"name\"")
-                                       : fmt::format("{}", fmt::join(names, ", "))));
+      std::string known;
+      for (const std::string& k : names) {
+        known += (known.empty() ? "" : ", ") + escape_for_message(k);
+        if (known.size() > 400) {
+          known += ", ...";
+          break;
+        }
+      }
+      n.fail(fmt::format("names no mesh '{}' (the named meshes: {})", escape_for_message(name),
+                         names.empty() ? std::string("none; give a mesh a \"name\"") : known));
     }
     node.solid = it->second;
     return node;
@@ -349,6 +372,9 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
     for (const auto& item : ms.value.items())
       materials[item.key()] = parse_material(ms.at(item.key()));
   }
+  // A built-in mesh is made once per name, however often the file names it: the scene's
+  // bound (append) is then checked before each copy, not after building it.
+  std::map<std::string, Mesh> builtin_meshes;
   std::map<std::string, int> solid_index;  // named meshes: their solid
   std::vector<std::size_t> solid_mesh;     // each solid's mesh index
   for (std::size_t i = 0; i < meshes.value.size(); ++i) {
@@ -367,11 +393,16 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
       if (file.is_relative()) file = fs::path(base_dir) / file;
       part = load_mesh(file.string(), nullptr, limits, color);
     } else if (m.has("builtin")) {
-      try {
-        part = make_builtin_scene(m.at("builtin").string()).mesh;
-      } catch (const std::invalid_argument& e) {
-        m.at("builtin").fail(e.what());
+      const std::string builtin = m.at("builtin").string();
+      auto it = builtin_meshes.find(builtin);
+      if (it == builtin_meshes.end()) {
+        try {
+          it = builtin_meshes.emplace(builtin, make_builtin_scene(builtin).mesh).first;
+        } catch (const std::invalid_argument& e) {
+          m.at("builtin").fail(e.what());
+        }
       }
+      part = it->second;
       if (material.color) {
         for (Vertex& v : part.vertices) v.color = color;
       }
@@ -391,7 +422,7 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
       const std::string name = m.at("name").string();
       if (name.empty()) m.at("name").fail("must not be empty");
       if (const auto it = solid_index.find(name); it != solid_index.end()) {
-        m.at("name").fail(fmt::format("repeats the name '{}' of mesh {}", name,
+        m.at("name").fail(fmt::format("repeats the name '{}' of mesh {}", escape_for_message(name),
                                       solid_mesh[static_cast<std::size_t>(it->second)]));
       }
       solid_index[name] = static_cast<int>(scene.solids.size());
@@ -519,6 +550,11 @@ Scene parse_scene_json(const std::string& text, const std::string& origin,
       if (!v.value.is_number_integer()) {
         v.fail(fmt::format("must be an integer (got {})", v.value.dump()));
       }
+      if (v.value.is_number_unsigned() &&
+          v.value.get<std::uint64_t>() > static_cast<std::uint64_t>(INT64_MAX)) {
+        v.fail(
+            fmt::format("is {}, out of range (no frame parameter reaches 2^63)", v.value.dump()));
+      }
       scene.parameters[item.key()] = v.value.get<std::int64_t>();
     }
   }
@@ -540,7 +576,23 @@ Scene load_scene_file(const std::string& path, const LoadLimits& limits, ScenePa
   return scene;
 }
 
+namespace {
+Scene load_scene_unnoted(const std::string& name_or_path, const SceneOptions& options);
+}  // namespace
+
 Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {
+  Scene scene = load_scene_unnoted(name_or_path, options);
+  // If memory runs out later, the message names this input and the bound (main.cpp).
+  set_memory_note(fmt::format(
+      "the scene {} holds {} triangles and {} spheres (a scene holds at most {} triangles; "
+      "docs/inputs-and-outputs.md)",
+      escape_for_message(name_or_path), scene.mesh.triangles.size(), scene.spheres.size(),
+      kMaxSceneTriangles));
+  return scene;
+}
+
+namespace {
+Scene load_scene_unnoted(const std::string& name_or_path, const SceneOptions& options) {
   const fs::path p(name_or_path);
   std::string ext = p.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -611,5 +663,7 @@ Scene load_scene(const std::string& name_or_path, const SceneOptions& options) {
         "{} (or give a mesh file .obj .ply .stl .off, or a scene file .json)", e.what()));
   }
 }
+
+}  // namespace
 
 }  // namespace pp5

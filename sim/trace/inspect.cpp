@@ -56,9 +56,7 @@ std::string show(const Trace& t, int field, std::uint64_t raw) {
   return fmt::format("{}", raw);
 }
 
-std::string firmware_name(const Trace& t) {
-  return t.header.at("firmware").at("name").get<std::string>();
-}
+std::string firmware_name(const Trace& t) { return t.firmware_name; }
 
 }  // namespace
 
@@ -73,7 +71,7 @@ std::string history_report(const Trace& t, Pixel px, const std::vector<std::stri
     want.insert(i);
   }
   std::string out = fmt::format("pixel {},{}  firmware {}  scene {}\n", px.first, px.second,
-                                firmware_name(t), t.header["scene"]["name"].get<std::string>());
+                                firmware_name(t), t.scene_name);
   out += fmt::format("{:>8} {:>10} {:>8} {:>9} {:>5}  {:<28} {:>7}  {}\n", "instr#", "cycle",
                      "proc", "primitive", "line", "instruction", "enabled", "changes");
   std::size_t rows = 0;
@@ -113,12 +111,12 @@ std::string why_report(const Trace& t, Pixel px) {
   }
   const PixelState& s = it->second;
   std::string out = fmt::format("pixel {},{}  firmware {}  scene {}\n", px.first, px.second,
-                                firmware_name(t), t.header["scene"]["name"].get<std::string>());
-  const auto& outputs = t.header["firmware"]["outputs"];
+                                firmware_name(t), t.scene_name);
+  const std::vector<std::string>& outputs = t.outputs;
   std::string colour;
   bool complete = true;
   for (const auto& o : outputs) {
-    const int f = t.field_index(o.get<std::string>());
+    const int f = t.field_index(o);
     if (f < 0 || !s.value.count(f)) {
       complete = false;
       continue;
@@ -289,7 +287,7 @@ std::string bitmap_report(const Trace& t) {
     if (it != last.end()) touched[v.rec.field] |= it->second ^ v.rec.value;
     last[key] = v.rec.value;
   }
-  const int memory_bits = t.header["firmware"]["memory_bits"].get<int>();
+  const int memory_bits = t.memory_bits;
   std::string out = fmt::format(
       "pixel memory of {} bits, firmware {}: '#' a bit that changed during the trace, '.' one "
       "that did not, '-' a field not traced\n\n",
@@ -371,7 +369,7 @@ std::string ascii_bits(const std::string& text, int chars) {
 }  // namespace
 
 std::string vcd(const Trace& t) {
-  const double clock_hz = t.header["config"]["renderer"]["clock_hz"].get<double>();
+  const double clock_hz = t.clock_hz;  // checked when read: 1e6 .. 1e9
   const auto ps_per_cycle = static_cast<std::uint64_t>(std::llround(1e12 / clock_hz));
   int text_chars = 8;
   for (const auto& p : t.procedures) {
@@ -430,9 +428,7 @@ std::string vcd(const Trace& t) {
     const Stream& s = streams[e.ins.renderer];
     const std::uint64_t at = e.ins.cycle * ps_per_cycle;
     const InstructionText& it = t.text(e.ins);
-    const int opcode =
-        t.header["firmware"]["procedures"][kProcedureNames[e.ins.procedure]][e.ins.index]["opcode"]
-            .get<int>();
+    const int opcode = it.opcode;
     std::string c;
     c += binary(static_cast<std::uint64_t>(opcode), 8) + " " + s.opcode + "\n";
     c += ascii_bits(it.text, text_chars) + " " + s.text + "\n";

@@ -114,9 +114,10 @@ const Snapshot& SnapshotTaker::snapshot() const {
   s.header["width"] = s.width;
   s.header["height"] = s.height;
   s.header["memory_bits"] = s.memory_bits;
-  s.header["point"] = after_ ? fmt::format("after micro-instruction {} of renderer {}", *after_,
-                                           region_ % config_.renderer.count)
-                             : std::string("end of region");
+  s.point = after_ ? fmt::format("after micro-instruction {} of renderer {}", *after_,
+                                 region_ % config_.renderer.count)
+                   : std::string("end of region");
+  s.header["point"] = s.point;
   s.header["layout"] =
       "memory_bits bit-planes; plane b holds bit b of every pixel, pixel p = y * width + x at "
       "bit p % 64 of little-endian 64-bit word p / 64";
@@ -177,8 +178,16 @@ Snapshot parse_snapshot(const std::string& bytes, const std::string& path) {
   }
   Snapshot s;
   try {
-    s.header =
-        nlohmann::json::parse(bytes.begin() + 16, bytes.begin() + 16 + static_cast<long>(hl));
+    try {
+      s.header = parse_strict_json(
+          std::string(bytes.begin() + 16, bytes.begin() + 16 + static_cast<long>(hl)),
+          path + ": header at byte 16");
+    } catch (const std::runtime_error& e) {
+      throw TraceError(e.what());
+    }
+    if (!s.header.is_object()) {
+      throw TraceError(fmt::format("{}: header at byte 16: a JSON object expected", path));
+    }
     // Each number checked against its width (common/checked_number.hpp): a forged
     // 2^32 + 64 is refused, never read as 64.
     auto integer = [&](const char* key, int min, int max) {
@@ -188,6 +197,16 @@ Snapshot parse_snapshot(const std::string& bytes, const std::string& path) {
         throw TraceError(fmt::format("{}: {}", path, e.what()));
       }
     };
+    const nlohmann::json& point = s.header.at("point");
+    if (!point.is_string() || point.get_ref<const std::string&>().size() > 256 ||
+        !is_display_text(point.get_ref<const std::string&>())) {
+      throw TraceError(fmt::format(
+          "{}: header: point = {}: expected text of at most 256 bytes without control characters",
+          path,
+          escape_for_message(
+              point.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace))));
+    }
+    s.point = point.get<std::string>();
     s.region = integer("region", 0, std::numeric_limits<int>::max());
     s.width = integer("width", 64, 1024);
     s.height = integer("height", 1, 1024);
@@ -216,6 +235,11 @@ Snapshot parse_snapshot(const std::string& bytes, const std::string& path) {
       const nlohmann::json& f = fields[k];
       const std::string name = f.at("name").get<std::string>();
       const std::string what = fmt::format("header: field {} ('{}')", k, escape_for_message(name));
+      if (name.empty() || name.size() > 64 || !is_display_text(name)) {
+        throw TraceError(fmt::format(
+            "{}: {}: a field's name is text of 1 to 64 bytes without control characters", path,
+            what));
+      }
       int lo = 0, width = 0;
       try {
         lo = json_integer<int>(f.at("lo"), what + " lo", -1, s.memory_bits - 1);

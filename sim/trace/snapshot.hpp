@@ -18,6 +18,7 @@ namespace pp5::trace {
 
 struct Snapshot {
   nlohmann::json header;  // config, firmware field map, region, point
+  std::string point;      // where it was taken ("after micro-instruction N ..."), checked text
   int region = 0;
   int width = 0, height = 0, memory_bits = 0;
   std::vector<std::uint64_t> planes;  // memory_bits planes of width * height / 64 words

@@ -171,7 +171,18 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
   Trace t;
   t.path = name;
   try {
-    t.header = nlohmann::json::parse(bytes.begin() + kPreambleBytes, bytes.begin() + header_end);
+    // Strictly, like every JSON pp5sim reads: nesting bounded, a key given twice refused.
+    try {
+      t.header =
+          parse_strict_json(std::string(bytes.begin() + kPreambleBytes, bytes.begin() + header_end),
+                            fmt::format("{}: header at byte {}", name, kPreambleBytes));
+    } catch (const std::runtime_error& e) {
+      throw TraceError(e.what());
+    }
+    if (!t.header.is_object()) {
+      throw TraceError(fmt::format("{}: header at byte {}: a JSON object expected (got {})", name,
+                                   kPreambleBytes, t.header.type_name()));
+    }
     // The field map's meaning, not only its syntax: a forged header (checksum recomputed)
     // must not make a reader shift or index out of range.
     // Every number is checked against its width (common/checked_number.hpp): a forged
@@ -183,10 +194,37 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
         throw TraceError(fmt::format("{}: {}", name, e.what()));
       }
     };
+    // Every string a report shows: text without control characters, of bounded length.
+    auto text = [&](const nlohmann::json& v, const std::string& what, std::size_t max) {
+      const bool ok = v.is_string() && v.get_ref<const std::string&>().size() <= max &&
+                      is_display_text(v.get_ref<const std::string&>());
+      if (!ok) {
+        throw TraceError(fmt::format(
+            "{}: header: {} = {}: expected text of at most {} bytes without control characters",
+            name, what,
+            escape_for_message(v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)),
+            max));
+      }
+      return v.get<std::string>();
+    };
     const nlohmann::json& firmware = t.header.at("firmware");
+    t.scene_name = text(t.header.at("scene").at("name"), "scene.name", kMaxHeaderText);
+    t.firmware_name = text(firmware.at("name"), "firmware.name", kMaxHeaderText);
+    // The array clock sets the VCD's time scale (picoseconds per cycle): the configuration
+    // table's range for renderer.clock_hz.
+    {
+      const nlohmann::json& hz = t.header.at("config").at("renderer").at("clock_hz");
+      t.clock_hz = hz.is_number() ? hz.get<double>() : 0.0;
+      if (!(t.clock_hz >= 1e6 && t.clock_hz <= 1e9)) {
+        throw TraceError(fmt::format(
+            "{}: header: config.renderer.clock_hz = {}: expected a number from 1e6 to 1e9 (Hz)",
+            name, escape_for_message(hz.dump())));
+      }
+    }
     const int memory_bits = integer(firmware.at("memory_bits"), "firmware.memory_bits", 1, 1024);
+    t.memory_bits = memory_bits;
     for (const auto& f : firmware.at("fields")) {
-      const std::string field_name = f.at("name").get<std::string>();
+      const std::string field_name = text(f.at("name"), "a field's name", 64);
       const std::string what = "field '" + escape_for_message(field_name) + "'";
       t.fields.push_back({field_name, integer(f.at("lo"), what + " lo", -1, memory_bits - 1),
                           integer(f.at("width"), what + " width", 1, 64),
@@ -208,11 +246,16 @@ Trace parse_trace(const std::string& bytes, const std::string& name) {
         continue;
       }
       for (const auto& i : procedures.at(kProcedureNames[p])) {
-        code.push_back(
-            {i.at("text").get<std::string>(),
-             integer(i.at("line"), "instruction line", 0, std::numeric_limits<int>::max())});
+        const std::string where =
+            fmt::format("instruction {} of procedure {}", code.size(), kProcedureNames[p]);
+        code.push_back({text(i.at("text"), where + ": text", kMaxInstructionText),
+                        integer(i.at("line"), where + ": line", 0, std::numeric_limits<int>::max()),
+                        integer(i.at("opcode"), where + ": opcode", 0, 255)});
       }
       t.procedures.push_back(std::move(code));
+    }
+    for (const auto& o : firmware.at("outputs")) {
+      t.outputs.push_back(text(o, "an output field's name", 64));
     }
     // Value records hold a pixel's x and y in 16 bits.
     for (const auto& p : t.header.at("pixels")) {

@@ -74,8 +74,9 @@ struct FieldInfo {
 };
 
 struct InstructionText {
-  std::string text;
+  std::string text;  // checked: printable text of at most kMaxInstructionText bytes
   int line = 0;
+  int opcode = 0;  // 0..255
 };
 
 struct Event {
@@ -89,9 +90,19 @@ struct Value {
   std::size_t event = 0;  // index into Trace::events
 };
 
+// Header strings are shown to the user: each is text of at most this many bytes, without
+// control characters (a forged header cannot drive the terminal or bloat a VCD).
+inline constexpr std::size_t kMaxHeaderText = 256;
+inline constexpr std::size_t kMaxInstructionText = 1000;
+
 struct Trace {
   std::string path;
-  nlohmann::json header;
+  nlohmann::json header;  // as read (trace info prints it); the fields below are checked
+  std::string scene_name;
+  std::string firmware_name;
+  std::vector<std::string> outputs;  // the firmware's output fields, "?" for an unnamed one
+  int memory_bits = 0;
+  double clock_hz = 0;  // the Renderer's array clock, for the VCD's time scale
   std::vector<FieldInfo> fields;
   std::vector<std::vector<InstructionText>> procedures;  // [procedure][index]
   std::vector<std::pair<int, int>> pixels;               // selected screen pixels
