@@ -145,4 +145,7 @@ out=$("$bin" sweep aggregate forged -o f.csv 2>&1) && fail "an empty sweep aggre
 [ "$(echo "$out" | wc -l)" -le 12 ] || fail "50 missing runs printed $(echo "$out" | wc -l) lines"
 echo "$out" | grep -q "and 40 more runs without them (50 of 50)" || fail "aggregate said: $out"
 [ -e f.csv ] && fail "a refused aggregate wrote its CSV"
+# trace snapshot --after -1 took the region's end (its default's stand-in) without a word.
+expect_error "^pp5sim: error: --after" trace snapshot --scene two-triangles "${small[@]}" --region 0 --after -1 -o snap.pp5m
+[ -e snap.pp5m ] && fail "a refused snapshot was written"
 echo "inputs_cli: all checks passed"

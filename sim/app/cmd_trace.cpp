@@ -287,9 +287,12 @@ Command add_trace_command(CLI::App& app) {
   so->run.add(*snap);
   snap->add_option("--region", so->region, "Region number");
   snap->add_option("-p,--pixel", so->pixel, "Or: the region holding screen pixel X,Y");
+  // -1 (the default) stands for the region's end; a negative number given is refused, not
+  // taken as that.
   snap->add_option("--after", so->after,
                    "After this micro-instruction number of the region's Renderer [the region's "
-                   "end]");
+                   "end]")
+      ->check(CLI::NonNegativeNumber);
   snap->add_option("-o,--out", so->out, "Snapshot file [out/SCENE/region-R.pp5m]");
   snap->add_option("--png", so->png,
                    "Also write FIELD as OUT-FIELD.png (repeatable): 1-bit fields as masks, wider "
