@@ -17,7 +17,7 @@ std::string GridMachine::label() const {
   return out;
 }
 
-std::vector<GridMachine> analytic_tuning_grid() {
+std::vector<GridMachine> analytic_tuning_grid(const std::string& balancing) {
   std::vector<GridMachine> grid;
   for (const char* program : {"phong", "threshold", "flat", "transparent"}) {
     for (int gps : {4, 32}) {
@@ -28,6 +28,7 @@ std::vector<GridMachine> analytic_tuning_grid() {
                           {"screen.width=640", "screen.height=512", fmt::format("gp.count={}", gps),
                            fmt::format("renderer.count={}", renderers),
                            fmt::format("ring.channels={}", channels)}});
+          if (balancing != "static") grid.back().sets.push_back("renderer.balancing=" + balancing);
         }
       }
     }
@@ -127,6 +128,13 @@ AnalyticValidation validate_analytic(const std::string& grid,
     v.closed_form_mean_error += closed_error;
     v.closed_form_worst_error = std::max(v.closed_form_worst_error, closed_error);
     if (p.event_bottleneck == p.analytic_bottleneck) ++v.bottleneck_agree;
+    AnalyticValidation::Mode& mode =
+        std::find(m.sets.begin(), m.sets.end(), "renderer.balancing=dynamic") != m.sets.end()
+            ? v.dynamic_balancing
+            : v.static_balancing;
+    ++mode.machines;
+    mode.mean_error += error;
+    mode.worst_error = std::max(mode.worst_error, error);
     event.push_back(p.event_seconds);
     analytic.push_back(p.analytic_seconds);
     closed.push_back(p.closed_form_seconds);
@@ -136,24 +144,33 @@ AnalyticValidation validate_analytic(const std::string& grid,
     v.mean_error /= static_cast<double>(v.points.size());
     v.closed_form_mean_error /= static_cast<double>(v.points.size());
   }
+  for (AnalyticValidation::Mode* mode : {&v.static_balancing, &v.dynamic_balancing}) {
+    if (mode->machines > 0) mode->mean_error /= mode->machines;
+  }
   v.kendall_tau = kendall_tau(event, analytic);
   v.closed_form_tau = kendall_tau(event, closed);
   return v;
 }
 
 std::string analytic_validation_markdown(const std::vector<AnalyticValidation>& grids) {
+  const auto mode_cell = [](const AnalyticValidation::Mode& m) {
+    return m.machines == 0 ? std::string("-")
+                           : fmt::format("{:.1f}% ({:.1f}%, {} machines)", 100 * m.worst_error,
+                                         100 * m.mean_error, m.machines);
+  };
   std::string out =
-      "| grid | machines | model | mean error | worst error | bottleneck agrees | Kendall tau | "
-      "worst machine |\n|---|---|---|---|---|---|---|---|\n";
+      "| grid | machines | model | mean error | worst error | static: worst (mean) | dynamic: "
+      "worst (mean) | bottleneck agrees | Kendall tau | worst machine |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const AnalyticValidation& v : grids) {
     const auto n = v.points.size();
     out += fmt::format(
-        "| {} | {} | contention recurrence | {:.1f}% | {:.1f}% | {} of {} | {:.3f} | "
+        "| {} | {} | contention recurrence | {:.1f}% | {:.1f}% | {} | {} | {} of {} | {:.3f} | "
         "{} |\n",
-        v.grid, n, 100 * v.mean_error, 100 * v.worst_error, v.bottleneck_agree, n, v.kendall_tau,
-        v.worst_at);
+        v.grid, n, 100 * v.mean_error, 100 * v.worst_error, mode_cell(v.static_balancing),
+        mode_cell(v.dynamic_balancing), v.bottleneck_agree, n, v.kendall_tau, v.worst_at);
     out += fmt::format(
-        "| {} | {} | closed form, no contention | {:.1f}% | {:.1f}% | - | {:.3f} | "
+        "| {} | {} | closed form, no contention | {:.1f}% | {:.1f}% | | | - | {:.3f} | "
         "|\n",
         v.grid, n, 100 * v.closed_form_mean_error, 100 * v.closed_form_worst_error,
         v.closed_form_tau);
