@@ -295,6 +295,23 @@ TEST_CASE("cycle costs follow the documented formulas", "[isa]") {
   CHECK(cost_of("qtest.ge edge0") == 40 + 8);
   CHECK(cost_of("bsld z, 0") == 1 * 64);  // 32-bit blocks
   CHECK(cost_of("bsst w, 3") == 2 * 64);
+
+  // evaluator.bit_order=msb_first: the sign first (an edge test is one bit), a load or
+  // compare streams the integer bits from the top down (40 - 12 of them).
+  TimingParams msb;
+  msb.msb_first = true;
+  auto msb_cost_of = [&](const std::string& line) {
+    for (std::size_t k = 0; k < cases.size(); ++k) {
+      if (line == cases[k].line) return instruction_cost(code[k], msb, values).count;
+    }
+    FAIL("no case " << line);
+    return std::uint64_t{0};
+  };
+  CHECK(msb_cost_of("qtest.ge edge0") == 1 + 8);
+  CHECK(msb_cost_of("qload z, depth") == 40 - 12 + 8);
+  CHECK(msb_cost_of("qload z[7:0], depth") == 40 - 12 + 8);
+  CHECK(msb_cost_of("qcmp.lt z, depth") == 40 - 12 + 8 + 1);
+  CHECK(msb_cost_of("bsld z, 0") == 1 * 64);
 }
 
 TEST_CASE("the windowed multiply adds only the partial product's window", "[isa]") {

@@ -93,6 +93,23 @@ TEST_CASE("depth sort: each overlap test decides the case it is for", "[visible]
   CHECK(ops.fadd > 0);
 }
 
+// The slides' containment ("minimax test with center of one triangle and containing rectangle
+// of the other") against the centroid-in-every-edge test: Q's centre lies in P's rectangle
+// but outside P, no edges cross, and the planes cut each other. The edge test finds the
+// projections apart; the slides' rectangle says they overlap, and then no test orders them.
+TEST_CASE("depth sort: the slides' containment test says overlap where the edges do not",
+          "[visible]") {
+  auto tri = [](glm::dvec3 a, glm::dvec3 b, glm::dvec3 c) { return SortPolygon{{a, b, c}}; };
+  const SortPolygon p = tri({0, 0, 0.4}, {10, 0, 0.8}, {0, 10, 0.4});  // z = 0.4 + 0.04 x
+  const SortPolygon q = tri({8, 8, 0.5}, {9, 8, 0.5}, {8, 9, 0.75});   // z = 0.5 + 0.25 (y - 8)
+  std::array<std::uint64_t, kOverlapTests> runs{};
+  OpCounts ops;
+  const PairVerdict edges = check_pair(p, q, runs, ops, Containment::edges);
+  const PairVerdict rectangle = check_pair(p, q, runs, ops, Containment::rectangle);
+  CHECK(edges.decided_by == OverlapTest::projection);
+  CHECK(rectangle.decided_by == OverlapTest::count);
+}
+
 namespace {
 
 // 256 x 256 (four regions), 4 GPs, 2 Renderers: the goldens' small machine.

@@ -43,10 +43,18 @@ std::uint64_t magnitude(std::int64_t k) {
   return k < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(k) : static_cast<std::uint64_t>(k);
 }
 
+// The bits a load or compare of a `width`-bit field streams from the evaluator: LSB first, the
+// fraction and then the field's bits; MSB first, the integer bits from the top down to the
+// field's lowest (those above the field first, discarded).
+std::uint64_t evaluator_stream(const TimingParams& t, int width) {
+  return static_cast<std::uint64_t>(t.msb_first ? t.result_bits - t.fraction_bits
+                                                : t.fraction_bits + width);
+}
+
 // The unpublished properties some costs rest on (InstructionInfo::basis).
 constexpr const char* kEvaluatorOrder =
-    "the evaluator's bit order and latency (assumed: the fraction bits stream first, LSB first, "
-    "after evaluator.latency_cycles; not published)";
+    "the evaluator's bit order and latency (assumed: evaluator.bit_order, by default the "
+    "fraction bits first, LSB first, after evaluator.latency_cycles; not published)";
 constexpr const char* kMultiplyMicrocode =
     "the multiply's microcode (a choice of the simulator, renderer.multiply_microcode: "
     "shift-and-add, one pass per multiplier bit over the destination from that bit up, or over "
@@ -74,9 +82,11 @@ std::vector<InstructionInfo> make_table() {
 
       {Opcode::qtest, "qtest", true, "E", "qtest.cond expr",
        "E <- E & (expr cond 0); every result bit streams through the comparator",
-       "evaluator.result_bits + evaluator.latency_cycles",
-       [](const I&, const T& t, const P&) {
-         return ArrayCycles(t.result_bits + t.evaluator_latency);
+       "evaluator.result_bits + evaluator.latency_cycles (evaluator.bit_order=msb_first: 1 + "
+       "evaluator.latency_cycles for ge and lt, the sign alone)",
+       [](const I& i, const T& t, const P&) {
+         const bool sign = i.condition == Compare::ge || i.condition == Compare::lt;
+         return ArrayCycles((t.msb_first && sign ? 1 : t.result_bits) + t.evaluator_latency);
        },
        [](const I& i, X& c) {
          c.pixels.qtest(expression_of(i.operands[0], c.values), i.condition);
@@ -84,9 +94,10 @@ std::vector<InstructionInfo> make_table() {
        kEvaluatorOrder},
       {Opcode::qload, "qload", false, "FE", "qload dst, expr",
        "dst <- floor(expr) modulo 2^width(dst)",
-       "evaluator.fraction_bits + width(dst) + evaluator.latency_cycles",
+       "evaluator.fraction_bits + width(dst) + evaluator.latency_cycles (evaluator.bit_order="
+       "msb_first: evaluator.result_bits - evaluator.fraction_bits + evaluator.latency_cycles)",
        [](const I& i, const T& t, const P&) {
-         return ArrayCycles(t.fraction_bits + width_of(i.operands[0]) + t.evaluator_latency);
+         return ArrayCycles(evaluator_stream(t, width_of(i.operands[0])) + t.evaluator_latency);
        },
        [](const I& i, X& c) {
          c.pixels.qload(i.operands[0].field, expression_of(i.operands[1], c.values));
@@ -94,9 +105,11 @@ std::vector<InstructionInfo> make_table() {
        kEvaluatorOrder},
       {Opcode::qcmp, "qcmp", true, "RE", "qcmp.cond field, expr",
        "E <- E & (floor(expr) cond field), expr taken to width(field) with field's signedness",
-       "evaluator.fraction_bits + width(field) + evaluator.latency_cycles + 1",
+       "evaluator.fraction_bits + width(field) + evaluator.latency_cycles + 1 "
+       "(evaluator.bit_order=msb_first: evaluator.result_bits - evaluator.fraction_bits + "
+       "evaluator.latency_cycles + 1)",
        [](const I& i, const T& t, const P&) {
-         return ArrayCycles(t.fraction_bits + width_of(i.operands[0]) + t.evaluator_latency + 1);
+         return ArrayCycles(evaluator_stream(t, width_of(i.operands[0])) + t.evaluator_latency + 1);
        },
        [](const I& i, X& c) {
          c.pixels.qcmp(i.operands[0].field, expression_of(i.operands[1], c.values), i.condition);

@@ -69,6 +69,9 @@ struct TimingParams {
   int backing_store_cycles_per_block = 64;
   // renderer.multiply_microcode = window: mul adds only the partial product's window.
   bool multiply_window = false;
+  // evaluator.bit_order = msb_first: the evaluator delivers the sign first (qtest, qload and
+  // qcmp cost as InstructionInfo::cycles says for that order).
+  bool msb_first = false;
 };
 
 using ExpressionValues = std::array<QuadraticCoefficients, static_cast<int>(Expression::count)>;

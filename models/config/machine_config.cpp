@@ -425,6 +425,19 @@ const std::vector<Entry>& parameter_table() {
           "a tree of about log2(128) = 7 levels plus input stages; not published: 4 to 16",
           "evaluator.latency_cycles=4", "evaluator.latency_cycles=16"),
 
+      assumed({"evaluator.bit_order", "mode", "A", 0, 0, 0,
+               "The order the evaluator delivers a value's bits in (timing only). 'lsb_first': the "
+               "fraction bits first, so qload and qcmp stop after the field's top bit, and qtest "
+               "streams every bit to reach the sign. 'msb_first': the sign first, so a qtest.ge or "
+               "qtest.lt (an edge test) takes one bit, and qload and qcmp stream the integer bits "
+               "from the top down to the field's lowest (result_bits - fraction_bits), with the "
+               "same latency.",
+               [](MachineConfig& c) -> Ref { return choice(&c.evaluator.bit_order); },
+               "lsb_first|msb_first"},
+              "not published: a tree of bit-serial adders delivers LSB first (Fuchs et al.); an "
+              "MSB-first tree (sign first, same latency) is the alternative that makes edge tests "
+              "cheap",
+              "evaluator.bit_order=lsb_first", "evaluator.bit_order=msb_first"),
       assumed({"evaluator.coefficient_words_per_cycle", "words/cycle", "A", 1, 1, 64,
                "Ring words of a packet's coefficients moved from the instruction queue into the "
                "evaluator's input registers per array cycle.",
@@ -872,6 +885,11 @@ std::string name_of(MachineConfig::Gp::OverheadForm form) {
 std::string name_of(MachineConfig::Renderer::MultiplyMicrocode microcode) {
   return split_choices(
       find_parameter("renderer.multiply_microcode")->choices)[static_cast<std::size_t>(microcode)];
+}
+
+std::string name_of(MachineConfig::Evaluator::BitOrder order) {
+  return split_choices(
+      find_parameter("evaluator.bit_order")->choices)[static_cast<std::size_t>(order)];
 }
 
 std::string name_of(MachineConfig::Gp::Multipass multipass) {

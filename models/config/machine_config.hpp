@@ -94,6 +94,10 @@ struct MachineConfig {
     int latency_cycles = 0;
     int coefficient_words_per_cycle = 0;
     int double_buffered = 0;
+    // The order the evaluator delivers a value's bits in (timing only: the values are the
+    // same).
+    enum class BitOrder { lsb_first, msb_first };
+    BitOrder bit_order = BitOrder::lsb_first;
   } evaluator;
   struct FrameBuffer {
     int bits_per_pixel = 0;
@@ -153,6 +157,7 @@ struct MachineConfig {
 std::string name_of(MachineConfig::Gp::Code code);
 std::string name_of(MachineConfig::Renderer::Balancing balancing);
 std::string name_of(MachineConfig::Renderer::MultiplyMicrocode microcode);
+std::string name_of(MachineConfig::Evaluator::BitOrder order);
 std::string name_of(MachineConfig::Gp::Multipass multipass);
 std::string name_of(MachineConfig::Gp::OverheadForm form);
 std::string name_of(MachineConfig::Gp::SendOrder order);

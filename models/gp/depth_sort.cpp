@@ -30,6 +30,9 @@ constexpr OpCounts kLineCross{6 + 2 + 4, 4 + 5 + 2, 0, 0, 0, 2, 2};
 // The slides' same-side test of a centroid against one edge: f(x, y) (2 multiplies, 3
 // subtracts) and the sign compare with the third vertex's (stored) sign.
 constexpr OpCounts kSameSide{3 + 1, 2, 2, 0, 0, 1, 0};
+// The slides' containment: a centre against a containing rectangle, four compares (and
+// their branches) on the centre (2 loads) and the stored extents (4 loads).
+constexpr OpCounts kCentreMinimax{4, 0, 6, 0, 0, 4, 0};
 
 // A polygon's record, made once (the prepare phase): extents, plane, centroid.
 struct Record {
@@ -109,10 +112,16 @@ bool contains(const SortPolygon& poly, const glm::dvec2& c, OpCounts& ops) {
   return true;
 }
 
+// The slides' containment: `c` inside the containing rectangle of `r` (minimax).
+bool in_rectangle(const Record& r, const glm::dvec2& c, OpCounts& ops) {
+  ops += kCentreMinimax;
+  return c.x > r.x0 && c.x < r.x1 && c.y > r.y0 && c.y < r.y1;
+}
+
 // The projections overlap: an edge of P crosses an edge of Q, or one contains the other's
 // centroid.
 bool projections_overlap(const SortPolygon& p, const Record& rp, const SortPolygon& q,
-                         const Record& rq, OpCounts& ops) {
+                         const Record& rq, OpCounts& ops, Containment containment) {
   const std::size_t np = p.v.size(), nq = q.v.size();
   for (std::size_t i = 0; i < np; ++i) {
     for (std::size_t j = 0; j < nq; ++j) {
@@ -126,12 +135,14 @@ bool projections_overlap(const SortPolygon& p, const Record& rp, const SortPolyg
       if (s == SegmentResult::crossing) return true;
     }
   }
+  if (containment == Containment::rectangle)
+    return in_rectangle(rq, rp.centroid, ops) || in_rectangle(rp, rq.centroid, ops);
   return contains(q, rp.centroid, ops) || contains(p, rq.centroid, ops);
 }
 
 PairVerdict check_records(const SortPolygon& p, const Record& rp, const SortPolygon& q,
                           const Record& rq, std::array<std::uint64_t, kOverlapTests>& runs,
-                          OpCounts& ops) {
+                          OpCounts& ops, Containment containment) {
   auto run = [&](OverlapTest t) { ++runs[static_cast<int>(t)]; };
   PairVerdict v;
   run(OverlapTest::x_extent);
@@ -157,7 +168,7 @@ PairVerdict check_records(const SortPolygon& p, const Record& rp, const SortPoly
     return v;
   }
   run(OverlapTest::projection);
-  if (!projections_overlap(p, rp, q, rq, ops)) {
+  if (!projections_overlap(p, rp, q, rq, ops, containment)) {
     v.decided_by = OverlapTest::projection;
     return v;
   }
@@ -285,15 +296,17 @@ const char* overlap_test_name(OverlapTest t) {
 }
 
 PairVerdict check_pair(const SortPolygon& p, const SortPolygon& q,
-                       std::array<std::uint64_t, kOverlapTests>& runs, OpCounts& ops) {
+                       std::array<std::uint64_t, kOverlapTests>& runs, OpCounts& ops,
+                       Containment containment) {
   const Record rp = make_record(p), rq = make_record(q);
   ++runs[static_cast<int>(OverlapTest::z_extent)];
   ops += kZExtent;
   if (rq.z1 <= rp.z0) return {OverlapTest::z_extent, false};
-  return check_records(p, rp, q, rq, runs, ops);
+  return check_records(p, rp, q, rq, runs, ops, containment);
 }
 
-DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps) {
+DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps,
+                           Containment containment) {
   if (gps < 1) throw std::invalid_argument("depth_sort: gps must be at least 1");
   DepthSortResult r;
   const auto n = static_cast<long long>(polygons.size());
@@ -362,7 +375,7 @@ DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps) {
       }
       ++r.pairs_checked;
       const PairVerdict v =
-          check_records(polygons[p], rec[p], polygons[q], rec[q], r.tests_run, ops);
+          check_records(polygons[p], rec[p], polygons[q], rec[q], r.tests_run, ops, containment);
       if (v.decided_by != OverlapTest::count) ++r.decided[static_cast<int>(v.decided_by)];
       if (v.decided_by == OverlapTest::count) {
         ++r.unorderable;

@@ -16,6 +16,10 @@
 //   q_in_front_of_p      every vertex of Q on P's near side
 //   projection           the projections do not overlap: no two edges cross (the slides'
 //                        three-step line test) and neither contains the other's centroid
+//                        (Containment::edges: the centroid against every edge, the slides'
+//                        inside test) or centre (Containment::rectangle: the slides' "check
+//                        for containment", a minimax test of one polygon's centre against
+//                        the other's containing rectangle, which says "overlap" more often)
 // If all fail, the reversed plane tests (q_behind_p, p_in_front_of_q) are tried: if one
 // succeeds, Q must be drawn first and is moved ahead of P. A Q that was moved once and must
 // move again closes a cycle; a pair no test orders either way interpenetrates, or overlaps
@@ -75,6 +79,12 @@ enum class SegmentResult { disjoint_extents, parallel, crossing, not_crossing };
 SegmentResult segments_cross(const glm::dvec2& p1, const glm::dvec2& p2, const glm::dvec2& p3,
                              const glm::dvec2& p4);
 
+// The projection test's last step: is one polygon's centre inside the other?
+enum class Containment {
+  edges,      // the centroid against every edge (same-side tests): exact for convex polygons
+  rectangle,  // the slides': the centre against the containing rectangle (minimax)
+};
+
 enum class OverlapTest {
   z_extent,  // the depth extents do not overlap (the sort's own criterion)
   x_extent,
@@ -97,7 +107,8 @@ struct PairVerdict {
 // Checks P (farther by its far end) against Q with the tests in order; adds the tests run to
 // `runs` and their operations to `ops`.
 PairVerdict check_pair(const SortPolygon& p, const SortPolygon& q,
-                       std::array<std::uint64_t, kOverlapTests>& runs, OpCounts& ops);
+                       std::array<std::uint64_t, kOverlapTests>& runs, OpCounts& ops,
+                       Containment containment = Containment::edges);
 
 struct DepthSortCosts {
   std::vector<OpCounts> prepare;  // per GP: extents, planes, its share's merge sort
@@ -118,7 +129,8 @@ struct DepthSortResult {
   DepthSortCosts costs;
 };
 
-DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps);
+DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps,
+                           Containment containment = Containment::edges);
 
 class Statistics;
 // Registers PREFIX.key_comparisons, .pairs_checked, .tests_run.TEST, .decided.TEST,

@@ -37,6 +37,7 @@ TimingParams timing_params(const MachineConfig& c) {
   t.backing_store_cycles_per_block = c.renderer.backing_store_cycles_per_block;
   t.multiply_window =
       c.renderer.multiply_microcode == MachineConfig::Renderer::MultiplyMicrocode::window;
+  t.msb_first = c.evaluator.bit_order == MachineConfig::Evaluator::BitOrder::msb_first;
   return t;
 }
 

@@ -298,17 +298,23 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     return std::max({st.stage_open, st.room, gp_free[static_cast<std::size_t>(m.gp)],
                      pass_ready(m.gp, st.pass)});
   };
-  // (time, kind, Renderer): kind 0 a region to claim, 1 a message to send; earliest first,
-  // claims before messages at one instant, then the lower Renderer.
-  using Candidate = std::tuple<double, int, int>;
+  // (time, kind, stage, Renderer): kind 0 a region to claim, 1 a message to send; earliest
+  // first, claims before messages at one instant, then the lower stage (pass * regions +
+  // region: a GP free for several open stages sends to the lowest, as
+  // GraphicsProcessor::run picks), then the lower Renderer.
+  using Candidate = std::tuple<double, int, int, int>;
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> heap;
+  auto stage_of = [&](int j) {
+    const RendererState& st = rs[static_cast<std::size_t>(j)];
+    return st.pass * regions + st.current;
+  };
   auto schedule = [&](int j) {
     switch (advance(j)) {
       case Next::message:
-        heap.emplace(ready_time(j), 1, j);
+        heap.emplace(ready_time(j), 1, stage_of(j), j);
         break;
       case Next::claim:
-        heap.emplace(rs[static_cast<std::size_t>(j)].stage_open, 0, j);
+        heap.emplace(rs[static_cast<std::size_t>(j)].stage_open, 0, 0, j);
         break;
       case Next::done:
         break;
@@ -316,7 +322,7 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   };
   for (int j = 0; j < renderers; ++j) schedule(j);
   while (!heap.empty()) {
-    const auto [when, kind, j] = heap.top();
+    const auto [when, kind, stage, j] = heap.top();
     heap.pop();
     RendererState& st = rs[static_cast<std::size_t>(j)];
     if (kind == 0) {
@@ -329,7 +335,7 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     }
     const double ready = ready_time(j);
     if (ready > when) {  // its GP was taken meanwhile
-      heap.emplace(ready, 1, j);
+      heap.emplace(ready, 1, stage, j);
       continue;
     }
     const AnalyticMessage m = st.messages[st.next++];

@@ -17,7 +17,7 @@ std::string GridMachine::label() const {
   return out;
 }
 
-std::vector<GridMachine> analytic_tuning_grid() {
+std::vector<GridMachine> analytic_tuning_grid(const std::string& balancing) {
   std::vector<GridMachine> grid;
   for (const char* program : {"phong", "threshold", "flat", "transparent"}) {
     for (int gps : {4, 32}) {
@@ -28,6 +28,7 @@ std::vector<GridMachine> analytic_tuning_grid() {
                           {"screen.width=640", "screen.height=512", fmt::format("gp.count={}", gps),
                            fmt::format("renderer.count={}", renderers),
                            fmt::format("ring.channels={}", channels)}});
+          if (balancing != "static") grid.back().sets.push_back("renderer.balancing=" + balancing);
         }
       }
     }
@@ -127,6 +128,13 @@ AnalyticValidation validate_analytic(const std::string& grid,
     v.closed_form_mean_error += closed_error;
     v.closed_form_worst_error = std::max(v.closed_form_worst_error, closed_error);
     if (p.event_bottleneck == p.analytic_bottleneck) ++v.bottleneck_agree;
+    AnalyticValidation::Mode& mode =
+        std::find(m.sets.begin(), m.sets.end(), "renderer.balancing=dynamic") != m.sets.end()
+            ? v.dynamic_balancing
+            : v.static_balancing;
+    ++mode.machines;
+    mode.mean_error += error;
+    mode.worst_error = std::max(mode.worst_error, error);
     event.push_back(p.event_seconds);
     analytic.push_back(p.analytic_seconds);
     closed.push_back(p.closed_form_seconds);
@@ -135,6 +143,9 @@ AnalyticValidation validate_analytic(const std::string& grid,
   if (!v.points.empty()) {
     v.mean_error /= static_cast<double>(v.points.size());
     v.closed_form_mean_error /= static_cast<double>(v.points.size());
+  }
+  for (AnalyticValidation::Mode* mode : {&v.static_balancing, &v.dynamic_balancing}) {
+    if (mode->machines > 0) mode->mean_error /= mode->machines;
   }
   v.kendall_tau = kendall_tau(event, analytic);
   v.closed_form_tau = kendall_tau(event, closed);
@@ -147,11 +158,15 @@ report::Table analytic_validation_table(const std::vector<AnalyticValidation>& g
   Table t;
   t.id = "analytic-grids";
   t.columns = {
-      text_column("grid", "tuning (the machines it was adjusted on) or held-out"),
+      text_column("grid", "tuning (the machines it was adjusted on), looked at, or held-out"),
       left(integer_column("machines", "machines")),
       text_column("model", "The analytic level's recurrence, or a closed form without contention"),
       left(real_column("mean error", "%", 1, "Mean |frame-time error| against the event level")),
       left(real_column("worst error", "%", 1, "Largest |frame-time error|")),
+      text_column("static: worst (mean)",
+                  "Worst and mean error over the grid's machines with static balancing"),
+      text_column("dynamic: worst (mean)",
+                  "Worst and mean error over the grid's machines with dynamic balancing"),
       left(integer_column("bottleneck agrees", "machines",
                           "Machines where the bottleneck agrees with the event level's")),
       left(real_column("Kendall tau", "", 3,
@@ -162,14 +177,20 @@ report::Table analytic_validation_table(const std::vector<AnalyticValidation>& g
   auto pct = [](double share) {
     return Cell::shown_as(100 * share, fmt::format("{:.1f}%", 100 * share));
   };
+  const auto mode_cell = [](const AnalyticValidation::Mode& m) {
+    return m.machines == 0 ? std::string("-")
+                           : fmt::format("{:.1f}% ({:.1f}%, {} machines)", 100 * m.worst_error,
+                                         100 * m.mean_error, m.machines);
+  };
   for (const AnalyticValidation& v : grids) {
     const auto n = static_cast<std::int64_t>(v.points.size());
     t.add_row({v.grid, n, "contention recurrence", pct(v.mean_error), pct(v.worst_error),
+               mode_cell(v.static_balancing), mode_cell(v.dynamic_balancing),
                Cell::shown_as(static_cast<std::int64_t>(v.bottleneck_agree),
                               fmt::format("{} of {}", v.bottleneck_agree, n)),
                v.kendall_tau, v.worst_at});
     t.add_row({v.grid, n, "closed form, no contention", pct(v.closed_form_mean_error),
-               pct(v.closed_form_worst_error), Cell::missing(), v.closed_form_tau, ""});
+               pct(v.closed_form_worst_error), "", "", Cell::missing(), v.closed_form_tau, ""});
   }
   return t;
 }

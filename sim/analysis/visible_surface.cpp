@@ -67,7 +67,8 @@ constexpr std::uint64_t kSortRecordWords = 19;
 // time is the larger of all words over the ring's bandwidth and the longest single message.
 // `whole`, if given, is the whole-screen sort already run on `polygons`.
 SortCost painter_sort_cost(const MachineConfig& config, const std::vector<SortPolygon>& polygons,
-                           bool per_region, bool factor, const DepthSortResult* whole) {
+                           bool per_region, bool factor, const DepthSortResult* whole,
+                           Containment containment) {
   I860Params params = i860_params(config);
   if (!factor) params.overhead_factor = 1;
   const I860Model i860(params);
@@ -80,7 +81,7 @@ SortCost painter_sort_cost(const MachineConfig& config, const std::vector<SortPo
   c.polygons = polygons.size();
   const int gps = config.gp.count;
   if (!per_region) {
-    const DepthSortResult own = whole ? DepthSortResult{} : depth_sort(polygons, gps);
+    const DepthSortResult own = whole ? DepthSortResult{} : depth_sort(polygons, gps, containment);
     const DepthSortResult& r = whole ? *whole : own;
     c.pairs_checked = r.pairs_checked;
     std::uint64_t prepare = 0, check = 0;
@@ -115,7 +116,7 @@ SortCost painter_sort_cost(const MachineConfig& config, const std::vector<SortPo
       if (hx >= x0 && lx < x0 + rw && hy >= y0 && ly < y0 + rh) bin.push_back(p);
     }
     if (bin.empty()) continue;
-    const DepthSortResult r = depth_sort(bin, 1);
+    const DepthSortResult r = depth_sort(bin, 1, containment);
     c.pairs_checked += r.pairs_checked;
     gp_clocks[static_cast<std::size_t>(region % gps)] += i860.clocks(r.costs.prepare[0], 0).count +
                                                          i860.clocks(r.costs.check[0], 0).count +
@@ -225,12 +226,13 @@ SortPolygon sort_polygon(const PaintPiece& p) {
 DepthSortResult sort_with_splitting(std::vector<PaintPiece>& pieces, int gps, int rounds,
                                     VisibleSceneReport& rep,
                                     std::vector<std::vector<SortPolygon>>& earlier,
-                                    std::vector<DepthSortResult>& earlier_sorts) {
+                                    std::vector<DepthSortResult>& earlier_sorts,
+                                    Containment containment) {
   std::vector<SortPolygon> polys;
   auto sort_now = [&] {
     polys.clear();
     for (const PaintPiece& p : pieces) polys.push_back(sort_polygon(p));
-    return depth_sort(polys, gps);
+    return depth_sort(polys, gps, containment);
   };
   DepthSortResult r = sort_now();
   rep.unresolved_before_split = r.unresolved.size();
@@ -320,16 +322,17 @@ PainterTiming painter_against_zbuffer(const MachineConfig& config_in, const Scen
   VisibleSceneReport scratch;
   std::vector<std::vector<SortPolygon>> earlier;
   std::vector<DepthSortResult> earlier_sorts;
-  const DepthSortResult sort = sort_with_splitting(pieces, config.gp.count, options.split_rounds,
-                                                   scratch, earlier, earlier_sorts);
+  const DepthSortResult sort =
+      sort_with_splitting(pieces, config.gp.count, options.split_rounds, scratch, earlier,
+                          earlier_sorts, options.containment);
   std::vector<SortPolygon> sortable;
   for (const PaintPiece& piece : pieces) sortable.push_back(sort_polygon(piece));
   SortCost c = painter_sort_cost(config, sortable, per_region, options.overhead_factor,
-                                 per_region ? nullptr : &sort);
+                                 per_region ? nullptr : &sort, options.containment);
   for (std::size_t k = 0; k < earlier.size(); ++k) {
-    c.prepare_seconds +=
-        painter_sort_cost(config, earlier[k], false, options.overhead_factor, &earlier_sorts[k])
-            .seconds();
+    c.prepare_seconds += painter_sort_cost(config, earlier[k], false, options.overhead_factor,
+                                           &earlier_sorts[k], options.containment)
+                             .seconds();
   }
   t.sort_seconds = c.seconds();
   std::vector<int> first;
@@ -379,7 +382,7 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
   std::vector<std::vector<SortPolygon>> earlier;
   std::vector<DepthSortResult> earlier_sorts;
   rep.sort = sort_with_splitting(pieces, config.gp.count, painter_options.split_rounds, rep,
-                                 earlier, earlier_sorts);
+                                 earlier, earlier_sorts, painter_options.containment);
   rep.pieces = pieces.size();
   std::vector<SortPolygon> sortable;
   sortable.reserve(pieces.size());
@@ -411,7 +414,8 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
                                          ran       ? sortable
                                          : removed ? fronts
                                                    : every,
-                                         per_region, factor, ran ? &rep.sort : nullptr);
+                                         per_region, factor, ran ? &rep.sort : nullptr,
+                                         painter_options.containment);
           c.back_faces_removed = removed;
           c.label = fmt::format("{}, {}, {}", removed ? "back faces removed" : "every face",
                                 per_region ? "per region bin" : "whole screen",
@@ -422,8 +426,8 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
             if (rep.split_rounds > 0)
               c.label += fmt::format(", with {} rounds of splitting", rep.split_rounds);
             for (std::size_t k = 0; k < earlier.size(); ++k) {
-              const SortCost e =
-                  painter_sort_cost(config, earlier[k], false, factor, &earlier_sorts[k]);
+              const SortCost e = painter_sort_cost(config, earlier[k], false, factor,
+                                                   &earlier_sorts[k], painter_options.containment);
               c.prepare_seconds += e.prepare_seconds;
               c.merge_seconds += e.merge_seconds;
               c.transfer_seconds += e.transfer_seconds;

@@ -130,6 +130,9 @@ struct PainterOptions {
   // A pair no test orders: split one polygon by the other's plane (Newell, Newell and
   // Sancha) and sort again, up to this many rounds; 0 leaves such pairs in far-depth order.
   int split_rounds = 8;
+  // The projection test's containment step: the centroid against every edge (the default),
+  // or the slides' centre against the containing rectangle.
+  Containment containment = Containment::edges;
 };
 
 // One way of running the sort and what it costs on the GPs: the slowest GP's prepare, the

@@ -232,14 +232,21 @@ int run_fidelity(FidelityOptions o) {
     const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
       return assemble_file(resolve_firmware(name), assembler_options(c));
     };
-    const std::vector<AnalyticValidation> grids = {
+    std::vector<AnalyticValidation> grids = {
         validate_analytic("tuning", analytic_tuning_grid(), load),
-        validate_analytic("held-out", analytic_heldout_grid(o.heldout), load)};
+        validate_analytic("tuning (dynamic)", analytic_tuning_grid("dynamic"), load),
+        validate_analytic(fmt::format("looked at (seed {:#x})", kLookedAtSeed),
+                          analytic_heldout_grid(o.heldout, kLookedAtSeed), load)};
+    for (const std::uint64_t seed : kHeldOutSeeds) {
+      grids.push_back(validate_analytic(fmt::format("held-out (seed {:#x})", seed),
+                                        analytic_heldout_grid(o.heldout, seed), load));
+    }
     const std::string heading =
-        "The analytic level against the event level (frame time, no pixels), on the grid "
-        "it was adjusted on and on a held-out grid of seeded machines (scenes, programs, "
-        "screens, GPs, Renderers, channels, queue words, balancing, shipping, hop latency, "
-        "double buffering, code profile):";
+        "The analytic level against the event level (frame time, no pixels), on the grids "
+        "it was adjusted on (the tuning grids, and a seeded grid that was held out until it "
+        "was looked at) and on held-out grids of seeded machines (scenes, programs, screens, "
+        "GPs, Renderers, channels, queue words, balancing, shipping, hop latency, double "
+        "buffering, code profile):";
     const report::Table grid_table = analytic_validation_table(grids);
     md += "\n" + heading + "\n\n" + report::markdown(grid_table);
     report::Section& section = page.add_section("analytic", "The analytic level's validation");
@@ -303,7 +310,8 @@ Command add_fidelity_command(CLI::App& app) {
   add_report_flag(*cmd, o->report, "OUT");
   cmd->add_flag("!--no-analytic-grids", o->analytic_grids,
                 "Skip the analytic level's validation on the tuning and held-out grids");
-  cmd->add_option("--heldout", o->heldout, "Machines of the held-out grid")
+  cmd->add_option("--heldout", o->heldout,
+                  "Machines of each seeded grid (the held-out grids and the one looked at)")
       ->check(CLI::Range(2, 100000))
       ->capture_default_str();
   return {cmd, [o] { return run_fidelity(*o); }};

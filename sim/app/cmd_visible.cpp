@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "models/machine.hpp"
@@ -132,6 +133,12 @@ Command add_visible_command(CLI::App& app) {
   cmd->add_flag("--painter-overhead-factor", o->painter.overhead_factor,
                 "Multiply the depth sort's clocks by gp.overhead_factor (fitted to the transform "
                 "loop); by default the sort is costed from its own operation counts");
+  cmd->add_option("--painter-containment", o->painter.containment,
+                  "The depth sort's containment step: edges (a centroid against every edge of "
+                  "the other polygon, the default) or rectangle (the slides' minimax test of a "
+                  "centre against the other's containing rectangle)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, Containment>{
+          {"edges", Containment::edges}, {"rectangle", Containment::rectangle}}));
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
   return {cmd, [o] { return run_visible(*o); }};
