@@ -31,6 +31,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
     renderers_.push_back(
         std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, renderer_wiring));
     renderer_queues_.push_back(renderers_.back().get());
+    clock_.enrol_renderer();
   }
   const GpWiring gp_wiring{plan_, *ring_, scheduler_, renderer_queues_, timeline_, clock_};
   for (int k = 0; k < gps; ++k) {
@@ -57,6 +58,11 @@ Machine::~Machine() = default;
 
 sc_core::sc_time Machine::frame_end() const {
   return std::max(sc_core::sc_time_stamp(), clock_.start() + frame_buffer_->frame_complete());
+}
+
+void Machine::overlap(int frames) {
+  clock_.set_overlapped(true);
+  clock_.release(frames);
 }
 
 void Machine::begin_frame(int frame) {

@@ -104,6 +104,12 @@ class Machine : public sc_core::sc_module {
   // begin_frame.
   sc_core::sc_time frame_end() const;
   const FrameClock& clock() const { return clock_; }
+  // Frames overlapped (sim/simulation.hpp, Session::run_frames): before the kernel first
+  // runs, releases `frames` frames that the units then run one after another on their own,
+  // a GP setting up frame n + 1 while the Renderers still draw frame n (frames.gp_bins,
+  // frames.gp_start); each unit keeps a record of every frame it finished
+  // (GraphicsProcessor::history, Renderer::history). No begin_frame between them.
+  void overlap(int frames);
 
   // The timeline: when on, modules record slices of activity.
   void record_timeline(bool on);

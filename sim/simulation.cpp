@@ -777,6 +777,297 @@ FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& ob
   return counted(std::move(result));
 }
 
+std::string RunSummary::sustained_text() const {
+  if (frames == 0) return {};
+  std::string rate = fmt::format("{:.0f} triangles/s", sustained_triangles_per_second);
+  if (sustained_spheres_per_second > 0)
+    rate += fmt::format(", {:.0f} spheres/s", sustained_spheres_per_second);
+  if (!overlapped) {
+    return fmt::format(
+        "sustained (closed-form estimate, frames not simulated overlapped): {:.3f} ms a frame, "
+        "{:.1f} frames/s, {}\n",
+        sustained_frame_seconds * 1e3,
+        sustained_frame_seconds > 0 ? 1 / sustained_frame_seconds : 0.0, rate);
+  }
+  std::string out = fmt::format(
+      "sustained (simulated, {} frames overlapped): {:.3f} ms a frame, {:.1f} frames/s, {}; "
+      "latency {:.3f} ms mean, {:.3f} ms longest; GPs busy {:.1f}%, waiting for Renderers "
+      "{:.1f}%; Renderers idle between frames {:.1f}%; {} of {} frames overlapped "
+      "the one before\n",
+      frames, sustained_frame_seconds * 1e3,
+      sustained_frame_seconds > 0 ? 1 / sustained_frame_seconds : 0.0, rate,
+      mean_latency_seconds * 1e3, longest_latency_seconds * 1e3, 100 * gp_busy_share,
+      100 * gp_wait_share, 100 * renderer_wait_share, overlapped_frames,
+      frames > 1 ? frames - 1 : 0);
+  if (estimate_frame_seconds > 0) {
+    out += fmt::format(
+        "closed-form estimate (frame.pipelined_frame_seconds of one frame alone): {:.3f} ms, "
+        "{:+.1f}% against the simulated period\n",
+        estimate_frame_seconds * 1e3, 100 * estimate_error());
+  }
+  return out;
+}
+
+Statistics RunSummary::statistics() const {
+  namespace u = stat_unit;
+  Statistics s;
+  const RunSummary r = *this;
+  s.add_integer("run.frames", u::count, "Frames in the run",
+                [r] { return std::int64_t{r.frames}; });
+  s.add_text("run.timing", u::name,
+             "How the sustained figures were found: 'simulated' (frames overlapped in the event "
+             "model) or 'estimate' (the closed form, fidelity.timing=analytic)",
+             [r] { return std::string(r.overlapped ? "simulated" : "estimate"); });
+  s.add_real("run.sustained_frame_seconds", u::seconds,
+             "Sustained frame period: from the end of the first frame to the end of the last, "
+             "over the frames between (one frame: its time)",
+             [r] { return r.sustained_frame_seconds; });
+  s.add_real("run.sustained_frames_per_second", u::per_second, "1 / sustained_frame_seconds",
+             [r] { return r.sustained_frame_seconds > 0 ? 1 / r.sustained_frame_seconds : 0; });
+  s.add_real("run.sustained_triangles_per_second", u::per_second,
+             "Display-list triangles / sustained_frame_seconds",
+             [r] { return r.sustained_triangles_per_second; });
+  s.add_real("run.sustained_spheres_per_second", u::per_second,
+             "Display-list spheres / sustained_frame_seconds",
+             [r] { return r.sustained_spheres_per_second; });
+  s.add_real("run.mean_latency_seconds", u::seconds,
+             "Frame latency, mean: from the first GP starting a frame's set-up to its last "
+             "region reaching the frame buffer",
+             [r] { return r.mean_latency_seconds; });
+  s.add_real("run.longest_latency_seconds", u::seconds, "Frame latency, longest",
+             [r] { return r.longest_latency_seconds; });
+  s.add_real("run.gp_busy_share", u::ratio,
+             "The busy GPs' busy time (geometry, starting messages) over their number x the GPs' "
+             "part of the run (first set-up to the last GP's last message)",
+             [r] { return r.gp_busy_share; });
+  s.add_real("run.gp_wait_share", u::ratio,
+             "The busy GPs' time waiting for the Renderers (a stage to open, room in a queue, "
+             "the frame before to let them start) over their number x the GPs' part of the run",
+             [r] { return r.gp_wait_share; });
+  s.add_real("run.renderer_wait_share", u::ratio,
+             "Time the Renderers stood idle between frames (in each frame after the first, "
+             "their waits before its first message: the bin maps, the first bin) over their "
+             "number x the run after the first frame",
+             [r] { return r.renderer_wait_share; });
+  s.add_integer("run.overlapped_frames", u::count,
+                "Frames whose set-up began on a GP before the frame before had finished on "
+                "every Renderer",
+                [r] { return std::int64_t{r.overlapped_frames}; });
+  s.add_real("run.estimate_frame_seconds", u::seconds,
+             "The closed-form estimate of the period, frame.pipelined_frame_seconds of one frame "
+             "alone (0: not computed)",
+             [r] { return r.estimate_frame_seconds; });
+  s.add_real("run.estimate_error", u::ratio,
+             "estimate_frame_seconds / sustained_frame_seconds - 1 (0: not computed)",
+             [r] { return r.estimate_error(); });
+  s.add_real("run.host_seconds_per_frame", u::host_seconds,
+             "Host time per frame (timing and pixels, start-up included)",
+             [r] { return r.frames ? r.host_seconds / r.frames : 0; });
+  s.add_real("run.host_over_simulated", u::ratio,
+             "Host seconds per simulated second of the run's frames (below 1: real time)",
+             [r] { return r.host_over_simulated(); });
+  s.freeze();
+  return s;
+}
+
+const RunSummary& Session::run_frames(
+    int count, const std::function<void(int frame, FrameResult& result)>& on_frame, bool pixels,
+    const SceneSource& scenes, nlohmann::json* timeline) {
+  if (count < 1) throw std::invalid_argument("a run of frames needs at least one frame");
+  if (frames_ > 0)
+    throw std::logic_error("Session::run_frames: the session has simulated frames already");
+  auto scene_of = [&](int f) {
+    if (!scenes) return;
+    const std::shared_ptr<const Scene> given = scenes(f);
+    if (given && given.get() != scene_.get()) {
+      throw std::invalid_argument(fmt::format(
+          "frame {}: a run of overlapped frames sets up every frame from the session's scene "
+          "'{}' (its machine plan holds one scene); the scene source gave another",
+          f, scene_->name));
+    }
+  };
+  const auto triangles = static_cast<double>(scene_->mesh.triangles.size());
+  const auto spheres = static_cast<double>(scene_->spheres.size());
+  if (!event_) {
+    // The analytic level: each frame alone; the sustained period is the closed form's.
+    double estimate = 0;
+    for (int f = 0; f < count; ++f) {
+      scene_of(f);
+      FrameResult r = frame({}, nullptr, pixels);
+      estimate = r.stats.real("frame.pipelined_frame_seconds");
+      if (on_frame) on_frame(f, r);
+    }
+    summary_.overlapped = false;
+    summary_.sustained_frame_seconds = estimate;
+    summary_.estimate_frame_seconds = estimate;
+    summary_.sustained_triangles_per_second = estimate > 0 ? triangles / estimate : 0;
+    summary_.sustained_spheres_per_second = estimate > 0 ? spheres / estimate : 0;
+    return summary_;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  Machine& machine = *event_->machine;
+  for (int f = 0; f < count; ++f) scene_of(f);
+  machine.record_timeline(timeline != nullptr);
+  machine.overlap(count);
+  event_->kernel.run();
+  if (timeline) *timeline = timeline_document(machine);
+  const double timing_seconds = seconds_since(t0) + startup_seconds_;
+
+  // Each frame's span from the units' records: it starts when the first GP starts its set-up
+  // and ends when its last region reaches the frame buffer.
+  std::vector<const GraphicsProcessor*> gps;
+  for (int k = 0; k < machine.gp_count(); ++k) {
+    if (machine.gp(k).takes_part()) gps.push_back(&machine.gp(k));
+  }
+  std::vector<double> start(static_cast<std::size_t>(count), -1),
+      end(static_cast<std::size_t>(count), 0);
+  std::vector<double> computed(static_cast<std::size_t>(count), 0);
+  double gp_busy = 0;
+  double gp_wait = 0;
+  double gp_end = 0;
+  for (const GraphicsProcessor* g : gps) {
+    if (static_cast<int>(g->history().size()) != count)
+      throw std::logic_error("run_frames: a GP did not finish every frame");
+    for (const GpFrameRecord& rec : g->history()) {
+      double& st = start[static_cast<std::size_t>(rec.frame)];
+      const double t = rec.stats.geometry_started.to_seconds();
+      st = st < 0 ? t : std::min(st, t);
+      gp_busy += rec.stats.busy.seconds(config_.gp.clock_hz);
+      gp_wait += (rec.stats.waiting_stage + rec.stats.waiting_queue + rec.stats.waiting_start)
+                     .to_seconds();
+      gp_end = std::max(gp_end, rec.stats.finished.to_seconds());
+    }
+  }
+  double renderer_wait = 0;
+  for (int k = 0; k < machine.renderer_count(); ++k) {
+    const Renderer& rd = machine.renderer(k);
+    if (static_cast<int>(rd.history().size()) != count)
+      throw std::logic_error("run_frames: a Renderer did not finish every frame");
+    for (const Renderer::FrameRecord& rec : rd.history()) {
+      const auto f = static_cast<std::size_t>(rec.frame);
+      end[f] = std::max(end[f], (rec.began + rec.stats.finished).to_seconds());
+      computed[f] = std::max(computed[f], (rec.began + rec.stats.computed).to_seconds());
+      if (rec.frame > 0) {
+        renderer_wait += rec.stats.waiting_first.to_seconds();
+      }
+    }
+  }
+  RunSummary& sum = summary_;
+  sum.overlapped = true;
+  const double last_end = end.back();
+  const double first_start = start.empty() || start[0] < 0 ? 0 : start[0];
+  sum.sustained_frame_seconds = count > 1 ? (last_end - end[0]) / (count - 1) : end[0];
+  const double period = sum.sustained_frame_seconds;
+  sum.sustained_triangles_per_second = period > 0 ? triangles / period : 0;
+  sum.sustained_spheres_per_second = period > 0 ? spheres / period : 0;
+  const double gp_span = (gp_end - first_start) * static_cast<double>(gps.size());
+  sum.gp_busy_share = gp_span > 0 ? gp_busy / gp_span : 0;
+  sum.gp_wait_share = gp_span > 0 ? gp_wait / gp_span : 0;
+  const double later = last_end - end[0];
+  sum.renderer_wait_share = later > 0 ? renderer_wait / (later * machine.renderer_count()) : 0;
+  double latency_sum = 0;
+  sum.longest_latency_seconds = 0;
+  sum.overlapped_frames = 0;
+  for (int f = 0; f < count; ++f) {
+    const auto i = static_cast<std::size_t>(f);
+    const double latency = end[i] - std::max(0.0, start[i]);
+    latency_sum += latency;
+    sum.longest_latency_seconds = std::max(sum.longest_latency_seconds, latency);
+    if (f > 0 && start[i] >= 0 && start[i] < computed[i - 1]) ++sum.overlapped_frames;
+  }
+  sum.mean_latency_seconds = latency_sum / count;
+
+  // Each frame's result: its pixels from the regions its Renderers recorded.
+  FrameBuffer& fb = machine.frame_buffer();
+  const double timing_per_frame = timing_seconds / count;
+  for (int f = 0; f < count; ++f) {
+    const auto i = static_cast<std::size_t>(f);
+    const auto t1 = std::chrono::steady_clock::now();
+    fb.begin_frame(sc_core::sc_time_stamp());
+    FrameResult result;
+    std::vector<const std::vector<RegionWork>*> work;
+    for (int k = 0; k < machine.renderer_count(); ++k) {
+      const Renderer::FrameRecord& rec = machine.renderer(k).history()[i];
+      work.push_back(&rec.work);
+      for (const RegionWork& w : rec.work)
+        result.regions.push_back(region_load(config_, w.region, k, w.busy_cycles));
+    }
+    if (pixels && config_.fidelity.pixels != MachineConfig::Fidelity::Pixels::none)
+      execute_pixels(machine.plan(), fb, work, threads_, {});
+    result.image = fb.take_image();
+    const double pixel_seconds = seconds_since(t1);
+    const double frame_start = std::max(0.0, start[i]);
+    const double frame_end = end[i];
+    const double previous_end = f > 0 ? end[i - 1] : 0;
+    result.frame_seconds = frame_end - previous_end;
+    result.triangles_per_second = result.frame_seconds > 0 ? triangles / result.frame_seconds : 0;
+    namespace u = stat_unit;
+    Statistics& s = result.stats;
+    register_frame_identity(s, *scene_, *program_);
+    const double frame_seconds = result.frame_seconds;
+    s.add_integer("frame.index", u::index, "The frame's place in a run of frames (from 0)",
+                  [f] { return std::int64_t{f}; });
+    s.add_real("frame.simulated_seconds", u::seconds,
+               "Frame time: when the last region reached the frame buffer (in a run of "
+               "overlapped frames: since the frame before ended, the first since the run began)",
+               [frame_seconds] { return frame_seconds; });
+    s.add_real("frame.start_seconds", u::seconds,
+               "In the run's time: when the first GP started the frame's set-up",
+               [frame_start] { return frame_start; });
+    s.add_real("frame.end_seconds", u::seconds,
+               "In the run's time: when the frame's last region reached the frame buffer (the "
+               "frame buffer swaps)",
+               [frame_end] { return frame_end; });
+    s.add_real("frame.latency_seconds", u::seconds, "end_seconds - start_seconds",
+               [frame_start, frame_end] { return frame_end - frame_start; });
+    const double tps = result.triangles_per_second;
+    s.add_real("frame.projected_triangles_per_second", u::per_second,
+               "Triangles per second the real machine would reach: triangles / frame time",
+               [tps] { return tps; });
+    s.add_real("frame.projected_frames_per_second", u::per_second, "1 / frame time",
+               [frame_seconds] { return frame_seconds > 0 ? 1.0 / frame_seconds : 0; });
+    register_program_statistics(s, *program_);
+    const double host = timing_per_frame + pixel_seconds;
+    s.add_real("host.seconds", u::host_seconds,
+               "Host time of the frame: its share of the run's timing, and its pixels",
+               [host] { return host; });
+    s.add_real("host.timing_seconds", u::host_seconds,
+               "The run's host time of the timing model (the SystemC run), over its frames",
+               [timing_per_frame] { return timing_per_frame; });
+    s.add_real("host.pixel_seconds", u::host_seconds,
+               "Host time executing the firmware on the pixel arrays",
+               [pixel_seconds] { return pixel_seconds; });
+    const int threads = threads_;
+    s.add_integer("host.threads", u::count, "Host threads for the pixel arrays (--threads)",
+                  [threads] { return std::int64_t{threads}; });
+    s.freeze();
+    result.stats_json = s.to_json();
+    ++frames_;
+    RunSummary& rs = summary_;
+    rs.shortest_frame_seconds =
+        rs.frames == 0 ? frame_seconds : std::min(rs.shortest_frame_seconds, frame_seconds);
+    rs.longest_frame_seconds = std::max(rs.longest_frame_seconds, frame_seconds);
+    rs.simulated_seconds += frame_seconds;
+    rs.host_seconds += host;
+    ++rs.frames;
+    if (on_frame) on_frame(f, result);
+  }
+  return summary_;
+}
+
+RunSummary simulate_frames(const MachineConfig& config, std::shared_ptr<const Scene> scene,
+                           std::shared_ptr<const Program> program, int threads, int count,
+                           const std::function<void(int frame, FrameResult& result)>& on_frame,
+                           bool pixels, nlohmann::json* timeline) {
+  // The closed form first: its own SystemC context, freed before the session's is made.
+  const double estimate =
+      project_frame(config, *scene, *program).stats.real("frame.pipelined_frame_seconds");
+  Session session(config, std::move(scene), std::move(program), threads);
+  RunSummary summary = session.run_frames(count, on_frame, pixels, {}, timeline);
+  summary.estimate_frame_seconds = estimate;
+  return summary;
+}
+
 namespace {
 
 // simulate_frame, or with `pixels` false project_frame: the one-frame case of a Session.
@@ -827,6 +1118,21 @@ std::vector<StatisticInfo> describe_statistics(const std::string& program_path,
   return simulate_frame(config, make_builtin_scene("two-triangles"), program, 1).stats.describe();
 }
 
+std::vector<StatisticInfo> describe_run_statistics(const std::string& program_path) {
+  MachineConfig config = MachineConfig::defaults();
+  config.set({"screen.width=128", "screen.height=128", "gp.count=1", "renderer.count=1",
+              "fidelity.pixels=none"});
+  auto program =
+      std::make_shared<const Program>(assemble_file(program_path, assembler_options(config)));
+  auto scene = std::make_shared<const Scene>(make_builtin_scene("two-triangles"));
+  std::vector<StatisticInfo> out;
+  Session session(config, scene, program, 1);
+  session.run_frames(
+      1, [&out](int, FrameResult& r) { out = r.stats.describe(); }, false);
+  for (StatisticInfo& i : session.summary().statistics().describe()) out.push_back(std::move(i));
+  return out;
+}
+
 std::string bit_budget_table(const Program& program, const TimingParams& timing) {
   // The table itself comes from the report model (sim/run_report.hpp).
   std::string out = report::text(bit_budget(program));
@@ -861,11 +1167,15 @@ std::string summary(const FrameResult& r, const Program& program, const TimingPa
           ? fmt::format(", {:.0f} spheres/s", static_cast<double>(spheres) / r.frame_seconds)
           : std::string(),
       r.frame_seconds > 0 ? 1.0 / r.frame_seconds : 0.0);
+  // A closed-form estimate: `render --frames N` simulates the overlap.
+  const double pipelined = s.real("frame.pipelined_frame_seconds");
   out += fmt::format(
-      "pipelined (GPs on the next frame while the Renderers finish this one): {:.3f} ms, {:.0f} "
-      "triangles/s\n",
-      s.real("frame.pipelined_frame_seconds") * 1e3,
-      s.real("frame.pipelined_triangles_per_second"));
+      "pipelined estimate (GPs on the next frame while the Renderers finish this one; closed "
+      "form): {:.3f} ms, {:.0f} triangles/s{}\n",
+      pipelined * 1e3, s.real("frame.pipelined_triangles_per_second"),
+      spheres > 0 && pipelined > 0
+          ? fmt::format(", {:.0f} spheres/s", static_cast<double>(spheres) / pipelined)
+          : std::string());
   const double f = r.frame_seconds > 0 ? r.frame_seconds : 1;
   const double gp = s.real("timing.gp_seconds");
   const double ring = s.real("timing.ring_seconds");

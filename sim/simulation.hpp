@@ -64,6 +64,10 @@ FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, cons
 //    timeline on, in the run's simulated time).
 class Machine;
 
+// The scene of each frame of a run (Session::run_frames): called once per frame, in frame
+// order, before the frame is set up. The default gives the session's scene to every frame.
+using SceneSource = std::function<std::shared_ptr<const Scene>(int frame)>;
+
 // What a run of frames did, over all its frames so far (Session::summary).
 struct RunSummary {
   int frames = 0;
@@ -71,6 +75,44 @@ struct RunSummary {
   double shortest_frame_seconds = 0;
   double longest_frame_seconds = 0;
   double host_seconds = 0;  // host.seconds, summed
+
+  // A run of overlapped frames (Session::run_frames), as simulated; at
+  // fidelity.timing=analytic, the closed-form estimate instead (overlapped false).
+  bool overlapped = false;
+  // Sustained frame period: from the end of the first frame to the end of the last, over the
+  // frames between (the first frame's time when there is one frame).
+  double sustained_frame_seconds = 0;
+  double sustained_triangles_per_second = 0;  // display-list triangles / period
+  double sustained_spheres_per_second = 0;    // display-list spheres / period
+  // Frame latency, mean and longest: from the first GP starting a frame's set-up to its last
+  // region reaching the frame buffer.
+  double mean_latency_seconds = 0;
+  double longest_latency_seconds = 0;
+  // The GPs' busy time (geometry and starting messages), and their time waiting for the
+  // Renderers (a stage to open, room in a queue, or the frame before to let them start),
+  // each over the busy GPs x the GPs' part of the run (from the first set-up to the last GP's
+  // last message): in a GP-bound run the GPs never wait (the rest is sending on the ring).
+  double gp_busy_share = 0;
+  double gp_wait_share = 0;
+  // Time the Renderers stood idle between frames (in each frame after the first, their waits
+  // before its first message: the bin maps, the first bin) over the Renderers x the run after
+  // the first frame: near 0 when the next frame's bins are ready as they finish a frame.
+  double renderer_wait_share = 0;
+  // Frames whose first region started on a GP's set-up before the frame before had its last
+  // region on a Renderer (the overlap happened), of frames - 1.
+  int overlapped_frames = 0;
+  // The closed-form estimate (frame.pipelined_frame_seconds of one frame alone), when the
+  // caller computed it (simulate_frames), and its error against the simulated period.
+  double estimate_frame_seconds = 0;
+  double estimate_error() const {
+    return sustained_frame_seconds > 0 && estimate_frame_seconds > 0
+               ? estimate_frame_seconds / sustained_frame_seconds - 1
+               : 0;
+  }
+  // The run.* statistics (docs/reference/statistics.md), frozen.
+  Statistics statistics() const;
+  // One text line of the sustained figures.
+  std::string sustained_text() const;
   double mean_frame_seconds() const { return frames ? simulated_seconds / frames : 0; }
   // Host seconds per simulated second (below 1 the simulator keeps up with the machine).
   double host_over_simulated() const {
@@ -91,6 +133,22 @@ class Session {
   // Simulates the next frame; with `pixels` false, its timing only (as project_frame).
   FrameResult frame(const std::function<BoardObserver*(int renderer)>& observe = {},
                     nlohmann::json* timeline = nullptr, bool pixels = true);
+
+  // Simulates `count` frames overlapped, as the machine ran them: a GP sets up frame n + 1
+  // while the Renderers still draw frame n (frames.gp_bins, frames.gp_start), the Renderers
+  // take frame n + 1's regions once they have finished frame n's, and a frame ends (the frame
+  // buffer swaps) when its last region arrives. `on_frame(n, result)` is called for each
+  // frame in order: its image (with `pixels`), its regions, frame_seconds the time since the
+  // frame before ended (the first: since the run began), and its statistics (frame.index,
+  // frame.start_seconds, frame.end_seconds, frame.latency_seconds, ...). `scenes` gives the
+  // scene of each frame (default: the session's). Returns the summary with the sustained
+  // figures. Only on a new session (no frame simulated yet); with `timeline`, the whole
+  // run's, on which the overlap shows. At fidelity.timing=analytic each frame is the analytic
+  // model's and the sustained period is its closed-form estimate.
+  const RunSummary& run_frames(int count,
+                               const std::function<void(int frame, FrameResult& result)>& on_frame,
+                               bool pixels = true, const SceneSource& scenes = {},
+                               nlohmann::json* timeline = nullptr);
   // Frames simulated so far, and the run's summary over them.
   int frames() const { return frames_; }
   const RunSummary& summary() const { return summary_; }
@@ -120,6 +178,14 @@ class Session {
   FrameResult counted(FrameResult r);
 };
 
+// A run of `count` frames of `scene`, overlapped (Session::run_frames), with the closed-form
+// estimate of one frame alone (project_frame's frame.pipelined_frame_seconds) in the summary
+// to compare with the simulated period.
+RunSummary simulate_frames(const MachineConfig& config, std::shared_ptr<const Scene> scene,
+                           std::shared_ptr<const Program> program, int threads, int count,
+                           const std::function<void(int frame, FrameResult& result)>& on_frame,
+                           bool pixels = true, nlohmann::json* timeline = nullptr);
+
 // The timing model alone, for projections over many configurations (pp5sim validate): the
 // frame time and the statistics of simulate_frame, without executing the firmware on the
 // pixel arrays, which no instruction's cost depends on. The image is not drawn, and what
@@ -136,6 +202,9 @@ FrameResult project_frame(const MachineConfig& config, const Scene& scene, const
 // fidelity level whose statistics are wanted ({"fidelity.timing=analytic", ...}).
 std::vector<StatisticInfo> describe_statistics(const std::string& program_path,
                                                const std::vector<std::string>& sets = {});
+// Those of a run of overlapped frames: a frame's (Session::run_frames) and the run's
+// (RunSummary::statistics), on the same small machine.
+std::vector<StatisticInfo> describe_run_statistics(const std::string& program_path);
 
 // The bit-budget table and the headline figures, as printed after a run.
 std::string bit_budget_table(const Program& program, const TimingParams& timing);

@@ -9,7 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "models/gp/graphics_processor.hpp"
 #include "models/machine.hpp"
+#include "models/renderer/renderer.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 #include "tests/support.hpp"
@@ -110,4 +112,130 @@ TEST_CASE("session: resident memory stays flat over many frames", "[session]") {
 #if !defined(__SANITIZE_ADDRESS__)
   CHECK(grown < 256 * 1024);
 #endif
+}
+
+// Frames overlapped (Session::run_frames): a GP sets up frame n + 1 while the Renderers still
+// draw frame n.
+namespace {
+
+MachineConfig torus_machine(const std::vector<std::string>& sets) {
+  MachineConfig c = MachineConfig::defaults();
+  c.set(std::vector<std::string>{"fidelity.pixels=none"});
+  c.set(sets);
+  return c;
+}
+
+RunSummary overlapped_run(const MachineConfig& c, int frames, const Session** keep = nullptr) {
+  // One SystemC context at a time: the last run's session goes before the next is made.
+  static std::unique_ptr<Session> session;
+  session.reset();
+  session = std::make_unique<Session>(c, std::make_shared<const Scene>(make_builtin_scene("torus")),
+                                      std::make_shared<const Program>(load_program("phong", c)), 1);
+  const RunSummary s = session->run_frames(frames, {}, false);
+  if (keep != nullptr) {
+    *keep = session.get();
+  } else {
+    session.reset();
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("frames: frame n + 1's set-up starts on a GP before frame n's last region is drawn",
+          "[session]") {
+  // The default machine: the 32 GPs set up frame 1 while the 16 Renderers draw frame 0.
+  const Session* session = nullptr;
+  const RunSummary s = overlapped_run(torus_machine({}), 3, &session);
+  REQUIRE(s.overlapped);
+  CHECK(s.overlapped_frames == 2);
+  Machine& m = const_cast<Machine&>(*session->machine());
+  for (int f = 1; f < 3; ++f) {
+    INFO("frame " << f);
+    double first_setup = 1e9, last_region = 0;
+    for (int k = 0; k < m.gp_count(); ++k) {
+      const auto& h = m.gp(k).history();
+      REQUIRE(h.size() == 3);
+      first_setup = std::min(first_setup, h[f].stats.geometry_started.to_seconds());
+    }
+    for (int k = 0; k < m.renderer_count(); ++k) {
+      const auto& rec = m.renderer(k).history()[f - 1];
+      last_region = std::max(last_region, (rec.began + rec.stats.computed).to_seconds());
+    }
+    CHECK(first_setup < last_region);
+  }
+  // Against frames that do not overlap: the GPs start frame n + 1 only after frame n.
+  const RunSummary apart = overlapped_run(torus_machine({"frames.gp_start=after_frame"}), 3);
+  CHECK(apart.overlapped_frames == 0);
+  CHECK(s.sustained_frame_seconds < apart.sustained_frame_seconds);
+}
+
+TEST_CASE("frames: the GPs do not wait when they should not", "[session]") {
+  SECTION("GP-bound: two GPs for 8,192 triangles never wait for the Renderers") {
+    // Mutations caught: frames.gp_bins=1 (1.3% waiting), frames.gp_start=after_frame (1.2%).
+    const RunSummary s = overlapped_run(torus_machine({"gp.count=2"}), 3);
+    INFO(s.sustained_text());
+    CHECK(s.gp_wait_share < 0.005);
+    // The rest of their time is sending on the ring (the GP waits for its ring interface).
+    CHECK(s.gp_busy_share > 0.8);
+    const RunSummary apart =
+        overlapped_run(torus_machine({"gp.count=2", "frames.gp_start=after_frame"}), 3);
+    CHECK(apart.gp_wait_share > 0.005);
+  }
+  SECTION("Renderer-bound: one Renderer on a 512 x 512 screen never idles between frames") {
+    // Mutation caught: frames.gp_start=after_frame (idle 5.3% of the run).
+    const std::vector<std::string> sets = {"renderer.count=1", "screen.width=512",
+                                           "screen.height=512"};
+    const RunSummary s = overlapped_run(torus_machine(sets), 3);
+    INFO(s.sustained_text());
+    CHECK(s.renderer_wait_share < 0.002);
+    std::vector<std::string> apart_sets = sets;
+    apart_sets.push_back("frames.gp_start=after_frame");
+    const RunSummary apart = overlapped_run(torus_machine(apart_sets), 3);
+    CHECK(apart.renderer_wait_share > 0.02);
+    // Overlapped, the period is the Renderer's work; apart, it adds the GPs' set-up.
+    CHECK(s.sustained_frame_seconds < apart.sustained_frame_seconds * 0.97);
+  }
+}
+
+TEST_CASE("frames: an overlapped run's images are the single frame's, with any host threads",
+          "[session]") {
+  const MachineConfig c = small_machine({});
+  const auto scene = std::make_shared<const Scene>(make_builtin_scene("torus", {24, 12}));
+  const auto program = std::make_shared<const Program>(load_program("phong", c));
+  const FrameResult alone = simulate_frame(c, *scene, *program, 1);
+  std::vector<nlohmann::json> stats[2];
+  for (int threads : {1, 2}) {
+    Session session(c, scene, program, threads);
+    session.run_frames(3, [&](int f, FrameResult& r) {
+      INFO("frame " << f << ", threads " << threads);
+      CHECK(r.image.flat().rgb == alone.image.flat().rgb);
+      CHECK(r.stats.integer("frame.index") == f);
+      CHECK(r.stats.real("frame.latency_seconds") > 0);
+      stats[threads - 1].push_back(without_host(r.stats_json));
+    });
+    CHECK(session.summary().frames == 3);
+  }
+  CHECK(stats[0] == stats[1]);
+}
+
+TEST_CASE("frames: the sustained rate counts spheres, and the closed form is an estimate",
+          "[session]") {
+  MachineConfig c = MachineConfig::defaults();
+  c.set(std::vector<std::string>{"fidelity.pixels=none"});
+  const auto scene = std::make_shared<const Scene>(make_builtin_scene("spheres"));
+  const auto program = std::make_shared<const Program>(load_program("phong", c));
+  const RunSummary s = simulate_frames(c, scene, program, 1, 3, {}, false);
+  CHECK(s.sustained_spheres_per_second > 0);
+  CHECK(s.sustained_spheres_per_second ==
+        Approx(static_cast<double>(scene->spheres.size()) / s.sustained_frame_seconds));
+  CHECK(s.estimate_frame_seconds > 0);
+  CHECK(s.statistics().real("run.estimate_error") == Approx(s.estimate_error()));
+  // At the analytic level the sustained figures are the closed form's, and say so.
+  MachineConfig a = c;
+  a.set(std::vector<std::string>{"fidelity.timing=analytic"});
+  Session analytic(a, scene, program, 1);
+  const RunSummary e = analytic.run_frames(2, {}, false);
+  CHECK_FALSE(e.overlapped);
+  CHECK(e.statistics().text("run.timing") == "estimate");
 }

@@ -200,6 +200,23 @@ TEST_CASE("sensitivity: each end of a range is projected, and the rates move the
   CHECK_THAT(sensitivity_csv(t), Catch::StartsWith("key,mark,low,high,workload"));
 }
 
+TEST_CASE("sensitivity: a key of a run of frames is measured on the sustained rate", "[validate]") {
+  // frames.gp_start changes nothing in one frame: its row is three frames overlapped,
+  // simulated, against the same run's default (mutation: measuring it on one frame gives
+  // +0% at both ends).
+  const SensitivityTable t =
+      sensitivity(MachineConfig::defaults(), kLoad, {{"phong", MachineConfig::Gp::Code::assembly}},
+                  {"frames.gp_start"});
+  REQUIRE(t.rows.size() == 1);
+  const SensitivityRow& row = t.rows[0];
+  CHECK(row.sustained);
+  // The default (overlap) is the high end; frames apart (the low end) are slower.
+  CHECK(row.rates[0][2] == row.rates[0][1]);
+  CHECK(row.rates[0][0] < row.rates[0][1]);
+  CHECK(row.rates[0][1] != t.defaults[0]);
+  CHECK_THAT(sensitivity_markdown(t), Catch::Contains("`frames.gp_start` (sustained, 3 frames)"));
+}
+
 TEST_CASE("sensitivity: an end that does not combine with the configuration has no rate",
           "[validate]") {
   MachineConfig config = MachineConfig::defaults();

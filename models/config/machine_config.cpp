@@ -455,6 +455,27 @@ const std::vector<Entry>& parameter_table() {
                [](MachineConfig& c) -> Ref { return &c.frame_buffer.bits_per_pixel; }},
               "24-bit colour (P: the frame buffer), sent packed (24) or in a word (32)",
               "frame_buffer.bits_per_pixel=24", "frame_buffer.bits_per_pixel=32"),
+      assumed({"frames.gp_bins", "buffers", "A", 2, 1, 2,
+               "Bin buffers per GP in a run of frames: 2, the GP sets up frame n + 1 into the "
+               "second while the Renderers take frame n's bins from the first (whenever it has "
+               "nothing of frame n it can send), stalling only when both are full; 1, it sets "
+               "up frame n + 1 once the last of frame n's bins has gone. A single frame is the "
+               "same either way.",
+               [](MachineConfig& c) -> Ref { return &c.frames.gp_bins; }},
+              "the sources say the GPs transform frame n + 1 while the Renderers draw frame n "
+              "(P), not how many bin buffers a GP kept: one or two",
+              "frames.gp_bins=1", "frames.gp_bins=2"),
+      assumed({"frames.gp_start", "policy", "A", 0, 0, 0,
+               "When a GP may start frame n + 1 in a run of frames: 'overlap', as soon as it "
+               "has a free bin buffer and every Renderer has finished frame n - 1 (the frame "
+               "buffer swaps at the end of a frame, when its last region arrives); "
+               "'after_frame', only once every Renderer has finished frame n (no overlap). A "
+               "single frame is the same either way.",
+               [](MachineConfig& c) -> Ref { return choice(&c.frames.gp_start); },
+               "overlap|after_frame"},
+              "the machine was a frame engine whose rating is a sustained rate (P); when a GP "
+              "was let loose on the next frame is not published",
+              "frames.gp_start=after_frame", "frames.gp_start=overlap"),
 
       // Not the machine: how much of it a run simulates (README "Fidelity levels").
       {"fidelity.pixels", "level", "A", 0, 0, 0,

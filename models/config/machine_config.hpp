@@ -102,6 +102,12 @@ struct MachineConfig {
   struct FrameBuffer {
     int bits_per_pixel = 0;
   } frame_buffer;
+  // A run of frames (Session::run_frames): how the GPs overlap the Renderers.
+  struct Frames {
+    int gp_bins = 2;
+    enum class GpStart { overlap, after_frame };
+    GpStart gp_start = GpStart::overlap;
+  } frames;
   // How much of the machine a run simulates (README "Fidelity levels"): what executes the
   // pixels (bit-serial, a whole field at a time, or nothing), whether time comes from the
   // event model or a closed form, and the window of regions whose pixels execute (columns and

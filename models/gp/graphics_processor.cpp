@@ -214,6 +214,10 @@ void fill_setup_memo(const MachinePlan& plan, int threads, int least_part) {
 }
 
 void GraphicsProcessor::run() {
+  if (wiring_.clock.overlapped()) {
+    run_overlapped();
+    return;
+  }
   // Frame after frame: frame 0 as the kernel starts, each later one when the host begins it.
   for (;;) {
     run_frame();
@@ -226,6 +230,23 @@ void GraphicsProcessor::reset_frame() {
   activity_.assign(1, {wiring_.clock.start(), GpActivity::compute});
 }
 
+void GraphicsProcessor::geometry(RegionBins& bins, GpStats& stats, int frame) {
+  const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+  begin(GpActivity::compute);
+  stats.geometry_started = t0;
+  geometry_pass(plan_, first_, last_, stats, &bins);
+  // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
+  stats.busy += stats.geometry;
+  wait(clock_ * static_cast<double>(stats.geometry.count));
+  stats.geometry_done = sc_core::sc_time_stamp() - wiring_.clock.start();
+  if (wiring_.timeline.on()) {
+    wiring_.timeline.add(Unit::gp, index_,
+                         wiring_.clock.overlapped() ? "geometry of frame " + std::to_string(frame)
+                                                    : std::string("geometry"),
+                         t0, sc_core::sc_time_stamp());
+  }
+}
+
 void GraphicsProcessor::run_frame() {
   const sc_core::sc_time base = wiring_.clock.start();
   // With fewer triangles than GPs, a GP may have none: it takes no part in the frame, and
@@ -234,19 +255,102 @@ void GraphicsProcessor::run_frame() {
     begin(GpActivity::done);
     return;
   }
-  const MachineConfig& config = plan_.config();
   RegionBins bins;
-  geometry_pass(plan_, first_, last_, stats_, &bins);
-  // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
-  stats_.busy += stats_.geometry;
-  wait(clock_ * static_cast<double>(stats_.geometry.count));
-  stats_.geometry_done = sc_core::sc_time_stamp() - base;
-  wiring_.timeline.add(Unit::gp, index_, "geometry", base, sc_core::sc_time_stamp());
+  const int frame = wiring_.clock.frame();
+  geometry(bins, stats_, frame);
+  send_bins(bins, frame, {});
+  begin(GpActivity::done);
+  stats_.finished = sc_core::sc_time_stamp() - base;
+}
 
+bool GraphicsProcessor::may_start(int frame) const {
+  const FrameClock& clock = wiring_.clock;
+  // Two frames in flight at most: frame n's regions and bin senders take the slot frame n - 2
+  // left, which every Renderer has finished. Set up after the frame before has been swapped
+  // in (frames.gp_start=after_frame), the GPs do not overlap the Renderers.
+  const bool overlap = plan_.config().frames.gp_start == MachineConfig::Frames::GpStart::overlap;
+  return clock.released() > frame && clock.renderers_finished() >= frame - (overlap ? 1 : 0);
+}
+
+void GraphicsProcessor::run_overlapped() {
+  // Frames overlap (Machine::overlap): frame after frame with no host between them. The GP
+  // keeps frames.gp_bins bin buffers. With two it sets up frame n + 1 into the second while
+  // the Renderers still take frame n's bins from the first, whenever it has nothing of frame n
+  // it can send, and stalls only when both are full; that set-up yields to frame n's bins: a
+  // Renderer opening a stage it owes, or freeing room, interrupts it (it resumes when the GP
+  // again has nothing to send). With one buffer it sets up frame n + 1 once the last of frame
+  // n's bins has gone.
+  if (first_ == last_) {
+    begin(GpActivity::done);
+    return;
+  }
+  const MachineConfig& config = plan_.config();
+  const bool double_buffered = config.frames.gp_bins >= 2 &&
+                               config.frames.gp_start == MachineConfig::Frames::GpStart::overlap;
+  RegionBins bins[2];
+  Ahead ahead;
+  for (frame_ = 0;; ++frame_) {
+    if (!ahead.started) {
+      stats_ = GpStats{};
+      if (!may_start(frame_)) {
+        const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+        begin(GpActivity::renderer);
+        while (!may_start(frame_)) wait(wiring_.clock.progress());
+        stats_.waiting_start = sc_core::sc_time_stamp() - t0;
+      }
+      geometry(bins[frame_ & 1], stats_, frame_);
+    } else {
+      // The rest of a set-up begun ahead.
+      if (!ahead.done) {
+        const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+        begin(GpActivity::compute);
+        wait(ahead.remaining);
+        finish_ahead_piece(ahead, t0);
+      }
+      stats_ = ahead_;
+    }
+    ahead = Ahead{};
+    ahead.possible = double_buffered;
+    ahead.frame = frame_ + 1;
+    ahead.bins = &bins[(frame_ + 1) & 1];
+    send_bins(bins[frame_ & 1], frame_, double_buffered ? &ahead : nullptr);
+    begin(GpActivity::done);
+    stats_.finished = sc_core::sc_time_stamp();
+    history_.push_back({frame_, stats_});
+  }
+}
+
+void GraphicsProcessor::start_ahead(Ahead& ahead) {
+  // The set-up itself is plain C++ (geometry_pass); its time is spent piece by piece.
+  ahead_ = GpStats{};
+  ahead_.geometry_started = sc_core::sc_time_stamp();
+  geometry_pass(plan_, first_, last_, ahead_, ahead.bins);
+  ahead_.busy += ahead_.geometry;
+  ahead.started = true;
+  ahead.remaining = clock_ * static_cast<double>(ahead_.geometry.count);
+  if (ahead.remaining == sc_core::SC_ZERO_TIME) ahead.done = true;
+}
+
+void GraphicsProcessor::finish_ahead_piece(Ahead& ahead, sc_core::sc_time t0) {
+  const sc_core::sc_time now = sc_core::sc_time_stamp();
+  const sc_core::sc_time spent = now - t0;
+  ahead.remaining = spent < ahead.remaining ? ahead.remaining - spent : sc_core::SC_ZERO_TIME;
+  if (wiring_.timeline.on() && t0 < now) {
+    wiring_.timeline.add(Unit::gp, index_, "geometry of frame " + std::to_string(ahead.frame), t0,
+                         now);
+  }
+  if (ahead.remaining == sc_core::SC_ZERO_TIME) {
+    ahead.done = true;
+    ahead_.geometry_done = now;
+  }
+}
+
+void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahead) {
+  const MachineConfig& config = plan_.config();
   // The bin map goes first, in one message that passes every Renderer: which regions this
   // GP has packets for.
-  wiring_.scheduler.add_bin_senders(bins.regions());
-  send_bin_map();
+  wiring_.scheduler.add_bin_senders(bins.regions(), frame);
+  send_bin_map(frame);
 
   // Bins go out as their Renderers open (pass, region) stages: each message goes to the
   // lowest open stage whose Renderer's queue has room for it, so a full queue holds up only
@@ -315,11 +419,13 @@ void GraphicsProcessor::run_frame() {
     if (owed.size() <= renderers) {
       for (const int s : owed) {
         if (s / n >= ready_passes) break;
-        const int owner = wiring_.scheduler.owner_of_region(s % n);
-        if (owner >= 0 && queue(owner).open_stage(n) == s) open_stages.push_back(s);
+        const int owner = wiring_.scheduler.owner_of_region(s % n, frame);
+        if (owner >= 0 && queue(owner).open_frame() == frame && queue(owner).open_stage(n) == s)
+          open_stages.push_back(s);
       }
     } else {
       for (int k = 0; k < plan_.renderer_count(); ++k) {
+        if (queue(k).open_frame() != frame) continue;
         const int s = queue(k).open_stage(n);
         // A region it claimed (its owner), of a pass whose packets exist.
         if (s >= 0 && bins.slot(s % n) >= 0 && !done[slot(s)] && s / n < ready_passes)
@@ -329,7 +435,7 @@ void GraphicsProcessor::run_frame() {
     }
     int pick = -1;
     for (int s : open_stages) {
-      if (queue(wiring_.scheduler.owner_of_region(s % n)).has_room(words_for(s))) {
+      if (queue(wiring_.scheduler.owner_of_region(s % n, frame)).has_room(words_for(s))) {
         pick = s;
         break;
       }
@@ -347,10 +453,26 @@ void GraphicsProcessor::run_frame() {
       ++ready_passes;
       continue;
     }
+    // Nothing of this frame it can send: the next frame's set-up, if it may start it, until
+    // a stage it owes opens or frees room.
+    if (pick < 0 && ahead != nullptr && !ahead->done) {
+      if (!ahead->started && may_start(ahead->frame)) start_ahead(*ahead);
+      if (ahead->started && !ahead->done) {
+        const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+        begin(GpActivity::compute);
+        wiring_.scheduler.wait_for_input(index_, owed, frame, nullptr, &ahead->remaining);
+        finish_ahead_piece(*ahead, t0);
+        continue;
+      }
+    }
     if (pick < 0) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();
       begin(GpActivity::renderer);
-      wiring_.scheduler.wait_for_input(index_, owed);
+      // A GP that may start its next frame's set-up later waits for that too.
+      const bool may_later =
+          ahead != nullptr && !ahead->started && wiring_.clock.released() > ahead->frame;
+      wiring_.scheduler.wait_for_input(index_, owed, frame,
+                                       may_later ? &wiring_.clock.progress() : nullptr);
       (open_stages.empty() ? stats_.waiting_stage : stats_.waiting_queue) +=
           sc_core::sc_time_stamp() - t0;
       continue;
@@ -367,22 +489,20 @@ void GraphicsProcessor::run_frame() {
     m->packets.assign(bin.begin() + static_cast<std::ptrdiff_t>(first),
                       bin.begin() + static_cast<std::ptrdiff_t>(next[k]));
     m->last = next[k] == bin.size();
-    queue(wiring_.scheduler.owner_of_region(pick % n)).reserve_room(m->words);
+    queue(wiring_.scheduler.owner_of_region(pick % n, frame)).reserve_room(m->words);
     if (m->last) {
       done[k] = true;
       owed.erase(std::lower_bound(owed.begin(), owed.end(), pick));
     }
-    send(std::move(m));
+    send(std::move(m), frame);
   }
-  begin(GpActivity::done);
-  stats_.finished = sc_core::sc_time_stamp() - base;
 }
 
-void GraphicsProcessor::send_bin_map() {
+void GraphicsProcessor::send_bin_map(int frame) {
   spend(plan_.i860().clocks(I860Work::send_bin(), 0));
   const sc_core::sc_time requested = sc_core::sc_time_stamp();
   const RingBooking b = wiring_.ring.send_bin_map(plan_.gp_stop(index_), renderer_stops_,
-                                                  plan_.bin_map_words(), index_);
+                                                  plan_.bin_map_words(), index_, frame);
   ++stats_.messages;
   if (wiring_.timeline.on()) wiring_.timeline.add(Unit::gp, index_, "bin map", requested, b.end);
   begin(GpActivity::ring);
@@ -390,8 +510,8 @@ void GraphicsProcessor::send_bin_map() {
   wait(b.end - sc_core::sc_time_stamp());
 }
 
-void GraphicsProcessor::send(std::shared_ptr<BinMessage> m) {
-  const int renderer_index = wiring_.scheduler.owner_of_region(m->region);
+void GraphicsProcessor::send(std::shared_ptr<BinMessage> m, int frame) {
+  const int renderer_index = wiring_.scheduler.owner_of_region(m->region, frame);
   // Starting the message costs i860 clocks; its room in the queue is already reserved.
   spend(plan_.i860().clocks(I860Work::send_bin(), 0));
   const sc_core::sc_time requested = sc_core::sc_time_stamp();

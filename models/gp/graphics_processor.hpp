@@ -10,6 +10,7 @@
 // With a multipass program, gp.multipass says where later passes' packets come from: the
 // bins kept from the first traversal (resend), or a new traversal of the whole share per
 // pass, charged like the first and done when the GP has nothing it can send (retraverse).
+#include <functional>
 #include <memory>
 #include <systemc>
 #include <vector>
@@ -35,13 +36,21 @@ struct GpStats {
   sc_core::sc_time waiting_stage;      // waiting for a Renderer to open a stage
   sc_core::sc_time waiting_queue;      // waiting for room in a Renderer's queue
   sc_core::sc_time waiting_ring;       // waiting for its ring interface to send
+  sc_core::sc_time waiting_start;      // overlapped: waiting until it may start the frame
   std::uint64_t triangles_in = 0;      // scene triangles it transformed
   std::uint64_t packets = 0;           // triangle packets it sent (one per region touched)
   std::uint64_t messages = 0;          // ring messages it sent
   std::uint64_t screen_triangles = 0;  // triangles after clipping that reached set-up
   SetupCounts setup;
+  sc_core::sc_time geometry_started;  // in the run's time
   sc_core::sc_time geometry_done;
-  sc_core::sc_time finished;
+  sc_core::sc_time finished;  // relative to the frame's start; overlapped, the run's time
+};
+
+// One frame of an overlapped run, as a GP did it (GraphicsProcessor::history).
+struct GpFrameRecord {
+  int frame = 0;
+  GpStats stats;  // times in the run's time
 };
 
 // What a GP is wired to (the Machine builds it): the plan it works from, the ring it sends
@@ -70,15 +79,37 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   void register_statistics(Statistics& stats, double frame_seconds) const;
   // How the GP spent [from, to): so that a Renderer's wait for this GP can be attributed.
   GpActivityTimes activity(sc_core::sc_time from, sc_core::sc_time to) const override;
+  // Overlapped frames (FrameClock::overlapped): every frame it has finished sending, in order.
+  const std::vector<GpFrameRecord>& history() const { return history_; }
+  bool takes_part() const { return first_ != last_; }
 
  private:
   void run();
   void run_frame();
+  void run_overlapped();
+  bool may_start(int frame) const;
+  // The geometry phase of `frame` into `bins`, adding to `stats`: one kernel event.
+  void geometry(RegionBins& bins, GpStats& stats, int frame);
+  // The next frame's set-up, done ahead while this frame's bins go out (frames.gp_bins=2).
+  struct Ahead {
+    bool possible = false;
+    int frame = 0;
+    RegionBins* bins = nullptr;
+    bool started = false;
+    bool done = false;
+    sc_core::sc_time remaining;  // of its geometry time
+  };
+  void start_ahead(Ahead& ahead);
+  // After a piece of the ahead set-up's time that began at t0.
+  void finish_ahead_piece(Ahead& ahead, sc_core::sc_time t0);
+  // Sends `bins` of `frame` (bin map first) as Renderers open its stages; with `ahead`, does
+  // the next frame's set-up whenever nothing can be sent.
+  void send_bins(const RegionBins& bins, int frame, Ahead* ahead);
   void spend(GpClocks clocks);
-  void send(std::shared_ptr<BinMessage> message);
+  void send(std::shared_ptr<BinMessage> message, int frame);
   // Tells every Renderer which regions this GP has packets for (RegionScheduler::add_bin_senders),
   // in one message around the ring.
-  void send_bin_map();
+  void send_bin_map(int frame);
   void begin(GpActivity a);
   RendererQueue& queue(int renderer) const {
     return *wiring_.renderers[static_cast<std::size_t>(renderer)];
@@ -93,6 +124,9 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   std::vector<int> renderer_stops_;  // where the bin map goes
   sc_core::sc_time clock_;
   GpStats stats_;
+  GpStats ahead_;  // overlapped: the next frame's, set up ahead
+  int frame_ = 0;  // overlapped: the frame it is sending
+  std::vector<GpFrameRecord> history_;
   // When each activity began, in time order.
   std::vector<std::pair<sc_core::sc_time, GpActivity>> activity_{
       {sc_core::SC_ZERO_TIME, GpActivity::compute}};

@@ -40,6 +40,31 @@ class FrameClock : public sc_core::sc_module {
     begun_.notify(sc_core::SC_ZERO_TIME);
   }
 
+  // Overlapped frames (Machine::overlap): the units run frame after frame on their own, each
+  // on the frame it has reached, with no host between frames. released() frames exist (the
+  // host releases them before the kernel runs); renderers_finished() is the number of frames
+  // every Renderer has finished (the GPs may set up frame n + 1 only once it is n: two frames
+  // at most are in flight, so a unit's per-frame state needs two slots, frame & 1). progress()
+  // is notified when either changes.
+  void set_overlapped(bool on) { overlapped_ = on; }
+  bool overlapped() const { return overlapped_; }
+  void release(int frames) {
+    released_ = frames;
+    progress_.notify(sc_core::SC_ZERO_TIME);
+  }
+  int released() const { return released_; }
+  void enrol_renderer() { finished_.push_back(0); }
+  void renderer_finished(int renderer) {
+    ++finished_[static_cast<std::size_t>(renderer)];
+    progress_.notify(sc_core::SC_ZERO_TIME);
+  }
+  int renderers_finished() const {
+    int least = -1;
+    for (const int f : finished_) least = least < 0 ? f : (f < least ? f : least);
+    return least < 0 ? 0 : least;
+  }
+  const sc_core::sc_event& progress() const { return progress_; }
+
  private:
   // Wakes the units one by one, in enrolment order: an immediate notification makes the
   // waiting thread runnable at the back of the kernel's queue.
@@ -51,6 +76,10 @@ class FrameClock : public sc_core::sc_module {
   }
 
   int frame_ = 0;
+  bool overlapped_ = false;
+  int released_ = 0;
+  std::deque<int> finished_;
+  sc_core::sc_event progress_;
   sc_core::sc_time start_;
   sc_core::sc_event begun_;
   std::deque<sc_core::sc_event> units_;

@@ -12,15 +12,20 @@ RegionScheduler::RegionScheduler(sc_core::sc_module_name name, int regions, int 
       gps_(gps),
       dynamic_(dynamic),
       order_(order),
-      owner_(regions, -1),
-      bin_senders_(regions, 0),
-      claimed_(renderers, 0),
       is_changed_(renderers, 0),
       open_stage_(renderers, -1),
+      open_frame_(renderers, 0),
       owed_(gps, nullptr),
+      owed_frame_(gps, 0),
       woken_(new sc_core::sc_event[gps > 0 ? gps : 1]),
       hops_(gps, std::vector<int>(renderers, 0)),
       nearest_(gps, -1) {
+  for (Slot& s : slots_) {
+    s.owner.assign(static_cast<std::size_t>(regions), -1);
+    s.bin_senders.assign(static_cast<std::size_t>(regions), 0);
+    s.claimed.assign(static_cast<std::size_t>(renderers), 0);
+  }
+  slots_[1].frame = 1;
   changed_.reserve(renderers);
   wake_order_.reserve(gps);
   SC_METHOD(arbitrate);
@@ -28,11 +33,30 @@ RegionScheduler::RegionScheduler(sc_core::sc_module_name name, int regions, int 
   dont_initialize();
 }
 
+void RegionScheduler::Slot::reset(int frame_number) {
+  frame = frame_number;
+  std::fill(owner.begin(), owner.end(), -1);
+  std::fill(bin_senders.begin(), bin_senders.end(), 0);
+  next_region = 0;
+  std::fill(claimed.begin(), claimed.end(), 0);
+}
+
+RegionScheduler::Slot& RegionScheduler::slot_for(int frame) {
+  Slot& s = slots_[frame & 1];
+  if (s.frame != frame) s.reset(frame);
+  return s;
+}
+
 void RegionScheduler::reset_frame() {
-  std::fill(owner_.begin(), owner_.end(), -1);
-  std::fill(bin_senders_.begin(), bin_senders_.end(), 0);
-  next_region_ = 0;
-  std::fill(claimed_.begin(), claimed_.end(), 0);
+  for (Slot& s : slots_) {
+    s.owner.assign(static_cast<std::size_t>(regions_), -1);
+    s.bin_senders.assign(static_cast<std::size_t>(regions_), 0);
+    s.claimed.assign(static_cast<std::size_t>(renderers_), 0);
+  }
+  slots_[0].reset(0);
+  slots_[1].reset(1);
+  std::fill(open_frame_.begin(), open_frame_.end(), 0);
+  std::fill(owed_frame_.begin(), owed_frame_.end(), 0);
   changed_.clear();
   std::fill(is_changed_.begin(), is_changed_.end(), 0);
   std::fill(open_stage_.begin(), open_stage_.end(), -1);
@@ -43,36 +67,57 @@ void RegionScheduler::reset_frame() {
   next_turn_ = 0;
 }
 
-int RegionScheduler::claim_region(int renderer) {
+int RegionScheduler::claim_region(int renderer, int frame) {
+  Slot& s = slot_for(frame);
   int region = -1;
   if (dynamic_) {
-    if (next_region_ < regions_) region = next_region_++;
+    if (s.next_region < regions_) region = s.next_region++;
   } else {
-    const int r = renderer + claimed_[renderer] * renderers_;
+    const int r = renderer + s.claimed[renderer] * renderers_;
     if (r < regions_) {
       region = r;
-      ++claimed_[renderer];
+      ++s.claimed[renderer];
     }
   }
-  if (region >= 0) owner_[region] = renderer;
+  if (region >= 0) s.owner[region] = renderer;
   return region;
 }
 
-void RegionScheduler::add_bin_senders(const std::vector<int>& regions) {
-  for (int r : regions) ++bin_senders_[r];
+void RegionScheduler::add_bin_senders(const std::vector<int>& regions, int frame) {
+  Slot& s = slot_for(frame);
+  for (int r : regions) ++s.bin_senders[r];
 }
 
-void RegionScheduler::wait_for_input(int gp, const std::vector<int>& owed) {
+void RegionScheduler::wait_for_input(int gp, const std::vector<int>& owed, int frame,
+                                     const sc_core::sc_event* also,
+                                     const sc_core::sc_time* timeout) {
   owed_[gp] = &owed;
+  owed_frame_[gp] = frame;
   ++waiting_;
-  sc_core::wait(woken_[gp]);
+  if (also == nullptr && timeout == nullptr) {
+    sc_core::wait(woken_[gp]);
+    return;
+  }
+  if (timeout != nullptr && also != nullptr) {
+    sc_core::wait(*timeout, woken_[gp] | *also);
+  } else if (timeout != nullptr) {
+    sc_core::wait(*timeout, woken_[gp]);
+  } else {
+    sc_core::wait(woken_[gp] | *also);
+  }
+  if (owed_[gp] != nullptr) {  // ended by `also`: no longer waiting for a stage
+    owed_[gp] = nullptr;
+    nearest_[gp] = -1;
+    --waiting_;
+  }
 }
 
-void RegionScheduler::input_changed(int renderer, int stage) {
+void RegionScheduler::input_changed(int renderer, int stage, int frame) {
   open_stage_[renderer] = stage;
+  open_frame_[renderer] = frame;
   // A stage no GP has packets for wakes nobody: on a large screen most stages are empty.
   // Room freed in a queue matters only to the GPs owing its open stage, which are senders.
-  if (stage < 0 || bin_senders_[stage % regions_] == 0 || is_changed_[renderer]) return;
+  if (stage < 0 || bin_senders(stage % regions_, frame) == 0 || is_changed_[renderer]) return;
   is_changed_[renderer] = 1;
   changed_.push_back(renderer);
   changed_event_.notify(sc_core::SC_ZERO_TIME);
@@ -86,7 +131,9 @@ void RegionScheduler::arbitrate() {
     if (s < 0 || waiting_ == 0) continue;
     for (int g = 0; g < gps_; ++g) {
       const std::vector<int>* owed = owed_[g];
-      if (owed == nullptr || !std::binary_search(owed->begin(), owed->end(), s)) continue;
+      if (owed == nullptr || owed_frame_[g] != open_frame_[k] ||
+          !std::binary_search(owed->begin(), owed->end(), s))
+        continue;
       const int hops = hops_[g][k];
       if (nearest_[g] < 0) wake_order_.push_back(g);
       if (nearest_[g] < 0 || hops < nearest_[g]) nearest_[g] = hops;

@@ -4,6 +4,10 @@
 // of Machine.
 //
 // Contract:
+//  - Every call names the frame it is about (frames overlap, models/protocol/frame_clock.hpp):
+//    a frame's claims and bin senders are kept in slot frame & 1, which the first call of
+//    frame n + 2 finds as frame n left it and empties (no unit is on frame n by then); a GP
+//    is woken only by a Renderer on the GP's frame.
 //  - claim_region(k) gives Renderer k its next region: statically region r to Renderer
 //    r mod renderers, in increasing order; dynamically the lowest region nobody has claimed.
 //    It returns -1 when there is none, and records the owner.
@@ -44,16 +48,26 @@ class RegionScheduler : public sc_core::sc_module {
   // round-robin turn at GP 0: as a new scheduler, so that every frame starts alike.
   void reset_frame();
 
-  int claim_region(int renderer);
-  int owner_of_region(int region) const { return owner_[region]; }
-  void add_bin_senders(const std::vector<int>& regions);
-  int bin_senders(int region) const { return bin_senders_[region]; }
+  int claim_region(int renderer, int frame = 0);
+  int owner_of_region(int region, int frame = 0) const {
+    const Slot& s = slot(frame);
+    return s.frame == frame ? s.owner[region] : -1;
+  }
+  void add_bin_senders(const std::vector<int>& regions, int frame = 0);
+  int bin_senders(int region, int frame = 0) const {
+    const Slot& s = slot(frame);
+    return s.frame == frame ? s.bin_senders[region] : 0;
+  }
   bool dynamic_balancing() const { return dynamic_; }
 
   // hops[g][k]: ring hops from GP g's stop to Renderer k's (the arbitration's order).
   void set_ring(std::vector<std::vector<int>> hops) { hops_ = std::move(hops); }
-  void wait_for_input(int gp, const std::vector<int>& owed);
-  void input_changed(int renderer, int stage);
+  // `also`, if given, ends the wait too (a GP that may set up its next frame meanwhile), and so
+  // does `timeout` elapsing (a GP setting up its next frame: the rest of that set-up).
+  void wait_for_input(int gp, const std::vector<int>& owed, int frame = 0,
+                      const sc_core::sc_event* also = nullptr,
+                      const sc_core::sc_time* timeout = nullptr);
+  void input_changed(int renderer, int stage, int frame = 0);
 
  private:
   void arbitrate();  // SC_METHOD on changed_
@@ -63,18 +77,28 @@ class RegionScheduler : public sc_core::sc_module {
   int gps_;
   bool dynamic_;
   Order order_;
-  std::vector<int> owner_;        // region -> Renderer, -1 until claimed
-  std::vector<int> bin_senders_;  // region -> GPs with packets for it
-  int next_region_ = 0;           // dynamic: the next unclaimed region
-  std::vector<int> claimed_;      // static: regions each Renderer has claimed so far
+  struct Slot {
+    int frame = 0;                 // the frame it holds
+    std::vector<int> owner;        // region -> Renderer, -1 until claimed
+    std::vector<int> bin_senders;  // region -> GPs with packets for it
+    int next_region = 0;           // dynamic: the next unclaimed region
+    std::vector<int> claimed;      // static: regions each Renderer has claimed so far
+    void reset(int frame_number);
+  };
+  Slot slots_[2];
+  const Slot& slot(int frame) const { return slots_[frame & 1]; }
+  // The slot of `frame`, emptied first if it still holds frame - 2.
+  Slot& slot_for(int frame);
 
   // Renderers changed since the last arbitration, and the stage each has open.
   std::vector<int> changed_;
   std::vector<char> is_changed_;
   std::vector<int> open_stage_;
+  std::vector<int> open_frame_;
   sc_core::sc_event changed_event_;
   // Waiting GPs: what each owes (null when it is not waiting) and its wake-up.
   std::vector<const std::vector<int>*> owed_;
+  std::vector<int> owed_frame_;
   std::unique_ptr<sc_core::sc_event[]> woken_;
   int waiting_ = 0;
   std::vector<std::vector<int>> hops_;

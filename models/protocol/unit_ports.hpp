@@ -7,9 +7,11 @@
 //
 // Contract:
 //  - RendererQueue: open_stage(regions) is the (region, pass) stage open for input as
-//    pass * regions + region, or -1; has_room(words) says whether a message of `words` fits
-//    the queue now; reserve_room(words) takes that room before the message is sent (the GP
-//    calls it after has_room, at the same instant). The ring delivers the message itself.
+//    pass * regions + region, or -1; open_frame() the frame that stage belongs to (frames
+//    overlap: a GP on frame n must not send to a Renderer already on n + 1); has_room(words) says
+//    whether a message of `words` fits the queue now; reserve_room(words) takes that room before
+//    the message is sent (the GP calls it after has_room, at the same instant). The ring delivers
+//    the message itself.
 //  - GpReport: activity(from, to) splits [from, to) of simulated time into what the GP was
 //    doing: computing, sending on the ring, or waiting for a Renderer (or done).
 #include <cstdint>
@@ -21,6 +23,7 @@ class RendererQueue {
  public:
   virtual ~RendererQueue() = default;
   virtual int open_stage(int regions) const = 0;
+  virtual int open_frame() const = 0;
   virtual bool has_room(std::uint64_t words) const = 0;
   virtual void reserve_room(std::uint64_t words) = 0;
 };

@@ -35,10 +35,12 @@ void Renderer::receive_bin(std::shared_ptr<const BinMessage> message) {
 }
 
 void Renderer::receive_bin_map(const BinMapArrival& map) {
-  ++maps_delivered_;
-  maps_requested_ = std::max(maps_requested_, map.requested);
-  maps_arrival_ = std::max(maps_arrival_, map.arrival);
-  if (maps_complete()) {
+  const int m = map.frame & 1;
+  ++maps_delivered_[m];
+  maps_requested_[m] = std::max(maps_requested_[m], map.requested);
+  maps_arrival_[m] = std::max(maps_arrival_[m], map.arrival);
+  // A map of the next frame waits until this Renderer is on it.
+  if (map.frame == frame_ && maps_complete()) {
     maps_complete_.notify(sc_core::SC_ZERO_TIME);
     advance();
   }
@@ -46,16 +48,17 @@ void Renderer::receive_bin_map(const BinMapArrival& map) {
 
 void Renderer::advance() {
   if (open_region_ < 0 || !maps_complete()) return;
-  const int senders = wiring_.scheduler.bin_senders(open_region_);
+  const int senders = wiring_.scheduler.bin_senders(open_region_, frame_);
   if (lasts_delivered_ == senders && (senders > 0 || open_started_)) open_next_stage();
 }
 
 void Renderer::wait_for_bin_maps() {
   const sc_core::sc_time from = sc_core::sc_time_stamp();
   while (!maps_complete()) wait(maps_complete_);
-  if (maps_arrival_ > sc_core::sc_time_stamp()) wait(maps_arrival_ - sc_core::sc_time_stamp());
+  const sc_core::sc_time arrival = maps_arrival_[frame_ & 1];
+  if (arrival > sc_core::sc_time_stamp()) wait(arrival - sc_core::sc_time_stamp());
   const sc_core::sc_time now = sc_core::sc_time_stamp();
-  const sc_core::sc_time gp_until = std::min(std::max(from, maps_requested_), now);
+  const sc_core::sc_time gp_until = std::min(std::max(from, maps_requested_[frame_ & 1]), now);
   stats_.waiting_gp += gp_until - from;
   stats_.waiting_ring += now - gp_until;
   cursor_ = std::max(cursor_, now);
@@ -69,11 +72,11 @@ void Renderer::open_next_stage() {
   } else {
     // The last pass of the region is all in the queue: take the next region now, so that
     // its bins flow in while this one finishes.
-    open_region_ = wiring_.scheduler.claim_region(index_);
+    open_region_ = wiring_.scheduler.claim_region(index_, frame_);
     open_pass_ = open_region_ >= 0 ? 0 : -1;
   }
   if (open_region_ >= 0) stages_.push_back({open_region_, open_pass_});
-  wiring_.scheduler.input_changed(index_, open_stage(plan_.config().regions()));
+  wiring_.scheduler.input_changed(index_, open_stage(plan_.config().regions()), frame_);
 }
 
 void Renderer::charge(const ProcedureCode& procedure, const PacketValues& values,
@@ -210,6 +213,10 @@ void Renderer::ship(int region) {
 }
 
 void Renderer::run() {
+  if (wiring_.clock.overlapped()) {
+    run_overlapped();
+    return;
+  }
   // Frame after frame: frame 0 as the kernel starts, each later one when the host begins it.
   for (;;) {
     run_frame();
@@ -223,9 +230,9 @@ void Renderer::reset_frame() {
   open_pass_ = -1;
   lasts_delivered_ = 0;
   open_started_ = false;
-  maps_delivered_ = 0;
-  maps_requested_ = base;
-  maps_arrival_ = base;
+  frame_ = wiring_.clock.frame();
+  forget_maps(0, base);
+  forget_maps(1, base);
   stages_.clear();
   queue_.clear();
   queued_words_ = 0;
@@ -237,8 +244,41 @@ void Renderer::reset_frame() {
   work_.clear();
 }
 
+void Renderer::forget_maps(int frame, sc_core::sc_time base) {
+  maps_delivered_[frame & 1] = 0;
+  maps_requested_[frame & 1] = base;
+  maps_arrival_[frame & 1] = base;
+}
+
+void Renderer::run_overlapped() {
+  // Frames overlap: the Renderer takes frame n + 1's regions as soon as it has finished
+  // frame n's, with its array, backing-store port and ring interface as frame n left them.
+  for (frame_ = 0;; ++frame_) {
+    // Two frames in flight at most (as for the GPs): a Renderer with no region of frame n
+    // (a small screen) waits for every other to finish frame n - 1 before taking up n + 1.
+    while (wiring_.clock.released() <= frame_ || wiring_.clock.renderers_finished() < frame_ - 1)
+      wait(wiring_.clock.progress());
+    const sc_core::sc_time began = sc_core::sc_time_stamp();
+    open_region_ = -1;
+    open_pass_ = -1;
+    lasts_delivered_ = 0;
+    open_started_ = false;
+    stats_ = RendererStats{};
+    work_.clear();
+    run_frame();
+    history_.push_back({frame_, began, stats_, std::move(work_)});
+    work_.clear();
+    // Frame n + 2's maps come only once every Renderer has finished n + 1.
+    forget_maps(frame_, sc_core::SC_ZERO_TIME);
+    wiring_.clock.renderer_finished(index_);
+  }
+}
+
 void Renderer::run_frame() {
-  const sc_core::sc_time base = wiring_.clock.start();
+  // A frame's times are relative to its start: the frame clock's, or where an overlapped
+  // Renderer took the frame up.
+  const sc_core::sc_time base =
+      wiring_.clock.overlapped() ? sc_core::sc_time_stamp() : wiring_.clock.start();
   const MachineConfig& config = plan_.config();
   const Program& program = plan_.program();
   const int gps = plan_.gp_count();
@@ -277,8 +317,9 @@ void Renderer::run_frame() {
     }
     stream.before_pass(stage.pass, charge_step);
     catch_up();
-    if (!maps_complete() || maps_arrival_ > sc_core::sc_time_stamp()) wait_for_bin_maps();
-    const int senders = wiring_.scheduler.bin_senders(stage.region);
+    if (!maps_complete() || maps_arrival_[frame_ & 1] > sc_core::sc_time_stamp())
+      wait_for_bin_maps();
+    const int senders = wiring_.scheduler.bin_senders(stage.region, frame_);
     int lasts = 0;
     while (lasts < senders) {
       catch_up();
@@ -308,6 +349,8 @@ void Renderer::run_frame() {
       stats_.waiting_gp += sc_core::sc_time(before.compute, sc_core::SC_SEC);
       stats_.waiting_ring += sc_core::sc_time(before.ring, sc_core::SC_SEC);
       stats_.waiting_renderers += sc_core::sc_time(before.renderer, sc_core::SC_SEC);
+      if (stats_.messages == 0)
+        stats_.waiting_first = stats_.waiting_gp + stats_.waiting_ring + stats_.waiting_renderers;
       cursor_ = now;
       const sc_core::sc_time t0 = cursor_;
       for (const auto& packet : m->packets) {
@@ -329,7 +372,7 @@ void Renderer::run_frame() {
             t0, cursor_);
       }
       queued_words_ -= m->words;
-      wiring_.scheduler.input_changed(index_, open_stage(plan_.config().regions()));
+      wiring_.scheduler.input_changed(index_, open_stage(plan_.config().regions()), frame_);
       if (m->last) ++lasts;
     }
     if (stage.pass + 1 < stream.passes()) continue;

@@ -71,6 +71,9 @@ struct RendererStats {
   sc_core::sc_time waiting_ring;
   sc_core::sc_time waiting_renderers;
   sc_core::sc_time waiting_ship;  // blocked shipping a region (no overlapped shipping)
+  // Of the waits above, those before its first message of the frame (the bin maps, the first
+  // bin): in a run of frames, how long it stood idle between frames.
+  sc_core::sc_time waiting_first;
   std::uint64_t regions = 0;
   std::uint64_t packets = 0;
   std::uint64_t messages = 0;
@@ -103,6 +106,7 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
   int open_stage(int regions) const override {
     return open_region_ < 0 ? -1 : open_pass_ * regions + open_region_;
   }
+  int open_frame() const override { return frame_; }
   bool has_room(std::uint64_t words) const override { return queued_words_ + words <= capacity_; }
   // A GP takes room for its next message (after has_room), before it starts sending.
   void reserve_room(std::uint64_t words) override;
@@ -117,6 +121,14 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
   void reset_frame();
 
   const RendererStats& stats() const { return stats_; }
+  // Overlapped frames (FrameClock::overlapped): every frame it has finished, in order.
+  struct FrameRecord {
+    int frame = 0;
+    sc_core::sc_time began;  // when it took the frame's first region, in the run's time
+    RendererStats stats;     // computed and finished relative to `began`
+    std::vector<RegionWork> work;
+  };
+  const std::vector<FrameRecord>& history() const { return history_; }
   // Registers renderer.INDEX.* (models/renderer/renderer_statistics.cpp); read once the frame
   // has run.
   void register_statistics(Statistics& stats, double frame_seconds) const;
@@ -134,13 +146,16 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
   };
   void run();
   void run_frame();
+  void run_overlapped();
   void open_next_stage();
   // Opens the next stage if the open one has all its input: every GP's bin map and the last
   // message of every GP that has packets for it. A stage nobody has packets for is complete
   // as soon as the maps are in, but the next opens only once the Renderer starts on it, so
   // a run of empty regions is not all claimed at once.
   void advance();
-  bool maps_complete() const { return maps_delivered_ == plan_.busy_gp_count(); }
+  bool maps_complete() const { return maps_delivered_[frame_ & 1] == plan_.busy_gp_count(); }
+  // Empties the bin-map slot of `frame` (frame & 1) for frame + 2.
+  void forget_maps(int frame, sc_core::sc_time base);
   // Waits until every bin map has arrived; the wait is the GPs' (before the last map was
   // asked for) and the ring's (after).
   void wait_for_bin_maps();
@@ -173,9 +188,11 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
   int open_pass_ = -1;
   int lasts_delivered_ = 0;
   bool open_started_ = false;  // processing of the open stage has begun
-  int maps_delivered_ = 0;
-  sc_core::sc_time maps_requested_;  // the last GP's
-  sc_core::sc_time maps_arrival_;    // the last map's
+  int frame_ = 0;              // the frame it is on
+  // Per frame & 1: a GP on frame n + 1 may send its bin map while this Renderer is on n.
+  int maps_delivered_[2] = {0, 0};
+  sc_core::sc_time maps_requested_[2];  // the last GP's
+  sc_core::sc_time maps_arrival_[2];    // the last map's
   sc_core::sc_event maps_complete_;
   std::deque<Stage> stages_;  // opened, not yet processed
   std::vector<std::shared_ptr<const BinMessage>> queue_;
@@ -187,6 +204,7 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
   sc_core::sc_time coefficients_free_;  // the evaluator's spare coefficient registers
   RendererStats stats_;
   std::vector<RegionWork> work_;
+  std::vector<FrameRecord> history_;
 };
 
 // Runs `work` (one board's regions, in order) on `board` and stores each region's colours in

@@ -87,7 +87,8 @@ RingBooking Ring::send_bin(int from, int to, std::shared_ptr<BinMessage> message
   return b;
 }
 
-RingBooking Ring::send_bin_map(int from, const std::vector<int>& to, std::uint64_t words, int gp) {
+RingBooking Ring::send_bin_map(int from, const std::vector<int>& to, std::uint64_t words, int gp,
+                               int frame) {
   int farthest = to.at(0);
   for (int stop : to) {
     if (hops(from, stop) > hops(from, farthest)) farthest = stop;
@@ -95,7 +96,7 @@ RingBooking Ring::send_bin_map(int from, const std::vector<int>& to, std::uint64
   const sc_core::sc_time requested = sc_core::sc_time_stamp();
   const RingBooking b = reserve(from, farthest, words);
   for (int stop : to) {
-    endpoint(stop).receive_bin_map({gp, requested, b.end + hop_delay(from, stop)});
+    endpoint(stop).receive_bin_map({gp, frame, requested, b.end + hop_delay(from, stop)});
   }
   return b;
 }

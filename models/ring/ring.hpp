@@ -74,6 +74,7 @@ struct BinMessage {
 // A GP's bin map as one Renderer receives it (the regions are in the RegionScheduler).
 struct BinMapArrival {
   int gp = 0;
+  int frame = 0;               // the frame whose bins it maps (frames overlap)
   sc_core::sc_time requested;  // the GP asked the ring for it
   sc_core::sc_time arrival;    // fully at this stop
 };
@@ -112,7 +113,8 @@ class Ring : public sc_core::sc_module {
   RingBooking send_bin(int from, int to, std::shared_ptr<BinMessage> message);
   // Books one bin map of `words` from `from` past every stop of `to` (booked to the farthest:
   // the nearer ones see it on the way) and hands each its arrival, in the order of `to`.
-  RingBooking send_bin_map(int from, const std::vector<int>& to, std::uint64_t words, int gp);
+  RingBooking send_bin_map(int from, const std::vector<int>& to, std::uint64_t words, int gp,
+                           int frame = 0);
   // Books a finished region from `from` to `to`, starting no earlier than `not_before`, and
   // hands it to `to`'s endpoint.
   RingBooking send_region(int from, int to, std::uint64_t words, int region,

@@ -86,6 +86,9 @@ struct SensitivityRow {
   std::vector<std::string> low, high;  // the assignments of the range's ends
   // Per workload: projected triangles/s at the low end, the default and the high end.
   std::vector<std::array<double, 3>> rates;
+  // A key of a run of frames (frames.*): the rates are sustained over three frames overlapped
+  // (Session::run_frames), the default's included, not one frame's.
+  bool sustained = false;
 };
 
 struct SensitivityTable {

@@ -106,6 +106,9 @@ int print_stats_file(const std::string& path) {
     for (StatisticInfo& i : describe_statistics(resolve_firmware("phong"), level))
       described.emplace(i.name, std::move(i));
   }
+  // And a run of frames' (render --frames: a frame's stats.json, run.json).
+  for (StatisticInfo& i : describe_run_statistics(resolve_firmware("phong")))
+    described.emplace(i.name, std::move(i));
   for (const StatisticInfo& i : file.infos()) {
     const auto it = described.find(stat_pattern(i.name));
     if (it == described.end()) {
@@ -465,8 +468,16 @@ Command add_stats_command(CLI::App& app) {
             report::Table table;
             table.columns = {report::code_column("statistic"), report::text_column("kind"),
                              report::text_column("unit"), report::text_column("meaning")};
+            std::set<std::string> listed;
             for (const StatisticInfo& i : describe_statistics(resolve_firmware("phong"))) {
               table.add_row({i.name, stat_kind_name(i.kind), i.unit, i.description});
+              listed.insert(i.name);
+            }
+            // A run of frames (render --frames N): what a frame's stats.json adds, and the
+            // run's own (run.json).
+            for (const StatisticInfo& i : describe_run_statistics(resolve_firmware("phong"))) {
+              if (listed.insert(i.name).second)
+                table.add_row({i.name, stat_kind_name(i.kind), i.unit, i.description});
             }
             std::cout << report::markdown(table);
             return 0;

@@ -35,7 +35,56 @@ struct RenderOptions {
   std::string timeline;
   std::string order = "given";
   bool report = false;  // also OUT/report.html (sim/run_report.hpp)
+  int frames = 1;       // --frames: a run of overlapped frames (Session::run_frames)
 };
+
+// `render --frames N`: N frames of the scene overlapped; writes the last frame's outputs, the
+// run's statistics (run.json) and prints the sustained figures.
+int run_render_frames(const RenderOptions& o, const MachineConfig& config, const Scene& scene,
+                      const Program& program) {
+  const bool pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
+  nlohmann::json timeline;
+  FrameResult last;
+  const RunSummary run = simulate_frames(
+      config, std::make_shared<const Scene>(scene), std::make_shared<const Program>(program),
+      o.threads, o.frames,
+      [&last, n = o.frames](int f, FrameResult& r) {
+        if (f == n - 1) last = std::move(r);
+      },
+      true, o.timeline.empty() ? nullptr : &timeline);
+  const fs::path dir(o.out_dir);
+  OutputSet outputs;
+  const bool heat_map = !last.regions.empty();
+  std::string frame_png, regions_png;
+  parallel_for(2, o.threads, [&](int image) {
+    if (image == 0 && pixels) frame_png = encode_png(last.image);
+    if (image == 1 && heat_map) {
+      const RegionHeatMap map(last.image, last.regions, -1);
+      regions_png = encode_png(map.width(), map.height(),
+                               [&map](int y, std::uint8_t* row) { map.row(y, row); });
+    }
+  });
+  if (pixels) outputs.add((dir / "frame.png").string(), std::move(frame_png));
+  if (heat_map) outputs.add((dir / "regions.png").string(), std::move(regions_png));
+  outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
+  outputs.add((dir / "stats.json").string(), last.stats_json.dump(2) + "\n");
+  outputs.add((dir / "run.json").string(), run.statistics().to_json().dump(2) + "\n");
+  if (!o.timeline.empty()) outputs.add(o.timeline, timeline.dump() + "\n");
+  outputs.commit();
+  std::error_code ignored;
+  if (!pixels) fs::remove(dir / "frame.png", ignored);
+  if (!heat_map) fs::remove(dir / "regions.png", ignored);
+  fs::remove(dir / "report.html", ignored);
+  std::cout << fmt::format("pp5sim: scene '{}' ({} triangles), firmware {}\n{}\n\n", scene.name,
+                           scene.mesh.triangles.size(), program.name, scene.description);
+  std::cout << bit_budget_table(program, timing_params(config));
+  std::cout << "\n" << run.text() << run.sustained_text();
+  std::cout << fmt::format(
+      "wrote {} (the last frame's frame.png, regions.png, stats.json; "
+      "run.json: the run's statistics)\n",
+      o.out_dir);
+  return 0;
+}
 
 // What the scene asks for that the program would ignore, one warning each (printed to stderr
 // and shown in report.html): opacity
@@ -79,6 +128,10 @@ std::vector<std::string> ignored_scene_parts(const Scene& scene, const Program& 
 int run_render(RenderOptions o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
   const bool pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
+  if (o.frames > 1 && o.report) {
+    std::cerr << "pp5sim: error: --report describes one frame; drop it with --frames N\n";
+    return 2;
+  }
   if (!o.timeline.empty() && config.fidelity.timing != MachineConfig::Fidelity::Timing::event) {
     std::cerr << "pp5sim: error: --timeline records the event model's units; this run asks for "
                  "fidelity.timing=analytic, which has no events (drop --timeline or use "
@@ -99,6 +152,8 @@ int run_render(RenderOptions o) {
   for (const std::string& w : warnings) std::cerr << "warning: " << w << "\n";
   if (o.out_dir.empty()) o.out_dir = default_output_folder(scene.name);
   const bool replacing = prepare_output_folder(o.out_dir, "--out");
+
+  if (o.frames > 1) return run_render_frames(o, config, scene, program);
 
   nlohmann::json timeline;
   // report.html draws the timeline: recorded for it too where the timing model has events.
@@ -248,6 +303,12 @@ Command add_render_command(CLI::App& app) {
   render->add_option("--timeline", o->timeline,
                      "Also write a timeline of every GP, ring channel and Renderer to FILE, in the "
                      "Chrome trace-event JSON format that ui.perfetto.dev opens");
+  render
+      ->add_option("--frames", o->frames,
+                   "Simulate N frames of the scene overlapped (a GP sets up frame n + 1 while the "
+                   "Renderers draw frame n): writes the last frame's outputs and OUT/run.json, "
+                   "and prints the sustained period, rates and latency")
+      ->check(CLI::Range(1, 100000));
   render->add_flag("--report", o->report,
                    "Also write OUT/report.html: one self-contained page with the frame, the "
                    "regions heat map, the bit budget, utilisation, the timeline, every "
