@@ -214,7 +214,8 @@ TEST_CASE("sensitivity: a key of a run of frames is measured on the sustained ra
   CHECK(row.rates[0][2] == row.rates[0][1]);
   CHECK(row.rates[0][0] < row.rates[0][1]);
   CHECK(row.rates[0][1] != t.defaults[0]);
-  CHECK_THAT(sensitivity_markdown(t), Catch::Contains("`frames.gp_start` (sustained, 3 frames)"));
+  CHECK_THAT(sensitivity_markdown(t),
+             Catch::Contains("| `frames.gp_start` | assumed (sustained rate, 3 frames) |"));
 }
 
 TEST_CASE("sensitivity: an end that does not combine with the configuration has no rate",

@@ -269,9 +269,9 @@ int run_fidelity(FidelityOptions o) {
         headed(real_column("estimate ms (analytic)", "ms", 3,
                            "Closed-form estimate at the analytic level"),
                "estimate ms (analytic)", Align::right),
-        headed(real_column("analytic error", "%", 2,
-                           "Analytic-level estimate against the simulated"),
-               "error", Align::right),
+        headed(
+            real_column("analytic error", "%", 2, "Analytic-level estimate against the simulated"),
+            "error", Align::right),
     };
   }
   for (const Sustained& t : sustained) {
