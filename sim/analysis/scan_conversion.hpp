@@ -17,9 +17,12 @@
 //  - Exact depth at pixel (X, Y): the smallest depth, in depth units (0 .. 2^gp.depth_bits - 1),
 //    of the unsnapped screen triangles containing the centre (X + 0.5, Y + 0.5); the next
 //    larger depth of another triangle there is the first hidden surface.
-//  - An edge pixel: one whose centre is within max(1, E) pixels of an edge of the frontmost
-//    triangle there (E below). Errors are |z - exact| over edge pixels that both the reference and
-//    the program cover; interior pixels (the rest) are reported separately.
+//  - An edge pixel: one whose centre is within max(1, E) pixels of an edge of any triangle
+//    drawn (E below): the front triangle there, a hidden one, or one that passes beside the
+//    centre without covering it (a nearer face's silhouette, whose rounded edge may claim the
+//    centre). Each edge's band is rasterised row by row. Errors are |z - exact| over edge
+//    pixels that both the reference and the program cover; interior pixels (the rest) are
+//    reported separately.
 //  - A hidden surface shows through at a covered pixel when a hidden surface lies more than
 //    kDepthResolution units behind the front one and the program's z is nearer to the hidden
 //    depth than to the front one.
@@ -36,9 +39,10 @@
 //    edge lies at most E from it, where their planes differ by at most 2ME. It holds where the two
 //    faces lie on opposite sides of the edge on the screen; across a boundary or silhouette edge a
 //    misclassified centre changes layer (the paper's figure 9.10, bottom row), and the error
-//    is the gap between the layers. So the bound is checked at edge pixels within 2E of a
-//    shared, non-silhouette edge and of no other edge, with M the largest such gradient there
-//    (local); report.M is the scene's largest gradient, for scale.
+//    is the gap between the layers. So the bound is checked at edge pixels within 2E of no
+//    silhouette, boundary or clipped edge of any triangle, with M the largest gradient of the
+//    front face and of the faces across its edges or around its corners within 2E (local);
+//    report.M is the scene's largest gradient, for scale.
 //  - Across a silhouette, boundary or clipped edge the paper (9.3.3, figure 9.10 bottom row)
 //    says a misclassified centre yields "a slightly translated layer": its depth is that of a
 //    surface moved by at most E. So at the edge pixels within 2E of such an edge (the layer
@@ -79,9 +83,10 @@ struct ScanConversionMethod {
   double edge_max_error = 0;      // depth units
   double edge_mean_error = 0;     // depth units
   double interior_max_error = 0;  // depth units, the other covered pixels
-  // Over edge pixels within 2E of a shared, non-silhouette edge and of no other kind of edge:
-  // the largest error, and the largest error / (2 M E) with M the larger gradient of the
-  // faces of the shared edges there (the paper's bound; 1 = at the bound).
+  // Over edge pixels within 2E of no silhouette, boundary or clipped edge (a centre there can
+  // change plane, not layer): the largest error, and the largest error / (2 M E) with M the
+  // larger gradient of the faces of the front face's shared edges there (the paper's bound;
+  // 1 = at the bound).
   double shared_edge_max_error = 0;
   double bound_ratio = 0;
   // Over the layer pixels (edge pixels within 2E of a silhouette, boundary or clipped edge):
