@@ -131,15 +131,7 @@ Report animation_report(const AnimationReportInput& in) {
         Note{Note::Level::info, "No timeline (fidelity.timing=analytic, or --no-timeline)."});
   }
 
-  Section& conf = rep.add_section("configuration", "Configuration");
-  std::vector<std::string> differs;
-  Table ct = configuration_table(*in.config, &differs);
-  conf.blocks.push_back(
-      Paragraph{differs.empty() ? std::string("Every key has its default value.")
-                                : fmt::format("{} key{} differ from the defaults (marked *): {}.",
-                                              differs.size(), differs.size() == 1 ? "" : "s",
-                                              fmt::format("{}", fmt::join(differs, "; ")))});
-  conf.blocks.push_back(ct);
+  add_configuration_section(rep, *in.config);
   return rep;
 }
 

@@ -347,6 +347,12 @@ Report run_report(const RunReportInput& in) {
                 "description. Click a heading to sort; type to search."});
   stats.blocks.push_back(statistics_table(s));
 
+  add_configuration_section(rep, config);
+  return rep;
+}
+
+void add_configuration_section(report::Report& rep, const MachineConfig& config) {
+  using namespace report;
   Section& conf = rep.add_section("configuration", "Configuration");
   std::vector<std::string> differs;
   Table ct = configuration_table(config, &differs);
@@ -356,7 +362,6 @@ Report run_report(const RunReportInput& in) {
                                               differs.size(), differs.size() == 1 ? "" : "s",
                                               fmt::format("{}", fmt::join(differs, "; ")))});
   conf.blocks.push_back(ct);
-  return rep;
 }
 
 }  // namespace pp5

@@ -43,6 +43,8 @@ report::Table statistics_table(const Statistics& stats);
 // Every configuration key: key, value, default, unit, calibration, description; `differs`
 // gets the keys whose value is not the default.
 report::Table configuration_table(const MachineConfig& config, std::vector<std::string>* differs);
+// A section "Configuration": what differs from the defaults, then the whole table.
+void add_configuration_section(report::Report& rep, const MachineConfig& config);
 // The busy intervals of each GP, ring channel and Renderer in a timeline document, and the
 // time of its last event (seconds).
 std::vector<report::Track> timeline_tracks(const nlohmann::json& timeline, double* end_seconds);
