@@ -287,7 +287,7 @@ void GraphicsProcessor::run_overlapped() {
   const MachineConfig& config = plan_.config();
   const bool double_buffered = config.frames.gp_bins >= 2 &&
                                config.frames.gp_start == MachineConfig::Frames::GpStart::overlap;
-  RegionBins bins[2];
+  RegionBins(&bins)[2] = overlap_bins_;
   Ahead ahead;
   for (frame_ = 0;; ++frame_) {
     if (!ahead.started) {

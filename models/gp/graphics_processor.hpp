@@ -125,6 +125,9 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   sc_core::sc_time clock_;
   GpStats stats_;
   GpStats ahead_;  // overlapped: the next frame's, set up ahead
+  // Overlapped: the two bin buffers. Members, not locals of run_overlapped: an SC_THREAD that
+  // never returns is not unwound when the simulation ends, so its locals would never be freed.
+  RegionBins overlap_bins_[2];
   int frame_ = 0;  // overlapped: the frame it is sending
   std::vector<GpFrameRecord> history_;
   // When each activity began, in time order.
