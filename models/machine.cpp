@@ -81,10 +81,11 @@ void Machine::record_timeline(bool on) {
 }
 
 void execute_pixels(Machine& machine, int threads,
-                    const std::function<BoardObserver*(int renderer)>& observe) {
+                    const std::function<BoardObserver*(int renderer)>& observe,
+                    const std::atomic<bool>* cancel) {
   std::vector<const std::vector<RegionWork>*> work;
   for (int k = 0; k < machine.renderer_count(); ++k) work.push_back(&machine.renderer(k).work());
-  execute_pixels(machine.plan(), machine.frame_buffer(), work, threads, observe);
+  execute_pixels(machine.plan(), machine.frame_buffer(), work, threads, observe, cancel);
 }
 
 std::string Machine::fmt_name(const char* base, int k) {

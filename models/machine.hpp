@@ -26,6 +26,7 @@
 // region's packets; after the simulation each Renderer's board executes its regions'
 // instruction streams on its pixel array (execute_pixels, models/renderer/execute_pixels.hpp),
 // in parallel across boards.
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <systemc>
@@ -144,6 +145,7 @@ class Machine : public sc_core::sc_module {
 // The functional half of the frame: every Renderer's board executes the regions its timing
 // pass recorded (models/renderer/execute_pixels.hpp).
 void execute_pixels(Machine& machine, int threads,
-                    const std::function<BoardObserver*(int renderer)>& observe = {});
+                    const std::function<BoardObserver*(int renderer)>& observe = {},
+                    const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace pp5

@@ -11,6 +11,8 @@
 #include <stdexcept>
 
 #include "common/strict_json.hpp"
+#include "models/gp/geometry.hpp"
+#include "models/gp/machine_plan.hpp"
 
 namespace fs = std::filesystem;
 
@@ -394,6 +396,16 @@ Animation load_animation(const std::string& name_or_path, const AnimationOptions
   auto shared = std::make_shared<const Scene>(load_scene(name_or_path, options.scene));
   return Animation(shared->name, "turning about the vertical axis", frames, fps,
                    [shared, frames](int k) { return turned_scene(*shared, 360.0 * k / frames); });
+}
+
+std::vector<std::shared_ptr<const Scene>> animation_scenes(const Animation& animation,
+                                                           const MachineConfig& config) {
+  std::vector<std::shared_ptr<const Scene>> scenes;
+  for (int k = 0; k < animation.frames(); ++k) {
+    scenes.push_back(std::make_shared<const Scene>(animation.scene(k)));
+    GeometryEngine(geometry_params(config), *scenes.back()).frame_parameters();
+  }
+  return scenes;
 }
 
 }  // namespace pp5

@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "models/config/machine_config.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
 
@@ -96,6 +97,12 @@ Animation load_animation(const std::string& name_or_path, const AnimationOptions
 // saying where each entry landed); `origin` names the file in messages.
 Animation parse_animation_json(const std::string& text, const std::string& origin, Scene base,
                                const SceneParts& parts, const AnimationOptions& options);
+
+// Every frame's scene of `animation`, made and checked (each frame's parameters computed for
+// `config`'s Graphics Processors) before anything runs: a bad frame throws before any frame is
+// simulated. `pp5sim animate` and the Python module's animated sessions draw these.
+std::vector<std::shared_ptr<const Scene>> animation_scenes(const Animation& animation,
+                                                           const MachineConfig& config);
 
 // The camera of `keys` at `frame`, near and far planes from `base`.
 Camera camera_at(const std::vector<CameraKey>& keys, int frame, const Camera& base);

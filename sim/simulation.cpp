@@ -680,7 +680,8 @@ FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& ob
   const double startup = frames_ == 0 ? startup_seconds_ : 0;
   const double timing_seconds = seconds_since(t0) + startup;
   const auto t1 = std::chrono::steady_clock::now();
-  if (pixels) execute_pixels(*machine, threads, observe);
+  if (pixels) execute_pixels(*machine, threads, observe, cancel_);
+  if (cancel_ != nullptr && cancel_->load()) throw FrameCancelled();
   const double pixel_seconds = seconds_since(t1);
   const double host_seconds = seconds_since(t0) + startup;
   ++frames_;

@@ -3,9 +3,11 @@
 // statistics and the human-readable summary. A library entry point, so that tests, the
 // command-line program and sweeps share it; each call is the one-frame case of a Session
 // (below), with a SystemC context of its own that it frees.
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 
 #include "common/statistics.hpp"
@@ -122,6 +124,12 @@ struct RunSummary {
   std::string text() const;
 };
 
+// Thrown by Session::frame when its cancel flag turned true during the frame.
+class FrameCancelled : public std::runtime_error {
+ public:
+  FrameCancelled() : std::runtime_error("the frame was cancelled") {}
+};
+
 class Session {
  public:
   Session(const MachineConfig& config, std::shared_ptr<const Scene> scene,
@@ -162,6 +170,10 @@ class Session {
   void set_scene(std::shared_ptr<const Scene> scene);
   // The event model's machine (null at fidelity.timing=analytic).
   const Machine* machine() const;
+  // A flag checked between regions of the pixel execution of each frame (null: none). Once it
+  // is true, the boards execute no more regions and frame() throws FrameCancelled; the session
+  // is then to be destroyed (its machine holds a frame half drawn).
+  void set_cancel(const std::atomic<bool>* flag) { cancel_ = flag; }
 
  private:
   struct Event;
@@ -171,6 +183,7 @@ class Session {
   std::shared_ptr<const Program> program_;
   int threads_;
   SetupMemo* memo_;
+  const std::atomic<bool>* cancel_ = nullptr;
   std::unique_ptr<Event> event_;
   double startup_seconds_ = 0;
   int frames_ = 0;

@@ -13,7 +13,8 @@ namespace pp5 {
 
 void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
                     const std::vector<const std::vector<RegionWork>*>& work, int threads,
-                    const std::function<BoardObserver*(int renderer)>& observe) {
+                    const std::function<BoardObserver*(int renderer)>& observe,
+                    const std::atomic<bool>* cancel) {
   const Program& program = plan.program();
   const MachineConfig& config = plan.config();
   using Pixels = MachineConfig::Fidelity::Pixels;
@@ -51,6 +52,8 @@ void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
     const int columns = config.regions_x();
     execute_regions(regions, board, program, frame_buffer, plan.frame_values(),
                     [&](const RegionWork& w) {
+                      if (cancel != nullptr && cancel->load(std::memory_order_relaxed))
+                        return false;
                       return config.fidelity.executes(w.region % columns, w.region / columns);
                     });
   });

@@ -12,6 +12,7 @@
 //    BoardObserver. Each board's observer is called from one host thread only.
 //  - An exception thrown while a board executes (e.g. std::out_of_range from a backing-store
 //    block) is rethrown here, on the caller's thread, once the other boards have stopped.
+#include <atomic>
 #include <functional>
 #include <vector>
 
@@ -24,8 +25,11 @@ struct RegionWork;
 
 // work[k] is board k's regions, in order: the event model's Renderers' (Machine's
 // execute_pixels, models/machine.hpp) or the analytic timing model's.
+// With `cancel`, each board checks it before each region and executes no more regions once it
+// is true (the frame is then incomplete: the caller discards it).
 void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
                     const std::vector<const std::vector<RegionWork>*>& work, int threads,
-                    const std::function<BoardObserver*(int renderer)>& observe = {});
+                    const std::function<BoardObserver*(int renderer)>& observe = {},
+                    const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace pp5

@@ -84,11 +84,7 @@ int run_animate(AnimateOptions o) {
   const int frames = animation.frames();
   // Every frame's scene, made and checked before anything runs: a bad frame stops the run
   // before any output.
-  std::vector<std::shared_ptr<const Scene>> scenes;
-  for (int k = 0; k < frames; ++k) {
-    scenes.push_back(std::make_shared<const Scene>(animation.scene(k)));
-    GeometryEngine(geometry_params(config), *scenes.back()).frame_parameters();
-  }
+  const std::vector<std::shared_ptr<const Scene>> scenes = animation_scenes(animation, config);
   const Scene& first = *scenes.front();
   auto program = std::make_shared<const Program>(
       assemble_file(firmware_for(o.firmware, first), assembler_options(config)));

@@ -13,14 +13,21 @@
 //    frame. Each frame begins on a machine whose units begin the frame as new
 //    (Machine::begin_frame), so that gives the same frames.
 //  - Every run releases the GIL; a sweep checks for Ctrl-C (PyErr_CheckSignals) between points
-//    and Session.frames between frames.
+//    and Session.frames between frames. A frame run on the main thread sees Ctrl-C between
+//    regions (SigintWatch, Session::set_cancel): it stops, its machine is freed, and
+//    KeyboardInterrupt is raised; the session's next frame is the same frame again.
+//  - An animated session (animation=True) draws frame k of the scene's animation at its frame
+//    k, the scenes `pp5sim animate` draws (animation_scenes); a machine made again mid-run is
+//    made for the scene of the frame it runs next.
 #include <dlfcn.h>
 #include <fmt/format.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <signal.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -38,6 +45,7 @@
 #include "models/gp/machine_plan.hpp"
 #include "models/gp/setup_memo.hpp"
 #include "models/renderer/renderer_board.hpp"
+#include "sim/animation.hpp"
 #include "sim/app/commands.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
@@ -438,7 +446,61 @@ struct PyFrame {
   MachineConfig config;
 };
 
+// --- Ctrl-C inside a frame ----------------------------------------------------------------
+
+// While a frame runs on the main thread, SIGINT sets g_frame_cancel (which the boards check
+// between regions: Session::set_cancel) and is passed on to the handler it replaced (Python's,
+// which notes it for PyErr_CheckSignals).
+std::atomic<bool> g_frame_cancel{false};
+struct sigaction g_python_sigint {};
+
+extern "C" void pp5_on_sigint(int signal) {
+  g_frame_cancel.store(true);
+  if (g_python_sigint.sa_handler != SIG_DFL && g_python_sigint.sa_handler != SIG_IGN)
+    g_python_sigint.sa_handler(signal);
+}
+
+bool on_main_thread() {
+  const py::module_ threading = py::module_::import("threading");
+  return threading.attr("current_thread")().is(threading.attr("main_thread")());
+}
+
+// Installs pp5_on_sigint for its lifetime, on the main thread when Python handles SIGINT with
+// a handler of its own (not when it is ignored or left to the default).
+class SigintWatch {
+ public:
+  SigintWatch() {
+    g_frame_cancel.store(false);
+    if (!on_main_thread()) return;
+    struct sigaction current {};
+    if (sigaction(SIGINT, nullptr, &current) != 0 || (current.sa_flags & SA_SIGINFO) != 0 ||
+        current.sa_handler == SIG_DFL || current.sa_handler == SIG_IGN)
+      return;
+    g_python_sigint = current;
+    struct sigaction ours = current;
+    ours.sa_handler = pp5_on_sigint;
+    installed_ = sigaction(SIGINT, &ours, nullptr) == 0;
+  }
+  ~SigintWatch() {
+    if (installed_) sigaction(SIGINT, &g_python_sigint, nullptr);
+  }
+  SigintWatch(const SigintWatch&) = delete;
+  SigintWatch& operator=(const SigintWatch&) = delete;
+  bool installed() const { return installed_; }
+
+ private:
+  bool installed_ = false;
+};
+
 // --- Sessions -----------------------------------------------------------------------------
+
+// An animated session's frames (sim/animation.hpp): every frame's scene, made and checked when
+// the session is made, as `pp5sim animate` makes them.
+struct PyAnimation {
+  std::string name, motion;
+  double fps = 0;
+  std::vector<std::shared_ptr<const Scene>> scenes;
+};
 
 class PySession;
 PySession* g_kernel_holder = nullptr;  // the session whose machine holds SystemC's context
@@ -446,11 +508,13 @@ PySession* g_kernel_holder = nullptr;  // the session whose machine holds System
 class PySession {
  public:
   PySession(const MachineConfig& config, std::shared_ptr<const Scene> scene,
-            std::shared_ptr<const Program> program, int threads)
+            std::shared_ptr<const Program> program, int threads,
+            std::optional<PyAnimation> animation = std::nullopt)
       : config_(config),
         scene_(std::move(scene)),
         program_(std::move(program)),
-        threads_(threads) {}
+        threads_(threads),
+        animation_(std::move(animation)) {}
   ~PySession() { close(); }
 
   // Frees the machine (and SystemC's context); the next frame makes them again.
@@ -522,7 +586,7 @@ class PySession {
     if (!refused.empty()) throw std::invalid_argument(refused);
     trace::Selection sel;
     sel.rects.push_back(trace::Rect{x, y, 1, 1});
-    trace::Recorder recorder(config_, *scene_, *program_, sel, frames_);
+    trace::Recorder recorder(config_, *frame_scene(), *program_, sel, frames_);
     for (int k = 0; k < config_.renderer.count; ++k) recorder.observer(k);
     run([&](int k) { return recorder.observer(k); }, true);
     std::uint64_t count = 0;
@@ -534,8 +598,15 @@ class PySession {
 
   int frames() const { return frames_; }
   const MachineConfig& config() const { return config_; }
-  const Scene& scene() const { return *scene_; }
-  std::shared_ptr<const Scene> scene_ptr() const { return scene_; }
+  const Scene& scene() const { return *scene_ptr(); }
+  // The scene of the next frame (an animation's last once it has ended).
+  std::shared_ptr<const Scene> scene_ptr() const {
+    if (!animation_) return scene_;
+    const std::size_t k =
+        std::min<std::size_t>(static_cast<std::size_t>(frames_), animation_->scenes.size() - 1);
+    return animation_->scenes[k];
+  }
+  const std::optional<PyAnimation>& animation() const { return animation_; }
   std::shared_ptr<const Program> program() const { return program_; }
   int threads() const { return threads_; }
   RunSummary summary() const {
@@ -548,19 +619,53 @@ class PySession {
   FrameResult run(const std::function<BoardObserver*(int)>& observe, bool pixels) {
     using F = MachineConfig::Fidelity;
     const bool kernel = config_.fidelity.timing == F::Timing::event;
+    const std::shared_ptr<const Scene> scene = frame_scene();
     if (kernel && g_kernel_holder != nullptr && g_kernel_holder != this) g_kernel_holder->close();
     if (!session_) {
+      // A machine made again mid-animation (another session took the kernel) is made for this
+      // frame's scene.
       py::gil_scoped_release release;
-      session_ = std::make_unique<Session>(config_, scene_, program_, threads_);
+      session_ = std::make_unique<Session>(config_, scene, program_, threads_);
+    } else if (animation_ && frames_ > 0) {
+      session_->set_scene(scene);  // as pp5sim animate does before each frame after the first
     }
     if (kernel) g_kernel_holder = this;
     FrameResult r;
+    bool cancelled = false;
     {
+      SigintWatch watch;
+      session_->set_cancel(watch.installed() ? &g_frame_cancel : nullptr);
       py::gil_scoped_release release;
-      r = session_->frame(observe, nullptr, pixels);
+      try {
+        r = session_->frame(observe, nullptr, pixels);
+      } catch (const FrameCancelled&) {
+        cancelled = true;
+      }
     }
+    if (cancelled) {
+      // Ctrl-C between regions: the machine, which holds half a frame, is freed (the next
+      // frame makes it again, for the same frame number) and Python's handler runs.
+      session_->set_cancel(nullptr);
+      close();
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
+      throw py::error_already_set();
+    }
+    session_->set_cancel(nullptr);
     ++frames_;
     return r;
+  }
+  // The scene of frame frames_: the session's, or the animation's frame (refused past its end).
+  std::shared_ptr<const Scene> frame_scene() const {
+    if (!animation_) return scene_;
+    const auto count = static_cast<int>(animation_->scenes.size());
+    if (frames_ >= count) {
+      throw std::invalid_argument(fmt::format(
+          "the animation of '{}' has {} frames, all simulated; make the session with frames=N "
+          "for more",
+          animation_->name, count));
+    }
+    return animation_->scenes[static_cast<std::size_t>(frames_)];
   }
   static void add(RunSummary& a, const RunSummary& b) {
     if (b.frames == 0) return;
@@ -579,6 +684,7 @@ class PySession {
   std::shared_ptr<const Program> program_;
   int threads_;
   std::unique_ptr<Session> session_;
+  std::optional<PyAnimation> animation_;
   int frames_ = 0;
   RunSummary closed_;  // the frames of machines freed so far
 };
@@ -843,42 +949,79 @@ PYBIND11_MODULE(_pp5sim, m) {
       });
 
   py::class_<PySession>(m, "Session")
-      .def(py::init([](const std::string& scene, const py::object& vertices,
-                       const py::object& triangles, const py::object& colors,
-                       const py::object& centers, const py::object& radii,
-                       const py::object& sphere_colors, const std::vector<int>& tessellation,
-                       const std::string& firmware, const std::string& config_file,
-                       const std::string& fidelity,
-                       const std::vector<std::pair<std::string, std::string>>& sets, int threads) {
-             MachineConfig config = make_config(config_file, fidelity, sets);
-             std::shared_ptr<const Scene> s;
-             if (!vertices.is_none() || !centers.is_none() || !triangles.is_none() ||
-                 !radii.is_none()) {
-               s = std::make_shared<const Scene>(scene_from_arrays(
-                   vertices, triangles, colors, centers, radii, sphere_colors, ""));
-             } else {
-               SceneOptions o;
-               if (!tessellation.empty()) {
-                 if (tessellation.size() != 2)
-                   throw std::invalid_argument("tessellation: expected (u, v)");
-                 o.tessellation_u = tessellation[0];
-                 o.tessellation_v = tessellation[1];
-               }
-               s = std::make_shared<const Scene>(load_scene(scene, o));
-             }
-             auto program = std::make_shared<const Program>(load_program(firmware, *s, config));
-             return std::make_unique<PySession>(config, s, program, threads_or_default(threads));
-           }),
-           py::arg("scene"), py::arg("vertices"), py::arg("triangles"), py::arg("colors"),
-           py::arg("sphere_centers"), py::arg("sphere_radii"), py::arg("sphere_colors"),
-           py::arg("tessellation"), py::arg("firmware"), py::arg("config_file"),
-           py::arg("fidelity"), py::arg("sets"), py::arg("threads"))
+      .def(
+          py::init([](const std::string& scene, const py::object& vertices,
+                      const py::object& triangles, const py::object& colors,
+                      const py::object& centers, const py::object& radii,
+                      const py::object& sphere_colors, const std::vector<int>& tessellation,
+                      const std::string& firmware, const std::string& config_file,
+                      const std::string& fidelity,
+                      const std::vector<std::pair<std::string, std::string>>& sets, int threads,
+                      bool animate, int frames, double fps) {
+            MachineConfig config = make_config(config_file, fidelity, sets);
+            std::shared_ptr<const Scene> s;
+            std::optional<PyAnimation> animation;
+            const bool arrays = !vertices.is_none() || !centers.is_none() || !triangles.is_none() ||
+                                !radii.is_none();
+            if (!animate && (frames != 0 || fps != 0))
+              throw std::invalid_argument("frames, fps: given without animation=True");
+            if (animate && arrays) {
+              throw std::invalid_argument(
+                  "animation: a scene given as arrays does not move; give a built-in name or "
+                  "a scene file");
+            }
+            if (frames < 0) throw std::invalid_argument("frames: expected a count >= 1");
+            if (fps < 0) throw std::invalid_argument("fps: expected frames per second > 0");
+            if (arrays) {
+              s = std::make_shared<const Scene>(scene_from_arrays(
+                  vertices, triangles, colors, centers, radii, sphere_colors, ""));
+            } else {
+              SceneOptions o;
+              if (!tessellation.empty()) {
+                if (tessellation.size() != 2)
+                  throw std::invalid_argument("tessellation: expected (u, v)");
+                o.tessellation_u = tessellation[0];
+                o.tessellation_v = tessellation[1];
+              }
+              if (animate) {
+                // The frames pp5sim animate draws for the same arguments.
+                AnimationOptions ao;
+                ao.scene = o;
+                ao.frames = frames;
+                ao.fps = fps;
+                const Animation a = load_animation(scene, ao);
+                animation = PyAnimation{a.name(), a.motion(), a.fps(), animation_scenes(a, config)};
+                s = animation->scenes.front();
+              } else {
+                s = std::make_shared<const Scene>(load_scene(scene, o));
+              }
+            }
+            auto program = std::make_shared<const Program>(load_program(firmware, *s, config));
+            return std::make_unique<PySession>(config, s, program, threads_or_default(threads),
+                                               std::move(animation));
+          }),
+          py::arg("scene"), py::arg("vertices"), py::arg("triangles"), py::arg("colors"),
+          py::arg("sphere_centers"), py::arg("sphere_radii"), py::arg("sphere_colors"),
+          py::arg("tessellation"), py::arg("firmware"), py::arg("config_file"), py::arg("fidelity"),
+          py::arg("sets"), py::arg("threads"), py::arg("animate") = false, py::arg("frames") = 0,
+          py::arg("fps") = 0.0)
       .def("frame", &PySession::frame, py::arg("fields") = std::vector<std::string>{},
            py::arg("pixels") = true)
       .def("why", &PySession::why, py::arg("x"), py::arg("y"))
       .def("close", &PySession::close)
       .def_property_readonly("frames", &PySession::frames)
       .def_property_readonly("threads", &PySession::threads)
+      .def_property_readonly("animation",
+                             [](const PySession& s) -> py::object {
+                               if (!s.animation()) return py::none();
+                               const PyAnimation& a = *s.animation();
+                               py::dict d;
+                               d["name"] = a.name;
+                               d["motion"] = a.motion;
+                               d["frames"] = a.scenes.size();
+                               d["fps"] = a.fps;
+                               return std::move(d);
+                             })
       .def_property_readonly(
           "config", [](const PySession& s) { return json_to_python(s.config().to_json()); })
       .def_property_readonly("scene_name", [](const PySession& s) { return s.scene().name; })

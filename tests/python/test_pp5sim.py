@@ -340,3 +340,103 @@ def test_ctrl_c_stops_a_sweep_between_points():
     # Stopped between points, long before the end (without the check it would run to the end
     # and only then raise).
     assert interrupted < 0.5 * points * per_point, (interrupted, per_point)
+
+
+# --- Animations ---------------------------------------------------------------------------
+
+ANIMATION = {"screen.width": 128, "screen.height": 128}
+ANIMATION_TESSELLATION = (48, 12)
+ANIMATION_FRAMES = 3
+
+
+def animated_session():
+    return pp5sim.Session("torus", animation=True, frames=ANIMATION_FRAMES,
+                          tessellation=ANIMATION_TESSELLATION, config=ANIMATION, threads=2)
+
+
+@pytest.fixture(scope="module")
+def cli_animation(tmp_path_factory, pp5sim_exe):
+    import json
+
+    import matplotlib.image
+
+    out = tmp_path_factory.mktemp("cli") / "animation"
+    run_cli(pp5sim_exe, "animate", "--scene", "torus", "--tessellation",
+            *map(str, ANIMATION_TESSELLATION), "--frames", str(ANIMATION_FRAMES),
+            *cli_sets(ANIMATION), "--threads", "2", "--no-timeline", "--out", str(out))
+    images = []
+    for k in range(ANIMATION_FRAMES):
+        png = matplotlib.image.imread(str(out / f"frame-{k:04d}.png"))
+        images.append(np.round(png[..., :3] * 255).astype(np.uint8))
+    with open(out / "stats.json") as f:
+        stats = json.load(f)["frames"]
+    return images, stats
+
+
+def test_animation_frames_are_pp5sim_animates(cli_animation):
+    images, stats = cli_animation
+    session = animated_session()
+    assert session.animation["frames"] == ANIMATION_FRAMES
+    assert "4-space" in session.animation["motion"]
+    frames = list(session.frames())  # to the animation's last frame
+    assert [f.index for f in frames] == list(range(ANIMATION_FRAMES))
+    for k, f in enumerate(frames):
+        assert f.image.shape == (128, 128, 3)
+        assert np.array_equal(f.image, images[k]), k
+        assert f.stats["frame"] == stats[k]["frame"], k
+        assert f.stats["timing"] == stats[k]["timing"], k
+    # The torus turns: no two frames alike.
+    assert not np.array_equal(frames[0].image, frames[1].image)
+    assert not np.array_equal(frames[1].image, frames[2].image)
+    with pytest.raises(ValueError, match="has 3 frames"):
+        session.frame()
+
+
+def test_animated_session_rebuilt_mid_run_resumes_at_its_frame(cli_animation):
+    images, _ = cli_animation
+    session = animated_session()
+    first = session.frame()
+    # Another session takes SystemC's kernel: the animated session's machine is freed, and made
+    # again for frame 1's scene at its next frame.
+    small_session().frame()
+    rest = list(session.frames())
+    assert [f.index for f in [first] + rest] == list(range(ANIMATION_FRAMES))
+    for k, f in enumerate([first] + rest):
+        assert np.array_equal(f.image, images[k]), k
+
+
+def test_animation_arguments_are_checked():
+    with pytest.raises(ValueError, match="without animation=True"):
+        pp5sim.Session("torus", frames=3)
+    with pytest.raises(ValueError, match="arrays does not move"):
+        pp5sim.Session(vertices=np.zeros((3, 3)), triangles=[[0, 1, 2]], animation=True)
+
+
+# --- Ctrl-C inside a frame ----------------------------------------------------------------
+
+
+def test_ctrl_c_stops_a_frame_between_regions():
+    # A frame at the bit level with a field read, almost all of it pixel execution (about a
+    # fifth of a second on one host thread: 320 regions, the timing part some milliseconds);
+    # Ctrl-C (SIGINT) a tenth of the way in. Without the check between regions the frame runs
+    # to its end before the KeyboardInterrupt.
+    session = pp5sim.Session("molecule", config={"screen.width": 1280, "screen.height": 1024},
+                             fidelity="bit", threads=1)
+    session.frame(pixels=False)  # the machine made, outside the timed frames
+    start = time.perf_counter()
+    full = session.frame(fields=["z"])
+    full_seconds = time.perf_counter() - start
+    timer = threading.Timer(0.1 * full_seconds, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        session.frame(fields=["z"])
+    interrupted = time.perf_counter() - start
+    timer.cancel()
+    assert interrupted < 0.5 * full_seconds, (interrupted, full_seconds)
+    # The session is usable: the frame interrupted is run again, whole, on a machine made again.
+    assert session.frames_run == 2
+    again = session.frame(fields=["z"])
+    assert again.index == 2
+    assert np.array_equal(again.image, full.image)
+    assert np.array_equal(again.fields["z"], full.fields["z"])

@@ -147,18 +147,23 @@ class Session:
     program text (it holds a newline); default the scene's, else phong. config: {KEY: VALUE}
     with the keys, ranges and messages of --set (a bad one raises ValueError). fidelity: as
     --fidelity ('bit', 'word', 'timing', 'analytic', or items). threads: host threads (0: all).
+    animation=True: frame k draws frame k of the scene's animation, as `pp5sim animate` does
+    (the torus turning in 4-space, another built-in turning, a scene file's keyframes); frames
+    and fps as its --frames and --fps; session.frames() then iterates over them.
     """
 
     def __init__(self, scene="torus", *, firmware=None, config=None, config_file="", fidelity="",
                  threads=0, tessellation=None, vertices=None, triangles=None, colors=None,
-                 sphere_centers=None, sphere_radii=None, sphere_colors=None):
+                 sphere_centers=None, sphere_radii=None, sphere_colors=None, animation=False,
+                 frames=None, fps=None):
         if not isinstance(scene, (str, _os.PathLike)):
             raise TypeError("scene: expected a built-in name or a file path; give arrays as "
                             "vertices=..., triangles=... or sphere_centers=..., sphere_radii=...")
         self._s = _c.Session(
             _os.fspath(scene), vertices, triangles, colors, sphere_centers, sphere_radii,
             sphere_colors, list(tessellation or []), _firmware(firmware), config_file,
-            fidelity or "", _sets(config), int(threads))
+            fidelity or "", _sets(config), int(threads), bool(animation), int(frames or 0),
+            float(fps or 0))
 
     def frame(self, fields=(), pixels=True):
         """Simulates the next frame. fields: pixel-memory fields to read over the whole screen
@@ -168,16 +173,17 @@ class Session:
         return Frame(self._s.frame(list(fields), bool(pixels)))
 
     def frames(self, n=None, fields=(), pixels=True):
-        """Iterates over the next n frames (without n, until the loop stops). Ctrl-C between
-        frames raises KeyboardInterrupt as usual."""
+        """Iterates over the next n frames (without n, until the loop stops; an animation's, to
+        its last frame). Ctrl-C raises KeyboardInterrupt."""
+        if n is None and self.animation is not None:
+            n = self.animation["frames"] - self.frames_run
         count = 0
         while n is None or count < n:
             yield self._next_frame(fields, pixels)
             count += 1
 
     def _next_frame(self, fields, pixels):
-        # One frame of the sequence. The scene is the session's for every frame; an animated
-        # scene would pick frame i's scene here (the C++ Session's per-frame hook).
+        # One frame of the sequence; an animated session's C++ half gives it its frame's scene.
         return self.frame(fields, pixels)
 
     def __iter__(self):
@@ -205,6 +211,8 @@ class Session:
     program = property(lambda self: self._s.program, doc="The assembled Program")
     scene_name = property(lambda self: self._s.scene_name)
     threads = property(lambda self: self._s.threads)
+    animation = property(lambda self: self._s.animation,
+                         doc="{name, motion, frames, fps} of an animated session, else None")
 
     def __repr__(self):
         return (f"<pp5sim.Session scene {self.scene_name}, program {self.program.name}, "
