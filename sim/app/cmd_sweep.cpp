@@ -366,24 +366,6 @@ Statistics read_statistics(const fs::path& path) {
   }
 }
 
-// The metrics of one run, as CSV columns: (column, statistic).
-const std::vector<std::pair<std::string, std::string>>& metric_columns() {
-  static const std::vector<std::pair<std::string, std::string>> columns = {
-      {"frame_seconds", "frame.simulated_seconds"},
-      {"triangles_per_second", "frame.projected_triangles_per_second"},
-      {"pipelined_triangles_per_second", "frame.pipelined_triangles_per_second"},
-      {"gp_clocks_per_triangle", "frame.gp_clocks_per_triangle"},
-      {"bottleneck", "timing.bottleneck"},
-      {"gp_seconds", "timing.gp_seconds"},
-      {"ring_seconds", "timing.ring_seconds"},
-      {"renderer_seconds", "timing.renderer_seconds"},
-      {"gp_utilisation", "timing.gp_utilisation_mean"},
-      {"ring_utilisation", "timing.ring_utilisation"},
-      {"renderer_utilisation", "timing.renderer_utilisation_mean"},
-  };
-  return columns;
-}
-
 // A configuration value or a statistic as a typed cell (the CSV writes integers exactly and
 // reals with 9 significant digits).
 report::Cell sweep_cell(const nlohmann::json& v) {
@@ -506,7 +488,7 @@ int run_aggregate(const SweepOptions& o) {
     c.key = k;
     table.columns.push_back(c);
   }
-  for (const auto& [column, name] : metric_columns())
+  for (const auto& [column, name] : sweep_metric_columns())
     table.columns.push_back(sweep_column(column, name, infos));
   for (const char* level : {"fidelity_pixels", "fidelity_timing"}) {
     report::Column c = report::text_column(level, "The level each row was simulated at");
@@ -541,7 +523,7 @@ int run_aggregate(const SweepOptions& o) {
       row.order.push_back(v.is_number() ? v.get<double>() : 0.0);
       row.cells.push_back(sweep_cell(v));
     }
-    for (const auto& [column, name] : metric_columns()) {
+    for (const auto& [column, name] : sweep_metric_columns()) {
       if (!stats.contains(name)) {
         throw std::runtime_error(fmt::format("{}: no '{}' in stats.json (from an older pp5sim?)",
                                              (run / "stats.json").string(), name));
@@ -705,9 +687,9 @@ int run_plot(const SweepOptions& o) {
   int sc = -1;
   if (!o.plot_series.empty()) {
     sc = csv.column(o.plot_series, o.plot_csv);
-  } else if (xc != 1 && csv.header.size() > 1 && csv.header[1] != metric_columns()[0].first) {
+  } else if (xc != 1 && csv.header.size() > 1 && csv.header[1] != sweep_metric_columns()[0].first) {
     sc = 1;
-  } else if (xc != 0 && csv.header[0] != metric_columns()[0].first) {
+  } else if (xc != 0 && csv.header[0] != sweep_metric_columns()[0].first) {
     sc = 0;
   }
   // Lines in the order their values first appear (the CSV is in grid order).
@@ -818,6 +800,24 @@ int run_plot(const SweepOptions& o) {
 }
 
 }  // namespace
+
+// The metrics of one run as sweep.csv's columns: (column, statistic), in its order.
+const std::vector<std::pair<std::string, std::string>>& sweep_metric_columns() {
+  static const std::vector<std::pair<std::string, std::string>> columns = {
+      {"frame_seconds", "frame.simulated_seconds"},
+      {"triangles_per_second", "frame.projected_triangles_per_second"},
+      {"pipelined_triangles_per_second", "frame.pipelined_triangles_per_second"},
+      {"gp_clocks_per_triangle", "frame.gp_clocks_per_triangle"},
+      {"bottleneck", "timing.bottleneck"},
+      {"gp_seconds", "timing.gp_seconds"},
+      {"ring_seconds", "timing.ring_seconds"},
+      {"renderer_seconds", "timing.renderer_seconds"},
+      {"gp_utilisation", "timing.gp_utilisation_mean"},
+      {"ring_utilisation", "timing.ring_utilisation"},
+      {"renderer_utilisation", "timing.renderer_utilisation_mean"},
+  };
+  return columns;
+}
 
 Command add_sweep_command(CLI::App& app) {
   auto o = std::make_shared<SweepOptions>();

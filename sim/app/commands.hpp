@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "models/config/machine_config.hpp"
@@ -28,6 +29,8 @@ Command add_config_command(CLI::App& app);
 Command add_stats_command(CLI::App& app);
 Command add_scenes_command(CLI::App& app);
 Command add_sweep_command(CLI::App& app);
+// The metrics of one run as sweep.csv's columns, after the swept keys: (column, statistic).
+const std::vector<std::pair<std::string, std::string>>& sweep_metric_columns();
 Command add_trace_command(CLI::App& app);
 Command add_highlight_command(CLI::App& app);
 Command add_extremes_command(CLI::App& app);

@@ -695,24 +695,6 @@ void release_kernel() {
 
 // --- Sweeps -------------------------------------------------------------------------------
 
-// The columns sweep.csv holds for each run (`pp5sim sweep aggregate`), in its order.
-const std::vector<std::pair<std::string, std::string>>& csv_metric_columns() {
-  static const std::vector<std::pair<std::string, std::string>> columns = {
-      {"frame_seconds", "frame.simulated_seconds"},
-      {"triangles_per_second", "frame.projected_triangles_per_second"},
-      {"pipelined_triangles_per_second", "frame.pipelined_triangles_per_second"},
-      {"gp_clocks_per_triangle", "frame.gp_clocks_per_triangle"},
-      {"bottleneck", "timing.bottleneck"},
-      {"gp_seconds", "timing.gp_seconds"},
-      {"ring_seconds", "timing.ring_seconds"},
-      {"renderer_seconds", "timing.renderer_seconds"},
-      {"gp_utilisation", "timing.gp_utilisation_mean"},
-      {"ring_utilisation", "timing.ring_utilisation"},
-      {"renderer_utilisation", "timing.renderer_utilisation_mean"},
-  };
-  return columns;
-}
-
 py::object config_value(const nlohmann::json& config, const std::string& key) {
   const auto dot = key.find('.');
   return json_to_python(config.at(key.substr(0, dot)).at(key.substr(dot + 1)));
@@ -724,7 +706,7 @@ py::dict sweep_row(const std::vector<std::string>& keys, const nlohmann::json& c
                    const Statistics& stats) {
   py::dict row;
   for (const std::string& k : keys) row[py::str(k)] = config_value(config_json, k);
-  for (const auto& [column, name] : csv_metric_columns())
+  for (const auto& [column, name] : sweep_metric_columns())
     row[py::str(column)] = stat_to_python(stats.value(name));
   row["fidelity_pixels"] = json_to_python(config_json.at("fidelity").at("pixels"));
   row["fidelity_timing"] = json_to_python(config_json.at("fidelity").at("timing"));
@@ -935,7 +917,7 @@ PYBIND11_MODULE(_pp5sim, m) {
       .def_property_readonly("rates",
                              [](const PyFrame& f) {
                                py::dict d;
-                               for (const auto& [column, name] : csv_metric_columns())
+                               for (const auto& [column, name] : sweep_metric_columns())
                                  d[py::str(column)] = stat_to_python(f.result.stats.value(name));
                                return d;
                              })
