@@ -801,24 +801,6 @@ int run_plot(const SweepOptions& o) {
 
 }  // namespace
 
-// The metrics of one run as sweep.csv's columns: (column, statistic), in its order.
-const std::vector<std::pair<std::string, std::string>>& sweep_metric_columns() {
-  static const std::vector<std::pair<std::string, std::string>> columns = {
-      {"frame_seconds", "frame.simulated_seconds"},
-      {"triangles_per_second", "frame.projected_triangles_per_second"},
-      {"pipelined_triangles_per_second", "frame.pipelined_triangles_per_second"},
-      {"gp_clocks_per_triangle", "frame.gp_clocks_per_triangle"},
-      {"bottleneck", "timing.bottleneck"},
-      {"gp_seconds", "timing.gp_seconds"},
-      {"ring_seconds", "timing.ring_seconds"},
-      {"renderer_seconds", "timing.renderer_seconds"},
-      {"gp_utilisation", "timing.gp_utilisation_mean"},
-      {"ring_utilisation", "timing.ring_utilisation"},
-      {"renderer_utilisation", "timing.renderer_utilisation_mean"},
-  };
-  return columns;
-}
-
 Command add_sweep_command(CLI::App& app) {
   auto o = std::make_shared<SweepOptions>();
   auto* sweep = app.add_subcommand(
