@@ -18,6 +18,7 @@ import base64
 import fcntl
 import json
 import os
+import resource
 import shutil
 import struct
 import subprocess
@@ -56,6 +57,12 @@ class Browser:
         def child_fds():
             os.dup2(to_browser_r, 3)
             os.dup2(from_browser_w, 4)
+            # The browser is a tool here, not the code under test: it reserves far more address
+            # space than the suite's soft limit (scripts/pp5 test runs under ulimit -S -v 4 GiB)
+            # allows, so its soft limit goes back up to the hard one.
+            soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+            if soft != hard:
+                resource.setrlimit(resource.RLIMIT_AS, (hard, hard))
 
         self.proc = subprocess.Popen(
             [binary, "--headless=new", "--remote-debugging-pipe", "--no-sandbox",
@@ -330,6 +337,12 @@ def main():
     if not binary:
         print("SKIP: no chromium (scripts/install-deps.sh test installs Debian's chromium)")
         return 77
+    hard = resource.getrlimit(resource.RLIMIT_AS)[1]
+    if hard != resource.RLIM_INFINITY:
+        print(f"FAIL: Chromium cannot start under a hard address-space limit ({hard} bytes, "
+              "ulimit -v); set only a soft one (ulimit -S -v), which this check lifts for the "
+              "browser")
+        return 1
     status = 0
     with tempfile.TemporaryDirectory() as profile:
         browser = Browser(binary, profile)
