@@ -1,7 +1,9 @@
 #include "sim/kernel.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <systemc>
+#include <vector>
 
 namespace pp5 {
 
@@ -9,22 +11,46 @@ namespace {
 void quiet_systemc() { setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0); }
 }  // namespace
 
-KernelContext::KernelContext() {
+namespace {
+// The contexts alive, oldest first: when one goes, the newest left becomes current.
+std::vector<sc_core::sc_simcontext*>& live_contexts() {
+  static std::vector<sc_core::sc_simcontext*> live;
+  return live;
+}
+}  // namespace
+
+KernelContext::KernelContext() : context_(nullptr) {
   quiet_systemc();
-  sc_core::sc_curr_simcontext = new sc_core::sc_simcontext();
-  sc_core::sc_default_global_context = sc_core::sc_curr_simcontext;
+  context_ = new sc_core::sc_simcontext();
+  live_contexts().push_back(context_);
+  make_current();
 }
 
 KernelContext::~KernelContext() {
-  delete sc_core::sc_curr_simcontext;
-  // The next use of SystemC makes a new default context (sc_get_curr_simcontext).
-  sc_core::sc_curr_simcontext = nullptr;
-  sc_core::sc_default_global_context = nullptr;
+  const bool was_current = sc_core::sc_curr_simcontext == context_;
+  auto& live = live_contexts();
+  live.erase(std::remove(live.begin(), live.end(), context_), live.end());
+  delete context_;
+  if (was_current || sc_core::sc_curr_simcontext == nullptr) {
+    // Another context still alive becomes current; with none, the next use of SystemC makes a
+    // new default context (sc_get_curr_simcontext).
+    sc_core::sc_curr_simcontext = live.empty() ? nullptr : live.back();
+    sc_core::sc_default_global_context = sc_core::sc_curr_simcontext;
+  }
 }
 
-void KernelContext::run() { sc_core::sc_start(); }
+void KernelContext::make_current() {
+  sc_core::sc_curr_simcontext = context_;
+  sc_core::sc_default_global_context = context_;
+}
+
+void KernelContext::run() {
+  make_current();
+  sc_core::sc_start();
+}
 
 void KernelContext::run_until(sc_core::sc_time t) {
+  make_current();
   if (t > sc_core::sc_time_stamp()) sc_core::sc_start(t - sc_core::sc_time_stamp());
 }
 

@@ -23,6 +23,12 @@ class KernelContext {
   // Advances simulated time to `t` (running whatever events lie before it); nothing if `t` is
   // not later than now.
   void run_until(sc_core::sc_time t);
+  // Makes this context SystemC's current one again (several may live at once: a session
+  // beside a one-frame run, or two Python sessions); run() and run_until() do so themselves.
+  void make_current();
+
+ private:
+  sc_core::sc_simcontext* context_;
 };
 
 // For tests that build modules without an owner of the context: a fresh context made current

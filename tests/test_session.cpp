@@ -74,6 +74,25 @@ TEST_CASE("session: every frame of a run reports what a single frame reports", "
   }
 }
 
+TEST_CASE("session: a one-frame run in between leaves the session's kernel alone", "[session]") {
+  // Each run owns its SystemC context: a one-frame run made and freed while a session lives
+  // must not take the session's context with it (the session's next frame would then run on
+  // an empty kernel).
+  const MachineConfig c = small_machine({});
+  const Scene scene = make_builtin_scene("torus", {16, 8});
+  const auto program = std::make_shared<const Program>(load_program("phong", c));
+  const FrameResult alone = simulate_frame(c, scene, *program, 1);
+  Session session(c, std::make_shared<const Scene>(scene), program, 1);
+  session.frame();
+  const FrameResult between = simulate_frame(c, scene, *program, 1);
+  CHECK(between.image.flat().rgb == alone.image.flat().rgb);
+  const FrameResult second = session.frame();
+  CHECK(second.frame_seconds == alone.frame_seconds);
+  CHECK(second.image.flat().rgb == alone.image.flat().rgb);
+  CHECK(nlohmann::json::diff(without_host(alone.stats_json), without_host(second.stats_json))
+            .empty());
+}
+
 TEST_CASE("session: frames follow one another in simulated time", "[session]") {
   const MachineConfig c = small_machine({});
   const auto program = std::make_shared<const Program>(load_program("phong", c));
