@@ -156,7 +156,9 @@ TEST_CASE("analytic frame time on the held-out grid: error, bottleneck and rank 
   const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
     return test::load_program(name, c);
   };
-  const std::vector<GridMachine> grid = analytic_heldout_grid(120, kHeldOutSeed);
+  // Until the model change that follows the looking lands, the bounds below are those measured
+  // on seed 0x3435 (now looked at); the new held-out seeds (kHeldOutSeeds) were fixed first.
+  const std::vector<GridMachine> grid = analytic_heldout_grid(120, kLookedAtSeeds[1]);
   REQUIRE(grid.size() >= 100);
   const AnalyticValidation v = validate_analytic("held-out", grid, load);
   WARN(fmt::format(

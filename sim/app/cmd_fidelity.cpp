@@ -304,17 +304,19 @@ int run_fidelity(FidelityOptions o) {
     };
     std::vector<AnalyticValidation> grids = {
         validate_analytic("tuning", analytic_tuning_grid(), load),
-        validate_analytic("tuning (dynamic)", analytic_tuning_grid("dynamic"), load),
-        validate_analytic(fmt::format("looked at (seed {:#x})", kLookedAtSeed),
-                          analytic_heldout_grid(o.heldout, kLookedAtSeed), load)};
+        validate_analytic("tuning (dynamic)", analytic_tuning_grid("dynamic"), load)};
+    for (const std::uint64_t seed : kLookedAtSeeds) {
+      grids.push_back(validate_analytic(fmt::format("looked at (seed {:#x})", seed),
+                                        analytic_heldout_grid(o.heldout, seed), load));
+    }
     for (const std::uint64_t seed : kHeldOutSeeds) {
       grids.push_back(validate_analytic(fmt::format("held-out (seed {:#x})", seed),
                                         analytic_heldout_grid(o.heldout, seed), load));
     }
     const std::string heading =
         "The analytic level against the event level (frame time, no pixels), on the grids "
-        "it was adjusted on (the tuning grids, and a seeded grid that was held out until it "
-        "was looked at) and on held-out grids of seeded machines (scenes, programs, screens, "
+        "it was adjusted on (the tuning grids, and seeded grids that were held out until they "
+        "were looked at) and on held-out grids of seeded machines (scenes, programs, screens, "
         "GPs, Renderers, channels, queue words, balancing, shipping, hop latency, double "
         "buffering, code profile):";
     const report::Table grid_table = analytic_validation_table(grids);
