@@ -144,21 +144,18 @@ TEST_CASE("analytic timing with word pixels draws the event model's image", "[an
 // The analytic level against the event level on a held-out grid: machines drawn with a
 // seeded generator over scenes, programs, screens and every timing knob, which the model was
 // never adjusted on (sim/analysis/analytic_validation.hpp; it was adjusted on the 48-point
-// torus grids and on the grid of seed 0x3434, once held out). Targets (docs/timing.md): worst
-// frame-time error at most 15%, Kendall tau at least 0.9. Measured on this grid (seed 0x3435,
-// 120 machines): mean 1.8%, worst 19.8% (dynamic balancing; static 6.6%), bottleneck agrees at
-// 119 of 120, tau 0.985. The worst-error target is met with static balancing here (not on
-// every held-out grid: 23.2% and 25.0% on seeds 0x3436 and 0x3437) and not with dynamic: the
-// bound below is the measured 19.8% rounded up, a regression bound, and the targets are
-// asserted where they hold.
+// torus grids and on the grids of seeds 0x3434 to 0x3437, each once held out). Targets
+// (docs/timing.md): worst frame-time error at most 15%, Kendall tau at least 0.9. Measured on
+// this grid (seed 0x3438, 120 machines, fixed before either model was run on it): mean
+// 0.88%, worst 12.5% (dynamic balancing; static 6.7%), bottleneck agrees at 117 of 120, tau
+// 0.990. The targets do not hold on every held-out grid: on seed 0x3439 the worst is 22.5%
+// (docs/timing.md says which machine and why).
 TEST_CASE("analytic frame time on the held-out grid: error, bottleneck and rank against events",
           "[analytic]") {
   const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
     return test::load_program(name, c);
   };
-  // Until the model change that follows the looking lands, the bounds below are those measured
-  // on seed 0x3435 (now looked at); the new held-out seeds (kHeldOutSeeds) were fixed first.
-  const std::vector<GridMachine> grid = analytic_heldout_grid(120, kLookedAtSeeds[1]);
+  const std::vector<GridMachine> grid = analytic_heldout_grid(120, kHeldOutSeed);
   REQUIRE(grid.size() >= 100);
   const AnalyticValidation v = validate_analytic("held-out", grid, load);
   WARN(fmt::format(
@@ -171,9 +168,8 @@ TEST_CASE("analytic frame time on the held-out grid: error, bottleneck and rank 
   CHECK(v.static_balancing.machines + v.dynamic_balancing.machines ==
         static_cast<int>(v.points.size()));
   CHECK(v.kendall_tau >= 0.9);
-  CHECK(v.static_balancing.worst_error <= 0.15);
-  CHECK(v.worst_error <= 0.20);
-  CHECK(v.mean_error <= 0.03);
+  CHECK(v.worst_error <= 0.15);
+  CHECK(v.mean_error <= 0.02);
   CHECK(v.bottleneck_agree >= static_cast<int>(v.points.size()) * 95 / 100);
   // The recurrence must beat the closed form it refines, on the same machines.
   CHECK(v.mean_error < v.closed_form_mean_error);
@@ -194,6 +190,39 @@ TEST_CASE("analytic dynamic balancing: a GP serves the lowest open stage", "[ana
   REQUIRE(v.dynamic_balancing.machines > 40);
   CHECK(v.dynamic_balancing.worst_error <= 0.12);
   CHECK(v.dynamic_balancing.mean_error <= 0.025);
+}
+
+// The ring as the event model books it (Ring::reserve): in request order, on the channel that
+// frees first, held from then until the message's last word. A Renderer that finishes empty
+// regions quickly books each next one to start only when its interface has sent the one
+// before, and holds a channel idle until then. The worst machines of the looked-at grids of
+// seeds 0x3436 and 0x3437 (spheres-and-triangles, static and dynamic balancing, whose frame is
+// the ring shipping mostly empty regions) were 23.2% and 34.1% under with calendars that
+// filled those idle gaps; a GP's message waiting behind another GP's (a stage's messages
+// sent in GP order) cost the dynamic one more.
+TEST_CASE("analytic ring books regions as the event ring: idle gaps held", "[analytic]") {
+  const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
+    return test::load_program(name, c);
+  };
+  const std::vector<GridMachine> machines = {
+      {"spheres-and-triangles",
+       "threshold",
+       {"screen.width=512", "screen.height=512", "gp.count=27", "renderer.count=14",
+        "ring.channels=8", "renderer.queue_words=4096", "renderer.balancing=static",
+        "renderer.overlap_shipping=1", "ring.hop_latency_cycles=0", "evaluator.double_buffered=0",
+        "gp.code=assembly"}},
+      {"spheres-and-triangles",
+       "phong",
+       {"screen.width=1280", "screen.height=1024", "gp.count=19", "renderer.count=13",
+        "ring.channels=4", "renderer.queue_words=2048", "renderer.balancing=dynamic",
+        "renderer.overlap_shipping=1", "ring.hop_latency_cycles=2", "evaluator.double_buffered=0",
+        "gp.code=assembly"}}};
+  const AnalyticValidation v = validate_analytic("looked at", machines, load);
+  for (const AnalyticPoint& p : v.points) {
+    WARN(fmt::format("{}: event {:.3f} ms, analytic {:.3f} ms ({:+.1f}%)", p.machine.label(),
+                     1e3 * p.event_seconds, 1e3 * p.analytic_seconds, 100 * p.error()));
+    CHECK(std::abs(p.error()) <= 0.05);
+  }
 }
 
 // What the closed form could not see: the ring's channels with few Renderers (a plateau:

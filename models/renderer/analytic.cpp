@@ -126,20 +126,41 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     }
   };
 
-  // The ring's channels, each a calendar of the intervals it is booked for: a message takes
-  // the channel that can carry it soonest, in the first gap long enough from the time it is
-  // asked for. (Bookings come in the order messages could go, not strictly in time: a
-  // Renderer's finished region is booked when its array finishes, which may be later than
-  // messages booked after it; the calendar keeps such a booking from blocking the gap
-  // before it.)
+  // The ring's channels, each a calendar of the intervals it is booked for.
+  // With renderer.overlap_shipping every booking is made in the order of the time it is asked
+  // for (messages through the heap below, finished regions when their copy-out is done), so
+  // the channels book as Ring::reserve does: the channel whose last booking ends first (ties
+  // to the lowest), held from then, or from the request, until the message's last word. A
+  // finished region may start only when its Renderer's interface has sent the region before
+  // (`not_before`): the channel is held, idle, until then, as in the event model, where the
+  // Renderers that finish empty regions quickly book their next ones far ahead.
+  // Without it, a Renderer's finished region is booked when its array finishes, which may be
+  // later than messages booked after it; the calendar then gives a message the first gap
+  // long enough from the time it is asked for, so that such a booking does not block the
+  // gap before it (no booking there starts later than asked, so the event model leaves no
+  // gap idle either).
   std::vector<std::map<double, double>> channels(static_cast<std::size_t>(config.ring.channels));
-  auto book = [&](double at, std::uint64_t words) {
+  const bool in_order = config.renderer.overlap_shipping;
+  auto book = [&](double at, std::uint64_t words, double not_before = 0) {
     const double length = static_cast<double>(words) / ring_hz;
+    if (in_order) {
+      std::size_t c = 0;
+      auto free_at = [&](std::size_t k) {
+        return channels[k].empty() ? 0.0 : channels[k].rbegin()->second;
+      };
+      for (std::size_t k = 1; k < channels.size(); ++k) {
+        if (free_at(k) < free_at(c)) c = k;
+      }
+      const double held = std::max(at, free_at(c));
+      const double start = std::max(held, not_before);
+      channels[c].emplace(held, start + length);
+      return start + length;
+    }
     double best = 0;
     std::size_t best_channel = 0;
     for (std::size_t c = 0; c < channels.size(); ++c) {
       const std::map<double, double>& booked = channels[c];
-      double t = at;
+      double t = std::max(at, not_before);
       auto it = booked.upper_bound(t);
       if (it != booked.begin() && std::prev(it)->second > t) t = std::prev(it)->second;
       for (; it != booked.end() && it->first < t + length; ++it) t = std::max(t, it->second);
@@ -190,7 +211,8 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     int pass = 0;
     bool entered = false;  // the stage's region-wide steps and messages are made
     std::vector<AnalyticMessage> messages;
-    std::size_t next = 0;      // the next message of the stage
+    std::size_t next = 0;      // the stage's messages sent
+    std::vector<char> sent;    // by message of the stage
     double stage_open = 0;     // when the stage opened for input
     double last_sent = 0;      // the latest booking of the stage's messages
     double room = 0;           // when the queue has room for the next message
@@ -198,6 +220,7 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     double ship_free = 0;      // the video-RAM port's next free time
     double finished = 0;       // its last region at the frame buffer
     std::deque<Queued> queue;  // messages sent, not yet consumed, in order
+    std::deque<double> ships;  // finished regions whose copy-out is done, not yet booked
     std::uint64_t queued = 0;
     double gp_s = 0, ring_s = 0, renderer_s = 0;  // its time, attributed
     bool maps_waited = false;
@@ -226,6 +249,8 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   const int regions = config.regions();
   int unclaimed = 0;
   out.regions.assign(static_cast<std::size_t>(renderers), {});
+  using Candidate = std::tuple<double, int, int, int>;
+  std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> heap;
   enum class Next { message, claim, done };
   // Moves Renderer j to a stage with a message to send, running the region-wide steps and
   // empty stages on the way: Next::message, or Next::claim when it needs its next region
@@ -247,9 +272,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
           const double trip =
               plan.hop_delay(plan.renderer_stop(j), plan.frame_buffer_stop()).to_seconds();
           if (config.renderer.overlap_shipping) {
-            const double end = book(std::max(st.array, st.ship_free), plan.region_words());
-            st.ship_free = end;
-            st.finished = std::max(st.finished, end + trip);
+            // Booked when the copy-out is done (Renderer::ship), in time order with the
+            // other bookings: through the heap.
+            st.ships.push_back(st.array);
+            heap.emplace(st.array - start_s, 2, 0, j);
           } else {
             const double end = book(st.array, plan.region_words()) + trip;
             st.ring_s += end - st.array;
@@ -277,6 +303,7 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
         st.array = in;
       }
       stage_messages(st.current, st.pass, st.messages);
+      st.sent.assign(st.messages.size(), 0);
       st.next = 0;
       st.last_sent = st.stage_open;
     }
@@ -287,23 +314,45 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     return retraverse ? g * (1 + pass) : g;
   };
   // When Renderer j's next message can go: its stage open, room in the queue, its GP free.
-  auto ready_time = [&](int j) {
-    RendererState& st = rs[static_cast<std::size_t>(j)];
-    const AnalyticMessage& m = st.messages[st.next];
-    while (!st.queue.empty() && st.queued + m.words > capacity) {
-      st.room = std::max(st.room, st.queue.front().consumed);
-      st.queued -= st.queue.front().words;
-      st.queue.pop_front();
+  // When Renderer j's next message can go, and which: of each GP's next message of the
+  // stage (a GP's messages of one bin go in order), the one that can go first (its stage
+  // open, room in the queue for it, its GP free), ties to the lower GP; as the event model's
+  // GPs each send to an open stage they owe whenever they can, and the Renderer takes its
+  // messages as they arrive.
+  auto room_for = [&](const RendererState& st, std::uint64_t words) {
+    double t = st.room;
+    std::uint64_t queued = st.queued;
+    for (auto it = st.queue.begin(); it != st.queue.end() && queued + words > capacity; ++it) {
+      t = std::max(t, it->consumed);
+      queued -= it->words;
     }
-    return std::max({st.stage_open, st.room, gp_free[static_cast<std::size_t>(m.gp)],
-                     pass_ready(m.gp, st.pass)});
+    return t;
   };
-  // (time, kind, stage, Renderer): kind 0 a region to claim, 1 a message to send; earliest
+  auto pick_message = [&](int j) {
+    RendererState& st = rs[static_cast<std::size_t>(j)];
+    double best = 0;
+    std::size_t pick = st.messages.size();
+    int previous_gp = -1;
+    for (std::size_t i = 0; i < st.messages.size(); ++i) {
+      const AnalyticMessage& m = st.messages[i];
+      if (st.sent[i] || m.gp == previous_gp) {
+        if (!st.sent[i]) previous_gp = m.gp;
+        continue;
+      }
+      previous_gp = m.gp;
+      const double t =
+          std::max({st.stage_open, room_for(st, m.words), gp_free[static_cast<std::size_t>(m.gp)],
+                    pass_ready(m.gp, st.pass)});
+      if (pick == st.messages.size() || t < best) best = t, pick = i;
+    }
+    return std::make_pair(best, pick);
+  };
+  auto ready_time = [&](int j) { return pick_message(j).first; };
+  // (time, kind, stage, Renderer): kind 0 a region to claim, 1 a message to send, 2 a finished
+  // region to book (at its request time less the send clocks, the scale of kind 1); earliest
   // first, claims before messages at one instant, then the lower stage (pass * regions +
   // region: a GP free for several open stages sends to the lowest, as
   // GraphicsProcessor::run picks), then the lower Renderer.
-  using Candidate = std::tuple<double, int, int, int>;
-  std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> heap;
   auto stage_of = [&](int j) {
     const RendererState& st = rs[static_cast<std::size_t>(j)];
     return st.pass * regions + st.current;
@@ -325,6 +374,16 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     const auto [when, kind, stage, j] = heap.top();
     heap.pop();
     RendererState& st = rs[static_cast<std::size_t>(j)];
+    if (kind == 2) {
+      const double requested = st.ships.front();
+      st.ships.pop_front();
+      const double trip =
+          plan.hop_delay(plan.renderer_stop(j), plan.frame_buffer_stop()).to_seconds();
+      const double end = book(requested, plan.region_words(), st.ship_free);
+      st.ship_free = end;
+      st.finished = std::max(st.finished, end + trip);
+      continue;
+    }
     if (kind == 0) {
       if (unclaimed < regions) {
         st.current = unclaimed++;
@@ -338,7 +397,16 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
       heap.emplace(ready, 1, stage, j);
       continue;
     }
-    const AnalyticMessage m = st.messages[st.next++];
+    const std::size_t picked = pick_message(j).second;
+    const AnalyticMessage m = st.messages[picked];
+    st.sent[picked] = 1;
+    ++st.next;
+    // The queue's room for it: messages consumed by the time it could go are out.
+    while (!st.queue.empty() && st.queued + m.words > capacity) {
+      st.room = std::max(st.room, st.queue.front().consumed);
+      st.queued -= st.queue.front().words;
+      st.queue.pop_front();
+    }
     const auto g = static_cast<std::size_t>(m.gp);
     // The GP starts the message (i860 clocks), then holds its interface for the words.
     const double requested = ready + start_s;

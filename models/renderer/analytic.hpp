@@ -17,10 +17,13 @@
 //    (SetupMemo::Summary), so its packets, set-up counts and GP clocks are exactly the event
 //    model's, and a run of frames of one scene (a sweep) sets it up once.
 //  - What it leaves out against the event model: backing-store port stalls, the double-
-//    buffered coefficient load's stall after a wait, the scheduler's order among waiting GPs
-//    (GPs are served in the order their messages could go), and bookings made in the order
-//    of readiness rather than of request. The error this makes is measured on held-out
-//    machines (sim/analysis/analytic_validation.hpp, `pp5sim fidelity`), not assumed.
+//    buffered coefficient load's stall after a wait, and the scheduler's order among waiting
+//    GPs (of a stage's messages, the one whose GP can go first goes first, ties to the lower
+//    GP). With renderer.overlap_shipping its ring books as Ring::reserve does, in request
+//    order; without it, finished regions are booked when they finish, ahead of messages asked
+//    for earlier, on channel calendars that fill the gaps before them. The error this makes
+//    is measured on held-out machines (sim/analysis/analytic_validation.hpp,
+//    `pp5sim fidelity`), not assumed.
 //  - Regions go to Renderers as the event model's static balancing does (r mod count); with
 //    dynamic balancing, as the recurrence's Renderers claim them, each taking the next
 //    region when it opens its next stage, in time order (the closed form kept beside it

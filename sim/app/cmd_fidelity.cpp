@@ -385,7 +385,7 @@ Command add_fidelity_command(CLI::App& app) {
   cmd->add_flag("!--no-analytic-grids", o->analytic_grids,
                 "Skip the analytic level's validation on the tuning and held-out grids");
   cmd->add_option("--heldout", o->heldout,
-                  "Machines of each seeded grid (the held-out grids and the one looked at)")
+                  "Machines of each seeded grid (the held-out grids and those looked at)")
       ->check(CLI::Range(2, 100000))
       ->capture_default_str();
   return {cmd, [o] { return run_fidelity(*o); }};
