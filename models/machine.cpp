@@ -52,6 +52,7 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
     for (int k = 0; k < renderers; ++k) hops[g][k] = ring_->hops(gp_stop(g), renderer_stop(k));
   }
   scheduler_.set_ring(std::move(hops));
+  scheduler_.wake_before_maps(config.frames.gp_send == MachineConfig::Frames::GpSend::when_full);
 }
 
 Machine::~Machine() = default;

@@ -258,3 +258,13 @@ TEST_CASE("frames: the sustained rate counts spheres, and the closed form is an 
   CHECK_FALSE(e.overlapped);
   CHECK(e.statistics().text("run.timing") == "estimate");
 }
+
+TEST_CASE("frames: bins sent when full run every frame overlapped", "[session]") {
+  // frames.gp_send=when_full: a Renderer takes messages before the maps are in, and then
+  // messages of its next stage can be in its queue while it waits for the maps (it once took
+  // them for the stage it was on, and a frame never ended).
+  const RunSummary s = overlapped_run(torus_machine({"frames.gp_send=when_full"}), 3);
+  CHECK(s.frames == 3);
+  CHECK(s.overlapped_frames == 2);
+  CHECK(s.sustained_frame_seconds > 0);
+}

@@ -540,3 +540,43 @@ TEST_CASE("gp.send_order changes the frame time, never the image", "[timing][gp]
   CHECK(frames[0] != frames[2]);
   CHECK(frames[1] != frames[2]);
 }
+
+TEST_CASE("frames.gp_send=when_full: Renderers start before the GPs finish their set-up",
+          "[timing]") {
+  // 2,048 triangles on 4 GPs with 1,024-word queues: a bin fills a message (16 Phong
+  // packets) long before its GP has set up its whole share.
+  const Scene scene = make_builtin_scene("torus", {64, 16});
+  auto run = [&](const std::string& send) {
+    MachineConfig config = MachineConfig::defaults();
+    config.set(std::vector<std::string>{"screen.width=384", "screen.height=256", "gp.count=4",
+                                        "renderer.count=3", "renderer.queue_words=1024",
+                                        "fidelity.pixels=word", "frames.gp_send=" + send});
+    const Program program = load_program("phong", config);
+    nlohmann::json timeline;
+    FrameResult r = simulate_frame(config, scene, program, 1, {}, &timeline);
+    // The end of the last GP's set-up, and the first message a Renderer worked on (pid 3:
+    // the Renderers' tracks, a slice "gpK: N triangles" per message).
+    double geometry_end = 0, first_message = 1e30;
+    for (const auto& e : timeline["traceEvents"]) {
+      if (e["ph"] != "X") continue;
+      const std::string name = e["name"].get<std::string>();
+      const double ts = e["ts"].get<double>(), end = ts + e["dur"].get<double>();
+      if (name == "geometry") geometry_end = std::max(geometry_end, end);
+      if (e["pid"].get<int>() == 3 && name.rfind("gp", 0) == 0)
+        first_message = std::min(first_message, ts);
+    }
+    return std::make_tuple(geometry_end, first_message, std::move(r));
+  };
+  const auto [after_end, after_first, after] = run("after_geometry");
+  const auto [full_end, full_first, full] = run("when_full");
+  INFO("after_geometry: set-up ends " << after_end << " us, first message " << after_first
+                                      << " us; when_full: " << full_end << " us, " << full_first
+                                      << " us");
+  // After the set-up, no Renderer has a message before every GP's set-up has ended.
+  CHECK(after_first >= after_end);
+  // When full, Renderers work while the GPs still set up: well before the last set-up ends.
+  CHECK(full_first < 0.5 * full_end);
+  // The same packets, in the same order per region: the same image.
+  CHECK(full.image.flat().rgb == after.image.flat().rgb);
+  CHECK(full.stats.integer("setup.packets") == after.stats.integer("setup.packets"));
+}

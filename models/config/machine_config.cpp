@@ -476,6 +476,20 @@ const std::vector<Entry>& parameter_table() {
               "the machine was a frame engine whose rating is a sustained rate (P); when a GP "
               "was let loose on the next frame is not published",
               "frames.gp_start=after_frame", "frames.gp_start=overlap"),
+      assumed({"frames.gp_send", "policy", "A", 0, 0, 0,
+               "When a GP sends a region's packets: 'after_geometry', once it has set up its "
+               "whole share of the display list (its bin map, then its bins); 'when_full', a "
+               "message of a bin as soon as it is full (its next packet would not fit the "
+               "Renderer's queue) and the Renderer has the region's stage open, interrupting "
+               "the set-up, which goes on after it (the bin map and each bin's last message "
+               "follow the set-up). The Renderer then takes a stage's messages before every "
+               "bin map is in. Event timing only (the analytic level assumes after_geometry).",
+               [](MachineConfig& c) -> Ref { return choice(&c.frames.gp_send); },
+               "after_geometry|when_full"},
+              "no source says when a GP shipped a bin: the paper and Banks describe binning by "
+              "region, not when a bin left; a bin cannot be complete before the GP's whole "
+              "share is set up, and a full message could go earlier",
+              "frames.gp_send=after_geometry", "frames.gp_send=when_full"),
 
       // Not the machine: how much of it a run simulates (README "Fidelity levels").
       {"fidelity.pixels", "level", "A", 0, 0, 0,
@@ -722,6 +736,12 @@ void validate(const MachineConfig& c, const std::string& origin) {
     fail(
         "key 'renderer.region_width' must be a multiple of 64 (the array is stored 64 pixels "
         "to a host word)");
+  }
+  if (c.frames.gp_send == MachineConfig::Frames::GpSend::when_full &&
+      c.fidelity.timing == MachineConfig::Fidelity::Timing::analytic) {
+    fail(
+        "key 'frames.gp_send' = when_full needs fidelity.timing=event (the analytic level's "
+        "GPs send after their whole set-up: after_geometry)");
   }
   if (c.evaluator.result_bits < c.evaluator.coefficient_bits) {
     fail("key 'evaluator.result_bits' must be at least 'evaluator.coefficient_bits'");

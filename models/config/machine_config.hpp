@@ -107,6 +107,10 @@ struct MachineConfig {
     int gp_bins = 2;
     enum class GpStart { overlap, after_frame };
     GpStart gp_start = GpStart::overlap;
+    // When a GP sends a region's packets: once its whole share is set up (after_geometry), or
+    // a message as soon as it is full while the set-up goes on (when_full).
+    enum class GpSend { after_geometry, when_full };
+    GpSend gp_send = GpSend::after_geometry;
   } frames;
   // How much of the machine a run simulates (README "Fidelity levels"): what executes the
   // pixels (bit-serial, a whole field at a time, or nothing), whether time comes from the

@@ -90,7 +90,8 @@ namespace {
 
 // geometry_pass into `memo` (null for none).
 void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats& stats,
-                        RegionBins* bins, SetupMemo* memo) {
+                        RegionBins* bins, SetupMemo* memo,
+                        std::vector<std::uint64_t>* done_after = nullptr) {
   const MachineConfig& config = machine.config();
   const GeometryEngine& geometry = machine.geometry();
   const DisplayList& display_list = geometry.display_list();
@@ -121,6 +122,8 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
   // program the same packets go out once per pass.
   if (bins != nullptr) bins->reset(config.regions());
   std::vector<int> regions;
+  if (done_after != nullptr) done_after->clear();
+  const std::uint64_t clocks_before = stats.geometry.count;
   for (int i = first; i < last; ++i) {
     const PrimitiveRef ref = display_list.at(i);
     KindState& k = kinds[static_cast<std::size_t>(ref.kind)];
@@ -172,6 +175,7 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
     const PrimitiveCost& cost = k.cost(tally, machine);
     stats.ops += cost.ops;
     stats.geometry += cost.clocks;
+    if (done_after != nullptr) done_after->push_back(stats.geometry.count - clocks_before);
   }
   if (bins != nullptr) bins->finish();
 }
@@ -179,8 +183,8 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
 }  // namespace
 
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
-                   RegionBins* bins) {
-  geometry_pass_with(machine, first, last, stats, bins, machine.setup_memo());
+                   RegionBins* bins, std::vector<std::uint64_t>* done_after) {
+  geometry_pass_with(machine, first, last, stats, bins, machine.setup_memo(), done_after);
 }
 
 int setup_parts(const MachinePlan& plan, int threads, int least_part) {
@@ -230,13 +234,24 @@ void GraphicsProcessor::reset_frame() {
   activity_.assign(1, {wiring_.clock.start(), GpActivity::compute});
 }
 
-void GraphicsProcessor::geometry(RegionBins& bins, GpStats& stats, int frame) {
+bool GraphicsProcessor::sends_when_full() const {
+  return plan_.config().frames.gp_send == MachineConfig::Frames::GpSend::when_full;
+}
+
+void GraphicsProcessor::geometry(RegionBins& bins, GpStats& stats, int frame, Growing* growing) {
   const sc_core::sc_time t0 = sc_core::sc_time_stamp();
   begin(GpActivity::compute);
   stats.geometry_started = t0;
-  geometry_pass(plan_, first_, last_, stats, &bins);
-  // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
+  std::vector<std::uint64_t>* done_after = growing != nullptr ? &done_after_[frame & 1] : nullptr;
+  geometry_pass(plan_, first_, last_, stats, &bins, done_after);
   stats.busy += stats.geometry;
+  if (growing != nullptr) {
+    stats.geometry_done = t0 - wiring_.clock.start();  // until send_bins has spent it
+    *growing = Growing{done_after, sc_core::SC_ZERO_TIME,
+                       clock_ * static_cast<double>(stats.geometry.count)};
+    return;
+  }
+  // Time advances once for the whole geometry phase: nothing leaves the GP before it ends.
   wait(clock_ * static_cast<double>(stats.geometry.count));
   stats.geometry_done = sc_core::sc_time_stamp() - wiring_.clock.start();
   if (wiring_.timeline.on()) {
@@ -257,8 +272,9 @@ void GraphicsProcessor::run_frame() {
   }
   RegionBins bins;
   const int frame = wiring_.clock.frame();
-  geometry(bins, stats_, frame);
-  send_bins(bins, frame, {});
+  Growing growing;
+  geometry(bins, stats_, frame, sends_when_full() ? &growing : nullptr);
+  send_bins(bins, frame, {}, sends_when_full() ? &growing : nullptr);
   begin(GpActivity::done);
   stats_.finished = sc_core::sc_time_stamp() - base;
 }
@@ -289,7 +305,9 @@ void GraphicsProcessor::run_overlapped() {
                                config.frames.gp_start == MachineConfig::Frames::GpStart::overlap;
   RegionBins(&bins)[2] = overlap_bins_;
   Ahead ahead;
+  const bool when_full = sends_when_full();
   for (frame_ = 0;; ++frame_) {
+    Growing growing;
     if (!ahead.started) {
       stats_ = GpStats{};
       if (!may_start(frame_)) {
@@ -298,7 +316,12 @@ void GraphicsProcessor::run_overlapped() {
         while (!may_start(frame_)) wait(wiring_.clock.progress());
         stats_.waiting_start = sc_core::sc_time_stamp() - t0;
       }
-      geometry(bins[frame_ & 1], stats_, frame_);
+      geometry(bins[frame_ & 1], stats_, frame_, when_full ? &growing : nullptr);
+    } else if (when_full) {
+      // The rest of a set-up begun ahead, spent while its full messages go.
+      stats_ = ahead_;
+      const sc_core::sc_time total = clock_ * static_cast<double>(ahead_.geometry.count);
+      growing = Growing{&done_after_[frame_ & 1], total - ahead.remaining, total};
     } else {
       // The rest of a set-up begun ahead.
       if (!ahead.done) {
@@ -313,7 +336,8 @@ void GraphicsProcessor::run_overlapped() {
     ahead.possible = double_buffered;
     ahead.frame = frame_ + 1;
     ahead.bins = &bins[(frame_ + 1) & 1];
-    send_bins(bins[frame_ & 1], frame_, double_buffered ? &ahead : nullptr);
+    send_bins(bins[frame_ & 1], frame_, double_buffered ? &ahead : nullptr,
+              when_full ? &growing : nullptr);
     begin(GpActivity::done);
     stats_.finished = sc_core::sc_time_stamp();
     history_.push_back({frame_, stats_});
@@ -324,7 +348,8 @@ void GraphicsProcessor::start_ahead(Ahead& ahead) {
   // The set-up itself is plain C++ (geometry_pass); its time is spent piece by piece.
   ahead_ = GpStats{};
   ahead_.geometry_started = sc_core::sc_time_stamp();
-  geometry_pass(plan_, first_, last_, ahead_, ahead.bins);
+  geometry_pass(plan_, first_, last_, ahead_, ahead.bins,
+                sends_when_full() ? &done_after_[ahead.frame & 1] : nullptr);
   ahead_.busy += ahead_.geometry;
   ahead.started = true;
   ahead.remaining = clock_ * static_cast<double>(ahead_.geometry.count);
@@ -345,12 +370,42 @@ void GraphicsProcessor::finish_ahead_piece(Ahead& ahead, sc_core::sc_time t0) {
   }
 }
 
-void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahead) {
+void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahead,
+                                  Growing* growing) {
   const MachineConfig& config = plan_.config();
   // The bin map goes first, in one message that passes every Renderer: which regions this
-  // GP has packets for.
-  wiring_.scheduler.add_bin_senders(bins.regions(), frame);
-  send_bin_map(frame);
+  // GP has packets for. While the set-up goes on (frames.gp_send=when_full) the GP does not
+  // know them yet: the map goes when it ends.
+  const auto finish_geometry = [&] {
+    growing = nullptr;
+    wiring_.scheduler.add_bin_senders(bins.regions(), frame);
+    send_bin_map(frame);
+  };
+  if (growing != nullptr && !growing->done()) {
+    // The set-up's time is spent piece by piece below.
+  } else {
+    finish_geometry();
+  }
+  // A piece [t0, now) of the set-up, spent between messages.
+  const auto geometry_piece = [&](sc_core::sc_time t0) {
+    const sc_core::sc_time now = sc_core::sc_time_stamp();
+    growing->spent += now - t0;
+    if (wiring_.timeline.on() && t0 < now) {
+      wiring_.timeline.add(Unit::gp, index_,
+                           wiring_.clock.overlapped() ? "geometry of frame " + std::to_string(frame)
+                                                      : std::string("geometry"),
+                           t0, now);
+    }
+    if (growing->done()) {
+      stats_.geometry_done = now - wiring_.clock.start();
+      finish_geometry();
+    }
+  };
+  // When the packet is set up (growing): the end of its primitive's set-up.
+  const auto packet_ready_at = [&](const Packet& p) {
+    return clock_ * static_cast<double>(
+                        (*growing->done_after)[static_cast<std::size_t>(p.primitive - first_)]);
+  };
 
   // Bins go out as their Renderers open (pass, region) stages: each message goes to the
   // lowest open stage whose Renderer's queue has room for it, so a full queue holds up only
@@ -414,11 +469,22 @@ void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahea
   std::vector<int> open_stages;
   open_stages.reserve(static_cast<std::size_t>(plan_.renderer_count()));
   const auto renderers = static_cast<std::size_t>(plan_.renderer_count());
+  // While the set-up goes on, a message goes only when it is full: the packet after it is
+  // set up (and does not fit). Only first passes: a later pass's stage opens once every bin
+  // map is in.
+  const auto full_and_ready = [&](int s) {
+    const std::size_t k = chunk(s);
+    const RegionBins::Bin& bin = bins.bin(s % n);
+    const std::size_t end = next[k] + chunk_packets[k];
+    return end < bin.size() && !(growing->spent < packet_ready_at(*bin[end]));
+  };
   while (!owed.empty()) {
+    const bool setting_up = growing != nullptr;
+    const int sendable_passes = setting_up ? 1 : ready_passes;
     open_stages.clear();
     if (owed.size() <= renderers) {
       for (const int s : owed) {
-        if (s / n >= ready_passes) break;
+        if (s / n >= sendable_passes) break;
         const int owner = wiring_.scheduler.owner_of_region(s % n, frame);
         if (owner >= 0 && queue(owner).open_frame() == frame && queue(owner).open_stage(n) == s)
           open_stages.push_back(s);
@@ -428,17 +494,38 @@ void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahea
         if (queue(k).open_frame() != frame) continue;
         const int s = queue(k).open_stage(n);
         // A region it claimed (its owner), of a pass whose packets exist.
-        if (s >= 0 && bins.slot(s % n) >= 0 && !done[slot(s)] && s / n < ready_passes)
+        if (s >= 0 && bins.slot(s % n) >= 0 && !done[slot(s)] && s / n < sendable_passes)
           open_stages.push_back(s);
       }
       std::sort(open_stages.begin(), open_stages.end());
     }
     int pick = -1;
     for (int s : open_stages) {
+      if (setting_up && !full_and_ready(s)) continue;
       if (queue(wiring_.scheduler.owner_of_region(s % n, frame)).has_room(words_for(s))) {
         pick = s;
         break;
       }
+    }
+    if (pick < 0 && setting_up) {
+      // Nothing it can send yet: the set-up goes on until the next message fills, the set-up
+      // ends, or a Renderer opens a stage it owes or frees room.
+      sc_core::sc_time until = growing->total;
+      for (const int s : owed) {
+        if (s / n >= 1) break;
+        const std::size_t k = chunk(s);
+        const RegionBins::Bin& bin = bins.bin(s % n);
+        const std::size_t end = next[k] + chunk_packets[k];
+        if (end >= bin.size()) continue;
+        const sc_core::sc_time at = packet_ready_at(*bin[end]);
+        if (growing->spent < at && at < until) until = at;
+      }
+      const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+      begin(GpActivity::compute);
+      const sc_core::sc_time timeout = until - growing->spent;
+      wiring_.scheduler.wait_for_input(index_, owed, frame, nullptr, &timeout);
+      geometry_piece(t0);
+      continue;
     }
     if (pick < 0 && ready_passes < passes) {
       const sc_core::sc_time t0 = sc_core::sc_time_stamp();
@@ -495,6 +582,13 @@ void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahea
       owed.erase(std::lower_bound(owed.begin(), owed.end(), pick));
     }
     send(std::move(m), frame);
+  }
+  // A GP with no packet at all still spends its set-up, then sends its (empty) bin map.
+  if (growing != nullptr) {
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    begin(GpActivity::compute);
+    wait(growing->total - growing->spent);
+    geometry_piece(t0);
   }
 }
 

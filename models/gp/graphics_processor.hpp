@@ -5,7 +5,9 @@
 // GeometryEngine's; the time is the i860 cost model's (models/gp/i860.hpp), in i860 clocks.
 //
 // Contract: geometry for the whole share first (one kernel event), then bins in the order
-// (pass, region) as their Renderers open them; a bin travels in messages no larger than the
+// (pass, region) as their Renderers open them (with frames.gp_send=when_full, a bin's full
+// messages go while the geometry goes on, its last message and the bin map after it); a
+// bin travels in messages no larger than the
 // Renderer's queue, and the GP stalls while the queue has no room or the stage is not open.
 // With a multipass program, gp.multipass says where later passes' packets come from: the
 // bins kept from the first traversal (resend), or a new traversal of the whole share per
@@ -88,8 +90,17 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   void run_frame();
   void run_overlapped();
   bool may_start(int frame) const;
-  // The geometry phase of `frame` into `bins`, adding to `stats`: one kernel event.
-  void geometry(RegionBins& bins, GpStats& stats, int frame);
+  // frames.gp_send=when_full: the set-up of the frame being sent, going on while its full
+  // messages go out; its time is spent piece by piece in send_bins.
+  struct Growing {
+    const std::vector<std::uint64_t>* done_after = nullptr;  // geometry_pass's, per primitive
+    sc_core::sc_time spent;                                  // of its geometry time
+    sc_core::sc_time total;
+    bool done() const { return !(spent < total); }
+  };
+  // The geometry phase of `frame` into `bins`, adding to `stats`: one kernel event. With
+  // `growing` (frames.gp_send=when_full) no time passes: send_bins spends it.
+  void geometry(RegionBins& bins, GpStats& stats, int frame, Growing* growing = nullptr);
   // The next frame's set-up, done ahead while this frame's bins go out (frames.gp_bins=2).
   struct Ahead {
     bool possible = false;
@@ -104,7 +115,10 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   void finish_ahead_piece(Ahead& ahead, sc_core::sc_time t0);
   // Sends `bins` of `frame` (bin map first) as Renderers open its stages; with `ahead`, does
   // the next frame's set-up whenever nothing can be sent.
-  void send_bins(const RegionBins& bins, int frame, Ahead* ahead);
+  // With `growing`, a bin's message goes as soon as it is full and its packets are set up,
+  // and the bin map once the set-up is done.
+  void send_bins(const RegionBins& bins, int frame, Ahead* ahead, Growing* growing = nullptr);
+  bool sends_when_full() const;
   void spend(GpClocks clocks);
   void send(std::shared_ptr<BinMessage> message, int frame);
   // Tells every Renderer which regions this GP has packets for (RegionScheduler::add_bin_senders),
@@ -128,6 +142,8 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   // Overlapped: the two bin buffers. Members, not locals of run_overlapped: an SC_THREAD that
   // never returns is not unwound when the simulation ends, so its locals would never be freed.
   RegionBins overlap_bins_[2];
+  // frames.gp_send=when_full: geometry_pass's clocks per primitive, per bin buffer.
+  std::vector<std::uint64_t> done_after_[2];
   int frame_ = 0;  // overlapped: the frame it is sending
   std::vector<GpFrameRecord> history_;
   // When each activity began, in time order.
@@ -153,9 +169,11 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
 // `*bins`, each in display-list order (no bins when `bins` is null: the analytic timing model fills
 // the plan's set-up memo and reads the bins from its summary). GraphicsProcessor::run and the
 // analytic timing model (models/renderer/analytic.hpp) both use it, so both see the same
-// packets and clocks.
+// packets and clocks. With `done_after`, it leaves there, for each primitive of the range in
+// order, the geometry clocks spent from the range's start to the end of that primitive (when
+// its packets are ready: frames.gp_send=when_full).
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
-                   RegionBins* bins);
+                   RegionBins* bins, std::vector<std::uint64_t>* done_after = nullptr);
 
 // The parts fill_setup_memo splits the display list into: one per thread, each of
 // `least_part` primitives at least. On the development machine (a virtual machine) a

@@ -117,7 +117,9 @@ void RegionScheduler::input_changed(int renderer, int stage, int frame) {
   open_frame_[renderer] = frame;
   // A stage no GP has packets for wakes nobody: on a large screen most stages are empty.
   // Room freed in a queue matters only to the GPs owing its open stage, which are senders.
-  if (stage < 0 || bin_senders(stage % regions_, frame) == 0 || is_changed_[renderer]) return;
+  if (stage < 0 || is_changed_[renderer] ||
+      (!wake_before_maps_ && bin_senders(stage % regions_, frame) == 0))
+    return;
   is_changed_[renderer] = 1;
   changed_.push_back(renderer);
   changed_event_.notify(sc_core::SC_ZERO_TIME);

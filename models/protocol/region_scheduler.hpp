@@ -68,6 +68,9 @@ class RegionScheduler : public sc_core::sc_module {
                       const sc_core::sc_event* also = nullptr,
                       const sc_core::sc_time* timeout = nullptr);
   void input_changed(int renderer, int stage, int frame = 0);
+  // frames.gp_send=when_full: GPs send before their bin maps, so a stage no bin map has named
+  // yet may still be owed, and its changes wake the GPs that owe it.
+  void wake_before_maps(bool on) { wake_before_maps_ = on; }
 
  private:
   void arbitrate();  // SC_METHOD on changed_
@@ -77,6 +80,7 @@ class RegionScheduler : public sc_core::sc_module {
   int gps_;
   bool dynamic_;
   Order order_;
+  bool wake_before_maps_ = false;
   struct Slot {
     int frame = 0;                 // the frame it holds
     std::vector<int> owner;        // region -> Renderer, -1 until claimed

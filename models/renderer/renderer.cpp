@@ -317,22 +317,55 @@ void Renderer::run_frame() {
     }
     stream.before_pass(stage.pass, charge_step);
     catch_up();
-    if (!maps_complete() || maps_arrival_[frame_ & 1] > sc_core::sc_time_stamp())
-      wait_for_bin_maps();
-    const int senders = wiring_.scheduler.bin_senders(stage.region, frame_);
+    // How many GPs send the stage is known once every bin map is in. GPs that send a full
+    // message before their set-up ends (frames.gp_send=when_full) send it before their map:
+    // the Renderer then takes the stage's messages as they come and waits for the maps only
+    // to know when the stage is complete.
+    const bool early = config.frames.gp_send == MachineConfig::Frames::GpSend::when_full;
+    const auto maps_in = [&] {
+      return maps_complete() && !(maps_arrival_[frame_ & 1] > sc_core::sc_time_stamp());
+    };
+    if (!early && !maps_in()) wait_for_bin_maps();
     int lasts = 0;
-    while (lasts < senders) {
+    while (!maps_in() || lasts < wiring_.scheduler.bin_senders(stage.region, frame_)) {
       catch_up();
       const sc_core::sc_time waiting_from = sc_core::sc_time_stamp();
       std::size_t pick = queue_.size();
+      bool complete = false;  // early: the maps came in and said the stage has all it gets
       for (;;) {
+        // Scanned afresh after every wait: the queue may have grown by messages of the next
+        // stage (early, while the maps are still coming).
+        pick = queue_.size();
         for (std::size_t k = 0; k < queue_.size(); ++k) {
           const BinMessage& m = *queue_[k];
           if (m.region != stage.region || m.pass != stage.pass) continue;
           if (pick == queue_.size() || m.arrival < queue_[pick]->arrival) pick = k;
         }
         if (pick < queue_.size()) break;
+        if (!maps_in()) {
+          if (maps_complete()) {
+            wait(maps_arrival_[frame_ & 1] - sc_core::sc_time_stamp(), arrived_);
+          } else {
+            wait(arrived_ | maps_complete_);
+          }
+          if (maps_in() && lasts >= wiring_.scheduler.bin_senders(stage.region, frame_)) {
+            complete = true;
+            break;
+          }
+          continue;
+        }
         wait(arrived_);
+      }
+      if (complete) {
+        // The wait was for the maps: the GPs' while they had not asked for them, the ring's
+        // after (as wait_for_bin_maps).
+        const sc_core::sc_time now = sc_core::sc_time_stamp();
+        const sc_core::sc_time gp_until =
+            std::min(std::max(waiting_from, maps_requested_[frame_ & 1]), now);
+        stats_.waiting_gp += gp_until - waiting_from;
+        stats_.waiting_ring += now - gp_until;
+        cursor_ = std::max(cursor_, now);
+        break;
       }
       const std::shared_ptr<const BinMessage> m = queue_[pick];
       queue_.erase(queue_.begin() + static_cast<std::ptrdiff_t>(pick));

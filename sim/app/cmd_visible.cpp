@@ -137,8 +137,11 @@ Command add_visible_command(CLI::App& app) {
                   "The depth sort's containment step: edges (a centroid against every edge of "
                   "the other polygon, the default) or rectangle (the slides' minimax test of a "
                   "centre against the other's containing rectangle)")
-      ->transform(CLI::CheckedTransformer(std::map<std::string, Containment>{
-          {"edges", Containment::edges}, {"rectangle", Containment::rectangle}}));
+      ->transform(CLI::CheckedTransformer(
+                      std::map<std::string, Containment>{{"edges", Containment::edges},
+                                                         {"rectangle", Containment::rectangle}})
+                      .description("{edges,rectangle}"))
+      ->type_name("TEXT");
   cmd->add_option("-j,--threads", o->threads, "Host threads (results are identical for any)")
       ->check(CLI::Range(1, 256));
   return {cmd, [o] { return run_visible(*o); }};
