@@ -65,6 +65,16 @@ done
   || fail "highlight.csv's heading: $(head -1 "$tmp/hl/highlight.csv")"
 [ "$(grep -c '^epsilon,two-triangles,' "$tmp/hl/highlight.csv")" -eq 1 ] || fail "highlight.csv: $(cat "$tmp/hl/highlight.csv")"
 grep -q '<table' "$tmp/hl/report.html" || fail "highlight's report.html has no table"
+# spheres reads a tessellation's visibility from the --firmware that draws it: a program whose
+# triangles keep the farther depth (so none is ever drawn over the cleared z) shows no sphere
+# at any intersection-curve pixel of the tessellation (the built-in reader would find them).
+sed 's/^  qcmp.lt z, depth$/  qcmp.gt z, depth/' "$(dirname "$0")/../firmware/programs/phong.pp5" \
+  > "$tmp/farthest.pp5"
+grep -q 'qcmp.gt z, depth' "$tmp/farthest.pp5" || fail "phong.pp5 no longer has 'qcmp.lt z, depth'"
+"$bin" spheres --set screen.width=128 --set screen.height=128 --tessellations 8x4 \
+  --firmware "$tmp/farthest.pp5" -j 2 >"$tmp/sp.log" 2>&1 || fail "spheres failed: $(cat "$tmp/sp.log")"
+grep -Eq '^\| 8x4 \(48 triangles\) .*\| ([1-9][0-9]*) of \1 \|$' "$tmp/sp.log" \
+  || fail "spheres: the tessellation's visibility is not the --firmware's: $(grep '^| 8x4' "$tmp/sp.log")"
 "$bin" --help | grep -q render || fail "--help does not list render"
 # The extremes report: every synthetic case passes; a scene's failures are named, exit 1.
 "$bin" extremes -j 2 >"$tmp/ext.log" 2>&1 || fail "extremes failed: $(cat "$tmp/ext.log")"
