@@ -65,6 +65,19 @@ done
   || fail "highlight.csv's heading: $(head -1 "$tmp/hl/highlight.csv")"
 [ "$(grep -c '^epsilon,two-triangles,' "$tmp/hl/highlight.csv")" -eq 1 ] || fail "highlight.csv: $(cat "$tmp/hl/highlight.csv")"
 grep -q '<table' "$tmp/hl/report.html" || fail "highlight's report.html has no table"
+# scanconvert --significand-bits: one table whose rows at each width are the rows of a run
+# with gp.significand_bits set to it; a width outside the key's range is refused, nothing written.
+"$bin" scanconvert -s two-triangles --set screen.width=128 --set screen.height=128 -j 2 \
+  --significand-bits 62,10 --out "$tmp/scp" >"$tmp/scp.log" 2>&1 || fail "scanconvert --significand-bits: $(cat "$tmp/scp.log")"
+"$bin" scanconvert -s two-triangles --set screen.width=128 --set screen.height=128 -j 2 \
+  --set gp.significand_bits=10 --out "$tmp/sc10" >"$tmp/sc10.log" 2>&1 || fail "scanconvert: $(cat "$tmp/sc10.log")"
+[ "$(grep -c '^| 62 | two-triangles |' "$tmp/scp.log")" -eq 2 ] || fail "no 62-bit rows: $(cat "$tmp/scp.log")"
+diff <(grep '^10,' "$tmp/scp/scanconvert-precision.csv" | cut -d, -f3-6) \
+  <(tail -n +2 "$tmp/sc10/scanconvert.csv" | cut -d, -f2-5) >/dev/null \
+  || fail "the 10-bit rows differ from a run at gp.significand_bits=10: $(cat "$tmp/scp/scanconvert-precision.csv")"
+expect_error "significand-bits 3: .*out of range \[4, 62\]" scanconvert -s two-triangles \
+  --significand-bits 24,3 --out "$tmp/scp-bad"
+[ -e "$tmp/scp-bad" ] && fail "scanconvert --significand-bits wrote output after bad input"
 # spheres reads a tessellation's visibility from the --firmware that draws it: a program whose
 # triangles keep the farther depth (so none is ever drawn over the cleared z) shows no sphere
 # at any intersection-curve pixel of the tessellation (the built-in reader would find them).
