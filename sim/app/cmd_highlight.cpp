@@ -162,6 +162,8 @@ int run_highlight(const HighlightOptions& o) {
   };
   // Per scene of a few separate curves, the width along each (its caption line, its table).
   std::vector<std::pair<std::string, report::Table>> curve_tables;
+  // --report: per scene, the truth and each program's image beside its overlay.
+  std::vector<report::Section> image_sections;
   for (const Scene& scene : scenes) {
     const std::string& scene_name = scene.name;
     const GeometryEngine geometry(geometry_params(config), scene);
@@ -209,6 +211,8 @@ int run_highlight(const HighlightOptions& o) {
     }
     const fs::path dir = fs::path(o.out_dir) / scene_name;
     fs::create_directories(dir);
+    report::Section images{"images-" + scene_name, scene_name + ": images", {}};
+    bool truth_shown[2] = {false, false};
     for (const Entry& e : programs) {
       const IntersectionTruth& truth = truths[e.program.multipass() ? 1 : 0];
       const FieldFrame frame = render_field(config, scene, e.program, "iflag", o.threads);
@@ -237,9 +241,40 @@ int run_highlight(const HighlightOptions& o) {
             a.flagged ? static_cast<double>(changed) / a.flagged : static_cast<double>(changed);
         change = report::Cell::shown_as(share, fmt::format("{:.4f} ({} px)", share, changed));
       }
+      RgbImage overlay = overlay_image(frame.image, truth, flagged);
+      if (o.report) {
+        const int all = e.program.multipass() ? 1 : 0;
+        // The truth once per scene (and once more for the multipass programs' when it differs),
+        // over the first program's image.
+        if (!truth_shown[all] && (all == 0 || truths[1].pixels != truths[0].pixels ||
+                                  truths[1].reachable != truths[0].reachable)) {
+          truth_shown[all] = true;
+          const std::string which = all ? "every intersection curve, hidden or not (the truth "
+                                          "of the multipass programs)"
+                                        : "the visible intersection curves";
+          images.blocks.push_back(report::Figure{
+              fmt::format("truth-{}{}", scene_name, all ? "-all" : ""),
+              fmt::format("{}: the truth{}", scene_name, all ? " (every curve)" : ""),
+              fmt::format("The pixels within delta of {}: {} truth pixels, {} of them (white) "
+                          "reached by two or more triangles; the {} in orange are reached by one "
+                          "surface or none, so no program can flag them (recall ceiling {:.3f})",
+                          which, truth.pixels, truth.reachable, truth.pixels - truth.reachable,
+                          a.ceiling),
+              "image/png", encode_png(truth_image(frame.image, truth)),
+              fmt::format("{}: the truth pixels over {}'s image", scene_name, e.name), ""});
+        }
+        images.blocks.push_back(report::Figure{
+            fmt::format("{}-{}", scene_name, e.name), fmt::format("{} on {}", e.name, scene_name),
+            fmt::format("Left: {0}'s image ({1}/{0}.png). Right: its flags against the truth "
+                        "({1}/{0}-overlay.png): green flagged and true ({2} px), red flagged only "
+                        "({3} px), blue missed ({4} px)",
+                        e.name, scene_name, a.hits, a.flagged - a.hits, a.truth - a.hits),
+            "image/png", encode_png(side_by_side(frame.image, overlay)),
+            fmt::format("{} on {}: the image and the flags against the truth", e.name, scene_name),
+            ""});
+      }
       outputs.add((dir / (e.name + ".png")).string(), encode_png(frame.image));
-      outputs.add((dir / (e.name + "-overlay.png")).string(),
-                  encode_png(overlay_image(frame.image, truth, flagged)));
+      outputs.add((dir / (e.name + "-overlay.png")).string(), encode_png(overlay));
       auto speed = [&](double v) {
         return o.speed_scene.empty() ? report::Cell::missing() : report::Cell(v);
       };
@@ -248,6 +283,7 @@ int run_highlight(const HighlightOptions& o) {
                      a.width_mean, a.width_sd, a.coverage, change, e.program.bits_used(),
                      spilled_fields(e.program), speed(e.speed), speed(e.speed_compiled)});
     }
+    if (o.report) image_sections.push_back(std::move(images));
   }
   std::string text = report::markdown(table);
   report::Report r;
@@ -262,6 +298,7 @@ int run_highlight(const HighlightOptions& o) {
     text += "\n" + caption + "\n\n" + report::markdown(t);
     r.add_section(t.id, caption.substr(0, caption.size() - 1)).blocks.push_back(std::move(t));
   }
+  for (report::Section& s : image_sections) r.sections.push_back(std::move(s));
   outputs.add((fs::path(o.out_dir) / "highlight.md").string(), text);
   add_report_outputs(outputs, o.out_dir, r, o.report);
   // The tables and every image together, or none of them (sim/output).
