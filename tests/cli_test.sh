@@ -56,7 +56,8 @@ expect_error "'frame.bogus' is not a statistic" stats "$tmp/bogus.json"
   --set screen.width=256 --set screen.height=256 --out "$tmp/hl" --report >"$tmp/hl.log" 2>&1 \
   || fail "highlight failed: $(cat "$tmp/hl.log")"
 grep -q "| epsilon | two-triangles |" "$tmp/hl.log" || fail "no epsilon row in the table"
-for f in highlight.md highlight.csv highlight-curves-two-triangles.csv report.html \
+for f in highlight.md highlight.csv highlight-truth.csv highlight-summary.csv \
+  highlight-curves-two-triangles.csv report.html \
   two-triangles/epsilon.png two-triangles/epsilon-overlay.png; do
   [ -s "$tmp/hl/$f" ] || fail "highlight did not write $f"
 done
@@ -65,6 +66,12 @@ done
   || fail "highlight.csv's heading: $(head -1 "$tmp/hl/highlight.csv")"
 [ "$(grep -c '^epsilon,two-triangles,' "$tmp/hl/highlight.csv")" -eq 1 ] || fail "highlight.csv: $(cat "$tmp/hl/highlight.csv")"
 grep -q '<table' "$tmp/hl/report.html" || fail "highlight's report.html has no table"
+# The truth's recall ceiling: below 1 (the band spills past the triangles' outline), and the
+# same in the table by program.
+ceiling=$(grep '^two-triangles,' "$tmp/hl/highlight-truth.csv" | cut -d, -f5)
+awk -v c="$ceiling" 'BEGIN { exit !(c > 0.9 && c < 1) }' || fail "highlight-truth.csv: $(cat "$tmp/hl/highlight-truth.csv")"
+[ "$(grep '^epsilon,two-triangles,' "$tmp/hl/highlight-summary.csv" | cut -d, -f4)" = "$ceiling" ] \
+  || fail "highlight-summary.csv: $(cat "$tmp/hl/highlight-summary.csv")"
 # scanconvert --significand-bits: one table whose rows at each width are the rows of a run
 # with gp.significand_bits set to it; a width outside the key's range is refused, nothing written.
 "$bin" scanconvert -s two-triangles --set screen.width=128 --set screen.height=128 -j 2 \
