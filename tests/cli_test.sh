@@ -85,6 +85,17 @@ diff <(grep '^10,' "$tmp/scp/scanconvert-precision.csv" | cut -d, -f3-6) \
 expect_error "significand-bits 3: .*out of range \[4, 62\]" scanconvert -s two-triangles \
   --significand-bits 24,3 --out "$tmp/scp-bad"
 [ -e "$tmp/scp-bad" ] && fail "scanconvert --significand-bits wrote output after bad input"
+# validate and fidelity write their CSVs through the report's tables: the files of every
+# value, not the shown tables (no record.csv).
+"$bin" validate --no-sensitivity --joint 2 --out "$tmp/val" >"$tmp/val.log" 2>&1 || fail "validate: $(cat "$tmp/val.log")"
+[ "$(ls "$tmp/val" | tr '\n' ' ')" = "joint.csv validate.csv validate.md " ] || fail "validate wrote: $(ls "$tmp/val")"
+head -1 "$tmp/val/validate.csv" | grep -q '^figure,source,published,published_value,simulated,unit,difference,status' \
+  || fail "validate.csv's heading: $(head -1 "$tmp/val/validate.csv")"
+[ "$(wc -l < "$tmp/val/joint.csv")" -eq 3 ] || fail "joint.csv: $(cat "$tmp/val/joint.csv")"
+"$bin" fidelity --scene two-triangles --runs 1 --no-analytic-grids --set screen.width=128 \
+  --set screen.height=128 --out "$tmp/fid" >"$tmp/fid.log" 2>&1 || fail "fidelity: $(cat "$tmp/fid.log")"
+[ "$(ls "$tmp/fid" | tr '\n' ' ')" = "fidelity.csv fidelity.md sustained.csv sustained.md " ] \
+  || fail "fidelity wrote: $(ls "$tmp/fid")"
 # spheres reads a tessellation's visibility from the --firmware that draws it: a program whose
 # triangles keep the farther depth (so none is ever drawn over the cleared z) shows no sphere
 # at any intersection-curve pixel of the tessellation (the built-in reader would find them).
