@@ -8,7 +8,8 @@ no extra package), it fails on
   - a console error, an uncaught exception or a browser log error;
   - a request for anything but the page itself and data: URIs (a report must be one
     self-contained file);
-  - an image that does not decode (every <img> must have loaded with a width);
+  - an image that does not decode (every <img> must have loaded with a width), or a blank one
+    (more than 99.9% of its pixels one colour);
   - a blank first screen (a screenshot whose pixels are nearly all one colour);
   - a sortable table whose click does not sort, or a plot that draws nothing.
 Screenshots (the first screen, and the whole page at half scale) go to DIR when given.
@@ -202,8 +203,29 @@ CHECK_PAGE = r"""
   for (const img of Array.from(document.images)) {
     let ok = true;
     try { await img.decode(); } catch (e) { ok = false; }
-    out.images.push({alt: img.alt, ok: ok && img.complete && img.naturalWidth > 0,
-                     width: img.naturalWidth});
+    ok = ok && img.complete && img.naturalWidth > 0;
+    // Blank or not: the share of its pixels that have its commonest colour, drawn at its
+    // natural size (a data: image leaves the canvas readable).
+    let share = null, error = null;
+    if (ok) {
+      try {
+        const canvas = document.createElement('canvas');
+        canvas.width = img.naturalWidth;
+        canvas.height = img.naturalHeight;
+        const context = canvas.getContext('2d');
+        context.fillStyle = '#ffffff';
+        context.fillRect(0, 0, canvas.width, canvas.height);
+        context.drawImage(img, 0, 0);
+        const data = context.getImageData(0, 0, canvas.width, canvas.height).data;
+        const counts = new Map();
+        for (let i = 0; i < data.length; i += 4) {
+          const key = (data[i] << 16) | (data[i + 1] << 8) | data[i + 2];
+          counts.set(key, (counts.get(key) || 0) + 1);
+        }
+        share = Math.max(...counts.values()) / (data.length / 4);
+      } catch (e) { error = String(e); }
+    }
+    out.images.push({alt: img.alt, ok: ok, width: img.naturalWidth, share: share, error: error});
   }
   return JSON.stringify(out);
 })()
@@ -299,6 +321,10 @@ def check_page(browser, path, shots):
     for img in facts["images"]:
         if not img["ok"]:
             failures.append(f"image '{img['alt']}' does not decode")
+        elif img.get("error"):
+            failures.append(f"image '{img['alt']}' cannot be read back: {img['error']}")
+        elif img["share"] is not None and img["share"] > 0.999:
+            failures.append(f"image '{img['alt']}' is blank ({img['share']:.2%} of it one colour)")
     if facts["sorted"] is False:
         failures.append("clicking a numeric heading did not sort its table")
     if facts["plots"] and facts["plotMarks"] == 0:
@@ -316,7 +342,8 @@ def check_page(browser, path, shots):
         for name, png in section_shots:
             with open(f"{stem}-{name}.png", "wb") as f:
                 f.write(png)
-    summary = (f"{len(facts['images'])} images, text {facts['text']} characters, "
+    blankest = max((img["share"] or 0 for img in facts["images"]), default=0)
+    summary = (f"{len(facts['images'])} images (the blankest {blankest:.1%} one colour), text {facts['text']} characters, "
                f"sorting {'-' if facts['sorted'] is None else 'ok' if facts['sorted'] else 'BROKEN'}, "
                f"{facts['plots']} plots ({facts['plotMarks']} points), first screen "
                f"{share:.0%} one colour")

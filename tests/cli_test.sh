@@ -56,7 +56,8 @@ expect_error "'frame.bogus' is not a statistic" stats "$tmp/bogus.json"
   --set screen.width=256 --set screen.height=256 --out "$tmp/hl" --report >"$tmp/hl.log" 2>&1 \
   || fail "highlight failed: $(cat "$tmp/hl.log")"
 grep -q "| epsilon | two-triangles |" "$tmp/hl.log" || fail "no epsilon row in the table"
-for f in highlight.md highlight.csv highlight-curves-two-triangles.csv report.html \
+for f in highlight.md highlight.csv highlight-truth.csv highlight-summary.csv \
+  highlight-curves-two-triangles.csv report.html \
   two-triangles/epsilon.png two-triangles/epsilon-overlay.png; do
   [ -s "$tmp/hl/$f" ] || fail "highlight did not write $f"
 done
@@ -65,6 +66,46 @@ done
   || fail "highlight.csv's heading: $(head -1 "$tmp/hl/highlight.csv")"
 [ "$(grep -c '^epsilon,two-triangles,' "$tmp/hl/highlight.csv")" -eq 1 ] || fail "highlight.csv: $(cat "$tmp/hl/highlight.csv")"
 grep -q '<table' "$tmp/hl/report.html" || fail "highlight's report.html has no table"
+# The truth's recall ceiling: below 1 (the band spills past the triangles' outline), and the
+# same in the table by program.
+ceiling=$(grep '^two-triangles,' "$tmp/hl/highlight-truth.csv" | cut -d, -f5)
+awk -v c="$ceiling" 'BEGIN { exit !(c > 0.9 && c < 1) }' || fail "highlight-truth.csv: $(cat "$tmp/hl/highlight-truth.csv")"
+[ "$(grep '^epsilon,two-triangles,' "$tmp/hl/highlight-summary.csv" | cut -d, -f4)" = "$ceiling" ] \
+  || fail "highlight-summary.csv: $(cat "$tmp/hl/highlight-summary.csv")"
+# scanconvert --significand-bits: one table whose rows at each width are the rows of a run
+# with gp.significand_bits set to it; a width outside the key's range is refused, nothing written.
+"$bin" scanconvert -s two-triangles --set screen.width=128 --set screen.height=128 -j 2 \
+  --significand-bits 62,10 --out "$tmp/scp" >"$tmp/scp.log" 2>&1 || fail "scanconvert --significand-bits: $(cat "$tmp/scp.log")"
+"$bin" scanconvert -s two-triangles --set screen.width=128 --set screen.height=128 -j 2 \
+  --set gp.significand_bits=10 --out "$tmp/sc10" >"$tmp/sc10.log" 2>&1 || fail "scanconvert: $(cat "$tmp/sc10.log")"
+[ "$(grep -c '^| 62 | two-triangles |' "$tmp/scp.log")" -eq 2 ] || fail "no 62-bit rows: $(cat "$tmp/scp.log")"
+diff <(grep '^10,' "$tmp/scp/scanconvert-precision.csv" | cut -d, -f3-6) \
+  <(tail -n +2 "$tmp/sc10/scanconvert.csv" | cut -d, -f2-5) >/dev/null \
+  || fail "the 10-bit rows differ from a run at gp.significand_bits=10: $(cat "$tmp/scp/scanconvert-precision.csv")"
+expect_error "significand-bits 3: .*out of range \[4, 62\]" scanconvert -s two-triangles \
+  --significand-bits 24,3 --out "$tmp/scp-bad"
+[ -e "$tmp/scp-bad" ] && fail "scanconvert --significand-bits wrote output after bad input"
+# validate and fidelity write their CSVs through the report's tables: the files of every
+# value, not the shown tables (no record.csv).
+"$bin" validate --no-sensitivity --joint 2 --out "$tmp/val" >"$tmp/val.log" 2>&1 || fail "validate: $(cat "$tmp/val.log")"
+[ "$(ls "$tmp/val" | tr '\n' ' ')" = "joint.csv validate.csv validate.md " ] || fail "validate wrote: $(ls "$tmp/val")"
+head -1 "$tmp/val/validate.csv" | grep -q '^figure,source,published,published_value,simulated,unit,difference,status' \
+  || fail "validate.csv's heading: $(head -1 "$tmp/val/validate.csv")"
+[ "$(wc -l < "$tmp/val/joint.csv")" -eq 3 ] || fail "joint.csv: $(cat "$tmp/val/joint.csv")"
+"$bin" fidelity --scene two-triangles --runs 1 --no-analytic-grids --set screen.width=128 \
+  --set screen.height=128 --out "$tmp/fid" >"$tmp/fid.log" 2>&1 || fail "fidelity: $(cat "$tmp/fid.log")"
+[ "$(ls "$tmp/fid" | tr '\n' ' ')" = "fidelity.csv fidelity.md sustained.csv sustained.md " ] \
+  || fail "fidelity wrote: $(ls "$tmp/fid")"
+# spheres reads a tessellation's visibility from the --firmware that draws it: a program whose
+# triangles keep the farther depth (so none is ever drawn over the cleared z) shows no sphere
+# at any intersection-curve pixel of the tessellation (the built-in reader would find them).
+sed 's/^  qcmp.lt z, depth$/  qcmp.gt z, depth/' "$(dirname "$0")/../firmware/programs/phong.pp5" \
+  > "$tmp/farthest.pp5"
+grep -q 'qcmp.gt z, depth' "$tmp/farthest.pp5" || fail "phong.pp5 no longer has 'qcmp.lt z, depth'"
+"$bin" spheres --set screen.width=128 --set screen.height=128 --tessellations 8x4 \
+  --firmware "$tmp/farthest.pp5" -j 2 >"$tmp/sp.log" 2>&1 || fail "spheres failed: $(cat "$tmp/sp.log")"
+grep -Eq '^\| 8x4 \(48 triangles\) .*\| ([1-9][0-9]*) of \1 \|$' "$tmp/sp.log" \
+  || fail "spheres: the tessellation's visibility is not the --firmware's: $(grep '^| 8x4' "$tmp/sp.log")"
 "$bin" --help | grep -q render || fail "--help does not list render"
 # The extremes report: every synthetic case passes; a scene's failures are named, exit 1.
 "$bin" extremes -j 2 >"$tmp/ext.log" 2>&1 || fail "extremes failed: $(cat "$tmp/ext.log")"

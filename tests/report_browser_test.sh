@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Every kind of HTML report, opened in headless Chromium (tests/browser_check.py): a frame's
 # (bit-level pixels and event timing), a timing-only frame's (analytic: no image, no
-# timeline), a sweep's and the analyses' (extremes; csg and scanconvert, with their tables
-# and images). Fails on a console error, a request
-# outside the page, an image that does not decode, a blank first screen, a table that does
+# timeline), a sweep's and the analyses' (extremes; csg, scanconvert and highlight, with
+# their tables and images). Fails on a console error, a request
+# outside the page, an image that does not decode or is blank, a blank first screen, a table that does
 # not sort or a plot that draws nothing. Skips (77) where Chromium is not installed
 # (scripts/install-deps.sh test installs Debian's chromium).
 # Usage: tests/report_browser_test.sh PP5SIM [SCREENSHOT_DIR]
@@ -40,8 +40,14 @@ grep -q '<img' "$tmp/csg/report.html" || fail "the csg report has no image"
 "$bin" scanconvert -s two-triangles --set screen.width=128 --set screen.height=128 -j 2 \
   --out "$tmp/scanconvert" --report >"$tmp/log" 2>&1 || fail "scanconvert --report: $(cat "$tmp/log")"
 [ -s "$tmp/scanconvert/scanconvert.csv" ] || fail "scanconvert --report wrote no scanconvert.csv"
+"$bin" highlight --scenes two-triangles --firmware epsilon threshold --speed-scene '' \
+  --compare-order none --set screen.width=128 --set screen.height=128 -j 2 --out "$tmp/highlight" \
+  --report >"$tmp/log" 2>&1 || fail "highlight --report: $(cat "$tmp/log")"
+# The truth once, then each program's image beside its overlay.
+[ "$(grep -o '<img' "$tmp/highlight/report.html" | wc -l)" -eq 3 ] \
+  || fail "the highlight report has $(grep -o '<img' "$tmp/highlight/report.html" | wc -l) images, not 3"
 pages=()
-for kind in frame analytic sweep sweep2 extremes csg scanconvert; do pages+=("$tmp/$kind/report.html"); done
+for kind in frame analytic sweep sweep2 extremes csg scanconvert highlight; do pages+=("$tmp/$kind/report.html"); done
 
 # Self-contained: no address outside the page in any of them.
 for f in "${pages[@]}"; do

@@ -376,6 +376,14 @@ TEST_CASE(
   REQUIRE(truth.pixels > 200);
   CHECK(truth.reachable < truth.pixels);
   CHECK(truth.reachable > truth.pixels / 2);
+  // The per-pixel mask the report draws holds those pixels, each a truth pixel.
+  std::size_t reached = 0, outside = 0;
+  for (std::size_t p = 0; p < truth.reached.size(); ++p) {
+    outside += truth.reached[p] && !truth.mask[p];
+    reached += truth.reached[p];
+  }
+  CHECK(outside == 0);
+  CHECK(reached == truth.reachable);
   const Program program = assemble_file(program_path("threshold_keep"), assembler_options(config));
   const FieldFrame frame = render_field(config, scene, program, "iflag", 2);
   const std::vector<std::uint8_t> flagged(frame.values.begin(), frame.values.end());

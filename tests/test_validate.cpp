@@ -171,7 +171,7 @@ TEST_CASE("validate: every projection comes from running the models", "[validate
   CHECK(find(moved, "design goal: ").simulated < find(rows, "design goal: ").simulated);
   // The report's tables have a row per figure.
   const std::string md = validation_markdown(rows);
-  const std::string csv = validation_csv(rows);
+  const std::string csv = report::csv(validation_data_table(rows));
   CHECK(std::count(csv.begin(), csv.end(), '\n') == static_cast<long>(rows.size() + 1));
   CHECK_THAT(md, Catch::Contains("| fitted |"));
 }
@@ -197,7 +197,8 @@ TEST_CASE("sensitivity: each end of a range is projected, and the rates move the
   CHECK(multipass.rates[1][2] < multipass.rates[1][1]);
   const std::string md = sensitivity_markdown(t);
   CHECK_THAT(md, Catch::Contains("`gp.multipass` | assumed | resend | retraverse |"));
-  CHECK_THAT(sensitivity_csv(t), Catch::StartsWith("key,mark,low,high,workload"));
+  CHECK_THAT(report::csv(sensitivity_data_table(t)),
+             Catch::StartsWith("key,mark,low,high,workload"));
 }
 
 TEST_CASE("sensitivity: a key of a run of frames is measured on the sustained rate", "[validate]") {

@@ -219,6 +219,7 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
   }
   t.pixels = static_cast<std::size_t>(std::count(t.mask.begin(), t.mask.end(), 1));
   // The recall ceiling: truth pixels whose centre at least two triangles cover.
+  t.reached.assign(t.mask.size(), 0);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       if (!t.mask[static_cast<std::size_t>(y) * width + x]) continue;
@@ -230,6 +231,7 @@ IntersectionTruth intersection_truth(const Scene& scene, int width, int height, 
           break;
       }
       t.reachable += surfaces >= 2;
+      t.reached[static_cast<std::size_t>(y) * width + x] = surfaces >= 2;
     }
   }
   return t;
@@ -333,6 +335,38 @@ RgbImage overlay_image(const RgbImage& frame, const IntersectionTruth& truth,
       for (int k = 0; k < 3; ++k) c[k] = static_cast<std::uint8_t>(c[k] / 3);
     }
   }
+  return out;
+}
+
+RgbImage truth_image(const RgbImage& frame, const IntersectionTruth& truth) {
+  RgbImage out = frame;
+  for (std::size_t p = 0; p < truth.mask.size(); ++p) {
+    std::uint8_t* c = &out.rgb[p * 3];
+    if (!truth.mask[p]) {
+      for (int k = 0; k < 3; ++k) c[k] = static_cast<std::uint8_t>(c[k] / 3);
+    } else if (truth.reached[p]) {
+      c[0] = 255, c[1] = 255, c[2] = 255;
+    } else {
+      c[0] = 255, c[1] = 150, c[2] = 0;
+    }
+  }
+  return out;
+}
+
+RgbImage side_by_side(const RgbImage& left, const RgbImage& right, int gap) {
+  RgbImage out;
+  out.width = left.width + gap + right.width;
+  out.height = std::max(left.height, right.height);
+  out.rgb.assign(static_cast<std::size_t>(out.width) * out.height * 3, 128);
+  auto blit = [&out](const RgbImage& image, int x0) {
+    for (int y = 0; y < image.height; ++y) {
+      std::copy_n(&image.rgb[static_cast<std::size_t>(y) * image.width * 3],
+                  static_cast<std::size_t>(image.width) * 3,
+                  &out.rgb[(static_cast<std::size_t>(y) * out.width + x0) * 3]);
+    }
+  };
+  blit(left, 0);
+  blit(right, left.width + gap);
   return out;
 }
 

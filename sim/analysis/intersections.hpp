@@ -47,14 +47,15 @@ struct CurveSample {
 
 struct IntersectionTruth {
   int width = 0, height = 0;
-  double delta = 0;                  // half-width, pixels
-  std::size_t segments = 0;          // world-space intersection segments
-  std::vector<Segment3> curves;      // those segments, in intersection_segments order
-  std::size_t samples = 0;           // samples along them (on screen)
-  std::vector<CurveSample> visible;  // the visible samples
-  std::vector<std::uint8_t> mask;    // pixels within delta of a visible sample
-  std::size_t pixels = 0;            // set bits of mask
-  std::size_t reachable = 0;         // of those, pixels whose centre two or more triangles cover
+  double delta = 0;                   // half-width, pixels
+  std::size_t segments = 0;           // world-space intersection segments
+  std::vector<Segment3> curves;       // those segments, in intersection_segments order
+  std::size_t samples = 0;            // samples along them (on screen)
+  std::vector<CurveSample> visible;   // the visible samples
+  std::vector<std::uint8_t> mask;     // pixels within delta of a visible sample
+  std::size_t pixels = 0;             // set bits of mask
+  std::size_t reachable = 0;          // of those, pixels whose centre two or more triangles cover
+  std::vector<std::uint8_t> reached;  // per pixel, 1 for those reachable truth pixels
 };
 
 // Samples every segment at `spacing` pixels on the screen. With visible_only false, hidden
@@ -85,5 +86,13 @@ std::vector<Accuracy> measure_width_by_segment(const IntersectionTruth& truth,
 // and missed truth pixels blue.
 RgbImage overlay_image(const RgbImage& frame, const IntersectionTruth& truth,
                        const std::vector<std::uint8_t>& flagged);
+
+// The truth alone: the frame darkened, truth pixels two or more triangles reach white, truth
+// pixels no program can flag (one surface or none reaches them) orange.
+RgbImage truth_image(const RgbImage& frame, const IntersectionTruth& truth);
+
+// `left` and `right` side by side with a `gap`-pixel grey band between them (the taller one's
+// height; the shorter one padded with grey below).
+RgbImage side_by_side(const RgbImage& left, const RgbImage& right, int gap = 8);
 
 }  // namespace pp5

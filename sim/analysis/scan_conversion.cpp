@@ -703,4 +703,42 @@ report::Table scan_conversion_table(const std::vector<ScanConversionReport>& rep
   return t;
 }
 
+report::Table scan_conversion_precision_table(const std::vector<ScanConversionAtPrecision>& runs) {
+  using namespace report;
+  // The accuracy columns, as scan_conversion_table defines them, numbers right-aligned.
+  static const char* const kKept[] = {
+      "scene",           "method",         "edge px",      "max error",    "mean error",
+      "shared-edge max", "layer-edge max", "interior max", "hidden shows", "parity errors"};
+  const Table full = scan_conversion_table({});
+  std::vector<std::size_t> kept;
+  for (const char* name : kKept) {
+    std::size_t k = 0;
+    while (k < full.columns.size() && full.columns[k].name != name) ++k;
+    if (k == full.columns.size())
+      throw std::logic_error(fmt::format("scan_conversion_table has no column '{}'", name));
+    kept.push_back(k);
+  }
+  Table t;
+  t.id = "scanconvert-precision";
+  t.columns.push_back(headed(integer_column("significand bits", "bits",
+                                            "Significant bits of every value the GP computes "
+                                            "(gp.significand_bits; 62: exact)"),
+                             "significand bits"));
+  for (std::size_t k : kept) {
+    Column c = full.columns[k];
+    c.align = Align::automatic;
+    t.columns.push_back(std::move(c));
+  }
+  for (const ScanConversionAtPrecision& run : runs) {
+    const Table one = scan_conversion_table(run.reports);
+    for (std::size_t r = 0; r < one.rows.size(); ++r) {
+      std::vector<Cell> row = {run.significand_bits};
+      for (std::size_t k : kept) row.push_back(one.rows[r][k]);
+      row[1] = run.reports[r / 2].scene;  // named on every row (the full table names it once)
+      t.add_row(std::move(row));
+    }
+  }
+  return t;
+}
+
 }  // namespace pp5

@@ -132,6 +132,15 @@ ScanConversionReport measure_scan_conversion(const MachineConfig& config, const 
 // The table, one row per scene and method (sim/output/report.hpp).
 report::Table scan_conversion_table(const std::vector<ScanConversionReport>& reports);
 
+// The two programs measured at each precision of the GP's arithmetic: one row per significand
+// width, scene and method (the scene named on every row), with the accuracy columns of
+// scan_conversion_table (not the cost, which precision does not change).
+struct ScanConversionAtPrecision {
+  int significand_bits = 62;  // gp.significand_bits (62: exact)
+  std::vector<ScanConversionReport> reports;
+};
+report::Table scan_conversion_precision_table(const std::vector<ScanConversionAtPrecision>& runs);
+
 // The ablation of accurate scan conversion's two ingredients, each alone: the standard
 // program with its depth drawn through the unsnapped vertices (plane_depth instead of depth),
 // and the accurate program's classification (enlarged area and side tests) with the snapped

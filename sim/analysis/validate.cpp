@@ -670,7 +670,7 @@ std::string evidence_summary(const std::vector<ValidationRow>& rows) {
       n_predicted, rows.size(), predicted, n_fitted, fitted, n_derived, derived);
 }
 
-std::string validation_csv(const std::vector<ValidationRow>& rows) {
+report::Table validation_data_table(const std::vector<ValidationRow>& rows) {
   using namespace report;
   Table t;
   t.id = "validate";
@@ -692,7 +692,7 @@ std::string validation_csv(const std::vector<ValidationRow>& rows) {
     t.add_row({r.figure, r.source, r.published, r.published_value, r.simulated, r.unit,
                r.difference(), r.status, consumed, r.evidence() ? 1 : 0, r.workload, r.note});
   }
-  return csv(t);
+  return t;
 }
 
 namespace {
@@ -763,7 +763,7 @@ std::string sensitivity_markdown(const SensitivityTable& t) {
   return report::markdown(sensitivity_table(t));
 }
 
-std::string sensitivity_csv(const SensitivityTable& table) {
+report::Table sensitivity_data_table(const SensitivityTable& table) {
   using namespace report;
   Table t;
   t.id = "sensitivity";
@@ -784,7 +784,7 @@ std::string sensitivity_csv(const SensitivityTable& table) {
                  rate(r.rates[k][2])});
     }
   }
-  return csv(t);
+  return t;
 }
 
 }  // namespace pp5

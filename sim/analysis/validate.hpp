@@ -167,16 +167,18 @@ report::Table joint_samples_table(const JointSensitivity& joint);
 std::string joint_bottleneck_text(const JointSensitivity& joint);
 std::string joint_sensitivity_markdown(const JointSensitivity& joint);
 
-// The record's table (Markdown through the report writer), and CSV of the same rows with
-// the values at full precision.
+// The record's table (Markdown through the report writer), and the same rows with every value
+// at full precision as data (validate.csv: the published value and its unit apart, the
+// difference as a fraction, evidence 1 or 0).
 report::Table validation_table(const std::vector<ValidationRow>& rows);
 std::string validation_markdown(const std::vector<ValidationRow>& rows);
 // Which figures are evidence: the predictions, each with its difference, and the figures a
 // fit consumed (with the keys), which are not.
 std::string evidence_summary(const std::vector<ValidationRow>& rows);
-std::string validation_csv(const std::vector<ValidationRow>& rows);
+report::Table validation_data_table(const std::vector<ValidationRow>& rows);
 report::Table sensitivity_table(const SensitivityTable& table);
 std::string sensitivity_markdown(const SensitivityTable& table);
-std::string sensitivity_csv(const SensitivityTable& table);
+// One row per constant and workload (sensitivity.csv).
+report::Table sensitivity_data_table(const SensitivityTable& table);
 
 }  // namespace pp5

@@ -295,7 +295,6 @@ int run_fidelity(FidelityOptions o) {
     section.blocks.push_back(report::Paragraph{sustained_heading});
     section.blocks.push_back(sustained_table);
   }
-  std::string analytic_csv;
   if (o.analytic_grids) {
     // The analytic level against the event level on machines it was not adjusted on: the
     // held-out grid (seeded, drawn before either model was looked at) beside the tuning one.
@@ -340,21 +339,23 @@ int run_fidelity(FidelityOptions o) {
                         p.closed_form_seconds, p.event_bottleneck, p.analytic_bottleneck});
       }
     }
-    analytic_csv = report::csv(points);
+    points.title = "Every machine (analytic_validation.csv)";
+    section.blocks.push_back(std::move(points));
   }
   const fs::path dir(o.out_dir);
   OutputSet outputs;
   outputs.add((dir / "fidelity.md").string(), md);
-  outputs.add((dir / "fidelity.csv").string(), report::csv(table));
   outputs.add((dir / "sustained.md").string(), sustained_md);
-  outputs.add((dir / "sustained.csv").string(), report::csv(sustained_table));
-  if (!analytic_csv.empty()) outputs.add((dir / "analytic_validation.csv").string(), analytic_csv);
-  if (o.report) outputs.add((dir / "report.html").string(), report::html(page));
+  // fidelity.csv, sustained.csv, with the grids analytic-grids.csv and analytic_validation.csv,
+  // with --report the page.
+  add_report_outputs(outputs, o.out_dir, page, o.report);
   outputs.commit();
   std::cout << md;
   std::cout << fmt::format(
-      "\nwrote {}/fidelity.md, {}/fidelity.csv, {}/sustained.csv{}{}\n", o.out_dir, o.out_dir,
-      o.out_dir, analytic_csv.empty() ? "" : ", " + o.out_dir + "/analytic_validation.csv",
+      "\nwrote {0}/fidelity.md, {0}/fidelity.csv, {0}/sustained.csv{1}{2}\n", o.out_dir,
+      o.analytic_grids
+          ? fmt::format(", {0}/analytic-grids.csv, {0}/analytic_validation.csv", o.out_dir)
+          : "",
       o.report ? ", " + o.out_dir + "/report.html" : "");
   return 0;
 }

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <stdexcept>
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/machine.hpp"
@@ -56,6 +58,68 @@ std::string spilled_fields(const Program& p) {
 }
 
 constexpr std::size_t kMaxCurvesReported = 8;
+
+// The main table regrouped by program (its rows are scene-major, `programs` a scene): each
+// program's rows together, its accuracy beside the recall ceiling, and what belongs to the
+// program alone (bits, polygons/s) on its first row only.
+report::Table highlight_summary(const report::Table& main, std::size_t programs,
+                                const std::string& speed_scene) {
+  auto at = [&main](const char* key) {
+    for (std::size_t k = 0; k < main.columns.size(); ++k)
+      if (main.columns[k].csv_key() == key) return k;
+    throw std::logic_error(fmt::format("highlight table: no column '{}'", key));
+  };
+  const std::size_t program = at("program"), scene = at("scene"), recall = at("recall"),
+                    ceiling = at("recall_ceiling"), precision = at("precision"),
+                    width_mean = at("width_mean"), width_sd = at("width_sd"),
+                    coverage = at("coverage"), order = at("order_change"), bits = at("bits_used"),
+                    speed = at("polygons_per_second"),
+                    compiled = at("polygons_per_second_compiled");
+  report::Table t;
+  t.id = "highlight-summary";
+  auto copy = [&main](std::size_t k) { return main.columns[k]; };
+  t.columns = {
+      copy(program),
+      copy(scene),
+      copy(recall),
+      copy(ceiling),
+      copy(precision),
+      report::headed(report::real_column("width", "pixels", 2,
+                                         "Mean width of the flagged band across the "
+                                         "true curve, +- its standard deviation"),
+                     "width mean +- sd (px)", report::Align::left),
+      copy(order),
+      copy(bits),
+      report::headed(report::real_column("polygons/s", "polygons/s", 0,
+                                         fmt::format("Projected polygons per second on "
+                                                     "{}: configured GP code / compiled",
+                                                     speed_scene)),
+                     fmt::format("{} polygons/s, configured / compiled GP code",
+                                 speed_scene.empty() ? std::string("(none)") : speed_scene),
+                     report::Align::left)};
+  t.columns[5].key = "width_mean";
+  t.columns[8].key = "polygons_per_second";
+  const std::size_t scenes = programs ? main.rows.size() / programs : 0;
+  for (std::size_t p = 0; p < programs; ++p) {
+    for (std::size_t s = 0; s < scenes; ++s) {
+      const std::vector<report::Cell>& row = main.rows[s * programs + p];
+      const bool first = s == 0;
+      const std::optional<double> mean = row[width_mean].number(), sd = row[width_sd].number();
+      const std::optional<double> fast = row[speed].number(), slow = row[compiled].number();
+      t.add_row({first ? row[program] : report::Cell(std::string()), row[scene], row[recall],
+                 row[ceiling], row[precision],
+                 row[coverage].number().value_or(0) > 0
+                     ? report::Cell::shown_as(*mean, fmt::format("{:.2f} +- {:.2f}", *mean, *sd))
+                     : report::Cell::missing(),
+                 row[order], first ? row[bits] : report::Cell(std::string()),
+                 !first ? report::Cell(std::string())
+                 : fast && slow
+                     ? report::Cell::shown_as(*fast, fmt::format("{:.0f} / {:.0f}", *fast, *slow))
+                     : report::Cell::missing()});
+    }
+  }
+  return t;
+}
 
 int run_highlight(const HighlightOptions& o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
@@ -160,8 +224,54 @@ int run_highlight(const HighlightOptions& o) {
            fmt::format("{} polygons/s (compiled GP code)", o.speed_scene),
            "polygons_per_second_compiled"),
   };
+  // Per scene, the truth and its recall ceiling: the visible curves (opaque programs' truth)
+  // and every curve (multipass programs').
+  report::Table truth_table;
+  truth_table.id = "highlight-truth";
+  truth_table.columns = {
+      report::text_column("scene"),
+      report::integer_column("segments", "", "World-space intersection segments"),
+      report::headed(report::integer_column("truth px", "pixels",
+                                            "Pixels within delta of a visible intersection curve"),
+                     "truth px"),
+      report::headed(report::integer_column("reached by two", "pixels",
+                                            "Truth pixels whose centre two or more triangles "
+                                            "cover"),
+                     "reached by two"),
+      report::headed(report::real_column("recall ceiling", "", 3,
+                                         "Reached by two, of the truth pixels: the largest recall "
+                                         "a program that compares depths at a pixel can reach"),
+                     "recall ceiling"),
+      report::headed(report::integer_column("truth px, every curve", "pixels",
+                                            "Pixels within delta of any intersection curve, "
+                                            "hidden or not (the multipass programs' truth)"),
+                     "truth px, every curve"),
+      report::headed(report::integer_column("reached by two, every curve", "pixels",
+                                            "Of those, the pixels two or more triangles cover"),
+                     "reached by two, every curve"),
+      report::headed(report::real_column("recall ceiling, every curve", "", 3,
+                                         "The multipass programs' recall ceiling"),
+                     "recall ceiling, every curve"),
+  };
+  {
+    const char* keys[] = {"scene",
+                          "segments",
+                          "truth_pixels",
+                          "reached_pixels",
+                          "recall_ceiling",
+                          "truth_pixels_every_curve",
+                          "reached_pixels_every_curve",
+                          "recall_ceiling_every_curve"};
+    for (std::size_t k = 0; k < truth_table.columns.size(); ++k)
+      truth_table.columns[k].key = keys[k];
+  }
+  auto ceiling_of = [](const IntersectionTruth& t) {
+    return t.pixels ? static_cast<double>(t.reachable) / static_cast<double>(t.pixels) : 0.0;
+  };
   // Per scene of a few separate curves, the width along each (its caption line, its table).
   std::vector<std::pair<std::string, report::Table>> curve_tables;
+  // --report: per scene, the truth and each program's image beside its overlay.
+  std::vector<report::Section> image_sections;
   for (const Scene& scene : scenes) {
     const std::string& scene_name = scene.name;
     const GeometryEngine geometry(geometry_params(config), scene);
@@ -174,11 +284,11 @@ int run_highlight(const HighlightOptions& o) {
       truths[all] = intersection_truth(scene, config.screen.width, config.screen.height, delta,
                                        0.25, all == 0);
     }
-    std::cerr << fmt::format(
-        "{}: {} intersection segments; {} truth pixels visible ({} reached by two or more "
-        "surfaces), {} in all ({})\n",
-        scene_name, truths[0].segments, truths[0].pixels, truths[0].reachable, truths[1].pixels,
-        truths[1].reachable);
+    truth_table.add_row({scene_name, static_cast<std::int64_t>(truths[0].segments),
+                         static_cast<std::int64_t>(truths[0].pixels),
+                         static_cast<std::int64_t>(truths[0].reachable), ceiling_of(truths[0]),
+                         static_cast<std::int64_t>(truths[1].pixels),
+                         static_cast<std::int64_t>(truths[1].reachable), ceiling_of(truths[1])});
     // The same scene in the other display-list order (from the built-in order, so that
     // "--order reversed --compare-order given" compares the same two orders both ways).
     Scene reordered = make_builtin_scene(scene_name);
@@ -209,6 +319,8 @@ int run_highlight(const HighlightOptions& o) {
     }
     const fs::path dir = fs::path(o.out_dir) / scene_name;
     fs::create_directories(dir);
+    report::Section images{"images-" + scene_name, scene_name + ": images", {}};
+    bool truth_shown[2] = {false, false};
     for (const Entry& e : programs) {
       const IntersectionTruth& truth = truths[e.program.multipass() ? 1 : 0];
       const FieldFrame frame = render_field(config, scene, e.program, "iflag", o.threads);
@@ -237,9 +349,40 @@ int run_highlight(const HighlightOptions& o) {
             a.flagged ? static_cast<double>(changed) / a.flagged : static_cast<double>(changed);
         change = report::Cell::shown_as(share, fmt::format("{:.4f} ({} px)", share, changed));
       }
+      RgbImage overlay = overlay_image(frame.image, truth, flagged);
+      if (o.report) {
+        const int all = e.program.multipass() ? 1 : 0;
+        // The truth once per scene (and once more for the multipass programs' when it differs),
+        // over the first program's image.
+        if (!truth_shown[all] && (all == 0 || truths[1].pixels != truths[0].pixels ||
+                                  truths[1].reachable != truths[0].reachable)) {
+          truth_shown[all] = true;
+          const std::string which = all ? "every intersection curve, hidden or not (the truth "
+                                          "of the multipass programs)"
+                                        : "the visible intersection curves";
+          images.blocks.push_back(report::Figure{
+              fmt::format("truth-{}{}", scene_name, all ? "-all" : ""),
+              fmt::format("{}: the truth{}", scene_name, all ? " (every curve)" : ""),
+              fmt::format("The pixels within delta of {}: {} truth pixels, {} of them (white) "
+                          "reached by two or more triangles; the {} in orange are reached by one "
+                          "surface or none, so no program can flag them (recall ceiling {:.3f})",
+                          which, truth.pixels, truth.reachable, truth.pixels - truth.reachable,
+                          a.ceiling),
+              "image/png", encode_png(truth_image(frame.image, truth)),
+              fmt::format("{}: the truth pixels over {}'s image", scene_name, e.name), ""});
+        }
+        images.blocks.push_back(report::Figure{
+            fmt::format("{}-{}", scene_name, e.name), fmt::format("{} on {}", e.name, scene_name),
+            fmt::format("Left: {0}'s image ({1}/{0}.png). Right: its flags against the truth "
+                        "({1}/{0}-overlay.png): green flagged and true ({2} px), red flagged only "
+                        "({3} px), blue missed ({4} px)",
+                        e.name, scene_name, a.hits, a.flagged - a.hits, a.truth - a.hits),
+            "image/png", encode_png(side_by_side(frame.image, overlay)),
+            fmt::format("{} on {}: the image and the flags against the truth", e.name, scene_name),
+            ""});
+      }
       outputs.add((dir / (e.name + ".png")).string(), encode_png(frame.image));
-      outputs.add((dir / (e.name + "-overlay.png")).string(),
-                  encode_png(overlay_image(frame.image, truth, flagged)));
+      outputs.add((dir / (e.name + "-overlay.png")).string(), encode_png(overlay));
       auto speed = [&](double v) {
         return o.speed_scene.empty() ? report::Cell::missing() : report::Cell(v);
       };
@@ -248,8 +391,12 @@ int run_highlight(const HighlightOptions& o) {
                      a.width_mean, a.width_sd, a.coverage, change, e.program.bits_used(),
                      spilled_fields(e.program), speed(e.speed), speed(e.speed_compiled)});
     }
+    if (o.report) image_sections.push_back(std::move(images));
   }
-  std::string text = report::markdown(table);
+  const report::Table summary = highlight_summary(table, programs.size(), o.speed_scene);
+  std::string text =
+      report::markdown(table) + "\nThe truth of each scene:\n\n" + report::markdown(truth_table) +
+      "\nBy program (bits and polygons/s on its first row):\n\n" + report::markdown(summary);
   report::Report r;
   r.title = "Intersection highlighting";
   const std::string legend = fmt::format(
@@ -258,19 +405,22 @@ int run_highlight(const HighlightOptions& o) {
       static_cast<double>(resolved_frame_parameter(config, Parameter::delta)) / 16.0);
   r.subtitle = legend;
   r.add_section("highlight", "Programs and scenes").blocks.push_back(table);
+  r.add_section("highlight-truth", "The truth of each scene").blocks.push_back(truth_table);
+  r.add_section("highlight-summary", "By program").blocks.push_back(summary);
   for (auto& [caption, t] : curve_tables) {
     text += "\n" + caption + "\n\n" + report::markdown(t);
     r.add_section(t.id, caption.substr(0, caption.size() - 1)).blocks.push_back(std::move(t));
   }
+  for (report::Section& s : image_sections) r.sections.push_back(std::move(s));
   outputs.add((fs::path(o.out_dir) / "highlight.md").string(), text);
   add_report_outputs(outputs, o.out_dir, r, o.report);
   // The tables and every image together, or none of them (sim/output).
   outputs.commit();
   std::cout << text;
   std::cout << fmt::format(
-      "\n{}\nwrote {}/highlight.md, {}/highlight.csv{} and {}/SCENE/PROGRAM[-overlay].png\n",
-      legend, o.out_dir, o.out_dir, o.report ? fmt::format(", {}/report.html", o.out_dir) : "",
-      o.out_dir);
+      "\n{0}\nwrote {1}/highlight.md, {1}/highlight{{,-truth,-summary}}.csv{2} and "
+      "{1}/SCENE/PROGRAM[-overlay].png\n",
+      legend, o.out_dir, o.report ? fmt::format(", {}/report.html", o.out_dir) : "");
   return 0;
 }
 

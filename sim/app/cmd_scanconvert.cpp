@@ -28,7 +28,8 @@ struct ScanConvertOptions {
   std::vector<std::string> sets;
   std::string out_dir = "out/scanconvert";
   bool ablation = false;
-  bool report = false;  // also OUT/report.html
+  std::vector<int> significand_bits;  // --significand-bits: the precision table
+  bool report = false;                // also OUT/report.html
   int threads = default_threads();
 };
 
@@ -50,6 +51,46 @@ int run_scanconvert(const ScanConvertOptions& o) {
   Program accurate = assemble_file(resolve_firmware(o.accurate), options);
   standard.name = o.standard;
   accurate.name = o.accurate;
+  if (!o.significand_bits.empty()) {
+    // Every scene at each precision of the GP's arithmetic: one table. Each width is checked
+    // (the key's range) before the first frame runs.
+    std::vector<MachineConfig> configs;
+    for (const int b : o.significand_bits) {
+      MachineConfig c = config;
+      try {
+        c.set(std::vector<std::string>{fmt::format("gp.significand_bits={}", b)});
+      } catch (const std::exception& e) {
+        throw std::runtime_error(fmt::format("--significand-bits {}: {}", b, e.what()));
+      }
+      configs.push_back(std::move(c));
+    }
+    prepare_output_folder(o.out_dir, "--out");
+    std::vector<ScanConversionAtPrecision> runs;
+    for (const MachineConfig& c : configs) {
+      ScanConversionAtPrecision run;
+      run.significand_bits = c.gp.significand_bits;
+      for (const Scene& scene : scenes)
+        run.reports.push_back(measure_scan_conversion(c, scene, standard, accurate, o.threads));
+      runs.push_back(std::move(run));
+    }
+    const std::string heading = fmt::format(
+        "{} x {} screen, vertices snapped to 1/{} pixel, the GP's coefficients kept "
+        "to each number of significant bits (62: exact)",
+        config.screen.width, config.screen.height, 1 << config.gp.subpixel_bits);
+    const report::Table table = scan_conversion_precision_table(runs);
+    report::Report r;
+    r.title = "Scan conversion at each precision of the GP's arithmetic";
+    r.subtitle = heading;
+    r.add_section("precision", "Standard against accurate").blocks.push_back(table);
+    OutputSet outputs;
+    add_report_outputs(outputs, o.out_dir, r, o.report);
+    outputs.commit();
+    std::cout << heading << "\n\n"
+              << report::markdown(table)
+              << fmt::format("\nwrote {}/{}.csv{}\n", o.out_dir, table.id,
+                             o.report ? " and report.html" : "");
+    return 0;
+  }
   if (o.ablation) {
     // Each ingredient of the accurate program alone (scan_conversion.hpp).
     const Program standard_unsnapped = with_depth_expression(
@@ -183,6 +224,12 @@ Command add_scanconvert_command(CLI::App& app) {
                 "alone: the standard program with depth through the unsnapped vertices, and the "
                 "accurate program's classification with the snapped vertices' depth (four rows "
                 "per scene; writes nothing)");
+  cmd->add_option("--significand-bits", o->significand_bits,
+                  "Instead of the table and images, one table of both programs on every scene at "
+                  "each of these widths of the GP's arithmetic (gp.significand_bits, 62: exact; "
+                  "comma-separated, e.g. 62,24,16,12,10); writes OUT/scanconvert-precision.csv")
+      ->delimiter(',')
+      ->excludes("--ablation");
   add_config_options(*cmd, o->config_path, o->sets);
   cmd->add_option("-o,--out", o->out_dir, "Output folder (default out/scanconvert)");
   add_report_flag(*cmd, o->report, "OUT");

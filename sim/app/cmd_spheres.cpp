@@ -141,11 +141,10 @@ int run_spheres(const SpheresOptions& o) {
   const FrameResult base = simulate_frame(config, empty, program, o.threads);
   const RayCast truth = ray_cast(config, scene);
 
-  // `visibility`: the program that draws the index colours (shown_spheres_by), or null for
-  // shown_spheres' own; `program` and `base` default to the --firmware's.
+  // `visibility`: the program that draws the index colours (shown_spheres_by): the one that
+  // draws the row, light and shade taken out.
   auto row = [&](const std::string& what, const Scene& s, const std::vector<int>& stands_for,
-                 const Program& program, const FrameResult& base,
-                 const Program* visibility = nullptr) {
+                 const Program& program, const FrameResult& base, const Program& visibility) {
     const FrameResult r = simulate_frame(config, s, program, o.threads);
     SphereRow out;
     out.what = what;
@@ -169,25 +168,25 @@ int run_spheres(const SpheresOptions& o) {
     const double renderer_rate =
         config.renderer.count * config.renderer.clock_hz / std::max(1.0, out.renderer_cycles);
     out.rate = std::min(gp_rate, renderer_rate);
-    out.accuracy = measure_spheres(
-        config, scene, truth, draw_spheres(config, s, program, o.threads),
-        visibility != nullptr ? shown_spheres_by(config, s, stands_for, *visibility, o.threads)
-                              : shown_spheres(config, s, stands_for, o.threads));
+    out.accuracy =
+        measure_spheres(config, scene, truth, draw_spheres(config, s, program, o.threads),
+                        shown_spheres_by(config, s, stands_for, visibility, o.threads));
     return out;
   };
 
   std::vector<SphereRow> rows;
-  // The first row's visibility is read from the --firmware itself, light and shade taken out,
-  // so that it follows that program's own depth code (for phong, shown_spheres' counts).
+  // The quadric's and the tessellations' visibility is read from the --firmware itself, light
+  // and shade taken out, so that it follows that program's own depth code (for phong,
+  // shown_spheres' counts).
   const Program unshaded_own = unshaded_program(resolve_firmware(o.firmware), config);
-  rows.push_back(row("quadric", scene, {}, program, base, &unshaded_own));
+  rows.push_back(row("quadric", scene, {}, program, base, unshaded_own));
   // The other depth methods, each by its own program (sphere_depth_methods.hpp).
   for (const SphereDepthMethod& m : sphere_depth_methods()) {
     const std::string path = resolve_firmware(m.firmware);
     const Program p = assemble_file(path, assembler_options(config));
     const Program unshaded = unshaded_program(path, config);
     rows.push_back(row(fmt::format("{} ({}, {} bits)", m.label, m.firmware, p.bits_used()), scene,
-                       {}, p, simulate_frame(config, empty, p, o.threads), &unshaded));
+                       {}, p, simulate_frame(config, empty, p, o.threads), unshaded));
   }
   for (const std::string& t : o.tessellations) {
     int u = 0, v = 0;
@@ -206,8 +205,9 @@ int run_spheres(const SpheresOptions& o) {
                         static_cast<int>(k));
     if (stands_for.size() != tess.mesh.triangles.size())
       throw std::logic_error("cmd_spheres: tessellation triangle count");
-    rows.push_back(
-        row(fmt::format("{} ({} triangles)", t, 2 * u * (v - 1)), tess, stands_for, program, base));
+    // Drawn by the --firmware's triangle procedure, so their visibility is read from it too.
+    rows.push_back(row(fmt::format("{} ({} triangles)", t, 2 * u * (v - 1)), tess, stands_for,
+                       program, base, unshaded_own));
   }
 
   const std::string heading = fmt::format(

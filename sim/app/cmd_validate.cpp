@@ -46,12 +46,19 @@ int run_validate(const ValidateOptions& o) {
     report::Section& s = page.add_section("record", "Published figures");
     s.blocks.push_back(report::Paragraph{record_heading});
     report::Table t = validation_table(rows);
-    t.id = "record";  // validate.csv is written below with every value
+    t.id = "record";
+    t.csv_file = false;  // validate.csv: the same rows with every value, below
     s.blocks.push_back(std::move(t));
     s.blocks.push_back(report::Preformatted{evidence_summary(rows)});
   }
+  // The data behind the shown tables, each value at full precision: the CSV files.
+  report::Section data{"data", "Every value", {}};
+  {
+    report::Table t = validation_data_table(rows);
+    t.title = "The published figures (validate.csv)";
+    data.blocks.push_back(std::move(t));
+  }
   OutputSet outputs;
-  outputs.add(o.out + "/validate.csv", validation_csv(rows));
   if (o.sensitivity) {
     const SensitivityTable table = sensitivity(config, load, default_sensitivity_workloads());
     const std::string heading =
@@ -59,12 +66,15 @@ int run_validate(const ValidateOptions& o) {
         "end of each fitted or assumed constant's plausible range, the others at their "
         "values:";
     text += "\n" + heading + "\n\n" + sensitivity_markdown(table);
-    outputs.add(o.out + "/sensitivity.csv", sensitivity_csv(table));
     report::Section& s = page.add_section("sensitivity", "Sensitivity");
     s.blocks.push_back(report::Paragraph{heading});
     report::Table t = sensitivity_table(table);
-    t.id = "sensitivity-table";  // sensitivity.csv holds one row per constant and workload
+    t.id = "sensitivity-table";
+    t.csv_file = false;  // sensitivity.csv: one row per constant and workload, below
     s.blocks.push_back(std::move(t));
+    report::Table rows_by_workload = sensitivity_data_table(table);
+    rows_by_workload.title = "Each constant and workload (sensitivity.csv)";
+    data.blocks.push_back(std::move(rows_by_workload));
   }
   if (o.joint > 0) {
     JointSensitivityOptions joint;
@@ -78,22 +88,20 @@ int run_validate(const ValidateOptions& o) {
         "together:";
     const std::string markdown = joint_sensitivity_markdown(j);
     text += "\n" + heading + "\n\n" + markdown;
-    const report::Table samples = joint_samples_table(j);
-    outputs.add(o.out + "/joint.csv", report::csv(samples));
     report::Section& s = page.add_section("joint", "Joint sensitivity");
     s.blocks.push_back(report::Paragraph{heading + " " + markdown.substr(0, markdown.find('\n'))});
-    s.blocks.push_back(joint_sensitivity_table(j));
+    report::Table conclusions = joint_sensitivity_table(j);
+    conclusions.csv_file = false;  // drawn from the samples (joint.csv)
+    s.blocks.push_back(std::move(conclusions));
     s.blocks.push_back(report::Paragraph{joint_bottleneck_text(j).substr(1)});
-    report::Table all = samples;
-    all.id = "joint-samples";
-    all.title = "Every sample";
-    s.blocks.push_back(std::move(all));
+    report::Table samples = joint_samples_table(j);  // joint.csv
+    samples.title = "Every sample (joint.csv)";
+    s.blocks.push_back(std::move(samples));
   }
+  page.sections.push_back(std::move(data));
   outputs.add(o.out + "/validate.md", text);
-  if (o.report) {
-    // The page only: its tables' data are the CSVs above.
-    outputs.add(o.out + "/report.html", report::html(page));
-  }
+  // validate.csv, sensitivity.csv, joint.csv and with --report the page.
+  add_report_outputs(outputs, o.out, page, o.report);
   outputs.commit();
   std::cout << text;
   if (o.report) std::cout << fmt::format("\nwrote {}/report.html\n", o.out);

@@ -100,7 +100,8 @@ std::string shell_quote(const std::string& s, const std::string& what);
 std::string slurm_pattern_literal(const std::string& s);
 
 // An analysis's report files (sim/output/report.hpp), beside its Markdown: each table of `r`
-// as DIR/ID.csv (the table's id), and when `html` DIR/report.html, one self-contained page.
+// as DIR/ID.csv (the table's id; not the tables marked csv_file = false), and when `html`
+// DIR/report.html, one self-contained page.
 // Added to `outputs`, so they are written with the analysis's other files, or none of them.
 void add_report_outputs(OutputSet& outputs, const std::string& dir, const report::Report& r,
                         bool html);

@@ -275,6 +275,7 @@ void add_report_outputs(OutputSet& outputs, const std::string& dir, const report
   for (const report::Section& section : r.sections) {
     for (const report::Block& block : section.blocks) {
       if (const auto* table = std::get_if<report::Table>(&block)) {
+        if (!table->csv_file) continue;
         if (table->id.empty()) throw std::logic_error("add_report_outputs: a table without an id");
         outputs.add((folder / (table->id + ".csv")).string(), report::csv(*table));
       }

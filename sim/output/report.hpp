@@ -80,6 +80,9 @@ struct Table {
   std::string caption;  // a paragraph below it ("" for none)
   std::vector<Column> columns;
   std::vector<std::vector<Cell>> rows;
+  // Whether a report's files include it as ID.csv (sim/app add_report_outputs); false for a
+  // table shown only, whose values another table of the same report holds in full.
+  bool csv_file = true;
 
   Table& add_row(std::vector<Cell> cells);
   // Cell (row, column) as Markdown, text and HTML show it (without Markdown's escapes).
