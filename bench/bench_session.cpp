@@ -10,7 +10,9 @@
 //
 // BM_OverlappedFrames: the real-time targets. kOverlapped frames overlapped in one Session
 // (Session::run_frames: a GP sets up frame n + 1 while the Renderers draw frame n), every
-// frame's pixels executed and its frame.png encoded, 2 host threads, and reports
+// frame's pixels executed and its frame.png encoded (in on_frame, which overlaps the next
+// frame's pixel execution: run_frames runs the pixels one frame ahead), 2 host threads, and
+// reports
 //   host_over_period  host seconds per frame / the simulated sustained frame period
 //   target            the target for that ratio (real time: 1)
 //   met               1 if host_over_period <= target

@@ -9,8 +9,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
+#include <future>
 #include <memory>
 #include <optional>
+#include <system_error>
 #include <systemc>
 
 #include "firmware/assembler/program_statistics.hpp"
@@ -97,6 +100,45 @@ nlohmann::json timeline_document(Machine& machine) {
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+// One frame's pixels in a run of frames, and the host time they took.
+struct FramePixels {
+  FrameImage image;
+  double seconds = 0;
+};
+
+// A run's frames' pixels (`run(f)`, f = 0 .. count - 1, taken in order), each frame's
+// started on a helper thread as the frame before is taken: what the caller does with frame
+// f (its statistics, on_frame) overlaps frame f + 1's pixel execution. One frame ahead
+// only: `run` must not be called for two frames at once (they share the frame buffer).
+// An exception from run(f) is thrown by take(f); the destructor waits for a frame still
+// executing (the caller's on_frame threw), so nothing `run` uses goes before it.
+class FramesAhead {
+ public:
+  FramesAhead(std::function<FramePixels(int)> run, int count)
+      : run_(std::move(run)), count_(count) {}
+  FramesAhead(const FramesAhead&) = delete;
+  FramesAhead& operator=(const FramesAhead&) = delete;
+  ~FramesAhead() {
+    if (next_.valid()) next_.wait();
+  }
+  FramePixels take(int f) {
+    FramePixels out = next_.valid() ? next_.get() : run_(f);
+    if (f + 1 < count_) {
+      try {
+        next_ = std::async(std::launch::async, run_, f + 1);
+      } catch (const std::system_error&) {
+        // No helper thread: the next take executes the frame itself.
+      }
+    }
+    return out;
+  }
+
+ private:
+  std::function<FramePixels(int)> run_;
+  int count_;
+  std::future<FramePixels> next_;
+};
 
 }  // namespace
 
@@ -978,25 +1020,36 @@ const RunSummary& Session::run_frames(
   }
   sum.mean_latency_seconds = latency_sum / count;
 
-  // Each frame's result: its pixels from the regions its Renderers recorded.
+  // Each frame's result: its pixels from the regions its Renderers recorded. Frame f + 1's
+  // pixels execute on a helper thread while frame f's result is made and handed to
+  // `on_frame` (encoding a PNG, say): the same pixels, one frame ahead.
   FrameBuffer& fb = machine.frame_buffer();
   const double timing_per_frame = timing_seconds / count;
+  const sc_core::sc_time run_end = sc_core::sc_time_stamp();
+  const bool execute = pixels && config_.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
+  auto frame_pixels = [this, &machine, &fb, run_end, execute](int f) -> FramePixels {
+    const auto t1 = std::chrono::steady_clock::now();
+    fb.begin_frame(run_end);
+    std::vector<const std::vector<RegionWork>*> work;
+    for (int k = 0; k < machine.renderer_count(); ++k)
+      work.push_back(&machine.renderer(k).history()[static_cast<std::size_t>(f)].work);
+    if (execute) execute_pixels(machine.plan(), fb, work, threads_, {});
+    FramePixels out;
+    out.image = fb.take_image();
+    out.seconds = seconds_since(t1);
+    return out;
+  };
+  FramesAhead ahead(frame_pixels, count);
   for (int f = 0; f < count; ++f) {
     const auto i = static_cast<std::size_t>(f);
-    const auto t1 = std::chrono::steady_clock::now();
-    fb.begin_frame(sc_core::sc_time_stamp());
     FrameResult result;
-    std::vector<const std::vector<RegionWork>*> work;
     for (int k = 0; k < machine.renderer_count(); ++k) {
-      const Renderer::FrameRecord& rec = machine.renderer(k).history()[i];
-      work.push_back(&rec.work);
-      for (const RegionWork& w : rec.work)
+      for (const RegionWork& w : machine.renderer(k).history()[i].work)
         result.regions.push_back(region_load(config_, w.region, k, w.busy_cycles));
     }
-    if (pixels && config_.fidelity.pixels != MachineConfig::Fidelity::Pixels::none)
-      execute_pixels(machine.plan(), fb, work, threads_, {});
-    result.image = fb.take_image();
-    const double pixel_seconds = seconds_since(t1);
+    FramePixels executed = ahead.take(f);
+    result.image = std::move(executed.image);
+    const double pixel_seconds = executed.seconds;
     const double frame_start = std::max(0.0, start[i]);
     const double frame_end = end[i];
     const double previous_end = f > 0 ? end[i - 1] : 0;

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <fstream>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -236,6 +237,26 @@ TEST_CASE("frames: an overlapped run's images are the single frame's, with any h
     CHECK(session.summary().frames == 3);
   }
   CHECK(stats[0] == stats[1]);
+}
+
+TEST_CASE("frames: an exception from on_frame ends the run, the next frame's pixels in flight",
+          "[session]") {
+  // run_frames executes frame 1's pixels on a helper thread while on_frame handles frame 0:
+  // the exception reaches the caller once that execution has stopped, and no later frame is
+  // handed over.
+  const MachineConfig c = small_machine({});
+  const auto scene = std::make_shared<const Scene>(make_builtin_scene("torus", {24, 12}));
+  const auto program = std::make_shared<const Program>(load_program("phong", c));
+  Session session(c, scene, program, 2);
+  int called = 0;
+  CHECK_THROWS_WITH(session.run_frames(3,
+                                       [&](int f, FrameResult& r) {
+                                         ++called;
+                                         CHECK(r.image.has_pixels());
+                                         if (f == 0) throw std::runtime_error("on_frame stops");
+                                       }),
+                    "on_frame stops");
+  CHECK(called == 1);
 }
 
 TEST_CASE("frames: the sustained rate counts spheres, and the closed form is an estimate",
