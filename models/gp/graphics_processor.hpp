@@ -153,7 +153,7 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
 // `*bins`, each in display-list order (no bins when `bins` is null: the analytic timing model fills
 // the plan's set-up memo and reads the bins from its summary). GraphicsProcessor::run and the
 // analytic timing model (models/renderer/analytic.hpp) both use it, so both see the same
-// packets and clocks.
+// packets and clocks. It stops short once the plan is cancelled (MachinePlan::set_cancel).
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
                    RegionBins* bins);
 
