@@ -1,18 +1,22 @@
 #!/usr/bin/env python3
-"""The Python module's cost over the command line's, measured in one run (a ratio, never an
+"""The Python module's cost over the command line's, measured in one run (ratios, never an
 assertion: a timed test would fail on a loaded machine).
 
-For the default torus (1280 x 1024, phong, the default machine) at the same thread count:
-  - CLI: `pp5sim render`'s own host time for the frame (stats.json's host.seconds: the
-    machine's elaboration and the frame, timing and pixels; not the process start, the scene's
-    construction, the assembly or the PNG);
-  - Python: wall time from before pp5sim.Session(...) to the frame's image as a NumPy array
-    (scene construction, assembly, elaboration, the frame, the image copied into the array; the
-    session is freed after the clock stops), and the same with the z field read from pixel
-    memory as well.
-Runs alternate; each figure is the fastest of RUNS, and the run-by-run ratio's median.
-NumPy's import and the module's first frame are paid once before the runs.
-Usage: PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py [build/pp5sim] [runs=3] [threads=2]
+For the default torus (1280 x 1024, phong, the default machine) at the same thread count, like
+is compared with like, each side's parts read from its own statistics:
+  - set-up: host.setup_seconds, making the scene and assembling the program (pp5sim render's;
+    the Python session's, reported by its first frame);
+  - frame: host.seconds, the machine's elaboration and the frame, timing and pixels;
+  - compute: set-up + frame, the command line's whole work for the frame (not the process
+    start, the configuration, the PNG or stats.json);
+  - Python's call: wall time from before pp5sim.Session(...) to the frame's image as a NumPy
+    array (the configuration, set-up, frame, the image copied into the array; the session is
+    freed after the clock stops), against the command line's compute. What lies outside the
+    set-up and the frame is Python's own (the binding, the configuration, the copy): printed.
+  - the same call with the z field read from pixel memory as well.
+Runs alternate; each figure is the fastest of RUNS, and each ratio is also taken run by run
+(median and range). NumPy's import and the module's first frame are paid once before the runs.
+Usage: PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py [build/pp5sim] [runs=5] [threads=2]
 """
 import json
 import os
@@ -24,11 +28,17 @@ import time
 import pp5sim
 
 
+def spread(ratios):
+    r = sorted(ratios)
+    return f"median {r[len(r) // 2]:.3f} (from {r[0]:.3f} to {r[-1]:.3f})"
+
+
 def main():
     exe = sys.argv[1] if len(sys.argv) > 1 else "build/pp5sim"
-    runs = int(sys.argv[2]) if len(sys.argv) > 2 else 3
+    runs = int(sys.argv[2]) if len(sys.argv) > 2 else 5
     threads = int(sys.argv[3]) if len(sys.argv) > 3 else 2
-    cli, py, py_frame_host, py_z = [], [], [], []
+    cli = {"setup": [], "frame": []}
+    py = {"setup": [], "frame": [], "call": [], "z": []}
     # Once per process, not per frame: NumPy's import and the first array.
     pp5sim.Session(config={"screen.width": 128, "screen.height": 128}).frame()
     with tempfile.TemporaryDirectory(prefix="pp5-bench-python-") as scratch:
@@ -37,32 +47,46 @@ def main():
             subprocess.run([exe, "render", "--threads", str(threads), "--out", out], check=True,
                            stdout=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
             with open(os.path.join(out, "stats.json")) as f:
-                cli.append(json.load(f)["host"]["seconds"])
-            # The session is freed after the clock stops, as the command line's host.seconds
-            # leaves out its own exit.
+                host = json.load(f)["host"]
+            cli["setup"].append(host["setup_seconds"])
+            cli["frame"].append(host["seconds"])
+            # The session is freed after the clock stops, as the command line's figures leave
+            # out its own exit.
             t0 = time.perf_counter()
             session = pp5sim.Session(threads=threads)
             frame = session.frame()
             image = frame.image
-            py.append(time.perf_counter() - t0)
-            py_frame_host.append(frame.stat("host.seconds"))
+            py["call"].append(time.perf_counter() - t0)
+            py["setup"].append(frame.stat("host.setup_seconds"))
+            py["frame"].append(frame.stat("host.seconds"))
             assert image.shape == (1024, 1280, 3)
             del session, frame, image
             t0 = time.perf_counter()
             session = pp5sim.Session(threads=threads)
             frame = session.frame(fields=["z"])
             z = frame.fields["z"]
-            py_z.append(time.perf_counter() - t0)
+            py["z"].append(time.perf_counter() - t0)
             del session, frame, z
-    c, p, h, z = min(cli), min(py), min(py_frame_host), min(py_z)
-    paired = sorted(b / a for a, b in zip(cli, py))
-    print(f"torus 1280x1024, phong, {threads} threads, fastest of {runs}:")
-    print(f"  CLI host.seconds (pp5sim render)              {c:.3f} s")
-    print(f"  Python Session().frame().image, wall          {p:.3f} s   ratio {p / c:.3f}")
-    print(f"  Python frame's own host.seconds               {h:.3f} s   ratio {h / c:.3f}")
-    print(f"  Python with the z field from pixel memory     {z:.3f} s   ratio {z / c:.3f}")
-    print(f"  Python wall / CLI host.seconds, run by run: median {paired[len(paired) // 2]:.3f} "
-          f"(from {paired[0]:.3f} to {paired[-1]:.3f})")
+    cli["compute"] = [a + b for a, b in zip(cli["setup"], cli["frame"])]
+    py["compute"] = [a + b for a, b in zip(py["setup"], py["frame"])]
+    py["outside"] = [c - s for c, s in zip(py["call"], py["compute"])]
+    best = {k: min(v) for k, v in cli.items()}
+    pbest = {k: min(v) for k, v in py.items()}
+
+    def row(label, c, p, key_c, key_p):
+        paired = [b / a for a, b in zip(cli[key_c], py[key_p])]
+        print(f"  {label:<34} {c:7.3f} s {p:7.3f} s  {p / c:6.3f}   {spread(paired)}")
+
+    print(f"torus 1280x1024, phong, {threads} threads, fastest of {runs} (run by run: the ratio's")
+    print("median and range):")
+    print(f"  {'':<34} {'CLI':>9} {'Python':>9}  {'ratio':>6}")
+    row("set-up (host.setup_seconds)", best["setup"], pbest["setup"], "setup", "setup")
+    row("frame (host.seconds)", best["frame"], pbest["frame"], "frame", "frame")
+    row("compute (set-up + frame)", best["compute"], pbest["compute"], "compute", "compute")
+    row("Python's call / CLI compute", best["compute"], pbest["call"], "compute", "call")
+    row("  with the z field", best["compute"], pbest["z"], "compute", "z")
+    print(f"  Python's own, outside set-up and frame: {pbest['outside'] * 1e3:.1f} ms at fastest "
+          f"({pbest['outside'] / best['compute'] * 100:.1f}% of the CLI's compute)")
     return 0
 
 

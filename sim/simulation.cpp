@@ -359,6 +359,7 @@ void register_frame_identity(Statistics& s, const Scene& scene, const Program& p
 struct HostTimes {
   double host_seconds, timing_seconds, pixel_seconds;
   int threads;
+  double setup_seconds;  // the caller's, before the frame (Session::set_setup_seconds)
 };
 
 // The host's side of a frame (never in goldens): registered after renderers_total.*.
@@ -366,6 +367,10 @@ void register_host_statistics(Statistics& s, const HostTimes& t, const char* tim
   namespace u = stat_unit;
   s.add_real("host.seconds", u::host_seconds, "Host time of the whole frame (timing + pixels)",
              [t] { return t.host_seconds; });
+  s.add_real("host.setup_seconds", u::host_seconds,
+             "Host time before the run, not in host.seconds: making the scene and assembling the "
+             "program (pp5sim render's, a Python session's first frame's; 0 in a later frame)",
+             [t] { return t.setup_seconds; });
   s.add_real("host.timing_seconds", u::host_seconds, timing_meaning,
              [t] { return t.timing_seconds; });
   s.add_real("host.pixel_seconds", u::host_seconds,
@@ -401,8 +406,12 @@ RegionLoad region_load(const MachineConfig& config, int r, int renderer, std::ui
 // the Machine is built for its boards, which execute the regions the model assigned. It
 // registers the statistics the summary, sweeps and `pp5sim fidelity` read, under the event
 // model's names, and its own terms as analytic.*.
+// With `cancel`, it is checked after the set-up and the model, and between the boards' regions;
+// once it is true the frame throws FrameCancelled. `setup_seconds` is host.setup_seconds.
 FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, const Program& program,
-                           int threads, SetupMemo* memo) {
+                           int threads, SetupMemo* memo, const std::atomic<bool>* cancel = nullptr,
+                           double setup_seconds = 0) {
+  const auto cancelled = [cancel] { return cancel != nullptr && cancel->load(); };
   const auto t0 = std::chrono::steady_clock::now();
   check_memory(config, scene, program, threads);
   // Without a memo from the caller, one for this frame: the model sets up from a memo.
@@ -423,8 +432,11 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
     alone->use_setup_memo(*memo);
   }
   const MachinePlan& plan = machine ? machine->plan() : *alone;
+  plan.set_cancel(cancel);
   fill_setup_memo(plan, threads);
+  if (cancelled()) throw FrameCancelled();
   auto a = std::make_shared<const AnalyticTiming>(analytic_timing(plan));
+  if (cancelled()) throw FrameCancelled();
   const double timing_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
   FrameResult result;
@@ -432,7 +444,8 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
     const std::vector<std::vector<RegionWork>> regions = analytic_work(*a, plan);
     std::vector<const std::vector<RegionWork>*> work;
     for (const auto& w : regions) work.push_back(&w);
-    execute_pixels(machine->plan(), machine->frame_buffer(), work, threads);
+    execute_pixels(machine->plan(), machine->frame_buffer(), work, threads, {}, cancel);
+    if (cancelled()) throw FrameCancelled();
     result.image = machine->frame_buffer().take_image();
   } else {
     result.image = FrameImage(config.screen.width, config.screen.height,
@@ -602,7 +615,7 @@ FrameResult analytic_frame(const MachineConfig& config, const Scene& scene, cons
              "Which unit the closed form names the busiest: GPs, ring or Renderers",
              [a] { return a->busiest_unit; });
   register_program_statistics(s, program);
-  register_host_statistics(s, {host_seconds, timing_seconds, pixel_seconds, threads},
+  register_host_statistics(s, {host_seconds, timing_seconds, pixel_seconds, threads, setup_seconds},
                            "Host time of the timing model (the analytic model, with the GPs' "
                            "geometry)");
   s.freeze();
@@ -622,12 +635,14 @@ struct Session::Event {
 };
 
 Session::Session(const MachineConfig& config, std::shared_ptr<const Scene> scene,
-                 std::shared_ptr<const Program> program, int threads, SetupMemo* memo)
+                 std::shared_ptr<const Program> program, int threads, SetupMemo* memo,
+                 const std::atomic<bool>* cancel)
     : config_(config),
       scene_(std::move(scene)),
       program_(std::move(program)),
       threads_(threads),
-      memo_(memo) {
+      memo_(memo),
+      cancel_(cancel) {
   if (config_.fidelity.timing == MachineConfig::Fidelity::Timing::analytic) return;
   const auto t0 = std::chrono::steady_clock::now();
   check_memory(config_, *scene_, *program_, threads_);
@@ -640,7 +655,9 @@ Session::Session(const MachineConfig& config, std::shared_ptr<const Scene> scene
     memo_ = (event_->own_memo = std::make_unique<SetupMemo>(*scene_)).get();
   if (memo_ != nullptr) {
     machine.use_setup_memo(*memo_);
+    machine.plan().set_cancel(cancel_);
     fill_setup_memo(machine.plan(), threads_);
+    if (cancel_ != nullptr && cancel_->load()) throw FrameCancelled();
   }
   startup_seconds_ = seconds_since(t0);
 }
@@ -701,10 +718,12 @@ FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& ob
   const Program& program = *program_;
   const int threads = threads_;
   if (!event_) {
-    ++frames_;
     MachineConfig c = config;
     if (!pixels) c.fidelity.pixels = MachineConfig::Fidelity::Pixels::none;
-    return counted(analytic_frame(c, scene, program, pixels ? threads : 1, memo_));
+    const double setup = frames_ == 0 ? setup_seconds_ : 0;
+    FrameResult r = analytic_frame(c, scene, program, pixels ? threads : 1, memo_, cancel_, setup);
+    ++frames_;
+    return counted(std::move(r));
   }
   const auto t0 = std::chrono::steady_clock::now();
   Machine* machine = event_->machine.get();
@@ -714,12 +733,15 @@ FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& ob
     machine->begin_frame(frames_);
   }
   machine->record_timeline(timeline != nullptr);
-  event_->kernel.run();
+  machine->plan().set_cancel(cancel_);
+  if (!event_->kernel.run(cancel_) || (cancel_ != nullptr && cancel_->load()))
+    throw FrameCancelled();
   check_time_did_not_wrap(*machine);
   if (timeline) *timeline = timeline_document(*machine);
   // The first frame's host time includes elaborating the machine, as a single frame's always
   // has; a later frame's does not.
   const double startup = frames_ == 0 ? startup_seconds_ : 0;
+  const double setup = frames_ == 0 ? setup_seconds_ : 0;
   const double timing_seconds = seconds_since(t0) + startup;
   const auto t1 = std::chrono::steady_clock::now();
   if (pixels) execute_pixels(*machine, threads, observe, cancel_);
@@ -813,7 +835,7 @@ FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& ob
   register_timing_statistics(s, attribution, config);
   register_program_statistics(s, program);
 
-  register_host_statistics(s, {host_seconds, timing_seconds, pixel_seconds, threads},
+  register_host_statistics(s, {host_seconds, timing_seconds, pixel_seconds, threads, setup},
                            "Host time of the timing model (the SystemC run)");
   s.freeze();
   result.stats_json = s.to_json();
@@ -1127,10 +1149,12 @@ namespace {
 // simulate_frame, or with `pixels` false project_frame: the one-frame case of a Session.
 FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                       int threads, const std::function<BoardObserver*(int renderer)>& observe,
-                      nlohmann::json* timeline, bool pixels, SetupMemo* memo) {
+                      nlohmann::json* timeline, bool pixels, SetupMemo* memo,
+                      double setup_seconds = 0) {
   // The caller owns the scene and the program: the session only refers to them.
   Session session(config, std::shared_ptr<const Scene>(&scene, [](const Scene*) {}),
                   std::shared_ptr<const Program>(&program, [](const Program*) {}), threads, memo);
+  session.set_setup_seconds(setup_seconds);
   return session.frame(observe, timeline, pixels);
 }
 
@@ -1138,19 +1162,19 @@ FrameResult run_frame(const MachineConfig& config, const Scene& scene, const Pro
 
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                            int threads, const std::function<BoardObserver*(int renderer)>& observe,
-                           nlohmann::json* timeline, SetupMemo* memo) {
+                           nlohmann::json* timeline, SetupMemo* memo, double setup_seconds) {
   if (config.fidelity.timing == MachineConfig::Fidelity::Timing::analytic) {
     if (observe || timeline) {
       throw std::invalid_argument(
           "traces, snapshots and timelines need fidelity.timing=event (the analytic model runs "
           "no events and records no start cycles)");
     }
-    return analytic_frame(config, scene, program, threads, memo);
+    return analytic_frame(config, scene, program, threads, memo, nullptr, setup_seconds);
   }
   if (observe && config.fidelity.pixels == MachineConfig::Fidelity::Pixels::none) {
     throw std::invalid_argument("an observer of the boards needs fidelity.pixels=bit or word");
   }
-  return run_frame(config, scene, program, threads, observe, timeline, true, memo);
+  return run_frame(config, scene, program, threads, observe, timeline, true, memo, setup_seconds);
 }
 
 FrameResult project_frame(const MachineConfig& config, const Scene& scene, const Program& program,

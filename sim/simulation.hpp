@@ -45,10 +45,13 @@ struct FrameResult {
 // `observe`, if given, attaches an observer to Renderer k's board (tracing, snapshots).
 // With `timeline`, the run also records every unit's activity and stores it there as a
 // Chrome trace-event document (ui.perfetto.dev and chrome://tracing open it).
+// `setup_seconds`: the caller's host time making the scene and assembling the program, which
+// the frame reports as host.setup_seconds (Session::set_setup_seconds).
 FrameResult simulate_frame(const MachineConfig& config, const Scene& scene, const Program& program,
                            int threads,
                            const std::function<BoardObserver*(int renderer)>& observe = {},
-                           nlohmann::json* timeline = nullptr, SetupMemo* memo = nullptr);
+                           nlohmann::json* timeline = nullptr, SetupMemo* memo = nullptr,
+                           double setup_seconds = 0);
 
 // A simulation that persists across frames: it owns one SystemC context, the Machine
 // elaborated in it, the assembled program and the scene, and runs frame after frame
@@ -133,7 +136,8 @@ class FrameCancelled : public std::runtime_error {
 class Session {
  public:
   Session(const MachineConfig& config, std::shared_ptr<const Scene> scene,
-          std::shared_ptr<const Program> program, int threads, SetupMemo* memo = nullptr);
+          std::shared_ptr<const Program> program, int threads, SetupMemo* memo = nullptr,
+          const std::atomic<bool>* cancel = nullptr);
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
@@ -170,10 +174,15 @@ class Session {
   void set_scene(std::shared_ptr<const Scene> scene);
   // The event model's machine (null at fidelity.timing=analytic).
   const Machine* machine() const;
-  // A flag checked between regions of the pixel execution of each frame (null: none). Once it
-  // is true, the boards execute no more regions and frame() throws FrameCancelled; the session
-  // is then to be destroyed (its machine holds a frame half drawn).
+  // A flag checked during each frame() (null: none): between slices of the SystemC run
+  // (KernelContext::run), between the pixel execution's regions, and at the analytic level
+  // after the set-up and the model as well. Once it is true, frame() throws FrameCancelled;
+  // the session is then to be destroyed (its machine holds a frame half done). Given to the
+  // constructor, it is checked during the set-up memo's filling as well (FrameCancelled).
   void set_cancel(const std::atomic<bool>* flag) { cancel_ = flag; }
+  // The caller's host time making the scene and assembling the program, reported by the first
+  // frame as host.setup_seconds (later frames report 0); not part of host.seconds.
+  void set_setup_seconds(double seconds) { setup_seconds_ = seconds; }
 
  private:
   struct Event;
@@ -186,6 +195,7 @@ class Session {
   const std::atomic<bool>* cancel_ = nullptr;
   std::unique_ptr<Event> event_;
   double startup_seconds_ = 0;
+  double setup_seconds_ = 0;
   int frames_ = 0;
   RunSummary summary_;
   FrameResult counted(FrameResult r);

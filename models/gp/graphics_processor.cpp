@@ -125,6 +125,7 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
   if (done_after != nullptr) done_after->clear();
   const std::uint64_t clocks_before = stats.geometry.count;
   for (int i = first; i < last; ++i) {
+    if ((i & 255) == 0 && machine.cancelled()) break;  // the frame is being cancelled
     const PrimitiveRef ref = display_list.at(i);
     KindState& k = kinds[static_cast<std::size_t>(ref.kind)];
     ++stats.triangles_in;
@@ -213,6 +214,7 @@ void fill_setup_memo(const MachinePlan& plan, int threads, int least_part) {
     geometry_pass_with(plan, block(k), block(k + 1), scratch, nullptr, part.get());
     filled[static_cast<std::size_t>(k)] = std::move(part);
   });
+  if (plan.cancelled()) return;  // parts cut short: the memo stays empty
   for (int k = 0; k < parts; ++k)
     memo->absorb(std::move(*filled[static_cast<std::size_t>(k)]), block(k), block(k + 1));
 }

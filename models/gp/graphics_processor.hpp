@@ -171,7 +171,8 @@ PrimitiveCost primitive_cost(const MachinePlan& plan, const PrimitiveKind& kind,
 // analytic timing model (models/renderer/analytic.hpp) both use it, so both see the same
 // packets and clocks. With `done_after`, it leaves there, for each primitive of the range in
 // order, the geometry clocks spent from the range's start to the end of that primitive (when
-// its packets are ready: frames.gp_send=when_full).
+// its packets are ready: frames.gp_send=when_full). It stops short once the plan is cancelled
+// (MachinePlan::set_cancel).
 void geometry_pass(const MachinePlan& machine, int first, int last, GpStats& stats,
                    RegionBins* bins, std::vector<std::uint64_t>* done_after = nullptr);
 

@@ -12,6 +12,7 @@
 //  - It holds references to the scene and the program: both must outlive it.
 //  - The host spreads the display list over the GPs in contiguous blocks (gp_block), so that
 //    the concatenation of the GPs' bins is in display-list order.
+#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <utility>
@@ -84,6 +85,12 @@ class MachinePlan {
   void use_setup_memo(SetupMemo& memo);
   SetupMemo* setup_memo() const { return setup_memo_; }
 
+  // A host's flag (null: none) that the GPs' geometry pass checks between primitives: once it
+  // is true the pass stops short, and the frame is incomplete (a frame being cancelled, which
+  // its caller discards: Session::set_cancel). A host setting, not part of the plan: const.
+  void set_cancel(const std::atomic<bool>* flag) const { cancel_ = flag; }
+  bool cancelled() const { return cancel_ != nullptr && cancel_->load(std::memory_order_relaxed); }
+
   // The next frame's scene, between frames (an animation): the geometry, frame values and
   // pass plan are those of `scene`, checked as the constructor checks them. It must have as
   // many primitives of each kind as the current scene (the GPs' shares of the display list
@@ -109,6 +116,7 @@ class MachinePlan {
   sc_core::sc_time ring_cycle_;  // 1 / ring.clock_hz
   int busy_gps_ = 0;
   SetupMemo* setup_memo_ = nullptr;
+  mutable const std::atomic<bool>* cancel_ = nullptr;
 };
 
 }  // namespace pp5

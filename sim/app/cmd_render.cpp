@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <limits>
@@ -144,10 +145,14 @@ int run_render(RenderOptions o) {
     scene_options.tessellation_v = o.tessellation[1];
   }
   const DisplayOrder order = parse_display_order(o.order, "--order");
+  // host.setup_seconds: making the scene and assembling the program.
+  const auto setup_start = std::chrono::steady_clock::now();
   Scene scene = load_scene(o.scene_name, scene_options);
   apply_display_order(scene.mesh, order);
   GeometryEngine(geometry_params(config), scene).frame_parameters();  // check them first
   const Program program = assemble_file(firmware_for(o.firmware, scene), assembler_options(config));
+  const double setup_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start).count();
   std::vector<std::string> warnings = ignored_scene_parts(scene, program);
   for (const std::string& w : warnings) std::cerr << "warning: " << w << "\n";
   if (o.out_dir.empty()) o.out_dir = default_output_folder(scene.name);
@@ -161,7 +166,8 @@ int run_render(RenderOptions o) {
       !o.timeline.empty() ||
       (o.report && config.fidelity.timing == MachineConfig::Fidelity::Timing::event);
   FrameResult result =
-      simulate_frame(config, scene, program, o.threads, {}, record_timeline ? &timeline : nullptr);
+      simulate_frame(config, scene, program, o.threads, {}, record_timeline ? &timeline : nullptr,
+                     nullptr, setup_seconds);
   // All of the run's outputs, or none of them (sim/output/output_set.hpp).
   const fs::path dir(o.out_dir);
   OutputSet outputs;

@@ -90,23 +90,8 @@ std::vector<Axis> parse_grid(const std::vector<std::string>& grid, const Machine
     }
     std::stringstream values(g.substr(eq + 1));
     std::string v;
-    std::set<std::string> given;
-    while (std::getline(values, v, ',')) {
-      if (v.empty()) throw std::runtime_error(fmt::format("--grid {}: empty value", g));
-      // Two equal values would be two runs into one folder.
-      if (!given.insert(v).second) {
-        throw std::runtime_error(
-            fmt::format("--grid {}: value '{}' is given twice for '{}'", g, v, a.key));
-      }
-      // Each value must be valid on its own: the error names the key.
-      MachineConfig probe = base;
-      try {
-        probe.set(a.key + "=" + v);
-      } catch (const ConfigError& e) {
-        throw std::runtime_error(fmt::format("--grid {}: {}", g, e.what()));
-      }
-      a.values.push_back(v);
-    }
+    while (std::getline(values, v, ',')) a.values.push_back(v);
+    check_sweep_axis("--grid " + g, a.key, a.values, base);
     axes.push_back(std::move(a));
   }
   return axes;

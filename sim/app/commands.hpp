@@ -31,6 +31,12 @@ Command add_scenes_command(CLI::App& app);
 Command add_sweep_command(CLI::App& app);
 // The metrics of one run as sweep.csv's columns, after the swept keys: (column, statistic).
 const std::vector<std::pair<std::string, std::string>>& sweep_metric_columns();
+// Checks one swept key's values as pp5sim sweep does: each set alone on `base` (the
+// configuration every point starts from), none empty, none twice. Throws
+// std::invalid_argument "WHERE: ..." (WHERE names the axis as the caller was given it) whose
+// text names the key: the sweep command's messages, and the Python module's.
+void check_sweep_axis(const std::string& where, const std::string& key,
+                      const std::vector<std::string>& values, const MachineConfig& base);
 Command add_trace_command(CLI::App& app);
 Command add_highlight_command(CLI::App& app);
 Command add_extremes_command(CLI::App& app);

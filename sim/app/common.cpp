@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -311,6 +312,26 @@ const std::vector<std::pair<std::string, std::string>>& sweep_metric_columns() {
       {"renderer_utilisation", "timing.renderer_utilisation_mean"},
   };
   return columns;
+}
+
+void check_sweep_axis(const std::string& where, const std::string& key,
+                      const std::vector<std::string>& values, const MachineConfig& base) {
+  std::set<std::string> given;
+  for (const std::string& v : values) {
+    if (v.empty()) throw std::invalid_argument(fmt::format("{}: empty value", where));
+    // Two equal values would be two runs of one point (into one folder, for the command).
+    if (!given.insert(v).second) {
+      throw std::invalid_argument(
+          fmt::format("{}: value '{}' is given twice for '{}'", where, v, key));
+    }
+    // Each value must be valid on its own: the error names the key.
+    MachineConfig probe = base;
+    try {
+      probe.set(key + "=" + v);
+    } catch (const ConfigError& e) {
+      throw std::invalid_argument(fmt::format("{}: {}", where, e.what()));
+    }
+  }
 }
 
 }  // namespace pp5

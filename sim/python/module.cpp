@@ -7,15 +7,15 @@
 //  - Errors are the library's own exceptions with the command line's messages: a
 //    configuration error (ConfigError) and std::invalid_argument become ValueError, any other
 //    std::exception RuntimeError.
-//  - SystemC allows one simulation context per process at a time. A Session elaborates its
-//    machine on its first frame and keeps it; when another Session (or a sweep, which makes
-//    its own) needs the kernel, the holder's machine is freed first and made again at its next
-//    frame. Each frame begins on a machine whose units begin the frame as new
-//    (Machine::begin_frame), so that gives the same frames.
-//  - Every run releases the GIL; a sweep checks for Ctrl-C (PyErr_CheckSignals) between points
-//    and Session.frames between frames. A frame run on the main thread sees Ctrl-C between
-//    regions (SigintWatch, Session::set_cancel): it stops, its machine is freed, and
-//    KeyboardInterrupt is raised; the session's next frame is the same frame again.
+//  - A Session elaborates its machine on its first frame and keeps it until it is closed or
+//    freed. Each machine lives in a SystemC context of its own (KernelContext), made current
+//    whenever it runs, so any number of sessions live and run in turn; SystemC's current
+//    context is a process global, so one simulation runs at a time (KernelLock).
+//  - Every run releases the GIL. A run on the main thread sees Ctrl-C within milliseconds
+//    (SigintWatch, Session::set_cancel): between slices of the SystemC run, between the pixel
+//    execution's regions, and after the analytic level's set-up and model; a sweep's point is
+//    a run. It stops, the machine holding half a frame is freed, and KeyboardInterrupt is
+//    raised; the session's next frame is the same frame again, on a machine made again.
 //  - An animated session (animation=True) draws frame k of the scene's animation at its frame
 //    k, the scenes `pp5sim animate` draws (animation_scenes); a machine made again mid-run is
 //    made for the scene of the frame it runs next.
@@ -28,12 +28,15 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <tuple>
@@ -492,6 +495,46 @@ class SigintWatch {
   bool installed_ = false;
 };
 
+// Raises KeyboardInterrupt (Python's handler runs first, if SIGINT was delivered).
+[[noreturn]] void raise_interrupt() {
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+  PyErr_SetNone(PyExc_KeyboardInterrupt);
+  throw py::error_already_set();
+}
+
+// SystemC's current context is a process global: one simulation (made, run or freed) at a
+// time, whatever Python thread asks. Taken with the GIL held; it waits with the GIL released,
+// and a holder never waits for the GIL before it has the lock, so neither waits on the other.
+std::mutex g_kernel_mutex;
+class KernelLock {
+ public:
+  KernelLock() : lock_(g_kernel_mutex, std::try_to_lock) {
+    if (!lock_.owns_lock()) {
+      py::gil_scoped_release release;
+      lock_.lock();
+    }
+  }
+
+ private:
+  std::unique_lock<std::mutex> lock_;
+};
+
+// Runs `body(cancel)` (making a Session and/or running a frame, given the flag to watch) with
+// the GIL released and Ctrl-C watched on the main thread; false when Ctrl-C stopped it
+// (FrameCancelled: a session it ran holds half a frame). Called with SystemC held.
+template <typename Body>
+bool watched(Body&& body) {
+  SigintWatch watch;
+  const std::atomic<bool>* cancel = watch.installed() ? &g_frame_cancel : nullptr;
+  py::gil_scoped_release release;
+  try {
+    body(cancel);
+    return true;
+  } catch (const FrameCancelled&) {
+    return false;
+  }
+}
+
 // --- Sessions -----------------------------------------------------------------------------
 
 // An animated session's frames (sim/animation.hpp): every frame's scene, made and checked when
@@ -502,26 +545,25 @@ struct PyAnimation {
   std::vector<std::shared_ptr<const Scene>> scenes;
 };
 
-class PySession;
-PySession* g_kernel_holder = nullptr;  // the session whose machine holds SystemC's context
-
 class PySession {
  public:
   PySession(const MachineConfig& config, std::shared_ptr<const Scene> scene,
             std::shared_ptr<const Program> program, int threads,
-            std::optional<PyAnimation> animation = std::nullopt)
+            std::optional<PyAnimation> animation, double setup_seconds)
       : config_(config),
         scene_(std::move(scene)),
         program_(std::move(program)),
         threads_(threads),
-        animation_(std::move(animation)) {}
+        animation_(std::move(animation)),
+        setup_seconds_(setup_seconds) {}
   ~PySession() { close(); }
 
-  // Frees the machine (and SystemC's context); the next frame makes them again.
+  // Frees the machine (and its SystemC context); the next frame makes them again.
   void close() {
-    if (session_) accumulate_closed();
+    if (!session_) return;
+    accumulate_closed();
+    KernelLock kernel;
     session_.reset();
-    if (g_kernel_holder == this) g_kernel_holder = nullptr;
   }
 
   PyFrame frame(const std::vector<std::string>& field_names, bool pixels) {
@@ -617,43 +659,39 @@ class PySession {
 
  private:
   FrameResult run(const std::function<BoardObserver*(int)>& observe, bool pixels) {
-    using F = MachineConfig::Fidelity;
-    const bool kernel = config_.fidelity.timing == F::Timing::event;
     const std::shared_ptr<const Scene> scene = frame_scene();
-    if (kernel && g_kernel_holder != nullptr && g_kernel_holder != this) g_kernel_holder->close();
-    if (!session_) {
-      // A machine made again mid-animation (another session took the kernel) is made for this
-      // frame's scene.
-      py::gil_scoped_release release;
-      session_ = std::make_unique<Session>(config_, scene, program_, threads_);
-    } else if (animation_ && frames_ > 0) {
-      session_->set_scene(scene);  // as pp5sim animate does before each frame after the first
-    }
-    if (kernel) g_kernel_holder = this;
-    FrameResult r;
-    bool cancelled = false;
+    std::optional<FrameResult> r;
+    bool done = false;
     {
-      SigintWatch watch;
-      session_->set_cancel(watch.installed() ? &g_frame_cancel : nullptr);
-      py::gil_scoped_release release;
-      try {
-        r = session_->frame(observe, nullptr, pixels);
-      } catch (const FrameCancelled&) {
-        cancelled = true;
-      }
+      KernelLock kernel;
+      done = watched([&](const std::atomic<bool>* cancel) {
+        if (!session_) {
+          // A machine made again (after close() or Ctrl-C) mid-animation is made for this
+          // frame's scene.
+          session_ = std::make_unique<Session>(config_, scene, program_, threads_, nullptr, cancel);
+          // The scene's construction and the assembly, reported by the session's first frame.
+          if (frames_ == 0) session_->set_setup_seconds(setup_seconds_);
+        } else if (animation_ && frames_ > 0) {
+          session_->set_scene(scene);  // as pp5sim animate does before each frame after the first
+        }
+        session_->set_cancel(cancel);
+        try {
+          r = session_->frame(observe, nullptr, pixels);
+        } catch (...) {
+          session_->set_cancel(nullptr);
+          throw;
+        }
+        session_->set_cancel(nullptr);
+      });
     }
-    if (cancelled) {
-      // Ctrl-C between regions: the machine, which holds half a frame, is freed (the next
-      // frame makes it again, for the same frame number) and Python's handler runs.
-      session_->set_cancel(nullptr);
+    if (!done) {
+      // Ctrl-C: the machine, which holds half a frame, is freed (the next frame makes it
+      // again, for the same frame number).
       close();
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-      PyErr_SetNone(PyExc_KeyboardInterrupt);
-      throw py::error_already_set();
+      raise_interrupt();
     }
-    session_->set_cancel(nullptr);
     ++frames_;
-    return r;
+    return std::move(*r);
   }
   // The scene of frame frames_: the session's, or the animation's frame (refused past its end).
   std::shared_ptr<const Scene> frame_scene() const {
@@ -686,12 +724,9 @@ class PySession {
   std::unique_ptr<Session> session_;
   std::optional<PyAnimation> animation_;
   int frames_ = 0;
-  RunSummary closed_;  // the frames of machines freed so far
+  RunSummary closed_;     // the frames of machines freed so far
+  double setup_seconds_;  // host.setup_seconds of the first frame
 };
-
-void release_kernel() {
-  if (g_kernel_holder != nullptr) g_kernel_holder->close();
-}
 
 // --- Sweeps -------------------------------------------------------------------------------
 
@@ -716,24 +751,45 @@ py::dict sweep_row(const std::vector<std::string>& keys, const nlohmann::json& c
   return row;
 }
 
+// A sweep's points: the product of `axes` (the first key varying slowest, as pp5sim sweep),
+// or, when `points` is not empty, those points, each the value of every axis key in order
+// (`axes` then holds each key's distinct values). Every key's values are checked as
+// pp5sim sweep checks them (check_sweep_axis), and every point's configuration and program
+// before the first point runs. Each point is a frame of a Session of its own, interruptible
+// as a session's frame is.
 py::list sweep(const MachineConfig& base, std::shared_ptr<const Scene> scene,
                const std::string& firmware,
-               const std::vector<std::pair<std::string, std::vector<std::string>>>& grid,
-               int threads) {
-  if (grid.empty())
+               const std::vector<std::pair<std::string, std::vector<std::string>>>& axes,
+               const std::vector<std::vector<std::string>>& points, int threads) {
+  if (axes.empty())
     throw std::invalid_argument("grid: give at least one key, e.g. {'gp.count': [1, 2, 4]}");
+  const char* form = points.empty() ? "grid" : "points";
   std::vector<std::string> keys;
-  std::uint64_t points = 1;
-  for (const auto& [key, values] : grid) {
-    if (values.empty()) throw std::invalid_argument(fmt::format("grid: no values for '{}'", key));
-    for (const std::string& v : values) {
-      MachineConfig probe = base;
-      probe.set(key + "=" + v);  // a bad key or value: the --set message, as ValueError
-    }
+  std::set<std::string> seen;
+  constexpr std::uint64_t kMaxPoints = 1000000;  // as pp5sim sweep
+  std::uint64_t count = 1;
+  for (const auto& [key, values] : axes) {
+    const std::string where = fmt::format("{} {}={}", form, key, fmt::join(values, ","));
+    if (!seen.insert(key).second)
+      throw std::invalid_argument(fmt::format("{}: key '{}' is swept twice", where, key));
+    if (values.empty()) throw std::invalid_argument(fmt::format("{}: no values", where));
+    check_sweep_axis(where, key, values, base);
     keys.push_back(key);
-    points *= values.size();
+    if (points.empty() && count > kMaxPoints / values.size()) {
+      throw std::invalid_argument(fmt::format(
+          "grid: more than {} points; split the sweep or sweep fewer values", kMaxPoints));
+    }
+    count *= values.size();
   }
-  const std::string program_source = firmware;
+  if (!points.empty()) {
+    count = points.size();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (points[i].size() != keys.size()) {
+        throw std::invalid_argument(fmt::format("points: point {} has {} values for {} keys", i,
+                                                points[i].size(), keys.size()));
+      }
+    }
+  }
   std::map<std::tuple<int, int, int, int>, std::shared_ptr<const Program>> assembled;
   auto program_of = [&](const MachineConfig& c) {
     const AssemblerOptions a = assembler_options(c);
@@ -741,35 +797,42 @@ py::list sweep(const MachineConfig& base, std::shared_ptr<const Scene> scene,
         std::make_tuple(a.memory_bits, a.backing_store_bits, a.block_bits, a.enable_stack_depth);
     auto it = assembled.find(key);
     if (it == assembled.end())
-      it = assembled
-               .emplace(key,
-                        std::make_shared<const Program>(load_program(program_source, *scene, c)))
-               .first;
+      it =
+          assembled.emplace(key, std::make_shared<const Program>(load_program(firmware, *scene, c)))
+              .first;
     return it->second;
   };
   auto config_of = [&](std::uint64_t index) {
-    std::vector<std::string> sets(grid.size());
-    for (std::size_t k = grid.size(); k-- > 0;) {
-      const auto& values = grid[k].second;
-      sets[k] = grid[k].first + "=" + values[index % values.size()];
-      index /= values.size();
+    std::vector<std::string> sets(keys.size());
+    if (!points.empty()) {
+      for (std::size_t k = 0; k < keys.size(); ++k) sets[k] = keys[k] + "=" + points[index][k];
+    } else {
+      for (std::size_t k = keys.size(); k-- > 0;) {
+        const auto& values = axes[k].second;
+        sets[k] = keys[k] + "=" + values[index % values.size()];
+        index /= values.size();
+      }
     }
     MachineConfig c = base;
     c.set(sets);
     return c;
   };
-  for (std::uint64_t i = 0; i < points; ++i) program_of(config_of(i));  // check all first
-  release_kernel();
+  for (std::uint64_t i = 0; i < count; ++i) program_of(config_of(i));  // check all first
   SetupMemo memo(*scene);
   py::list rows;
-  for (std::uint64_t i = 0; i < points; ++i) {
+  for (std::uint64_t i = 0; i < count; ++i) {
     const MachineConfig config = config_of(i);
     const std::shared_ptr<const Program> program = program_of(config);
     std::optional<FrameResult> r;
+    bool done = false;
     {
-      py::gil_scoped_release release;
-      r = simulate_frame(config, *scene, *program, threads, {}, nullptr, &memo);
+      KernelLock kernel;
+      done = watched([&](const std::atomic<bool>* cancel) {
+        Session session(config, scene, program, threads, &memo, cancel);
+        r = session.frame();
+      });
     }
+    if (!done) raise_interrupt();
     rows.append(sweep_row(keys, config.to_json(), r->stats));
     if (PyErr_CheckSignals() != 0) throw py::error_already_set();
   }
@@ -819,8 +882,6 @@ PYBIND11_MODULE(_pp5sim, m) {
   m.def("builtin_scenes", &builtin_scene_names);
   m.def("builtin_programs", &builtin_program_names);
   m.def("resolve_firmware", &resolve_firmware);
-  m.def("release_kernel", &release_kernel,
-        "Frees the machine of whichever session holds SystemC's context");
 
   m.def("make_config", [](const std::string& file, const std::string& fidelity,
                           const std::vector<std::pair<std::string, std::string>>& sets) {
@@ -844,10 +905,14 @@ PYBIND11_MODULE(_pp5sim, m) {
   });
   m.def("describe_statistics",
         [](const std::string& firmware, const std::vector<std::string>& sets) {
-          release_kernel();  // it runs a frame of its own
+          std::vector<StatisticInfo> infos;
+          {
+            KernelLock kernel;  // it runs a frame of its own
+            py::gil_scoped_release release;
+            infos = describe_statistics(resolve_firmware(firmware), sets);
+          }
           py::dict out;
-          for (const StatisticInfo& i : describe_statistics(resolve_firmware(firmware), sets))
-            out[py::str(i.name)] = info_dict(i);
+          for (const StatisticInfo& i : infos) out[py::str(i.name)] = info_dict(i);
           return out;
         });
   m.def("statistics_from_json", [](const std::string& text, const std::string& origin) {
@@ -941,6 +1006,8 @@ PYBIND11_MODULE(_pp5sim, m) {
                       const std::vector<std::pair<std::string, std::string>>& sets, int threads,
                       bool animate, int frames, double fps) {
             MachineConfig config = make_config(config_file, fidelity, sets);
+            // host.setup_seconds: from here to the assembled program (pp5sim render's span).
+            const auto setup_start = std::chrono::steady_clock::now();
             std::shared_ptr<const Scene> s;
             std::optional<PyAnimation> animation;
             const bool arrays = !vertices.is_none() || !centers.is_none() || !triangles.is_none() ||
@@ -979,8 +1046,11 @@ PYBIND11_MODULE(_pp5sim, m) {
               }
             }
             auto program = std::make_shared<const Program>(load_program(firmware, *s, config));
+            const double setup_seconds =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start)
+                    .count();
             return std::make_unique<PySession>(config, s, program, threads_or_default(threads),
-                                               std::move(animation));
+                                               std::move(animation), setup_seconds);
           }),
           py::arg("scene"), py::arg("vertices"), py::arg("triangles"), py::arg("colors"),
           py::arg("sphere_centers"), py::arg("sphere_radii"), py::arg("sphere_colors"),
@@ -1032,16 +1102,16 @@ PYBIND11_MODULE(_pp5sim, m) {
         return d;
       });
 
-  m.def("sweep",
-        [](const std::string& scene, int tess_u, int tess_v, const std::string& firmware,
-           const std::string& config_file, const std::string& fidelity,
-           const std::vector<std::pair<std::string, std::string>>& sets,
-           const std::vector<std::pair<std::string, std::vector<std::string>>>& grid, int threads) {
-          const MachineConfig base = make_config(config_file, fidelity, sets);
-          SceneOptions o;
-          o.tessellation_u = tess_u;
-          o.tessellation_v = tess_v;
-          auto s = std::make_shared<const Scene>(load_scene(scene, o));
-          return sweep(base, s, firmware, grid, threads_or_default(threads));
-        });
+  m.def("sweep", [](const std::string& scene, int tess_u, int tess_v, const std::string& firmware,
+                    const std::string& config_file, const std::string& fidelity,
+                    const std::vector<std::pair<std::string, std::string>>& sets,
+                    const std::vector<std::pair<std::string, std::vector<std::string>>>& axes,
+                    const std::vector<std::vector<std::string>>& points, int threads) {
+    const MachineConfig base = make_config(config_file, fidelity, sets);
+    SceneOptions o;
+    o.tessellation_u = tess_u;
+    o.tessellation_v = tess_v;
+    auto s = std::make_shared<const Scene>(load_scene(scene, o));
+    return sweep(base, s, firmware, axes, points, threads_or_default(threads));
+  });
 }

@@ -154,21 +154,62 @@ def test_frames_in_sequence():
     assert next(it).index == 3
 
 
-def test_sessions_take_turns_with_the_kernel():
+def test_sessions_interleave_each_on_its_own_kernel():
     a = small_session()
     b = small_session(firmware="gouraud")
     fa = a.frame()
-    fb = b.frame()  # frees a's machine
-    fa2 = a.frame()  # makes it again
+    fb = b.frame()
+    fa2 = a.frame()  # on a's machine, made once: its frame 1
+    fb2 = b.frame()
     assert np.array_equal(fa.image, fa2.image)
     assert fa.frame_seconds == fa2.frame_seconds
+    assert np.array_equal(fb.image, fb2.image)
+    assert fb.stats["frame"] == fb2.stats["frame"]
     assert not np.array_equal(fa.image, fb.image)
     assert a.summary["frames"] == 2
+    # A session freed while another lives; a sweep and a one-frame description between frames.
+    c = small_session()
+    c.frame()
+    del c
+    pp5sim.sweep({"gp.count": [2]}, config=SMALL, tessellation=TESSELLATION)
+    pp5sim.describe_statistics()
+    fa3 = a.frame()
+    assert fa3.index == 2
+    assert np.array_equal(fa3.image, fa.image)
+    assert fa3.stats["frame"] == fa.stats["frame"]
     # A session that is replaced, then a new one: sequential use as in a notebook.
     s = small_session()
     s.frame()
     s = small_session()
     assert np.array_equal(s.frame().image, fa.image)
+
+
+def test_sessions_on_two_threads_at_once():
+    # Two Python threads run frames of two sessions at the same time (each call releases the
+    # GIL): SystemC runs one at a time, and each gives its frames' bits.
+    expected = {name: small_session(firmware=name).frame() for name in ("phong", "gouraud")}
+    sessions = {name: small_session(firmware=name) for name in expected}
+    got = {name: [] for name in expected}
+    errors = []
+
+    def run(name):
+        try:
+            for _ in range(3):
+                got[name].append(sessions[name].frame())
+        except Exception as e:  # reported below, not lost on the thread
+            errors.append(e)
+
+    threads = [threading.Thread(target=run, args=(name,)) for name in expected]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors, errors
+    for name, frames in got.items():
+        assert [f.index for f in frames] == [0, 1, 2]
+        for f in frames:
+            assert np.array_equal(f.image, expected[name].image), name
+            assert f.stats["frame"] == expected[name].stats["frame"], name
 
 
 def test_threads_do_not_change_results():
@@ -290,6 +331,63 @@ def test_bad_grid_value_names_the_key():
         pp5sim.sweep({"gp.count": [1, 0]}, config=SMALL)
 
 
+def test_sweep_takes_arrays_and_dataframes():
+    kw = dict(config=SMALL, tessellation=TESSELLATION, fidelity="analytic")
+    # A product of NumPy arrays and lists, the first key varying slowest: the lists' sweep.
+    arrays = pp5sim.sweep({"gp.count": np.arange(1, 4), "renderer.count": np.array([2, 8])}, **kw)
+    lists = pp5sim.sweep({"gp.count": [1, 2, 3], "renderer.count": [2, 8]}, **kw)
+    pd.testing.assert_frame_equal(arrays.drop(columns=[c for c in arrays if c.startswith("host.")]),
+                                  lists.drop(columns=[c for c in lists if c.startswith("host.")]))
+    assert arrays["gp.count"].tolist() == [1, 1, 2, 2, 3, 3]
+    assert arrays["renderer.count"].tolist() == [2, 8] * 3
+    # A DataFrame's rows are the points, in order; a list of dicts is the same.
+    points = pd.DataFrame({"gp.count": np.array([3, 1]), "renderer.count": [8, 2]})
+    rows = pp5sim.sweep(points, **kw)
+    assert rows["gp.count"].tolist() == [3, 1]
+    assert rows["renderer.count"].tolist() == [8, 2]
+    by_point = lists.set_index(["gp.count", "renderer.count"])
+    for _, row in rows.iterrows():
+        expected = by_point.loc[(row["gp.count"], row["renderer.count"])]
+        assert row["triangles_per_second"] == expected["triangles_per_second"]
+    dicts = pp5sim.sweep([{"gp.count": 3, "renderer.count": 8}], **kw)
+    assert dicts.loc[0, "triangles_per_second"] == rows.loc[0, "triangles_per_second"]
+    with pytest.raises(ValueError, match="one dimension"):
+        pp5sim.sweep({"gp.count": np.ones((2, 2), dtype=int)}, **kw)
+
+
+def test_sweep_errors_are_the_command_lines(tmp_path, pp5sim_exe):
+    # Each bad grid gives the message pp5sim sweep gives for --grid, after the place it names.
+    cases = [({"gp.count": [1, 0]}, "gp.count=1,0"),
+             ({"gp.nonsense": [1]}, "gp.nonsense=1"),
+             ({"gp.count": [2, 2]}, "gp.count=2,2"),
+             ({"renderer.count": np.array([4, 999])}, "renderer.count=4,999")]
+    for grid, cli in cases:
+        with pytest.raises(ValueError) as e:
+            pp5sim.sweep(grid, config=SMALL)
+        r = run_cli(pp5sim_exe, "sweep", "--grid", cli, "--out", str(tmp_path / "s"), check=False)
+        assert r.returncode != 0
+        cli_message = r.stderr.strip().split(f"--grid {cli}: ", 1)[1]
+        assert str(e.value) == f"grid {cli}: {cli_message}", (str(e.value), r.stderr)
+        assert list(grid)[0] in str(e.value)
+    # A DataFrame's column is checked the same way, named with its distinct values.
+    with pytest.raises(ValueError, match=r"^points gp.count=4,0: .*gp.count"):
+        pp5sim.sweep(pd.DataFrame({"gp.count": [4, 0, 4]}), config=SMALL)
+
+
+def test_setup_seconds_are_reported(pp5sim_exe, tmp_path):
+    import json
+
+    s = small_session()
+    first, second = s.frame(), s.frame()
+    assert first.stat("host.setup_seconds") > 0
+    assert second.stat("host.setup_seconds") == 0
+    assert first.info["host.setup_seconds"]["unit"] == first.info["host.seconds"]["unit"]
+    run_cli(pp5sim_exe, "render", "--tessellation", *map(str, TESSELLATION), *cli_sets(SMALL),
+            "--out", str(tmp_path / "r"))
+    with open(tmp_path / "r" / "stats.json") as f:
+        assert json.load(f)["host"]["setup_seconds"] > 0
+
+
 def test_frames_release_the_gil():
     # A frame of about a tenth of a second on one host thread, run on another Python thread:
     # this thread runs during it only if the frame released the GIL. Its ticks are counted in
@@ -316,30 +414,6 @@ def test_frames_release_the_gil():
     quarter = (end - start) / 4
     inside = [x for x in ticks if start + quarter < x < end - quarter]
     assert len(inside) >= 3, (len(inside), end - start)
-
-
-def test_ctrl_c_stops_a_sweep_between_points():
-    # 64 points of some milliseconds each (a third of a second at least on any host); Ctrl-C
-    # (SIGINT) after 50 ms, long before the end.
-    config = dict(SMALL, **{"screen.width": 256, "screen.height": 128})
-    points = 64
-    done = []
-    timer = threading.Timer(0.05, lambda: os.kill(os.getpid(), signal.SIGINT))
-    start = time.perf_counter()
-    timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        done.append(pp5sim.sweep({"gp.count": list(range(1, points + 1))},
-                                 tessellation=TESSELLATION, config=config, threads=1))
-    interrupted = time.perf_counter() - start
-    timer.cancel()
-    assert not done
-    start = time.perf_counter()
-    few = pp5sim.sweep({"gp.count": [1, 2, 3, 4]}, tessellation=TESSELLATION, config=config,
-                       threads=1)
-    per_point = (time.perf_counter() - start) / len(few)
-    # Stopped between points, long before the end (without the check it would run to the end
-    # and only then raise).
-    assert interrupted < 0.5 * points * per_point, (interrupted, per_point)
 
 
 # --- Animations ---------------------------------------------------------------------------
@@ -396,9 +470,10 @@ def test_animated_session_rebuilt_mid_run_resumes_at_its_frame(cli_animation):
     images, _ = cli_animation
     session = animated_session()
     first = session.frame()
-    # Another session takes SystemC's kernel: the animated session's machine is freed, and made
-    # again for frame 1's scene at its next frame.
+    # Another session runs between frames (each has its own kernel), and the animated session's
+    # machine is freed: made again for frame 1's scene at its next frame.
     small_session().frame()
+    session.close()
     rest = list(session.frames())
     assert [f.index for f in [first] + rest] == list(range(ANIMATION_FRAMES))
     for k, f in enumerate([first] + rest):
@@ -440,3 +515,98 @@ def test_ctrl_c_stops_a_frame_between_regions():
     assert again.index == 2
     assert np.array_equal(again.image, full.image)
     assert np.array_equal(again.fields["z"], full.fields["z"])
+
+
+# Ctrl-C (SIGINT to the main thread, from a timer thread) a tenth of the way into each kind of
+# long call: it must stop well before the call's end. Each test fails when its cancel check is
+# removed (the call then runs to its end before KeyboardInterrupt).
+
+
+def interrupted_seconds(call, after):
+    main = threading.main_thread().ident
+    timer = threading.Timer(after, signal.pthread_kill, (main, signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            call()
+        return time.perf_counter() - start
+    finally:
+        timer.cancel()
+        timer.join()
+
+
+def seconds(call):
+    start = time.perf_counter()
+    result = call()
+    return time.perf_counter() - start, result
+
+
+def without_host(stats):
+    return {k: v for k, v in stats.items() if k != "host"}
+
+
+def test_ctrl_c_stops_the_systemc_timing_run():
+    # A timing-only frame (the SystemC run is all of it: about a quarter of a second on one
+    # host thread for 73,728 triangles).
+    session = pp5sim.Session("torus", tessellation=(384, 96), fidelity="timing", threads=1)
+    session.frame(pixels=False)  # the machine made, outside the timed frames
+    full_seconds, full = seconds(lambda: session.frame(pixels=False))
+    interrupted = interrupted_seconds(lambda: session.frame(pixels=False), 0.1 * full_seconds)
+    assert interrupted < 0.5 * full_seconds, (interrupted, full_seconds)
+    assert session.frames_run == 2
+    again = session.frame(pixels=False)
+    assert again.index == 2
+    assert without_host(again.stats) == without_host(full.stats)
+
+
+def test_ctrl_c_stops_an_analytic_frame():
+    # The analytic level with pixels: the model, then the boards executing its regions (about
+    # half a second on one host thread).
+    config = {"screen.width": 1280, "screen.height": 1024, "fidelity.timing": "analytic",
+              "fidelity.pixels": "bit"}
+    session = pp5sim.Session("molecule", config=config, threads=1)
+    session.frame(pixels=False)
+    full_seconds, full = seconds(lambda: session.frame(fields=["z"]))
+    interrupted = interrupted_seconds(lambda: session.frame(fields=["z"]), 0.1 * full_seconds)
+    assert interrupted < 0.5 * full_seconds, (interrupted, full_seconds)
+    again = session.frame(fields=["z"])
+    assert again.index == 2
+    assert np.array_equal(again.image, full.image)
+    assert np.array_equal(again.fields["z"], full.fields["z"])
+    assert without_host(again.stats) == without_host(full.stats)
+
+
+def test_ctrl_c_stops_a_sweep_inside_a_point():
+    # Two points of about a quarter of a second each; Ctrl-C a tenth of the way into the first.
+    grid = {"gp.count": [4, 8]}
+    kw = dict(tessellation=(384, 96), fidelity="timing", threads=1)
+    one_seconds, one = seconds(lambda: pp5sim.sweep({"gp.count": [4]}, **kw))
+    interrupted = interrupted_seconds(lambda: pp5sim.sweep(grid, **kw), 0.1 * one_seconds)
+    assert interrupted < 0.5 * one_seconds, (interrupted, one_seconds)
+    # Usable afterwards, with the same results.
+    again = pp5sim.sweep({"gp.count": [4]}, **kw)
+    assert again.loc[0, "frame_seconds"] == one.loc[0, "frame_seconds"]
+
+
+def test_ctrl_c_stops_an_animation_frame():
+    # An animation's frames of a fifth of a second each, timing only; Ctrl-C inside frame 1.
+    def animation():
+        return pp5sim.Session("torus", animation=True, frames=3, tessellation=(384, 96),
+                              fidelity="timing", threads=1)
+
+    whole = animation()
+    whole.frame(pixels=False)
+    frame_seconds, f1 = seconds(lambda: whole.frame(pixels=False))
+    f2 = whole.frame(pixels=False)
+    session = animation()
+    frames = session.frames(pixels=False)
+    next(frames)
+    interrupted = interrupted_seconds(lambda: next(frames), 0.1 * frame_seconds)
+    assert interrupted < 0.5 * frame_seconds, (interrupted, frame_seconds)
+    assert session.frames_run == 1
+    # Resumed, the animation's frames are an uninterrupted run's.
+    rest = list(session.frames(pixels=False))
+    assert [f.index for f in rest] == [1, 2]
+    assert without_host(rest[0].stats) == without_host(f1.stats)
+    assert without_host(rest[1].stats) == without_host(f2.stats)

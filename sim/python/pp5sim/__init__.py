@@ -41,11 +41,7 @@ def _sets(config):
     for key, value in config.items():
         if not isinstance(key, str):
             raise TypeError(f"config: key {key!r} is not a string")
-        if isinstance(value, bool):
-            text = "true" if value else "false"
-        else:
-            text = str(value)
-        out.append((key, text))
+        out.append((key, _text(value)))
     return out
 
 
@@ -219,24 +215,69 @@ class Session:
                 f"{self.frames_run} frames>")
 
 
-def sweep(grid, scene="torus", *, firmware=None, config=None, config_file="", fidelity="",
+def _text(value):
+    """One configuration value as --set text: Python's and NumPy's bools as true/false, NumPy
+    scalars as their Python values."""
+    if hasattr(value, "item") and getattr(value, "ndim", None) == 0:
+        value = value.item()  # a NumPy scalar or 0-d array
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
+
+
+def _values(key, values):
+    """A key's values in a grid: a list, tuple, range, 1-D NumPy array or pandas Series, or
+    one value."""
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        return [_text(values)]
+    if getattr(values, "ndim", 1) == 0:
+        return [_text(values)]
+    if getattr(values, "ndim", 1) != 1:
+        raise ValueError(f"grid: the values of '{key}' are an array of shape "
+                         f"{tuple(values.shape)}; expected one dimension")
+    return [_text(v) for v in values]
+
+
+def sweep(points, scene="torus", *, firmware=None, config=None, config_file="", fidelity="",
           threads=0, tessellation=None):
-    """Simulates one frame per point of the grid {KEY: [values]} (the first key varying
-    slowest, as pp5sim sweep) and returns a pandas DataFrame: one row per point with the swept
-    keys, sweep.csv's columns and every statistic by name, typed."""
+    """Simulates one frame per point and returns a pandas DataFrame: one row per point with
+    the swept keys, sweep.csv's columns and every statistic by name, typed.
+
+    points: a grid {KEY: values} whose product is swept (the first key varying slowest, as
+    pp5sim sweep), each key's values a list, range, NumPy array or pandas Series (or one
+    value); or a pandas DataFrame (or a list of dicts) whose rows are the points, in order,
+    its columns the keys. Keys and values are checked as pp5sim sweep checks --grid: a bad
+    one raises ValueError naming the key. Ctrl-C stops the sweep within milliseconds."""
     import pandas as pd
 
-    if not isinstance(grid, dict) or not grid:
-        raise ValueError("grid: expected a dict {KEY: [values]}, e.g. {'gp.count': [1, 2, 4]}")
-    axes = []
-    for key, values in grid.items():
-        if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
-            values = [values]
-        axes.append((key, [_sets({key: v})[0][1] for v in values]))
+    if isinstance(points, list) and points and all(isinstance(p, dict) for p in points):
+        points = pd.DataFrame(points)
+    if isinstance(points, pd.DataFrame):
+        if points.empty or len(points.columns) == 0:
+            raise ValueError("points: the DataFrame has no rows or no columns")
+        keys = list(points.columns)
+        for key in keys:
+            if not isinstance(key, str):
+                raise TypeError(f"points: column {key!r} is not a configuration key")
+        rows = [[_text(v) for v in row] for row in points.itertuples(index=False, name=None)]
+        axes = []
+        for k, key in enumerate(keys):
+            distinct = list(dict.fromkeys(row[k] for row in rows))  # in order, once each
+            axes.append((key, distinct))
+    elif isinstance(points, dict) and points:
+        axes = []
+        for key, values in points.items():
+            if not isinstance(key, str):
+                raise TypeError(f"grid: key {key!r} is not a string")
+            axes.append((key, _values(key, values)))
+        rows = []
+    else:
+        raise ValueError("points: expected a dict {KEY: [values]} (e.g. {'gp.count': [1, 2, 4]})"
+                         " or a DataFrame with a column per key and a row per point")
     u, v = (tessellation or (0, 0))
-    rows = _c.sweep(_os.fspath(scene), int(u), int(v), _firmware(firmware), config_file,
-                    fidelity or "", _sets(config), axes, int(threads))
-    return pd.DataFrame(rows)
+    out = _c.sweep(_os.fspath(scene), int(u), int(v), _firmware(firmware), config_file,
+                   fidelity or "", _sets(config), axes, rows, int(threads))
+    return pd.DataFrame(out)
 
 
 def read_sweep(path):
