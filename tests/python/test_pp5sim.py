@@ -385,6 +385,10 @@ def test_animation_frames_are_pp5sim_animates(cli_animation):
         assert np.array_equal(f.image, images[k]), k
         assert f.stats["frame"] == stats[k]["frame"], k
         assert f.stats["timing"] == stats[k]["timing"], k
+    # Overlapped, as pp5sim animate runs them: each frame's set-up began before the frame
+    # before had ended.
+    assert session.summary["overlapped_frames"] == ANIMATION_FRAMES - 1
+    assert session.summary["sustained_frame_seconds"] > 0
     # The torus turns: no two frames alike.
     assert not np.array_equal(frames[0].image, frames[1].image)
     assert not np.array_equal(frames[1].image, frames[2].image)
