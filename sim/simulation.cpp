@@ -1100,6 +1100,11 @@ const RunSummary& Session::run_frames(
                "Frame time: when the last region reached the frame buffer (in a run of "
                "overlapped frames: since the frame before ended, the first since the run began)",
                [frame_seconds] { return frame_seconds; });
+    s.add_integer("frame.array_cycles", u::array_cycles,
+                  "The frame time in Renderer array cycles (rounded)", [frame_seconds, array_hz] {
+                    return static_cast<std::int64_t>(
+                        static_cast<std::uint64_t>(std::llround(frame_seconds * array_hz)));
+                  });
     s.add_real("frame.start_seconds", u::seconds,
                "In the run's time: when the first GP started the frame's set-up",
                [frame_start] { return frame_start; });
@@ -1126,6 +1131,14 @@ const RunSummary& Session::run_frames(
       words += g.ring_words;
       messages += g.messages;
     }
+    std::uint64_t geometry_clocks = 0;
+    for (const GpStats* g : gp_of) geometry_clocks += g->geometry.count;
+    s.add_real("frame.gp_clocks_per_triangle", u::gp_clocks,
+               "geometry_clocks summed over the GPs per display-list triangle (rounded)",
+               [geometry_clocks, triangles] {
+                 return triangles > 0 ? std::round(static_cast<double>(geometry_clocks) / triangles)
+                                      : 0.0;
+               });
     register_setup_statistics(s, gp_of);
     std::vector<const RendererStats*> renderer_of;
     for (int k = 0; k < machine.renderer_count(); ++k) {
