@@ -870,6 +870,25 @@ Statistics RunSummary::statistics() const {
                 "Frames whose set-up began on a GP before the frame before had finished on "
                 "every Renderer",
                 [r] { return std::int64_t{r.overlapped_frames}; });
+  s.add_integer("run.gp_busy_clocks", u::gp_clocks,
+                "gp.N.busy_clocks summed over the GPs and the frames",
+                [r] { return stat_count(r.gp_busy_clocks); });
+  s.add_integer("run.renderer_busy_cycles", u::array_cycles,
+                "renderer.N.busy_cycles summed over the Renderers and the frames",
+                [r] { return stat_count(r.renderer_busy_cycles); });
+  s.add_integer("run.ring_messages", u::count, "Messages the ring carried over the run",
+                [r] { return stat_count(r.ring_messages); });
+  s.add_integer("run.ring_words", u::ring_words,
+                "Words the ring carried over the run: ring.words summed over the frames",
+                [r] { return stat_count(r.ring_words); });
+  s.add_integer("run.ring_contention_cycles", u::ring_cycles,
+                "Cycles messages waited for a free channel, over the run (when frames overlap, "
+                "a run total only: a wait is not split between frames)",
+                [r] { return stat_count(r.ring_contention_cycles); });
+  s.add_real("run.ring_channel_utilisation_max", u::ratio,
+             "The busiest ring channel's busy time over the run's time (a run total only when "
+             "frames overlap)",
+             [r] { return r.ring_channel_utilisation_max; });
   s.add_real("run.estimate_frame_seconds", u::seconds,
              "The closed-form estimate of the period, frame.pipelined_frame_seconds of one frame "
              "alone (0: not computed)",
@@ -1013,6 +1032,26 @@ const RunSummary& Session::run_frames(
   }
   RunSummary& sum = summary_;
   sum.overlapped = true;
+  {
+    const Ring& r = machine.ring();
+    sum.ring_messages = r.messages();
+    sum.ring_words = r.words();
+    sum.ring_contention_cycles = r.contention().count;
+    const double run_seconds = end.back();
+    double busiest = 0;
+    for (const RingCycles& c : r.busy())
+      busiest = std::max(busiest, c.seconds(r.params().clock_hz));
+    sum.ring_channel_utilisation_max = run_seconds > 0 ? busiest / run_seconds : 0;
+    sum.gp_busy_clocks = 0;
+    for (const GraphicsProcessor* g : gps) {
+      for (const GpFrameRecord& rec : g->history()) sum.gp_busy_clocks += rec.stats.busy.count;
+    }
+    sum.renderer_busy_cycles = 0;
+    for (int k = 0; k < machine.renderer_count(); ++k) {
+      for (const Renderer::FrameRecord& rec : machine.renderer(k).history())
+        sum.renderer_busy_cycles += rec.stats.busy.count;
+    }
+  }
   const double last_end = end.back();
   const double first_start = start.empty() || start[0] < 0 ? 0 : start[0];
   sum.sustained_frame_seconds = count > 1 ? (last_end - end[0]) / (count - 1) : end[0];
