@@ -26,14 +26,15 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
       "frame_buffer", config.screen.width, config.screen.height, config.renderer.region_width,
       config.renderer.region_height, config.regions(),
       config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none);
-  const RendererWiring renderer_wiring{plan_, *ring_, scheduler_, gp_reports_, timeline_, clock_};
+  const RendererWiring renderer_wiring{plan_,       plans_,    *ring_, scheduler_,
+                                       gp_reports_, timeline_, clock_};
   for (int k = 0; k < renderers; ++k) {
     renderers_.push_back(
         std::make_unique<Renderer>(fmt_name("renderer", k).c_str(), k, renderer_wiring));
     renderer_queues_.push_back(renderers_.back().get());
     clock_.enrol_renderer();
   }
-  const GpWiring gp_wiring{plan_, *ring_, scheduler_, renderer_queues_, timeline_, clock_};
+  const GpWiring gp_wiring{plan_, plans_, *ring_, scheduler_, renderer_queues_, timeline_, clock_};
   for (int k = 0; k < gps; ++k) {
     const auto [first, last] = plan_.gp_block(k);
     gps_.push_back(
@@ -61,7 +62,8 @@ sc_core::sc_time Machine::frame_end() const {
   return std::max(sc_core::sc_time_stamp(), clock_.start() + frame_buffer_->frame_complete());
 }
 
-void Machine::overlap(int frames) {
+void Machine::overlap(int frames, FramePlans::Source plans) {
+  if (plans) plans_.set_source(std::move(plans));
   clock_.set_overlapped(true);
   clock_.release(frames);
 }

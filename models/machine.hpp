@@ -59,6 +59,8 @@ class Machine : public sc_core::sc_module {
   // What the units share, without SystemC (models/gp/machine_plan.hpp); the accessors below
   // forward to it.
   const MachinePlan& plan() const { return plan_; }
+  // Each frame's plan (FramePlans): the plan above unless overlap() was given a source.
+  FramePlans& frame_plans() { return plans_; }
   const MachineConfig& config() const { return plan_.config(); }
   const Program& program() const { return plan_.program(); }
   const Scene& scene() const { return plan_.scene(); }
@@ -109,8 +111,10 @@ class Machine : public sc_core::sc_module {
   // runs, releases `frames` frames that the units then run one after another on their own,
   // a GP setting up frame n + 1 while the Renderers still draw frame n (frames.gp_bins,
   // frames.gp_start); each unit keeps a record of every frame it finished
-  // (GraphicsProcessor::history, Renderer::history). No begin_frame between them.
-  void overlap(int frames);
+  // (GraphicsProcessor::history, Renderer::history). No begin_frame between them. With
+  // `plans`, each frame works from the plan it makes (an animation: FramePlans), else from
+  // plan().
+  void overlap(int frames, FramePlans::Source plans = {});
 
   // The timeline: when on, modules record slices of activity.
   void record_timeline(bool on);
@@ -128,6 +132,7 @@ class Machine : public sc_core::sc_module {
   static std::string fmt_name(const char* base, int k);
 
   MachinePlan plan_;
+  FramePlans plans_{plan_};
   std::unique_ptr<Ring> ring_;
   std::unique_ptr<FrameBuffer> frame_buffer_;
   std::vector<std::unique_ptr<Renderer>> renderers_;

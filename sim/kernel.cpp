@@ -65,7 +65,9 @@ bool KernelContext::run(const std::atomic<bool>* cancel) {
   // the first delta cycle.
   if (sc_core::sc_get_status() == sc_core::SC_ELABORATION) sc_core::sc_start(sc_core::SC_ZERO_TIME);
   for (;;) {
-    if (!sc_core::sc_pending_activity()) return true;
+    // sc_stop (a unit's error) ends the run as it ends sc_start().
+    if (!sc_core::sc_pending_activity() || sc_core::sc_get_status() == sc_core::SC_STOPPED)
+      return true;
     if (cancel->load(std::memory_order_relaxed)) return false;
     // To the next event and a slice beyond it (SC_EXIT_ON_STARVATION does not move time past
     // the last event it ran, as sc_start() does not).

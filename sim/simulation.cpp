@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
 #include <functional>
 #include <future>
@@ -171,18 +172,21 @@ struct FrameAttribution {
 // frame buffer last. Its time is its array's work (Renderers), its waits for messages no GP
 // had asked for yet (GPs), its waits for messages still crossing the ring, its blocked
 // shipping and the final region's trip to the frame buffer (ring).
-FrameAttribution frame_attribution(Machine& machine, double frame_seconds) {
-  const MachineConfig& config = machine.config();
+// `renderers` are each Renderer's statistics for the frame, with `finished` and `computed`
+// relative to `began` (its own start of the frame).
+FrameAttribution frame_attribution(const std::vector<const RendererStats*>& renderers,
+                                   const std::vector<sc_core::sc_time>& began, double array_hz,
+                                   double frame_seconds) {
   FrameAttribution a;
   int critical = 0;
-  for (int k = 1; k < machine.renderer_count(); ++k) {
-    if (machine.renderer(k).stats().finished > machine.renderer(critical).stats().finished)
-      critical = k;
+  for (std::size_t k = 1; k < renderers.size(); ++k) {
+    if (began[k] + renderers[k]->finished > began[critical] + renderers[critical]->finished)
+      critical = static_cast<int>(k);
   }
-  const RendererStats& st = machine.renderer(critical).stats();
+  const RendererStats& st = *renderers[static_cast<std::size_t>(critical)];
   a.critical_renderer = critical;
-  a.renderer_seconds = (st.busy.count + st.stall.count) / config.renderer.clock_hz +
-                       st.waiting_renderers.to_seconds();
+  a.renderer_seconds =
+      (st.busy.count + st.stall.count) / array_hz + st.waiting_renderers.to_seconds();
   a.gp_seconds = st.waiting_gp.to_seconds();
   a.ring_seconds = st.waiting_ring.to_seconds() + st.waiting_ship.to_seconds() +
                    (st.finished - st.computed).to_seconds();
@@ -195,10 +199,19 @@ FrameAttribution frame_attribution(Machine& machine, double frame_seconds) {
   return a;
 }
 
+FrameAttribution frame_attribution(Machine& machine, double frame_seconds) {
+  std::vector<const RendererStats*> st;
+  for (int k = 0; k < machine.renderer_count(); ++k) st.push_back(&machine.renderer(k).stats());
+  return frame_attribution(st, std::vector<sc_core::sc_time>(st.size()),
+                           machine.config().renderer.clock_hz, frame_seconds);
+}
+
 // Registers timing.*: the attribution `a` (which must outlive the reads) and the utilisation
 // figures, which read the units' statistics already registered in `s`.
+// `channels`: ring.channels.N.* are registered (a frame of an overlapped run has them only in
+// the run's totals: timing.ring_channel_utilisation_max is then left out).
 void register_timing_statistics(Statistics& s, const FrameAttribution& a,
-                                const MachineConfig& config) {
+                                const MachineConfig& config, bool channels = true) {
   namespace u = stat_unit;
   s.add_integer("timing.critical_renderer", u::index,
                 "The Renderer whose last region reached the frame buffer last",
@@ -230,8 +243,11 @@ void register_timing_statistics(Statistics& s, const FrameAttribution& a,
              [&s] { return max_of(s, "renderer", "utilisation"); });
   s.add_real("timing.ring_utilisation", u::ratio, "ring.utilisation, repeated here",
              [&s] { return s.real("ring.utilisation"); });
-  s.add_real("timing.ring_channel_utilisation_max", u::ratio, "Largest ring.channels.N.utilisation",
-             [&s] { return max_of(s, "ring.channels", "utilisation"); });
+  if (channels) {
+    s.add_real("timing.ring_channel_utilisation_max", u::ratio,
+               "Largest ring.channels.N.utilisation",
+               [&s] { return max_of(s, "ring.channels", "utilisation"); });
+  }
   const std::string gp_code = name_of(config.gp.code);
   s.add_text("timing.gp_code", u::name, "gp.code of the run: assembly or compiled",
              [gp_code] { return gp_code; });
@@ -918,6 +934,25 @@ Statistics RunSummary::statistics() const {
                 "Frames whose set-up began on a GP before the frame before had finished on "
                 "every Renderer",
                 [r] { return std::int64_t{r.overlapped_frames}; });
+  s.add_integer("run.gp_busy_clocks", u::gp_clocks,
+                "gp.N.busy_clocks summed over the GPs and the frames",
+                [r] { return stat_count(r.gp_busy_clocks); });
+  s.add_integer("run.renderer_busy_cycles", u::array_cycles,
+                "renderer.N.busy_cycles summed over the Renderers and the frames",
+                [r] { return stat_count(r.renderer_busy_cycles); });
+  s.add_integer("run.ring_messages", u::count, "Messages the ring carried over the run",
+                [r] { return stat_count(r.ring_messages); });
+  s.add_integer("run.ring_words", u::ring_words,
+                "Words the ring carried over the run: ring.words summed over the frames",
+                [r] { return stat_count(r.ring_words); });
+  s.add_integer("run.ring_contention_cycles", u::ring_cycles,
+                "Cycles messages waited for a free channel, over the run (when frames overlap, "
+                "a run total only: a wait is not split between frames)",
+                [r] { return stat_count(r.ring_contention_cycles); });
+  s.add_real("run.ring_channel_utilisation_max", u::ratio,
+             "The busiest ring channel's busy time over the run's time (a run total only when "
+             "frames overlap)",
+             [r] { return r.ring_channel_utilisation_max; });
   s.add_real("run.estimate_frame_seconds", u::seconds,
              "The closed-form estimate of the period, frame.pipelined_frame_seconds of one frame "
              "alone (0: not computed)",
@@ -941,23 +976,19 @@ const RunSummary& Session::run_frames(
   if (count < 1) throw std::invalid_argument("a run of frames needs at least one frame");
   if (frames_ > 0)
     throw std::logic_error("Session::run_frames: the session has simulated frames already");
-  auto scene_of = [&](int f) {
-    if (!scenes) return;
-    const std::shared_ptr<const Scene> given = scenes(f);
-    if (given && given.get() != scene_.get()) {
-      throw std::invalid_argument(fmt::format(
-          "frame {}: a run of overlapped frames sets up every frame from the session's scene "
-          "'{}' (its machine plan holds one scene); the scene source gave another",
-          f, scene_->name));
-    }
-  };
   const auto triangles = static_cast<double>(scene_->mesh.triangles.size());
   const auto spheres = static_cast<double>(scene_->spheres.size());
+  // The scene of frame f: the source's, or the session's when it gives none.
+  auto scene_of = [&](int f) {
+    std::shared_ptr<const Scene> given = scenes ? scenes(f) : nullptr;
+    return given ? given : scene_;
+  };
   if (!event_) {
     // The analytic level: each frame alone; the sustained period is the closed form's.
     double estimate = 0;
     for (int f = 0; f < count; ++f) {
-      scene_of(f);
+      const std::shared_ptr<const Scene> given = scene_of(f);
+      if (given != scene_) set_scene(given);
       FrameResult r = frame({}, nullptr, pixels);
       estimate = r.stats.real("frame.pipelined_frame_seconds");
       if (on_frame) on_frame(f, r);
@@ -971,10 +1002,65 @@ const RunSummary& Session::run_frames(
   }
   const auto t0 = std::chrono::steady_clock::now();
   Machine& machine = *event_->machine;
-  for (int f = 0; f < count; ++f) scene_of(f);
+  // A scene that changes from frame to frame (an animation): each frame in flight works from
+  // its own plan (FramePlans), made inside the kernel when a unit first asks for the frame,
+  // with the GPs' set-up memo of its scene when the display list is large. Only its frame
+  // values outlive it, for the frame's pixels.
+  std::vector<std::optional<FrameValues>> values(static_cast<std::size_t>(count));
+  std::exception_ptr source_error;
+  FramePlans::Source plans;
+  if (scenes) {
+    struct FramePlan {
+      std::shared_ptr<const Scene> scene;
+      std::unique_ptr<SetupMemo> memo;
+      std::unique_ptr<MachinePlan> plan;  // goes before the memo and scene it refers to
+    };
+    plans = [&, base = &machine.plan()](int f) -> std::shared_ptr<const MachinePlan> {
+      const std::shared_ptr<const MachinePlan> same(std::shared_ptr<void>(), base);
+      if (source_error) return same;
+      try {
+        const std::shared_ptr<const Scene> given = scene_of(f);
+        if (given == scene_) return same;
+        base->check_same_primitives(*given);
+        check_memory(config_, *given, *program_, threads_);
+        auto p = std::make_shared<FramePlan>();
+        p->scene = given;
+        p->plan = std::make_unique<MachinePlan>(config_, *given, *program_);
+        p->plan->set_cancel(cancel_);
+        if (setup_parts(*p->plan, threads_) > 1) {
+          p->memo = std::make_unique<SetupMemo>(*given);
+          p->plan->use_setup_memo(*p->memo);
+          fill_setup_memo(*p->plan, threads_);
+        }
+        values[static_cast<std::size_t>(f)] = p->plan->frame_values();
+        return std::shared_ptr<const MachinePlan>(p, p->plan.get());
+      } catch (...) {
+        // Not through the kernel: stop it, and throw once it has returned.
+        source_error = std::current_exception();
+        // (quietly: the error says what happened)
+        sc_core::sc_report_handler::set_actions("/OSCI/SystemC", sc_core::SC_INFO,
+                                                sc_core::SC_DO_NOTHING);
+        sc_core::sc_stop();
+        return same;
+      }
+    };
+  }
   machine.record_timeline(timeline != nullptr);
-  machine.overlap(count);
-  event_->kernel.run();
+  machine.overlap(count, plans);
+  // With a cancel flag (Ctrl-C from Python), the kernel runs in slices and stops between them;
+  // the GPs' set-up passes stop short too.
+  machine.plan().set_cancel(cancel_);
+  const bool ran = event_->kernel.run(cancel_);
+  machine.plan().set_cancel(nullptr);
+  machine.frame_plans().set_source({});  // the source refers to this call's locals
+  if (source_error) {
+    frames_ = count;  // the machine stopped mid-run: no frame can follow
+    std::rethrow_exception(source_error);
+  }
+  if (!ran || (cancel_ != nullptr && cancel_->load())) {
+    frames_ = count;  // likewise: the caller frees the machine
+    throw FrameCancelled();
+  }
   if (timeline) *timeline = timeline_document(machine);
   const double timing_seconds = seconds_since(t0) + startup_seconds_;
 
@@ -1019,6 +1105,26 @@ const RunSummary& Session::run_frames(
   }
   RunSummary& sum = summary_;
   sum.overlapped = true;
+  {
+    const Ring& r = machine.ring();
+    sum.ring_messages = r.messages();
+    sum.ring_words = r.words();
+    sum.ring_contention_cycles = r.contention().count;
+    const double run_seconds = end.back();
+    double busiest = 0;
+    for (const RingCycles& c : r.busy())
+      busiest = std::max(busiest, c.seconds(r.params().clock_hz));
+    sum.ring_channel_utilisation_max = run_seconds > 0 ? busiest / run_seconds : 0;
+    sum.gp_busy_clocks = 0;
+    for (const GraphicsProcessor* g : gps) {
+      for (const GpFrameRecord& rec : g->history()) sum.gp_busy_clocks += rec.stats.busy.count;
+    }
+    sum.renderer_busy_cycles = 0;
+    for (int k = 0; k < machine.renderer_count(); ++k) {
+      for (const Renderer::FrameRecord& rec : machine.renderer(k).history())
+        sum.renderer_busy_cycles += rec.stats.busy.count;
+    }
+  }
   const double last_end = end.back();
   const double first_start = start.empty() || start[0] < 0 ? 0 : start[0];
   sum.sustained_frame_seconds = count > 1 ? (last_end - end[0]) / (count - 1) : end[0];
@@ -1042,20 +1148,31 @@ const RunSummary& Session::run_frames(
   }
   sum.mean_latency_seconds = latency_sum / count;
 
-  // Each frame's result: its pixels from the regions its Renderers recorded. Frame f + 1's
-  // pixels execute on a helper thread while frame f's result is made and handed to
-  // `on_frame` (encoding a PNG, say): the same pixels, one frame ahead.
+  // Each frame's result: its pixels from the regions its Renderers recorded, and the unit
+  // statistics of its own records (the GPs' set-up and sending of that frame, the Renderers'
+  // regions of it); what the units do not record per frame (the ring's channels) is the run's.
+  // Frame f + 1's pixels execute on a helper thread while frame f's result is made and handed
+  // to `on_frame` (encoding a PNG, say): the same pixels, one frame ahead.
   FrameBuffer& fb = machine.frame_buffer();
   const double timing_per_frame = timing_seconds / count;
+  const double gp_hz = config_.gp.clock_hz;
+  const double array_hz = config_.renderer.clock_hz;
+  const RingParams& ring = machine.ring().params();
+  const std::uint64_t region_words = machine.plan().region_words();
   const sc_core::sc_time run_end = sc_core::sc_time_stamp();
   const bool execute = pixels && config_.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
-  auto frame_pixels = [this, &machine, &fb, run_end, execute](int f) -> FramePixels {
+  auto frame_pixels = [this, &machine, &fb, &values, run_end, execute](int f) -> FramePixels {
     const auto t1 = std::chrono::steady_clock::now();
+    const auto i = static_cast<std::size_t>(f);
     fb.begin_frame(run_end);
     std::vector<const std::vector<RegionWork>*> work;
     for (int k = 0; k < machine.renderer_count(); ++k)
-      work.push_back(&machine.renderer(k).history()[static_cast<std::size_t>(f)].work);
-    if (execute) execute_pixels(machine.plan(), fb, work, threads_, {});
+      work.push_back(&machine.renderer(k).history()[i].work);
+    if (execute) {
+      const FrameValues& v = values[i] ? *values[i] : machine.plan().frame_values();
+      execute_pixels(machine.plan(), v, fb, work, threads_, {});
+    }
+    values[i].reset();  // each frame's values are touched by one thread only
     FramePixels out;
     out.image = fb.take_image();
     out.seconds = seconds_since(t1);
@@ -1064,16 +1181,41 @@ const RunSummary& Session::run_frames(
   FramesAhead ahead(frame_pixels, count);
   for (int f = 0; f < count; ++f) {
     const auto i = static_cast<std::size_t>(f);
+    if (cancel_ != nullptr && cancel_->load()) throw FrameCancelled();  // between frames
     FrameResult result;
+    const double frame_start = std::max(0.0, start[i]);
+    const double frame_end = end[i];
+    const sc_core::sc_time start_time(frame_start, sc_core::SC_SEC);
+    std::vector<const std::vector<RegionWork>*> work;
+    // Times relative to the frame's start, as a frame alone reports them.
+    auto since_start = [start_time](sc_core::sc_time t) {
+      return t > start_time ? t - start_time : sc_core::SC_ZERO_TIME;
+    };
+    std::vector<RendererStats> rstats;
+    std::vector<sc_core::sc_time> began;
     for (int k = 0; k < machine.renderer_count(); ++k) {
-      for (const RegionWork& w : machine.renderer(k).history()[i].work)
+      const Renderer::FrameRecord& rec = machine.renderer(k).history()[i];
+      work.push_back(&rec.work);
+      for (const RegionWork& w : rec.work)
         result.regions.push_back(region_load(config_, w.region, k, w.busy_cycles));
+      RendererStats st = rec.stats;
+      st.computed = since_start(rec.began + rec.stats.computed);
+      st.finished = since_start(rec.began + rec.stats.finished);
+      rstats.push_back(st);
+      began.push_back(start_time);
+    }
+    std::vector<GpStats> gstats(static_cast<std::size_t>(machine.gp_count()));
+    for (int k = 0; k < machine.gp_count(); ++k) {
+      const GraphicsProcessor& g = machine.gp(k);
+      if (!g.takes_part()) continue;
+      GpStats st = g.history()[i].stats;
+      st.geometry_done = since_start(st.geometry_done);
+      st.finished = since_start(st.finished);
+      gstats[static_cast<std::size_t>(k)] = st;
     }
     FramePixels executed = ahead.take(f);
     result.image = std::move(executed.image);
     const double pixel_seconds = executed.seconds;
-    const double frame_start = std::max(0.0, start[i]);
-    const double frame_end = end[i];
     const double previous_end = f > 0 ? end[i - 1] : 0;
     result.frame_seconds = frame_end - previous_end;
     result.triangles_per_second = result.frame_seconds > 0 ? triangles / result.frame_seconds : 0;
@@ -1087,6 +1229,11 @@ const RunSummary& Session::run_frames(
                "Frame time: when the last region reached the frame buffer (in a run of "
                "overlapped frames: since the frame before ended, the first since the run began)",
                [frame_seconds] { return frame_seconds; });
+    s.add_integer("frame.array_cycles", u::array_cycles,
+                  "The frame time in Renderer array cycles (rounded)", [frame_seconds, array_hz] {
+                    return static_cast<std::int64_t>(
+                        static_cast<std::uint64_t>(std::llround(frame_seconds * array_hz)));
+                  });
     s.add_real("frame.start_seconds", u::seconds,
                "In the run's time: when the first GP started the frame's set-up",
                [frame_start] { return frame_start; });
@@ -1102,6 +1249,51 @@ const RunSummary& Session::run_frames(
                [tps] { return tps; });
     s.add_real("frame.projected_frames_per_second", u::per_second, "1 / frame time",
                [frame_seconds] { return frame_seconds > 0 ? 1.0 / frame_seconds : 0; });
+    // The units' figures of this frame: busy times over the frame time (its period), which a
+    // frame's work may exceed when it began in the period before (set-up ahead).
+    std::vector<const GpStats*> gp_of;
+    std::uint64_t words = 0, messages = 0;
+    for (int k = 0; k < machine.gp_count(); ++k) {
+      const GpStats& g = gstats[static_cast<std::size_t>(k)];
+      register_gp_statistics(s, k, g, gp_hz, frame_seconds);
+      if (machine.gp(k).takes_part()) gp_of.push_back(&g);
+      words += g.ring_words;
+      messages += g.messages;
+    }
+    std::uint64_t geometry_clocks = 0;
+    for (const GpStats* g : gp_of) geometry_clocks += g->geometry.count;
+    s.add_real("frame.gp_clocks_per_triangle", u::gp_clocks,
+               "geometry_clocks summed over the GPs per display-list triangle (rounded)",
+               [geometry_clocks, triangles] {
+                 return triangles > 0 ? std::round(static_cast<double>(geometry_clocks) / triangles)
+                                      : 0.0;
+               });
+    register_setup_statistics(s, gp_of);
+    std::vector<const RendererStats*> renderer_of;
+    for (int k = 0; k < machine.renderer_count(); ++k) {
+      const RendererStats& st = rstats[static_cast<std::size_t>(k)];
+      register_renderer_statistics(s, k, st, array_hz, frame_seconds);
+      renderer_of.push_back(&st);
+      words += st.regions * region_words;
+      messages += st.regions;
+    }
+    register_renderer_totals(s, renderer_of, work, config_.regions());
+    s.add_integer("ring.messages", u::count,
+                  "Messages of the frame: the GPs' bin maps and bins, the Renderers' regions",
+                  [messages] { return stat_count(messages); });
+    s.add_integer("ring.words", u::ring_words, "Words of those messages",
+                  [words] { return stat_count(words); });
+    const double bandwidth = static_cast<double>(ring.channels) * ring.word_bits * ring.clock_hz;
+    s.add_real("ring.bandwidth_bits_per_second", u::bits_per_second,
+               "Capacity: channels x word_bits x clock", [bandwidth] { return bandwidth; });
+    const double capacity = ring.channels * ring.clock_hz * frame_seconds;
+    s.add_real(
+        "ring.utilisation", u::ratio,
+        "words as a fraction of what all channels could carry in the frame time",
+        [words, capacity] { return capacity > 0 ? static_cast<double>(words) / capacity : 0; });
+    const FrameAttribution attribution =
+        frame_attribution(renderer_of, began, array_hz, frame_seconds);
+    register_timing_statistics(s, attribution, config_, false);
     register_program_statistics(s, *program_);
     const double host = timing_per_frame + pixel_seconds;
     s.add_real("host.seconds", u::host_seconds,

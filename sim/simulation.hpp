@@ -106,6 +106,14 @@ struct RunSummary {
   // Frames whose first region started on a GP's set-up before the frame before had its last
   // region on a Renderer (the overlap happened), of frames - 1.
   int overlapped_frames = 0;
+  // The units' totals over the run (0 at the analytic level). What a frame's statistics do
+  // not hold when frames overlap (the ring's channels and contention) is only here.
+  std::uint64_t gp_busy_clocks = 0;        // summed over the GPs
+  std::uint64_t renderer_busy_cycles = 0;  // summed over the Renderers
+  std::uint64_t ring_messages = 0;
+  std::uint64_t ring_words = 0;
+  std::uint64_t ring_contention_cycles = 0;  // ring cycles messages waited for a channel
+  double ring_channel_utilisation_max = 0;   // the busiest channel's busy time / the run
   // The closed-form estimate (frame.pipelined_frame_seconds of one frame alone), when the
   // caller computed it (simulate_frames), and its error against the simulated period.
   double estimate_frame_seconds = 0;

@@ -14,7 +14,8 @@ for f in frame-0000.png frame-0001.png frame-0002.png animation.gif frames.csv r
 done
 [ -e "$tmp/a1/frame-0003.png" ] && fail "a fourth frame"
 grep -q "turning in the zw-plane of 4-space: 3 frames" "$tmp/a1.log" || fail "$(cat "$tmp/a1.log")"
-# frames.csv: a header with units and one row per frame, frames back to back.
+# frames.csv: a header with units and one row per frame; frames overlap (a frame's set-up
+# starts before the frame before has ended), and a frame's time is from the end of the one before.
 [ "$(wc -l <"$tmp/a1/frames.csv")" -eq 4 ] || fail "frames.csv: $(cat "$tmp/a1/frames.csv")"
 head -1 "$tmp/a1/frames.csv" | grep -q "^frame,animation_seconds,start_ms,frame_ms," || fail "header"
 python3 - "$tmp/a1" <<'PY' || fail "frames.csv, stats.json or timeline.json do not agree"
@@ -27,19 +28,29 @@ for k, r in enumerate(rows):
     s = stats["frames"][k]
     assert abs(float(r["frame_ms"]) - s["frame"]["simulated_seconds"] * 1e3) < 1e-5, r
     assert r["bottleneck"] == s["timing"]["bottleneck"]
+    assert abs(float(r["latency_ms"]) - float(r["end_ms"]) + float(r["start_ms"])) < 1e-5, r
     if k:
         prev = rows[k - 1]
-        assert abs(float(r["start_ms"]) - float(prev["start_ms"]) - float(prev["frame_ms"])) < 1e-5
+        assert abs(float(r["end_ms"]) - float(prev["end_ms"]) - float(r["frame_ms"])) < 1e-5, r
+        assert float(r["start_ms"]) < float(prev["end_ms"]), (prev, r)
 # The frames differ: the torus turned.
 assert len({r["renderer_busy_cycles"] for r in rows}) > 1 or len({r["frame_ms"] for r in rows}) > 1
 # The timeline spans every frame, and marks each.
 ev = json.load(open(d + "/timeline.json"))["traceEvents"]
 frames = [e for e in ev if e.get("name", "").startswith("frame ") and e.get("ph") == "X"]
 assert len(frames) == 3, frames
-end = float(rows[2]["start_ms"]) + float(rows[2]["frame_ms"])
+end = float(rows[2]["end_ms"])
 assert max(e["ts"] + e.get("dur", 0) for e in ev if "ts" in e) >= end * 1e3 - 1
 assert any(e.get("ts", 0) > float(rows[2]["start_ms"]) * 1e3 and e.get("pid") == 3 for e in ev)
+# Frame slices overlap on the frames track (two rows), and GP set-up of a frame runs while a
+# Renderer still works on the frame before.
+spans = sorted((e["ts"], e["ts"] + e["dur"]) for e in frames)
+assert spans[1][0] < spans[0][1], spans
+geometry = [e for e in ev if e.get("pid") == 1 and e.get("name") == "geometry of frame 1"]
+renderer = [e for e in ev if e.get("pid") == 3 and e.get("ph") == "X"]
+assert geometry and any(r["ts"] < geometry[0]["ts"] < r["ts"] + r["dur"] for r in renderer)
 assert stats["summary"]["frames"] == 3
+assert stats["summary"]["run"]["overlapped_frames"] == 2
 PY
 # The GIF: three frames, and an ordinary decoder (gdk-pixbuf) opens it where one is installed.
 [ "$(head -c 6 "$tmp/a1/animation.gif")" = "GIF89a" ] || fail "not a GIF89a"
@@ -53,7 +64,7 @@ fi
 for f in frame-0000.png frame-0001.png frame-0002.png animation.gif regions.png timeline.json; do
   cmp -s "$tmp/a1/$f" "$tmp/a2/$f" || fail "$f differs between -j 1 and -j 2"
 done
-diff <(cut -d, -f1-14 "$tmp/a1/frames.csv") <(cut -d, -f1-14 "$tmp/a2/frames.csv") >/dev/null ||
+diff <(cut -d, -f1-16 "$tmp/a1/frames.csv") <(cut -d, -f1-16 "$tmp/a2/frames.csv") >/dev/null ||
   fail "frames.csv differs between -j 1 and -j 2 (beyond host_ms)"
 
 # Into the same folder again, fewer frames and a report: the earlier run's extra frame goes.

@@ -10,10 +10,13 @@
 namespace pp5 {
 
 void GraphicsProcessor::register_statistics(Statistics& stats, double frame_seconds) const {
+  register_gp_statistics(stats, index_, stats_, plan_.config().gp.clock_hz, frame_seconds);
+}
+
+void register_gp_statistics(Statistics& stats, int index, const GpStats& g, double clock_hz,
+                            double frame_seconds) {
   namespace u = stat_unit;
-  const std::string p = "gp." + std::to_string(index_) + ".";
-  const GpStats& g = stats_;
-  const double clock_hz = plan_.config().gp.clock_hz;
+  const std::string p = "gp." + std::to_string(index) + ".";
   stats.add_integer(p + "busy_clocks", u::gp_clocks,
                     "Clocks computing: geometry, and starting its ring messages",
                     [&g] { return stat_count(g.busy.count); });

@@ -245,7 +245,7 @@ void GraphicsProcessor::geometry(RegionBins& bins, GpStats& stats, int frame, Gr
   begin(GpActivity::compute);
   stats.geometry_started = t0;
   std::vector<std::uint64_t>* done_after = growing != nullptr ? &done_after_[frame & 1] : nullptr;
-  geometry_pass(plan_, first_, last_, stats, &bins, done_after);
+  geometry_pass(wiring_.plans.of(frame), first_, last_, stats, &bins, done_after);
   stats.busy += stats.geometry;
   if (growing != nullptr) {
     stats.geometry_done = t0 - wiring_.clock.start();  // until send_bins has spent it
@@ -350,7 +350,7 @@ void GraphicsProcessor::start_ahead(Ahead& ahead) {
   // The set-up itself is plain C++ (geometry_pass); its time is spent piece by piece.
   ahead_ = GpStats{};
   ahead_.geometry_started = sc_core::sc_time_stamp();
-  geometry_pass(plan_, first_, last_, ahead_, ahead.bins,
+  geometry_pass(wiring_.plans.of(ahead.frame), first_, last_, ahead_, ahead.bins,
                 sends_when_full() ? &done_after_[ahead.frame & 1] : nullptr);
   ahead_.busy += ahead_.geometry;
   ahead.started = true;
@@ -417,7 +417,7 @@ void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahea
   // transformed its share k more times, each costing what the first traversal cost; it
   // does the next traversal whenever it has nothing it can send (functionally the packets
   // are the same, so the first traversal's are sent).
-  const int passes = plan_.passes();
+  const int passes = wiring_.plans.of(frame).passes();
   const bool retraverse = config.gp.multipass == MachineConfig::Gp::Multipass::retraverse;
   const GpClocks traversal = stats_.geometry;
   const OpCounts traversal_ops = stats_.ops;
@@ -600,6 +600,7 @@ void GraphicsProcessor::send_bin_map(int frame) {
   const RingBooking b = wiring_.ring.send_bin_map(plan_.gp_stop(index_), renderer_stops_,
                                                   plan_.bin_map_words(), index_, frame);
   ++stats_.messages;
+  stats_.ring_words += plan_.bin_map_words();
   if (wiring_.timeline.on()) wiring_.timeline.add(Unit::gp, index_, "bin map", requested, b.end);
   begin(GpActivity::ring);
   stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
@@ -613,6 +614,7 @@ void GraphicsProcessor::send(std::shared_ptr<BinMessage> m, int frame) {
   const sc_core::sc_time requested = sc_core::sc_time_stamp();
   m->requested = requested;
   const int region = m->region;
+  stats_.ring_words += m->words;
   const RingBooking b = wiring_.ring.send_bin(plan_.gp_stop(index_),
                                               plan_.renderer_stop(renderer_index), std::move(m));
   ++stats_.messages;

@@ -42,6 +42,7 @@ struct GpStats {
   std::uint64_t triangles_in = 0;      // scene triangles it transformed
   std::uint64_t packets = 0;           // triangle packets it sent (one per region touched)
   std::uint64_t messages = 0;          // ring messages it sent
+  std::uint64_t ring_words = 0;        // words of those messages
   std::uint64_t screen_triangles = 0;  // triangles after clipping that reached set-up
   SetupCounts setup;
   sc_core::sc_time geometry_started;  // in the run's time
@@ -55,11 +56,13 @@ struct GpFrameRecord {
   GpStats stats;  // times in the run's time
 };
 
-// What a GP is wired to (the Machine builds it): the plan it works from, the ring it sends
-// on, the scheduler that says who owns a region, each Renderer's queue in Renderer order (a
-// vector the Machine fills once every Renderer exists), the timeline and the frame clock.
+// What a GP is wired to (the Machine builds it): the plan it works from and each frame's
+// (the scene's: FramePlans), the ring it sends on, the scheduler that says who owns a region, each
+// Renderer's queue in Renderer order (a vector the Machine fills once every Renderer exists), the
+// timeline and the frame clock.
 struct GpWiring {
   const MachinePlan& plan;
+  FramePlans& plans;
   Ring& ring;
   RegionScheduler& scheduler;
   const std::vector<RendererQueue*>& renderers;
@@ -188,6 +191,11 @@ int setup_parts(const MachinePlan& plan, int threads, int least_part = kLeastSet
 // the records are the same with any number (each primitive's set-up depends on nothing
 // else), and the GPs of the frame then replay them. Host speed only.
 void fill_setup_memo(const MachinePlan& plan, int threads, int least_part = kLeastSetupPart);
+
+// Registers gp.INDEX.* from `g` (GraphicsProcessor::register_statistics, or one frame's record
+// of an overlapped run); `g` must outlive the reads.
+void register_gp_statistics(Statistics& stats, int index, const GpStats& g, double clock_hz,
+                            double frame_seconds);
 
 // Registers setup.*: the packets and the set-up counts summed over `gps`.
 void register_setup_statistics(Statistics& stats, std::vector<const GraphicsProcessor*> gps);

@@ -90,6 +90,15 @@ MachinePlan::MachinePlan(const MachineConfig& config, const Scene& scene, const 
 }
 
 void MachinePlan::set_scene(const Scene& scene) {
+  check_same_primitives(scene);
+  scene_ = &scene;
+  geometry_.emplace(geometry_params(config_), scene);
+  setup_memo_ = nullptr;
+  busy_gps_ = 0;
+  derive_from_scene();
+}
+
+void MachinePlan::check_same_primitives(const Scene& scene) const {
   const std::vector<int> before = primitive_counts(*scene_);
   const std::vector<int> after = primitive_counts(scene);
   for (std::size_t k = 0; k < before.size(); ++k) {
@@ -101,11 +110,22 @@ void MachinePlan::set_scene(const Scene& scene) {
           scene.name, after[k], primitive_kinds()[k]->name(), scene_->name, before[k]));
     }
   }
-  scene_ = &scene;
-  geometry_.emplace(geometry_params(config_), scene);
-  setup_memo_ = nullptr;
-  busy_gps_ = 0;
-  derive_from_scene();
+}
+
+const MachinePlan& FramePlans::of(int frame) {
+  if (!source_) return *base_;
+  for (; made_ <= frame; ++made_) {
+    slots_[made_ & 1] = source_(made_);
+    slot_frame_[made_ & 1] = made_;
+  }
+  const int slot = frame & 1;
+  if (frame < 0 || slot_frame_[slot] != frame || !slots_[slot]) {
+    throw std::logic_error(
+        fmt::format("FramePlans: the plan of frame {} was asked for after frame {}'s took its "
+                    "place (more than two frames in flight)",
+                    frame, slot_frame_[slot]));
+  }
+  return *slots_[slot];
 }
 
 std::vector<int> MachinePlan::primitive_counts(const Scene& scene) {

@@ -14,6 +14,8 @@
 //    the concatenation of the GPs' bins is in display-list order.
 #include <atomic>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -97,6 +99,9 @@ class MachinePlan {
   // are fixed when the machine is built), else std::runtime_error naming both counts. The
   // set-up memo is dropped (it was made for the other scene). `scene` must outlive the plan.
   void set_scene(const Scene& scene);
+  // Throws what set_scene throws if `scene` has not as many primitives of each kind as this
+  // plan's scene.
+  void check_same_primitives(const Scene& scene) const;
 
  private:
   // What the constructor and set_scene derive from the scene, with their checks.
@@ -117,6 +122,43 @@ class MachinePlan {
   int busy_gps_ = 0;
   SetupMemo* setup_memo_ = nullptr;
   mutable const std::atomic<bool>* cancel_ = nullptr;
+};
+
+// The plan each frame works from. Frames of one scene share the machine's plan; a run of
+// overlapped frames whose scene changes (an animation: Session::run_frames with a scene per
+// frame) gives each frame in flight a plan of its own (its camera, lights, transformed
+// geometry, frame values and pass plan), so that the GPs set up frame n + 1 from frame
+// n + 1's scene while the Renderers still draw frame n with frame n's values.
+//
+// Contract:
+//  - of(n) is frame n's plan: the base plan without a source; with one, the plan the source
+//    made for n, made when a unit first asks for frame n (the source is called once per
+//    frame, in frame order, frames skipped included).
+//  - Two frames at most are in flight (FrameClock): frame n's plan takes the slot of frame
+//    n - 2 (n & 1), which every unit has finished by the time any unit asks for frame n; a
+//    plan asked for after its slot was taken is a logic_error.
+//  - The source runs inside the kernel (a unit's thread): it must not throw (the Session
+//    catches what its own source throws and stops the kernel).
+class FramePlans {
+ public:
+  using Source = std::function<std::shared_ptr<const MachinePlan>(int frame)>;
+  explicit FramePlans(const MachinePlan& base) : base_(&base) {}
+  const MachinePlan& of(int frame);
+  void set_source(Source source) {
+    source_ = std::move(source);
+    slots_[0].reset();
+    slots_[1].reset();
+    slot_frame_[0] = slot_frame_[1] = -1;
+    made_ = 0;
+  }
+  bool per_frame() const { return static_cast<bool>(source_); }
+
+ private:
+  const MachinePlan* base_;
+  Source source_;
+  std::shared_ptr<const MachinePlan> slots_[2];
+  int slot_frame_[2] = {-1, -1};
+  int made_ = 0;  // frames the source has made a plan for
 };
 
 }  // namespace pp5

@@ -15,6 +15,14 @@ void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
                     const std::vector<const std::vector<RegionWork>*>& work, int threads,
                     const std::function<BoardObserver*(int renderer)>& observe,
                     const std::atomic<bool>* cancel) {
+  execute_pixels(plan, plan.frame_values(), frame_buffer, work, threads, observe, cancel);
+}
+
+void execute_pixels(const MachinePlan& plan, const FrameValues& frame_values,
+                    FrameBuffer& frame_buffer,
+                    const std::vector<const std::vector<RegionWork>*>& work, int threads,
+                    const std::function<BoardObserver*(int renderer)>& observe,
+                    const std::atomic<bool>* cancel) {
   const Program& program = plan.program();
   const MachineConfig& config = plan.config();
   using Pixels = MachineConfig::Fidelity::Pixels;
@@ -29,8 +37,8 @@ void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
   // without a check; the rest of the boards' regions run as recorded. Where clear after
   // shade gives the same state again (the probe), no board executes an empty region at all.
   RendererBoard first(params);
-  first.run_empty_region(0, 0, program, plan.frame_values());
-  first.probe_clear_after_shade(program, plan.frame_values());
+  first.run_empty_region(0, 0, program, frame_values);
+  first.probe_clear_after_shade(program, frame_values);
   // One board per host worker, made here on the calling thread and restarted, for each
   // Renderer after its first, in the state of a newly made board (`fresh`): the same results
   // as a new board per Renderer, whatever the thread count, without a worker thread's first
@@ -50,12 +58,10 @@ void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
     if (observe) board.set_observer(observe(k));
     board.share_empty_region(first);
     const int columns = config.regions_x();
-    execute_regions(regions, board, program, frame_buffer, plan.frame_values(),
-                    [&](const RegionWork& w) {
-                      if (cancel != nullptr && cancel->load(std::memory_order_relaxed))
-                        return false;
-                      return config.fidelity.executes(w.region % columns, w.region / columns);
-                    });
+    execute_regions(regions, board, program, frame_buffer, frame_values, [&](const RegionWork& w) {
+      if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return false;
+      return config.fidelity.executes(w.region % columns, w.region / columns);
+    });
   });
 }
 

@@ -19,6 +19,7 @@
 namespace pp5 {
 
 class MachinePlan;
+struct FrameValues;
 class FrameBuffer;
 class BoardObserver;
 struct RegionWork;
@@ -28,6 +29,13 @@ struct RegionWork;
 // With `cancel`, each board checks it before each region and executes no more regions once it
 // is true (the frame is then incomplete: the caller discards it).
 void execute_pixels(const MachinePlan& plan, FrameBuffer& frame_buffer,
+                    const std::vector<const std::vector<RegionWork>*>& work, int threads,
+                    const std::function<BoardObserver*(int renderer)>& observe = {},
+                    const std::atomic<bool>* cancel = nullptr);
+// The same with the frame's values given apart from the plan's: a frame of an animation run
+// overlapped, whose own plan is gone by the time its pixels execute (FramePlans).
+void execute_pixels(const MachinePlan& plan, const FrameValues& frame_values,
+                    FrameBuffer& frame_buffer,
                     const std::vector<const std::vector<RegionWork>*>& work, int threads,
                     const std::function<BoardObserver*(int renderer)>& observe = {},
                     const std::atomic<bool>* cancel = nullptr);

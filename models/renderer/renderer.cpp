@@ -67,7 +67,7 @@ void Renderer::wait_for_bin_maps() {
 void Renderer::open_next_stage() {
   lasts_delivered_ = 0;
   open_started_ = false;
-  if (open_region_ >= 0 && open_pass_ + 1 < plan_.passes()) {
+  if (open_region_ >= 0 && open_pass_ + 1 < wiring_.plans.of(frame_).passes()) {
     ++open_pass_;
   } else {
     // The last pass of the region is all in the queue: take the next region now, so that
@@ -282,7 +282,10 @@ void Renderer::run_frame() {
   const MachineConfig& config = plan_.config();
   const Program& program = plan_.program();
   const int gps = plan_.gp_count();
-  const RegionStream stream(program, plan_.frame_values());
+  // The frame's own values (an animation's frames in flight each have theirs); the costs of
+  // region-wide steps are kept per frame, since they bind the frame's values.
+  const RegionStream stream(program, wiring_.plans.of(frame_).frame_values());
+  region_wide_costs_.clear();
   cursor_ = base;
   open_next_stage();
   std::vector<std::vector<std::shared_ptr<const Packet>>> by_gp(gps);

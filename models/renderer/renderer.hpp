@@ -89,6 +89,7 @@ struct RendererStats {
 // the timeline and the frame clock.
 struct RendererWiring {
   const MachinePlan& plan;
+  FramePlans& plans;  // each frame's plan (its frame values and passes)
   Ring& ring;
   RegionScheduler& scheduler;
   const std::vector<const GpReport*>& gps;
@@ -218,5 +219,13 @@ void execute_regions(const std::vector<RegionWork>& work, RendererBoard& board,
 // the `regions` screen regions.
 void register_renderer_totals(Statistics& stats, std::vector<const Renderer*> renderers,
                               int regions);
+// The same from each Renderer's statistics and regions (one frame's records of an overlapped
+// run), which must outlive the reads.
+void register_renderer_totals(Statistics& stats, std::vector<const RendererStats*> renderers,
+                              std::vector<const std::vector<RegionWork>*> works, int regions);
+// Registers renderer.INDEX.* from `st` (Renderer::register_statistics, or one frame's record);
+// `st` must outlive the reads.
+void register_renderer_statistics(Statistics& stats, int index, const RendererStats& st,
+                                  double array_hz, double frame_seconds);
 
 }  // namespace pp5

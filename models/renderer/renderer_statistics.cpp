@@ -9,10 +9,14 @@
 namespace pp5 {
 
 void Renderer::register_statistics(Statistics& stats, double frame_seconds) const {
+  register_renderer_statistics(stats, index_, stats_, plan_.config().renderer.clock_hz,
+                               frame_seconds);
+}
+
+void register_renderer_statistics(Statistics& stats, int index, const RendererStats& st,
+                                  double array_hz, double frame_seconds) {
   namespace u = stat_unit;
-  const std::string p = "renderer." + std::to_string(index_) + ".";
-  const RendererStats& st = stats_;
-  const double array_hz = plan_.config().renderer.clock_hz;
+  const std::string p = "renderer." + std::to_string(index) + ".";
   stats.add_integer(p + "busy_cycles", u::array_cycles,
                     "Cycles executing micro-instructions, decoding packets and copying finished "
                     "colours to the backing store",
@@ -58,26 +62,37 @@ void Renderer::register_statistics(Statistics& stats, double frame_seconds) cons
 
 void register_renderer_totals(Statistics& stats, std::vector<const Renderer*> renderers,
                               int regions) {
+  std::vector<const RendererStats*> st;
+  std::vector<const std::vector<RegionWork>*> work;
+  for (const Renderer* r : renderers) {
+    st.push_back(&r->stats());
+    work.push_back(&r->work());
+  }
+  register_renderer_totals(stats, std::move(st), std::move(work), regions);
+}
+
+void register_renderer_totals(Statistics& stats, std::vector<const RendererStats*> renderers,
+                              std::vector<const std::vector<RegionWork>*> works, int regions) {
   namespace u = stat_unit;
   stats.add_integer("renderers_total.busy_cycles", u::array_cycles,
                     "busy_cycles summed over the Renderers", [renderers] {
                       std::uint64_t total = 0;
-                      for (const Renderer* r : renderers) total += r->stats().busy.count;
+                      for (const RendererStats* r : renderers) total += r->busy.count;
                       return stat_count(total);
                     });
   stats.add_integer("renderers_total.micro_instructions", u::count,
                     "micro_instructions summed over the Renderers", [renderers] {
                       std::uint64_t total = 0;
-                      for (const Renderer* r : renderers) total += r->stats().instructions;
+                      for (const RendererStats* r : renderers) total += r->instructions;
                       return stat_count(total);
                     });
   // Counted once, on the first read, for every region at once.
   auto counts = std::make_shared<std::vector<std::uint64_t>>();
-  auto count = [counts, renderers, regions](int region) {
+  auto count = [counts, works, regions](int region) {
     if (counts->empty()) {
       counts->assign(regions, 0);
-      for (const Renderer* r : renderers) {
-        for (const RegionWork& w : r->work()) (*counts)[w.region] = w.triangles.size();
+      for (const std::vector<RegionWork>* work : works) {
+        for (const RegionWork& w : *work) (*counts)[w.region] = w.triangles.size();
       }
     }
     return stat_count((*counts)[region]);

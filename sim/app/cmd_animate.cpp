@@ -45,12 +45,15 @@ struct AnimateOptions {
 
 // frames.csv: one row per frame. Units are in the column names.
 const char* const kFramesCsvHeader =
-    "frame,animation_seconds,start_ms,frame_ms,frames_per_second,triangles_per_second,"
+    "frame,animation_seconds,start_ms,frame_ms,end_ms,latency_ms,frames_per_second,"
+    "triangles_per_second,"
     "primitives_per_second,bottleneck,gp_utilisation_max,renderer_utilisation_max,"
     "ring_utilisation,pixel_memory_bits_used,primitives_dropped,renderer_busy_cycles,host_ms\n";
 
-std::string frames_csv_row(int k, double fps, double start_seconds, const FrameResult& r) {
+std::string frames_csv_row(int k, double fps, const FrameResult& r) {
   const Statistics& s = r.stats;
+  const double start_seconds = s.real("frame.start_seconds");
+  const double end_seconds = s.real("frame.end_seconds");
   const double t = r.frame_seconds;
   const std::int64_t primitives = s.integer("frame.triangles") + s.integer("frame.spheres");
   const std::int64_t dropped =
@@ -61,8 +64,10 @@ std::string frames_csv_row(int k, double fps, double start_seconds, const FrameR
   std::uint64_t busy = 0;
   for (const RegionLoad& l : r.regions) busy += l.busy_cycles;
   return fmt::format(
-      "{},{:.6f},{:.6f},{:.6f},{:.3f},{:.1f},{:.1f},{},{:.6f},{:.6f},{:.6f},{},{},{},{:.3f}\n", k,
-      k / fps, start_seconds * 1e3, t * 1e3, t > 0 ? 1.0 / t : 0.0, r.triangles_per_second,
+      "{},{:.6f},{:.6f},{:.6f},{:.6f},{:.6f},{:.3f},{:.1f},{:.1f},{},{:.6f},{:.6f},{:.6f},{},{},{},"
+      "{:.3f}\n",
+      k, k / fps, start_seconds * 1e3, t * 1e3, end_seconds * 1e3,
+      (end_seconds - start_seconds) * 1e3, t > 0 ? 1.0 / t : 0.0, r.triangles_per_second,
       t > 0 ? static_cast<double>(primitives) / t : 0.0, s.text("timing.bottleneck"),
       s.real("timing.gp_utilisation_max"), s.real("timing.renderer_utilisation_max"),
       s.real("timing.ring_utilisation"), s.integer("pixel_memory.used"), dropped, busy,
@@ -107,17 +112,14 @@ int run_animate(AnimateOptions o) {
   std::map<int, RegionLoad> summed;  // by region
   FrameResult last;
   AnimationReportInput report_in;
-  double start = 0;
-  std::vector<std::pair<double, double>> frame_spans;  // per frame: start and length, seconds
-  for (int k = 0; k < frames; ++k) {
-    if (k > 0) session.set_scene(scenes[static_cast<std::size_t>(k)]);
-    FrameResult r = session.frame({}, record_timeline ? &timeline : nullptr, pixels);
-    // The frame's start in the run's simulated time: the machine's frame clock (the analytic
-    // model runs frames back to back).
-    if (const Machine* m = session.machine()) start = m->clock().start().to_seconds();
-    csv += frames_csv_row(k, animation.fps(), start, r);
-    frame_spans.emplace_back(start, r.frame_seconds);
-    start += r.frame_seconds;
+  std::vector<std::pair<double, double>> frame_spans;  // per frame: start and end, seconds
+  // The frames overlapped, as the machine ran them (Session::run_frames): each frame's GPs
+  // set up its own scene while the Renderers still draw the frame before.
+  auto on_frame = [&](int k, FrameResult& r) {
+    csv += frames_csv_row(k, animation.fps(), r);
+    const double start = r.stats.real("frame.start_seconds");
+    const double end = r.stats.real("frame.end_seconds");
+    frame_spans.emplace_back(start, end);
     nlohmann::json frame_stats = r.stats_json;
     stats["frames"].push_back(std::move(frame_stats));
     if (pixels) {
@@ -143,18 +145,23 @@ int run_animate(AnimateOptions o) {
         it->second.renderer = l.renderer;  // the last frame's Renderer
       }
     }
-    std::cout << fmt::format("frame {}: {:.3f} ms simulated, {}-bound\n", k, r.frame_seconds * 1e3,
+    std::cout << fmt::format("frame {}: {:.3f} ms simulated, latency {:.3f} ms, {}-bound\n", k,
+                             r.frame_seconds * 1e3, (end - start) * 1e3,
                              r.stats.text("timing.bottleneck"));
     last = std::move(r);
-  }
+  };
+  session.run_frames(
+      frames, on_frame, pixels, [&scenes](int k) { return scenes[static_cast<std::size_t>(k)]; },
+      record_timeline ? &timeline : nullptr);
   const RunSummary& summary = session.summary();
-  stats["summary"] = {{"frames", summary.frames},
-                      {"simulated_seconds", summary.simulated_seconds},
-                      {"mean_frame_seconds", summary.mean_frame_seconds()},
-                      {"shortest_frame_seconds", summary.shortest_frame_seconds},
-                      {"longest_frame_seconds", summary.longest_frame_seconds},
-                      {"fps", animation.fps()},
-                      {"motion", animation.motion()}};
+  stats["summary"] = summary.statistics().to_json();
+  stats["summary"].update({{"frames", summary.frames},
+                           {"simulated_seconds", summary.simulated_seconds},
+                           {"mean_frame_seconds", summary.mean_frame_seconds()},
+                           {"shortest_frame_seconds", summary.shortest_frame_seconds},
+                           {"longest_frame_seconds", summary.longest_frame_seconds},
+                           {"fps", animation.fps()},
+                           {"motion", animation.motion()}});
   if (pixels) {
     std::vector<const RgbImage*> list;
     for (const RgbImage& i : images) list.push_back(&i);
@@ -189,13 +196,22 @@ int run_animate(AnimateOptions o) {
                       {"pid", kFramesPid},
                       {"tid", 0},
                       {"args", {{"sort_index", -1}}}});
+    // Two frames are in flight at once: even frames on one row, odd on the other, each from
+    // its first set-up on a GP to its last region in the frame buffer.
+    for (int row = 0; row < 2; ++row) {
+      events.push_back({{"ph", "M"},
+                        {"name", "thread_name"},
+                        {"pid", kFramesPid},
+                        {"tid", row},
+                        {"args", {{"name", row == 0 ? "even frames" : "odd frames"}}}});
+    }
     for (std::size_t k = 0; k < frame_spans.size(); ++k) {
       events.push_back({{"ph", "X"},
                         {"name", fmt::format("frame {}", k)},
                         {"pid", kFramesPid},
-                        {"tid", 0},
+                        {"tid", static_cast<int>(k & 1)},
                         {"ts", frame_spans[k].first * 1e6},
-                        {"dur", frame_spans[k].second * 1e6}});
+                        {"dur", (frame_spans[k].second - frame_spans[k].first) * 1e6}});
     }
   }
   if (record_timeline) outputs.add((dir / "timeline.json").string(), timeline.dump() + "\n");
@@ -233,7 +249,7 @@ int run_animate(AnimateOptions o) {
     for (const fs::path& p : stale) fs::remove(p, ignored);
   }
 
-  std::cout << summary.text();
+  std::cout << summary.text() << summary.sustained_text();
   std::cout << fmt::format(
       "{} {}{}/frames.csv, {}/stats.json, {}/config.json{}{}\n",
       replacing ? "wrote (replacing the previous run's)" : "wrote",

@@ -604,23 +604,54 @@ class PySession {
     std::function<BoardObserver*(int)> observe;
     if (capture) observe = [&](int k) { return capture->observer(k); };
     f.result = run(observe, pixels);
-    f.index = frames_ - 1;
-    f.program = program_;
-    f.config = config_;
-    const FrameImage& image = f.result.image;
-    if (image.has_pixels()) {
-      // The frame buffer's rows, copied once into the array.
-      py::array_t<std::uint8_t> a({image.height(), image.width(), 3});
-      std::uint8_t* out = a.mutable_data();
-      for (int y = 0; y < image.height(); ++y)
-        image.row(y, out + static_cast<std::size_t>(y) * image.width() * 3);
-      f.image = a;
-    } else {
-      f.image = py::none();
-    }
-    f.result.image = FrameImage();  // the array holds the pixels now
-    return f;
+    return finish(std::move(f), frames_ - 1);
   }
+
+  // The rest of an animation's frames, overlapped as the machine ran them
+  // (Session::run_frames: the GPs set up frame n + 1 from its scene while the Renderers draw
+  // frame n): on a session that has run no frame yet. Its machine is freed afterwards.
+  std::vector<PyFrame> run_animation(bool pixels) {
+    if (!animation_ || frames_ > 0) {
+      throw std::invalid_argument(
+          "run_animation: an animated session (animation=True) that has run no frame yet");
+    }
+    close();
+    std::vector<FrameResult> results;
+    bool done = false;
+    {
+      KernelLock kernel;
+      done = watched([&](const std::atomic<bool>* cancel) {
+        session_ = std::make_unique<Session>(config_, animation_->scenes.front(), program_,
+                                             threads_, nullptr, cancel);
+        session_->set_setup_seconds(setup_seconds_);
+        session_->set_cancel(cancel);
+        const auto& scenes = animation_->scenes;
+        overlapped_ = session_->run_frames(
+            static_cast<int>(scenes.size()),
+            [&results](int, FrameResult& r) { results.push_back(std::move(r)); }, pixels,
+            [&scenes](int k) { return scenes[static_cast<std::size_t>(k)]; });
+        session_->set_cancel(nullptr);
+      });
+    }
+    if (!done) {
+      // Ctrl-C: no frame of the run is kept; the machine is freed and the animation can be run
+      // again from its first frame.
+      close();
+      overlapped_ = RunSummary{};
+      raise_interrupt();
+    }
+    frames_ = static_cast<int>(results.size());
+    close();  // an overlapped machine runs no further frame
+    std::vector<PyFrame> out;
+    for (std::size_t k = 0; k < results.size(); ++k) {
+      PyFrame f;
+      f.result = std::move(results[k]);
+      out.push_back(finish(std::move(f), static_cast<int>(k)));
+    }
+    return out;
+  }
+  // The sustained figures of run_animation's run (frames 0 when there was none).
+  const RunSummary& overlapped() const { return overlapped_; }
 
   // A frame recorded for pixel (x, y), and `pp5sim trace why`'s explanation of it.
   std::string why(int x, int y) {
@@ -705,6 +736,24 @@ class PySession {
     }
     return animation_->scenes[static_cast<std::size_t>(frames_)];
   }
+  PyFrame finish(PyFrame f, int index) const {
+    f.index = index;
+    f.program = program_;
+    f.config = config_;
+    const FrameImage& image = f.result.image;
+    if (image.has_pixels()) {
+      // The frame buffer's rows, copied once into the array.
+      py::array_t<std::uint8_t> a({image.height(), image.width(), 3});
+      std::uint8_t* out = a.mutable_data();
+      for (int y = 0; y < image.height(); ++y)
+        image.row(y, out + static_cast<std::size_t>(y) * image.width() * 3);
+      f.image = a;
+    } else {
+      f.image = py::none();
+    }
+    f.result.image = FrameImage();  // the array holds the pixels now
+    return f;
+  }
   static void add(RunSummary& a, const RunSummary& b) {
     if (b.frames == 0) return;
     a.shortest_frame_seconds = a.frames
@@ -725,6 +774,7 @@ class PySession {
   std::optional<PyAnimation> animation_;
   int frames_ = 0;
   RunSummary closed_;     // the frames of machines freed so far
+  RunSummary overlapped_;
   double setup_seconds_;  // host.setup_seconds of the first frame
 };
 
@@ -1061,6 +1111,7 @@ PYBIND11_MODULE(_pp5sim, m) {
            py::arg("pixels") = true)
       .def("why", &PySession::why, py::arg("x"), py::arg("y"))
       .def("close", &PySession::close)
+      .def("run_animation", &PySession::run_animation, py::arg("pixels") = true)
       .def_property_readonly("frames", &PySession::frames)
       .def_property_readonly("threads", &PySession::threads)
       .def_property_readonly("animation",
@@ -1099,6 +1150,18 @@ PYBIND11_MODULE(_pp5sim, m) {
         d["host_seconds"] = r.host_seconds;
         d["host_over_simulated"] = r.host_over_simulated();
         d["text"] = r.text();
+        const RunSummary& o = s.overlapped();
+        if (o.frames > 0) {
+          // An animation run overlapped (run_animation): the sustained figures.
+          d["overlapped"] = o.overlapped;
+          d["sustained_frame_seconds"] = o.sustained_frame_seconds;
+          d["sustained_frames_per_second"] =
+              o.sustained_frame_seconds > 0 ? 1 / o.sustained_frame_seconds : 0.0;
+          d["mean_latency_seconds"] = o.mean_latency_seconds;
+          d["longest_latency_seconds"] = o.longest_latency_seconds;
+          d["overlapped_frames"] = o.overlapped_frames;
+          d["text"] = r.text() + o.sustained_text();
+        }
         return d;
       });
 

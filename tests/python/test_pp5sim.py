@@ -459,6 +459,10 @@ def test_animation_frames_are_pp5sim_animates(cli_animation):
         assert np.array_equal(f.image, images[k]), k
         assert f.stats["frame"] == stats[k]["frame"], k
         assert f.stats["timing"] == stats[k]["timing"], k
+    # Overlapped, as pp5sim animate runs them: each frame's set-up began before the frame
+    # before had ended.
+    assert session.summary["overlapped_frames"] == ANIMATION_FRAMES - 1
+    assert session.summary["sustained_frame_seconds"] > 0
     # The torus turns: no two frames alike.
     assert not np.array_equal(frames[0].image, frames[1].image)
     assert not np.array_equal(frames[1].image, frames[2].image)
@@ -600,7 +604,7 @@ def test_ctrl_c_stops_an_animation_frame():
     frame_seconds, f1 = seconds(lambda: whole.frame(pixels=False))
     f2 = whole.frame(pixels=False)
     session = animation()
-    frames = session.frames(pixels=False)
+    frames = session.frames(2, pixels=False)  # frame by frame (not the whole animation)
     next(frames)
     interrupted = interrupted_seconds(lambda: next(frames), 0.1 * frame_seconds)
     assert interrupted < 0.5 * frame_seconds, (interrupted, frame_seconds)
@@ -610,3 +614,23 @@ def test_ctrl_c_stops_an_animation_frame():
     assert [f.index for f in rest] == [1, 2]
     assert without_host(rest[0].stats) == without_host(f1.stats)
     assert without_host(rest[1].stats) == without_host(f2.stats)
+
+
+def test_ctrl_c_stops_an_overlapped_animation():
+    # The whole animation run overlapped (frames() on a fresh animated session: one
+    # Session.run_frames); Ctrl-C a tenth of the way in stops it, keeps no frame, and the
+    # animation runs again from its first frame with an uninterrupted run's results.
+    def animation():
+        return pp5sim.Session("torus", animation=True, frames=3, tessellation=(384, 96),
+                              fidelity="timing", threads=1)
+
+    run_seconds, whole = seconds(lambda: list(animation().frames(pixels=False)))
+    session = animation()
+    interrupted = interrupted_seconds(lambda: list(session.frames(pixels=False)),
+                                      0.1 * run_seconds)
+    assert interrupted < 0.5 * run_seconds, (interrupted, run_seconds)
+    assert session.frames_run == 0
+    again = list(session.frames(pixels=False))
+    assert [f.index for f in again] == [0, 1, 2]
+    for a, b in zip(again, whole):
+        assert without_host(a.stats) == without_host(b.stats)

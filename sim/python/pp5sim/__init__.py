@@ -170,9 +170,17 @@ class Session:
 
     def frames(self, n=None, fields=(), pixels=True):
         """Iterates over the next n frames (without n, until the loop stops; an animation's, to
-        its last frame). Ctrl-C raises KeyboardInterrupt."""
+        its last frame). Ctrl-C raises KeyboardInterrupt. An animated session that has run no
+        frame yet runs all its frames overlapped, as `pp5sim animate` does (the GPs set up
+        frame n + 1 while the Renderers draw frame n; summary then holds the sustained
+        figures), unless fields are asked for or n is fewer than its frames."""
         if n is None and self.animation is not None:
             n = self.animation["frames"] - self.frames_run
+        if (self.animation is not None and self.frames_run == 0 and not fields
+                and n == self.animation["frames"]):
+            for f in self._s.run_animation(bool(pixels)):
+                yield Frame(f)
+            return
         count = 0
         while n is None or count < n:
             yield self._next_frame(fields, pixels)
