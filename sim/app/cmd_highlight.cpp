@@ -237,8 +237,12 @@ int run_highlight(const HighlightOptions& o) {
             a.flagged ? static_cast<double>(changed) / a.flagged : static_cast<double>(changed);
         change = report::Cell::shown_as(share, fmt::format("{:.4f} ({} px)", share, changed));
       }
-      outputs.add((dir / (e.name + ".png")).string(), encode_png(frame.image));
-      outputs.add((dir / (e.name + "-overlay.png")).string(),
+      // A program given as a path names its images with its '/' made '_' (one file per program
+      // in the scene's folder, not a folder per path component).
+      std::string image_name = e.name;
+      std::replace(image_name.begin(), image_name.end(), '/', '_');
+      outputs.add((dir / (image_name + ".png")).string(), encode_png(frame.image));
+      outputs.add((dir / (image_name + "-overlay.png")).string(),
                   encode_png(overlay_image(frame.image, truth, flagged)));
       auto speed = [&](double v) {
         return o.speed_scene.empty() ? report::Cell::missing() : report::Cell(v);
