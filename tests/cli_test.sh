@@ -52,13 +52,18 @@ grep -q '^timing.bottleneck = ' "$tmp/stats.txt" || fail "stats FILE: no timing.
 expect_error "give --describe or a stats.json file" stats
 printf '{"frame": {"bogus": 1}}' > "$tmp/bogus.json"
 expect_error "'frame.bogus' is not a statistic" stats "$tmp/bogus.json"
-"$bin" highlight --scenes two-triangles --firmware exactmatch epsilon --speed-scene '' \
-  --set screen.width=256 --set screen.height=256 --out "$tmp/hl" --report >"$tmp/hl.log" 2>&1 \
-  || fail "highlight failed: $(cat "$tmp/hl.log")"
+# A program may be given as a path (here one relative to the working folder, with a '/'):
+# its images are named by the path with '/' made '_', in the scene's folder.
+mkdir -p "$tmp/rw" && cp "$(dirname "$0")/../firmware/rewrites/epsilon.pp5" "$tmp/rw/eps.pp5"
+(cd "$tmp" && "$bin" highlight --scenes two-triangles --firmware exactmatch epsilon rw/eps.pp5 \
+  --speed-scene '' --set screen.width=256 --set screen.height=256 --out "$tmp/hl" --report) \
+  >"$tmp/hl.log" 2>&1 || fail "highlight failed: $(cat "$tmp/hl.log")"
 grep -q "| epsilon | two-triangles |" "$tmp/hl.log" || fail "no epsilon row in the table"
+grep -q "| rw/eps.pp5 | two-triangles |" "$tmp/hl.log" || fail "no row for the program path"
 for f in highlight.md highlight.csv highlight-truth.csv highlight-summary.csv \
   highlight-curves-two-triangles.csv report.html \
-  two-triangles/epsilon.png two-triangles/epsilon-overlay.png; do
+  two-triangles/epsilon.png two-triangles/epsilon-overlay.png two-triangles/rw_eps.pp5.png \
+  two-triangles/rw_eps.pp5-overlay.png; do
   [ -s "$tmp/hl/$f" ] || fail "highlight did not write $f"
 done
 # Its CSV is the Markdown table's rows, with the values (not the text) in the cells.

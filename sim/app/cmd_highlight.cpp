@@ -350,6 +350,10 @@ int run_highlight(const HighlightOptions& o) {
         change = report::Cell::shown_as(share, fmt::format("{:.4f} ({} px)", share, changed));
       }
       RgbImage overlay = overlay_image(frame.image, truth, flagged);
+      // A program given as a path names its images with its '/' made '_' (one file per program
+      // in the scene's folder, not a folder per path component).
+      std::string image_name = e.name;
+      std::replace(image_name.begin(), image_name.end(), '/', '_');
       if (o.report) {
         const int all = e.program.multipass() ? 1 : 0;
         // The truth once per scene (and once more for the multipass programs' when it differs),
@@ -372,17 +376,18 @@ int run_highlight(const HighlightOptions& o) {
               fmt::format("{}: the truth pixels over {}'s image", scene_name, e.name), ""});
         }
         images.blocks.push_back(report::Figure{
-            fmt::format("{}-{}", scene_name, e.name), fmt::format("{} on {}", e.name, scene_name),
-            fmt::format("Left: {0}'s image ({1}/{0}.png). Right: its flags against the truth "
-                        "({1}/{0}-overlay.png): green flagged and true ({2} px), red flagged only "
+            fmt::format("{}-{}", scene_name, image_name), fmt::format("{} on {}", e.name, scene_name),
+            fmt::format("Left: {0}'s image ({1}/{5}.png). Right: its flags against the truth "
+                        "({1}/{5}-overlay.png): green flagged and true ({2} px), red flagged only "
                         "({3} px), blue missed ({4} px)",
-                        e.name, scene_name, a.hits, a.flagged - a.hits, a.truth - a.hits),
+                        e.name, scene_name, a.hits, a.flagged - a.hits, a.truth - a.hits,
+                        image_name),
             "image/png", encode_png(side_by_side(frame.image, overlay)),
             fmt::format("{} on {}: the image and the flags against the truth", e.name, scene_name),
             ""});
       }
-      outputs.add((dir / (e.name + ".png")).string(), encode_png(frame.image));
-      outputs.add((dir / (e.name + "-overlay.png")).string(), encode_png(overlay));
+      outputs.add((dir / (image_name + ".png")).string(), encode_png(frame.image));
+      outputs.add((dir / (image_name + "-overlay.png")).string(), encode_png(overlay));
       auto speed = [&](double v) {
         return o.speed_scene.empty() ? report::Cell::missing() : report::Cell(v);
       };

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "common/read_file.hpp"
 #include "common/strict_json.hpp"
@@ -185,9 +186,21 @@ std::string rewrites_table(const MachineConfig& config, const Scene& scene,
   struct Measured {
     int bits = 0;
     std::uint64_t cycles = 0;
+    std::optional<std::uint64_t> sphere_cycles;  // the sphere procedure's, if it has one
     std::array<std::uint64_t, static_cast<int>(Opcode::count)> by_op{};
     double assembly = 0, compiled = 0;
-    bool broadcasts = false;  // names a constant expression as a broadcast operand
+    bool broadcasts = false;  // the triangle names a constant expression as a broadcast operand
+    bool sphere_broadcasts = false;  // ... the sphere procedure does
+  };
+  auto broadcasts_in = [](const ProcedureCode& code) {
+    bool any = false;
+    for (const Instruction& ins : code.code) {
+      const char* letters = instruction_info(ins.op).operands;
+      for (int k = 0; letters[k] != '\0'; ++k) {
+        any |= letters[k] == 'V' && ins.operands[k].kind == Operand::Kind::expression;
+      }
+    }
+    return any;
   };
   auto measure = [&](const std::string& name) {
     const Program program = assemble_file(resolve_firmware(name), assembler_options(config));
@@ -197,14 +210,18 @@ std::string rewrites_table(const MachineConfig& config, const Scene& scene,
     }
     Measured m;
     m.bits = program.bits_used();
+    m.broadcasts = broadcasts_in(code);
     for (const Instruction& ins : code.code) {
-      const char* letters = instruction_info(ins.op).operands;
-      for (int k = 0; letters[k] != '\0'; ++k) {
-        m.broadcasts |= letters[k] == 'V' && ins.operands[k].kind == Operand::Kind::expression;
-      }
       const std::uint64_t c = instruction_cost(ins, timing, values).count;
       m.cycles += c;
       m.by_op[static_cast<int>(ins.op)] += c;
+    }
+    const ProcedureCode& sphere = program.procedure(Procedure::sphere);
+    if (sphere.defined) {
+      std::uint64_t c = 0;
+      for (const Instruction& ins : sphere.code) c += instruction_cost(ins, timing, values).count;
+      m.sphere_cycles = c;
+      m.sphere_broadcasts = broadcasts_in(sphere);
     }
     m.assembly = project_frame(assembly, scene, program).triangles_per_second;
     m.compiled = project_frame(compiled, scene, program).triangles_per_second;
@@ -224,15 +241,20 @@ std::string rewrites_table(const MachineConfig& config, const Scene& scene,
       left(report::integer_column("cycles per triangle packet", "array cycles",
                                   "The triangle procedure's cycles, before -> after"),
            "cycles per triangle packet"),
+      left(report::integer_column("cycles per sphere packet", "array cycles",
+                                  "The sphere procedure's cycles, before -> after (- where "
+                                  "neither program draws spheres)"),
+           "cycles per sphere packet"),
       left(report::real_column("polygons/s, hand-coded", "polygons/s", 0,
                                "Projected rate with hand-coded GP code, before -> after"),
            fmt::format("{} polygons/s, hand-coded GP code", scene.name)),
       left(report::real_column("polygons/s, compiled", "polygons/s", 0,
                                "Projected rate with compiled GP code, before -> after"),
            fmt::format("{} polygons/s, compiled GP code", scene.name)),
-      left(report::text_column("cycles saved, by instruction",
-                               "Cycles the rewrite saves, per instruction (negative: spends)"),
-           "cycles saved, by instruction"),
+      left(report::text_column("cycles saved per triangle, by instruction",
+                               "Cycles the rewrite saves in the triangle procedure, per "
+                               "instruction (negative: spends)"),
+           "cycles saved per triangle, by instruction"),
   };
   auto arrow = [](report::Cell after, const std::string& a, const std::string& b) {
     return report::Cell::shown_as(std::move(after), fmt::format("{} -> {}", a, b));
@@ -269,23 +291,34 @@ std::string rewrites_table(const MachineConfig& config, const Scene& scene,
                                         : "-" + grouped(static_cast<std::uint64_t>(-d)),
                                   mark));
     }
+    auto broadcast_mark = [&notes] {
+      auto at = std::find(notes.begin(), notes.end(), kBroadcastBasis);
+      if (at == notes.end()) at = notes.insert(notes.end(), kBroadcastBasis);
+      return std::string(static_cast<std::size_t>(at - notes.begin()) + 1, '*');
+    };
     if (b.broadcasts && !a.broadcasts) {
-      const char* note = kBroadcastBasis;
-      auto at = std::find(notes.begin(), notes.end(), note);
-      if (at == notes.end()) at = notes.insert(notes.end(), note);
-      saved.push_back(
-          fmt::format("(constant expressions broadcast{})",
-                      std::string(static_cast<std::size_t>(at - notes.begin()) + 1, '*')));
+      saved.push_back(fmt::format("(constant expressions broadcast{})", broadcast_mark()));
     }
-    table.add_row({arrow(pair.substr(colon + 1), pair.substr(0, colon), pair.substr(colon + 1)),
-                   arrow(b.bits, std::to_string(a.bits), std::to_string(b.bits)),
-                   arrow(b.cycles, grouped(a.cycles), grouped(b.cycles)),
-                   arrow(b.assembly, grouped(static_cast<std::uint64_t>(std::llround(a.assembly))),
-                         grouped(static_cast<std::uint64_t>(std::llround(b.assembly)))),
-                   arrow(b.compiled, grouped(static_cast<std::uint64_t>(std::llround(a.compiled))),
-                         grouped(static_cast<std::uint64_t>(std::llround(b.compiled)))),
-                   saved.empty() ? report::Cell::missing()
-                                 : report::Cell(fmt::format("{}", fmt::join(saved, ", ")))});
+    // A sphere figure that moved because the after program broadcasts its constants.
+    const std::string sphere_mark =
+        b.sphere_broadcasts && !a.sphere_broadcasts && a.sphere_cycles != b.sphere_cycles
+            ? broadcast_mark()
+            : std::string();
+    table.add_row(
+        {arrow(pair.substr(colon + 1), pair.substr(0, colon), pair.substr(colon + 1)),
+         arrow(b.bits, std::to_string(a.bits), std::to_string(b.bits)),
+         arrow(b.cycles, grouped(a.cycles), grouped(b.cycles)),
+         !a.sphere_cycles && !b.sphere_cycles
+             ? report::Cell::missing()
+             : arrow(b.sphere_cycles ? report::Cell(*b.sphere_cycles) : report::Cell::missing(),
+                     a.sphere_cycles ? grouped(*a.sphere_cycles) : "-",
+                     (b.sphere_cycles ? grouped(*b.sphere_cycles) : "-") + sphere_mark),
+         arrow(b.assembly, grouped(static_cast<std::uint64_t>(std::llround(a.assembly))),
+               grouped(static_cast<std::uint64_t>(std::llround(b.assembly)))),
+         arrow(b.compiled, grouped(static_cast<std::uint64_t>(std::llround(a.compiled))),
+               grouped(static_cast<std::uint64_t>(std::llround(b.compiled)))),
+         saved.empty() ? report::Cell::missing()
+                       : report::Cell(fmt::format("{}", fmt::join(saved, ", ")))});
   }
   std::string out = report::markdown(table);
   for (std::size_t k = 0; k < notes.size(); ++k) {
