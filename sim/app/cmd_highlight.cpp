@@ -376,7 +376,8 @@ int run_highlight(const HighlightOptions& o) {
               fmt::format("{}: the truth pixels over {}'s image", scene_name, e.name), ""});
         }
         images.blocks.push_back(report::Figure{
-            fmt::format("{}-{}", scene_name, image_name), fmt::format("{} on {}", e.name, scene_name),
+            fmt::format("{}-{}", scene_name, image_name),
+            fmt::format("{} on {}", e.name, scene_name),
             fmt::format("Left: {0}'s image ({1}/{5}.png). Right: its flags against the truth "
                         "({1}/{5}-overlay.png): green flagged and true ({2} px), red flagged only "
                         "({3} px), blue missed ({4} px)",

@@ -773,7 +773,7 @@ class PySession {
   std::unique_ptr<Session> session_;
   std::optional<PyAnimation> animation_;
   int frames_ = 0;
-  RunSummary closed_;     // the frames of machines freed so far
+  RunSummary closed_;  // the frames of machines freed so far
   RunSummary overlapped_;
   double setup_seconds_;  // host.setup_seconds of the first frame
 };
