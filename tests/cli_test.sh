@@ -90,6 +90,9 @@ diff <(grep '^10,' "$tmp/scp/scanconvert-precision.csv" | cut -d, -f3-6) \
 expect_error "significand-bits 3: .*out of range \[4, 62\]" scanconvert -s two-triangles \
   --significand-bits 24,3 --out "$tmp/scp-bad"
 [ -e "$tmp/scp-bad" ] && fail "scanconvert --significand-bits wrote output after bad input"
+expect_error "significand-bits: 24 is given twice" scanconvert -s two-triangles \
+  --significand-bits 24,10,24 --out "$tmp/scp-twice"
+[ -e "$tmp/scp-twice" ] && fail "scanconvert --significand-bits wrote output after a repeated width"
 # validate and fidelity write their CSVs through the report's tables: the files of every
 # value, not the shown tables (no record.csv).
 "$bin" validate --no-sensitivity --joint 2 --out "$tmp/val" >"$tmp/val.log" 2>&1 || fail "validate: $(cat "$tmp/val.log")"

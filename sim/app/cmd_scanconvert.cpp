@@ -55,7 +55,14 @@ int run_scanconvert(const ScanConvertOptions& o) {
     // Every scene at each precision of the GP's arithmetic: one table. Each width is checked
     // (the key's range) before the first frame runs.
     std::vector<MachineConfig> configs;
-    for (const int b : o.significand_bits) {
+    for (std::size_t i = 0; i < o.significand_bits.size(); ++i) {
+      const int b = o.significand_bits[i];
+      for (std::size_t j = 0; j < i; ++j) {
+        if (o.significand_bits[j] == b) {
+          throw std::runtime_error(fmt::format(
+              "--significand-bits: {} is given twice (each width is one set of rows)", b));
+        }
+      }
       MachineConfig c = config;
       try {
         c.set(std::vector<std::string>{fmt::format("gp.significand_bits={}", b)});
