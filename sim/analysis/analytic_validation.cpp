@@ -154,23 +154,23 @@ AnalyticValidation validate_analytic(const std::string& grid,
 
 report::Table analytic_validation_table(const std::vector<AnalyticValidation>& grids) {
   using namespace report;
-  auto left = [](Column c) { return headed(c, c.name, Align::left); };
   Table t;
   t.id = "analytic-grids";
   t.columns = {
       text_column("grid", "tuning (the machines it was adjusted on), looked at, or held-out"),
-      left(integer_column("machines", "machines")),
+      left_aligned(integer_column("machines", "machines")),
       text_column("model", "The analytic level's recurrence, or a closed form without contention"),
-      left(real_column("mean error", "%", 1, "Mean |frame-time error| against the event level")),
-      left(real_column("worst error", "%", 1, "Largest |frame-time error|")),
+      left_aligned(
+          real_column("mean error", "%", 1, "Mean |frame-time error| against the event level")),
+      left_aligned(real_column("worst error", "%", 1, "Largest |frame-time error|")),
       text_column("static: worst (mean)",
                   "Worst and mean error over the grid's machines with static balancing"),
       text_column("dynamic: worst (mean)",
                   "Worst and mean error over the grid's machines with dynamic balancing"),
-      left(integer_column("bottleneck agrees", "machines",
-                          "Machines where the bottleneck agrees with the event level's")),
-      left(real_column("Kendall tau", "", 3,
-                       "Rank correlation of the frame times with the event level's")),
+      left_aligned(integer_column("bottleneck agrees", "machines",
+                                  "Machines where the bottleneck agrees with the event level's")),
+      left_aligned(real_column("Kendall tau", "", 3,
+                               "Rank correlation of the frame times with the event level's")),
       text_column("worst machine", "Where the recurrence's error is largest"),
   };
   // "12.3%": the unit follows the number in the cell, as the table always showed it.

@@ -654,39 +654,39 @@ std::string format_scan_conversion_ablation(const std::vector<ScanConversionAbla
 
 report::Table scan_conversion_table(const std::vector<ScanConversionReport>& reports) {
   using namespace report;
-  auto left = [](Column c) {
-    c.heading = c.name;
-    c.align = Align::left;
-    return c;
-  };
   Table t;
   t.id = "scanconvert";
   t.columns = {
       text_column("scene"),
       text_column("method", "standard (phong) or accurate"),
-      left(integer_column("edge px", "pixels",
-                          "Covered pixels within max(1, E) of any triangle's edge")),
-      left(real_column("max error", "depth units", 0, "Largest depth error at edge pixels")),
-      left(real_column("mean error", "depth units", 2, "Mean depth error at edge pixels")),
-      left(real_column("shared-edge max", "depth units", 0,
-                       "Largest depth error at edge pixels within 2E of no silhouette, boundary or "
-                       "clipped edge")),
-      left(real_column("/ 2ME", "", 3,
-                       "The shared-edge error over the paper's bound 2 M E (1: at the bound)")),
-      left(real_column("layer-edge max", "depth units", 0,
-                       "Largest depth error near a silhouette, boundary or clipped edge")),
-      left(real_column("/ ME", "", 3, "The layer-edge error over its bound (1: at the bound)")),
-      left(real_column("interior max", "depth units", 0,
-                       "Largest depth error at the other covered pixels")),
-      left(integer_column("hidden shows", "pixels", "Pixels where a hidden surface shows")),
-      left(integer_column("parity errors", "pixels",
-                          "Pixels of odd coverage on a closed mesh ('open': not closed)")),
-      left(integer_column("cycles/tri", "array cycles", "Array cycles of one triangle invocation")),
-      left(integer_column("bits", "bits", "Pixel-memory bits the program uses")),
-      left(real_column("GP clocks/tri", "i860 clocks", 0,
-                       "i860 clocks over the GPs per scene triangle")),
-      left(integer_column("words/packet", "ring words", "Ring words of one triangle packet")),
-      left(real_column("frame ms", "ms", 2, "Simulated frame time")),
+      left_aligned(integer_column("edge px", "pixels",
+                                  "Covered pixels within max(1, E) of any triangle's edge")),
+      left_aligned(
+          real_column("max error", "depth units", 0, "Largest depth error at edge pixels")),
+      left_aligned(real_column("mean error", "depth units", 2, "Mean depth error at edge pixels")),
+      left_aligned(
+          real_column("shared-edge max", "depth units", 0,
+                      "Largest depth error at edge pixels within 2E of no silhouette, boundary or "
+                      "clipped edge")),
+      left_aligned(real_column(
+          "/ 2ME", "", 3, "The shared-edge error over the paper's bound 2 M E (1: at the bound)")),
+      left_aligned(real_column("layer-edge max", "depth units", 0,
+                               "Largest depth error near a silhouette, boundary or clipped edge")),
+      left_aligned(
+          real_column("/ ME", "", 3, "The layer-edge error over its bound (1: at the bound)")),
+      left_aligned(real_column("interior max", "depth units", 0,
+                               "Largest depth error at the other covered pixels")),
+      left_aligned(integer_column("hidden shows", "pixels", "Pixels where a hidden surface shows")),
+      left_aligned(integer_column("parity errors", "pixels",
+                                  "Pixels of odd coverage on a closed mesh ('open': not closed)")),
+      left_aligned(
+          integer_column("cycles/tri", "array cycles", "Array cycles of one triangle invocation")),
+      left_aligned(integer_column("bits", "bits", "Pixel-memory bits the program uses")),
+      left_aligned(real_column("GP clocks/tri", "i860 clocks", 0,
+                               "i860 clocks over the GPs per scene triangle")),
+      left_aligned(
+          integer_column("words/packet", "ring words", "Ring words of one triangle packet")),
+      left_aligned(real_column("frame ms", "ms", 2, "Simulated frame time")),
   };
   for (const ScanConversionReport& r : reports) {
     for (const ScanConversionMethod* m : {&r.standard, &r.accurate}) {

@@ -533,16 +533,16 @@ JointSensitivity joint_sensitivity(const MachineConfig& base, const ProgramLoade
 
 report::Table joint_sensitivity_table(const JointSensitivity& j) {
   using namespace report;
-  auto left = [](Column c) { return headed(c, c.name, Align::left); };
   Table t;
   t.id = "joint-conclusions";
   t.columns = {
       text_column("conclusion", "What the default machine says"),
       text_column("measure", "What is measured per sample"),
-      left(real_column("5% .. 95% (median)", "%", 0,
-                       "The measure's 5th to 95th percentile over the samples (its median)")),
-      left(real_column("min .. max", "%", 0, "The measure's range over the samples")),
-      left(real_column("holds in", "%", 0, "The samples where the conclusion holds")),
+      left_aligned(
+          real_column("5% .. 95% (median)", "%", 0,
+                      "The measure's 5th to 95th percentile over the samples (its median)")),
+      left_aligned(real_column("min .. max", "%", 0, "The measure's range over the samples")),
+      left_aligned(real_column("holds in", "%", 0, "The samples where the conclusion holds")),
   };
   for (const ConclusionShare& c : j.conclusions) {
     const bool percent = c.measure.find("share") == std::string::npos;
@@ -618,15 +618,15 @@ std::string consumed_text(const ValidationRow& r) {
 
 report::Table validation_table(const std::vector<ValidationRow>& rows) {
   using namespace report;
-  auto left = [](Column c) { return headed(c, c.name, Align::left); };
   Table t;
   t.id = "validate";
   t.columns = {
       text_column("published figure", "What the record says"),
       text_column("source", "Where, with its confidence (P, S)"),
       text_column("published", "The figure as the source gives it"),
-      left(real_column("simulated", "", -1, "The simulator's projection, in the row's unit")),
-      left(real_column("difference", "%", 0, "(simulated - published) / published")),
+      left_aligned(
+          real_column("simulated", "", -1, "The simulator's projection, in the row's unit")),
+      left_aligned(real_column("difference", "%", 0, "(simulated - published) / published")),
       text_column("status", "fitted, derived or predicted"),
       text_column("consumed by the fit of", "The configuration keys fitted to this figure"),
       text_column("evidence", "Whether the figure tests the model (a prediction)"),
@@ -720,7 +720,6 @@ std::string change(double rate, double base) {
 
 report::Table sensitivity_table(const SensitivityTable& table) {
   using namespace report;
-  auto left = [](Column c) { return headed(c, c.name, Align::left); };
   Table t;
   t.id = "sensitivity";
   t.columns = {code_column("constant", "A fitted or assumed configuration key"),
@@ -728,7 +727,7 @@ report::Table sensitivity_table(const SensitivityTable& table) {
                text_column("low", "The low end of its plausible range (linked keys after it)"),
                text_column("high", "The high end of its plausible range (linked keys after it)")};
   for (const SensitivityWorkload& w : table.workloads) {
-    t.columns.push_back(left(real_column(
+    t.columns.push_back(left_aligned(real_column(
         w.label(), "K triangles/s", 0,
         fmt::format("Projected triangles/s of the torus with {}, at the low .. high end (the "
                     "change from the defaults); sorted by the low end",

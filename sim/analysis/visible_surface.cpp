@@ -608,30 +608,28 @@ Statistics visible_statistics(const std::vector<VisibleSceneReport>& reports) {
 report::Table visible_table(const std::vector<VisibleSceneReport>& reports,
                             const MachineConfig& config) {
   using namespace report;
-  auto left = [](Column c, const char* heading) {
-    return headed(std::move(c), heading, Align::left);
-  };
   Table t;
   t.id = "visible";
   t.columns = {
       text_column("scene"),
       text_column("algorithm"),
-      left(integer_column("pixels differing", "pixels",
-                          "Certain pixels that differ from the reference (in brackets: "
-                          "uncertain pixels that differ, not counted)"),
-           "pixels differing (uncertain)"),
+      left_aligned(integer_column("pixels differing", "pixels",
+                                  "Certain pixels that differ from the reference (in brackets: "
+                                  "uncertain pixels that differ, not counted)"),
+                   "pixels differing (uncertain)"),
       text_column("regions with differences",
                   "Regions with a differing pixel, and how they cluster"),
-      left(integer_column("bits", "bits", "Pixel-memory bits the program uses"), "bits"),
-      left(real_column("GP clocks / primitive", "i860 clocks", 0,
-                       "GP clocks per triangle, depth sort included ('-': a CPU reference)"),
-           "GP clocks / primitive"),
-      left(integer_column("Renderer cycles", "array cycles",
-                          "Renderer busy cycles of the shaded run ('-': a CPU reference)"),
-           "Renderer cycles"),
-      left(real_column("primitives / s", "triangles/s", -1,
-                       "Projected triangles per second ('-': a CPU reference)"),
-           "primitives / s"),
+      left_aligned(integer_column("bits", "bits", "Pixel-memory bits the program uses"), "bits"),
+      left_aligned(
+          real_column("GP clocks / primitive", "i860 clocks", 0,
+                      "GP clocks per triangle, depth sort included ('-': a CPU reference)"),
+          "GP clocks / primitive"),
+      left_aligned(integer_column("Renderer cycles", "array cycles",
+                                  "Renderer busy cycles of the shaded run ('-': a CPU reference)"),
+                   "Renderer cycles"),
+      left_aligned(real_column("primitives / s", "triangles/s", -1,
+                               "Projected triangles per second ('-': a CPU reference)"),
+                   "primitives / s"),
   };
   for (const VisibleSceneReport& r : reports) {
     for (const AlgorithmRow& a : r.rows) {

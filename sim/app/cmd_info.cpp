@@ -228,33 +228,37 @@ std::string rewrites_table(const MachineConfig& config, const Scene& scene,
     return m;
   };
   // Each cell "before -> after"; its value (CSV, sorting) the after figure.
-  auto left = [](report::Column c, std::string heading) {
-    return report::headed(std::move(c), std::move(heading), report::Align::left);
-  };
   report::Table table;
   table.id = "rewrites";
   table.columns = {
-      left(report::text_column("program", "The program before -> after the rewrite"),
-           "program, before -> after"),
-      left(report::integer_column("bits", "bits", "Pixel-memory bits, before -> after"),
-           fmt::format("bits of {}", config.renderer.memory_bits)),
-      left(report::integer_column("cycles per triangle packet", "array cycles",
-                                  "The triangle procedure's cycles, before -> after"),
-           "cycles per triangle packet"),
-      left(report::integer_column("cycles per sphere packet", "array cycles",
-                                  "The sphere procedure's cycles, before -> after (- where "
-                                  "neither program draws spheres)"),
-           "cycles per sphere packet"),
-      left(report::real_column("polygons/s, hand-coded", "polygons/s", 0,
-                               "Projected rate with hand-coded GP code, before -> after"),
-           fmt::format("{} polygons/s, hand-coded GP code", scene.name)),
-      left(report::real_column("polygons/s, compiled", "polygons/s", 0,
-                               "Projected rate with compiled GP code, before -> after"),
-           fmt::format("{} polygons/s, compiled GP code", scene.name)),
-      left(report::text_column("cycles saved per triangle, by instruction",
-                               "Cycles the rewrite saves in the triangle procedure, per "
-                               "instruction (negative: spends)"),
-           "cycles saved per triangle, by instruction"),
+      report::left_aligned(
+          report::text_column("program", "The program before -> after the rewrite"),
+          "program, before -> after"),
+      report::left_aligned(
+          report::integer_column("bits", "bits", "Pixel-memory bits, before -> after"),
+          fmt::format("bits of {}", config.renderer.memory_bits)),
+      report::left_aligned(
+          report::integer_column("cycles per triangle packet", "array cycles",
+                                 "The triangle procedure's cycles, before -> after"),
+          "cycles per triangle packet"),
+      report::left_aligned(
+          report::integer_column("cycles per sphere packet", "array cycles",
+                                 "The sphere procedure's cycles, before -> after (- where "
+                                 "neither program draws spheres)"),
+          "cycles per sphere packet"),
+      report::left_aligned(
+          report::real_column("polygons/s, hand-coded", "polygons/s", 0,
+                              "Projected rate with hand-coded GP code, before -> after"),
+          fmt::format("{} polygons/s, hand-coded GP code", scene.name)),
+      report::left_aligned(
+          report::real_column("polygons/s, compiled", "polygons/s", 0,
+                              "Projected rate with compiled GP code, before -> after"),
+          fmt::format("{} polygons/s, compiled GP code", scene.name)),
+      report::left_aligned(
+          report::text_column("cycles saved per triangle, by instruction",
+                              "Cycles the rewrite saves in the triangle procedure, per "
+                              "instruction (negative: spends)"),
+          "cycles saved per triangle, by instruction"),
   };
   auto arrow = [](report::Cell after, const std::string& a, const std::string& b) {
     return report::Cell::shown_as(std::move(after), fmt::format("{} -> {}", a, b));
@@ -340,24 +344,23 @@ std::string multiply_microcode_table(const MachineConfig& config, const Scene& s
   const TimingParams t_window = timing_params(window);
   OwnedValues values{};
   values.parameters = GeometryEngine(geometry_params(config), scene).frame_parameters();
-  auto left = [](report::Column c, std::string heading) {
-    return report::headed(std::move(c), std::move(heading), report::Align::left);
-  };
   report::Table table;
   table.id = "multiply-microcode";
   table.columns = {
-      left(report::text_column("program"), "program"),
-      left(report::text_column("procedure"), "procedure"),
-      left(report::integer_column("mul", "instructions", "mul instructions in the procedure"),
-           "mul"),
-      left(report::integer_column("cycles per packet, full", "array cycles",
-                                  "renderer.multiply_microcode = full"),
-           "cycles per packet, full"),
-      left(report::integer_column("cycles per packet, window", "array cycles",
-                                  "renderer.multiply_microcode = window"),
-           "cycles per packet, window*"),
-      left(report::integer_column("saved", "array cycles", "full - window (the share of full)"),
-           "saved"),
+      report::left_aligned(report::text_column("program"), "program"),
+      report::left_aligned(report::text_column("procedure"), "procedure"),
+      report::left_aligned(
+          report::integer_column("mul", "instructions", "mul instructions in the procedure"),
+          "mul"),
+      report::left_aligned(report::integer_column("cycles per packet, full", "array cycles",
+                                                  "renderer.multiply_microcode = full"),
+                           "cycles per packet, full"),
+      report::left_aligned(report::integer_column("cycles per packet, window", "array cycles",
+                                                  "renderer.multiply_microcode = window"),
+                           "cycles per packet, window*"),
+      report::left_aligned(
+          report::integer_column("saved", "array cycles", "full - window (the share of full)"),
+          "saved"),
   };
   for (const std::string& name : builtin_program_names()) {
     const Program program = assemble_file(resolve_firmware(name), assembler_options(config));

@@ -54,6 +54,11 @@ Column headed(Column c, std::string heading, Align align) {
   return c;
 }
 
+Column left_aligned(Column c, std::string heading) {
+  if (heading.empty()) heading = c.name;
+  return headed(std::move(c), std::move(heading), Align::left);
+}
+
 Cell Cell::shown_as(Cell value, std::string text) {
   value.shown = std::move(text);
   return value;

@@ -54,6 +54,8 @@ Column real_column(std::string name, std::string unit, int precision, std::strin
 // `c` with its heading text fixed and its alignment chosen: a table converted from
 // hand-written Markdown keeps its text (the unit still in Column::unit, for HTML and CSV).
 Column headed(Column c, std::string heading, Align align = Align::automatic);
+// `c` left-aligned under `heading` (its name when empty), as the hand-written tables were.
+Column left_aligned(Column c, std::string heading = {});
 
 struct Cell {
   std::variant<std::monostate, std::int64_t, double, std::string> value;
