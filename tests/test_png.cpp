@@ -6,6 +6,7 @@
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "sim/image/png_writer.hpp"
 
@@ -57,9 +58,7 @@ RgbImage pattern_image(int width, int height) {
 
 TEST_CASE("write_png and read_png round-trip the exact bytes", "[png]") {
   TempDir dir;
-  // The writer filters and compresses 256 KB of rows at a time, into an output buffer that
-  // starts at 64 KB: 1000 x 300 takes several strips and grows the buffer; a row of 100,000
-  // pixels is a strip of its own.
+  // Sizes from one pixel to a row of 100,000 pixels.
   for (auto [w, h] : {std::pair{1, 1}, std::pair{7, 5}, std::pair{64, 3}, std::pair{3, 64},
                       std::pair{1000, 300}, std::pair{100000, 3}}) {
     CAPTURE(w, h);
@@ -71,6 +70,55 @@ TEST_CASE("write_png and read_png round-trip the exact bytes", "[png]") {
     CHECK(back.height == h);
     CHECK(back.rgb == image.rgb);
     CHECK_FALSE(fs::exists(path + ".tmp"));
+  }
+}
+
+TEST_CASE("the encoder's runs and literals decode to the exact bytes", "[png]") {
+  // What the writer's deflate stream is made of (sim/image/png_writer.cpp): runs of a byte
+  // (distance 1) of every length from 1 to past the longest match (258), runs of a pixel
+  // (distance 3), rows like the one above (all 0 after the Up filter), noise (literals only,
+  // every byte value), a uniform image (one length symbol dominating, a skewed code) and a
+  // tall one whose Adler-32 sums many reductions.
+  TempDir dir;
+  auto make = [](int w, int h, auto pixel) {
+    RgbImage image;
+    image.width = w;
+    image.height = h;
+    image.rgb.resize(static_cast<std::size_t>(w) * h * 3);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        for (int c = 0; c < 3; ++c)
+          image.rgb[(static_cast<std::size_t>(y) * w + x) * 3 + c] = pixel(x, y, c);
+      }
+    }
+    return image;
+  };
+  std::uint32_t state = 12345;
+  auto noise = [&state](int, int, int) {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<std::uint8_t>(state >> 24);
+  };
+  const std::vector<RgbImage> images = {
+      make(300, 40,
+           [](int x, int y, int c) {  // runs whose lengths grow along the row
+             return static_cast<std::uint8_t>(((x * 3 + c) / (1 + y * 7)) * 53);
+           }),
+      make(200, 30,
+           [](int x, int y, int c) {  // flat colours changing from row to row
+             return static_cast<std::uint8_t>((x / 17) * 40 + y * 9 + c * 70);
+           }),
+      make(257, 19, noise), make(500, 500, [](int, int, int) { return std::uint8_t{200}; }),
+      make(3, 20000, [](int x, int y, int c) {
+        return static_cast<std::uint8_t>(y % 5 == 0 ? 255 : (x + y / 3 + c) & 0xff);
+      })};
+  for (const RgbImage& image : images) {
+    CAPTURE(image.width, image.height);
+    const std::string path = dir.file("runs.png");
+    write_png(path, image);
+    const RgbImage back = read_png(path);
+    CHECK(back.width == image.width);
+    CHECK(back.height == image.height);
+    CHECK(back.rgb == image.rgb);
   }
 }
 

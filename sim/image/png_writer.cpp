@@ -5,6 +5,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstddef>
 #include <cstdio>
@@ -36,13 +37,6 @@ class PngImageGuard {
   throw std::runtime_error(fmt::format("{} '{}': {}", what, path, reason));
 }
 
-// zlib's level 1 (Z_BEST_SPEED), run-length matches only (Z_RLE), after the Up filter: a
-// rendered frame's flat areas and repeated rows compress almost as well as with the default
-// search, in a fraction of the time (the image bits are the same).
-constexpr int kCompressionLevel = 1;
-// Rows are filtered and compressed this many bytes at a time: nothing holds the whole
-// filtered image.
-constexpr std::size_t kStripBytes = std::size_t{1} << 18;
 // The longest IDAT chunk written (PNG allows 2^31 - 1 bytes).
 constexpr std::size_t kMaxChunk = std::size_t{1} << 30;
 
@@ -52,33 +46,321 @@ void put_u32(std::string& out, std::uint32_t v) {
   out.append(bytes, 4);
 }
 
+// zlib's crc32 and adler32 take a uInt length: longer buffers go in pieces.
+template <class F>
+uLong png_checksum(F f, uLong start, const std::uint8_t* data, std::size_t size) {
+  uLong sum = start;
+  for (std::size_t done = 0; done < size;) {
+    const auto n = static_cast<uInt>(std::min<std::size_t>(size - done, 1u << 30));
+    sum = f(sum, data + done, n);
+    done += n;
+  }
+  return sum;
+}
+
 // A PNG chunk: length, type, data, and the CRC of type and data.
 void put_chunk(std::string& out, const char type[4], const char* data, std::size_t size) {
   put_u32(out, static_cast<std::uint32_t>(size));
   const std::size_t at = out.size();
   out.append(type, 4);
   out.append(data, size);
-  const auto* crc_from = reinterpret_cast<const Bytef*>(out.data() + at);
-  uLong crc = crc32(0L, Z_NULL, 0);
-  for (std::size_t done = 0; done < size + 4;) {  // crc32 takes a uInt length
-    const auto n = static_cast<uInt>(std::min<std::size_t>(size + 4 - done, 1u << 30));
-    crc = crc32(crc, crc_from + done, n);
-    done += n;
-  }
+  const uLong crc = png_checksum(crc32, crc32(0L, Z_NULL, 0),
+                                 reinterpret_cast<const std::uint8_t*>(out.data() + at), size + 4);
   put_u32(out, static_cast<std::uint32_t>(crc));
 }
 
-// Releases zlib's state on every exit path.
-class DeflateGuard {
+// The zlib stream of the filtered rows, made here: one dynamic-Huffman deflate block whose
+// matches are runs, a byte repeating the one before it (distance 1: after the Up filter, a
+// row like the one above is all 0) or the pixel before it (distance 3: a flat colour the row
+// above does not share), found greedily, 8 bytes compared at a time. It is what zlib's
+// run-length strategy (Z_RLE) makes of a rendered frame, plus the distance-3 runs, and several
+// times quicker (bench/bench_png.cpp prints the ratio against zlib in one run); any inflater
+// reads it (the tests decode it with libpng).
+class PngDeflate {
  public:
-  explicit DeflateGuard(z_stream& z) : z_(z) {}
-  ~DeflateGuard() { deflateEnd(&z_); }
-  DeflateGuard(const DeflateGuard&) = delete;
-  DeflateGuard& operator=(const DeflateGuard&) = delete;
+  // The zlib stream of in[0, n) appended to out.
+  void compress(const std::uint8_t* in, std::size_t n, std::string& out) {
+    tokenize(in, n);
+    build_codes();
+    bits_.clear();
+    acc_ = 0;
+    count_ = 0;
+    put(1, 1);  // BFINAL
+    put(2, 2);  // BTYPE = dynamic Huffman
+    write_header();
+    for (const std::uint32_t t : tokens_) {
+      if (t < 256) {
+        put(lit_code_[t], lit_len_[t]);
+        continue;
+      }
+      const int length = static_cast<int>(t >> 16), distance = static_cast<int>(t & 0xffff);
+      const int sym = kLengthSymbol[length];
+      put(lit_code_[sym], lit_len_[sym]);
+      const int extra = kLengthExtra[sym - 257];
+      if (extra > 0) put(static_cast<std::uint32_t>(length - kLengthBase[sym - 257]), extra);
+      const int d = distance == 1 ? 0 : 2;  // distance codes 0 (1) and 2 (3), no extra bits
+      put(dist_code_[d], dist_len_[d]);
+    }
+    put(lit_code_[256], lit_len_[256]);
+    flush();
+    out.push_back('\x78');  // zlib header: deflate, 32K window, no dictionary, FLEVEL 0
+    out.push_back('\x01');
+    out.append(reinterpret_cast<const char*>(bits_.data()), bits_.size());
+    put_u32(out, adler_);
+  }
 
  private:
-  z_stream& z_;
+  static constexpr int kLitSymbols = 286;  // literals, end of block, lengths 257..285
+  static constexpr int kMaxMatch = 258;
+  static constexpr int kLengthBase[29] = {3,  4,  5,  6,   7,   8,   9,   10,  11, 13,
+                                          15, 17, 19, 23,  27,  31,  35,  43,  51, 59,
+                                          67, 83, 99, 115, 131, 163, 195, 227, 258};
+  static constexpr int kLengthExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
+                                           2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
+  static const std::array<std::uint16_t, kMaxMatch + 1> kLengthSymbol;
+
+  // How many bytes from `at` on equal the ones `distance` before them (at most `limit`).
+  static std::size_t run_length(const std::uint8_t* in, std::size_t at, std::size_t distance,
+                                std::size_t limit) {
+    std::size_t k = 0;
+    while (k + 8 <= limit) {
+      std::uint64_t a, b;
+      std::memcpy(&a, in + at + k, 8);
+      std::memcpy(&b, in + at + k - distance, 8);
+      if (a != b) return k + static_cast<std::size_t>(__builtin_ctzll(a ^ b)) / 8;
+      k += 8;
+    }
+    while (k < limit && in[at + k] == in[at + k - distance]) ++k;
+    return k;
+  }
+
+  // Greedy: at each byte the longer run (distance 1 or 3) if it is at least 3 bytes long,
+  // else the byte as a literal. The zlib stream's Adler-32 is summed token by token: a run of
+  // one byte in closed form, so that the long runs of 0 cost nothing per byte.
+  void tokenize(const std::uint8_t* in, std::size_t n) {
+    tokens_.clear();
+    lit_freq_.fill(0);
+    dist_freq_.fill(0);
+    constexpr std::uint64_t kBase = 65521;
+    std::uint64_t s1 = 1, s2 = 0;
+    int since_reduce = 0;
+    std::size_t i = 0;
+    while (i < n) {
+      const std::uint8_t b = in[i];
+      // A literal unless the byte repeats the one before or the pixel before (cheap tests
+      // first: most literals fail both).
+      const bool run1 = i >= 1 && b == in[i - 1];
+      const bool run3 = i >= 3 && b == in[i - 3];
+      std::size_t best = 0, distance = 0;
+      if (run1 || run3) {
+        const std::size_t limit = std::min<std::size_t>(kMaxMatch, n - i);
+        if (run1) best = run_length(in, i, 1, limit), distance = 1;
+        if (run3 && best < limit) {
+          const std::size_t r = run_length(in, i, 3, limit);
+          if (r > best) best = r, distance = 3;
+        }
+      }
+      if (best >= 3) {
+        tokens_.push_back(static_cast<std::uint32_t>(best << 16 | distance));
+        ++lit_freq_[kLengthSymbol[best]];
+        ++dist_freq_[distance == 1 ? 0 : 2];
+        if (distance == 1) {  // best copies of b: s2 gains best s1 + b (1 + 2 + ... + best)
+          s2 += best * s1 + b * (best * (best + 1) / 2);
+          s1 += best * b;
+        } else {
+          for (std::size_t k = 0; k < best; ++k) {
+            s1 += in[i + k];
+            s2 += s1;
+          }
+        }
+        i += best;
+      } else {
+        tokens_.push_back(b);
+        ++lit_freq_[b];
+        s1 += b;
+        s2 += s1;
+        ++i;
+      }
+      // At most 4096 tokens between reductions: s1 stays below 2^29 and s2 below 2^49.
+      if (++since_reduce == 4096) {
+        s1 %= kBase;
+        s2 %= kBase;
+        since_reduce = 0;
+      }
+    }
+    lit_freq_[256] = 1;
+    adler_ = static_cast<std::uint32_t>((s2 % kBase) << 16 | (s1 % kBase));
+  }
+
+  // Code lengths for `freq` (n symbols), none longer than `limit`: Huffman's construction,
+  // over frequencies halved (a used symbol keeps at least 1) until it fits. Unused symbols
+  // get 0; a lone used symbol gets 1.
+  static void huffman_lengths(const std::uint32_t* freq, int n, int limit, std::uint8_t* len) {
+    std::vector<std::uint32_t> f(freq, freq + n);
+    for (;;) {
+      std::fill(len, len + n, std::uint8_t{0});
+      // Nodes: leaves 0..n-1, inner nodes after; parent links give the depths.
+      std::vector<std::pair<std::uint64_t, int>> heap;  // (weight, node), min-heap
+      std::vector<int> parent(static_cast<std::size_t>(2 * n), -1);
+      for (int s = 0; s < n; ++s) {
+        if (f[static_cast<std::size_t>(s)] != 0)
+          heap.emplace_back(f[static_cast<std::size_t>(s)], s);
+      }
+      if (heap.empty()) return;
+      if (heap.size() == 1) {
+        len[heap[0].second] = 1;
+        return;
+      }
+      auto greater = [](const auto& a, const auto& b) {
+        return a.first != b.first ? a.first > b.first : a.second > b.second;
+      };
+      std::make_heap(heap.begin(), heap.end(), greater);
+      int next = n;
+      while (heap.size() > 1) {
+        std::pop_heap(heap.begin(), heap.end(), greater);
+        const auto a = heap.back();
+        heap.pop_back();
+        std::pop_heap(heap.begin(), heap.end(), greater);
+        const auto b = heap.back();
+        heap.pop_back();
+        parent[static_cast<std::size_t>(a.second)] = next;
+        parent[static_cast<std::size_t>(b.second)] = next;
+        heap.emplace_back(a.first + b.first, next);
+        std::push_heap(heap.begin(), heap.end(), greater);
+        ++next;
+      }
+      int longest = 0;
+      for (int s = 0; s < n; ++s) {
+        if (f[static_cast<std::size_t>(s)] == 0) continue;
+        int depth = 0;
+        for (int v = s; parent[static_cast<std::size_t>(v)] >= 0;
+             v = parent[static_cast<std::size_t>(v)])
+          ++depth;
+        len[s] = static_cast<std::uint8_t>(std::min(depth, 255));
+        longest = std::max(longest, depth);
+      }
+      if (longest <= limit) return;
+      for (std::uint32_t& x : f) {
+        if (x != 0) x = std::max<std::uint32_t>(1, x >> 1);
+      }
+    }
+  }
+
+  // Canonical codes (RFC 1951 3.2.2) for the lengths, bit-reversed for the LSB-first stream.
+  static void canonical_codes(const std::uint8_t* len, int n, std::uint16_t* code) {
+    int count[16] = {};
+    for (int s = 0; s < n; ++s) ++count[len[s]];
+    count[0] = 0;
+    int next[16] = {};
+    int c = 0;
+    for (int b = 1; b < 16; ++b) {
+      c = (c + count[b - 1]) << 1;
+      next[b] = c;
+    }
+    for (int s = 0; s < n; ++s) {
+      const int l = len[s];
+      if (l == 0) continue;
+      int v = next[l]++;
+      int r = 0;
+      for (int b = 0; b < l; ++b, v >>= 1) r = (r << 1) | (v & 1);
+      code[s] = static_cast<std::uint16_t>(r);
+    }
+  }
+
+  void build_codes() {
+    huffman_lengths(lit_freq_.data(), kLitSymbols, 15, lit_len_.data());
+    canonical_codes(lit_len_.data(), kLitSymbols, lit_code_.data());
+    // Distance codes 0 and 2 one bit each, whichever are used: a complete code.
+    dist_len_ = {1, 0, 1};
+    canonical_codes(dist_len_.data(), 3, dist_code_.data());
+  }
+
+  // HLIT, HDIST, HCLEN and the code lengths, each sent as its own code-length symbol (0-15).
+  void write_header() {
+    int hlit = kLitSymbols;
+    while (hlit > 257 && lit_len_[static_cast<std::size_t>(hlit - 1)] == 0) --hlit;
+    std::array<std::uint8_t, kLitSymbols + 3> lengths{};
+    std::copy_n(lit_len_.begin(), hlit, lengths.begin());
+    std::copy_n(dist_len_.begin(), 3, lengths.begin() + hlit);
+    const int total = hlit + 3;
+    std::array<std::uint32_t, 19> freq{};
+    for (int k = 0; k < total; ++k) ++freq[lengths[static_cast<std::size_t>(k)]];
+    std::array<std::uint8_t, 19> cl_len{};
+    std::array<std::uint16_t, 19> cl_code{};
+    huffman_lengths(freq.data(), 19, 7, cl_len.data());
+    canonical_codes(cl_len.data(), 19, cl_code.data());
+    static constexpr int kOrder[19] = {16, 17, 18, 0, 8,  7, 9,  6, 10, 5,
+                                       11, 4,  12, 3, 13, 2, 14, 1, 15};
+    int hclen = 19;
+    while (hclen > 4 && cl_len[static_cast<std::size_t>(kOrder[hclen - 1])] == 0) --hclen;
+    put(static_cast<std::uint32_t>(hlit - 257), 5);
+    put(3 - 1, 5);  // HDIST: distance codes 0..2
+    put(static_cast<std::uint32_t>(hclen - 4), 4);
+    for (int k = 0; k < hclen; ++k) put(cl_len[static_cast<std::size_t>(kOrder[k])], 3);
+    for (int k = 0; k < total; ++k) {
+      const std::size_t l = lengths[static_cast<std::size_t>(k)];
+      put(cl_code[l], cl_len[l]);
+    }
+  }
+
+  void put(std::uint32_t value, int bits) {
+    acc_ |= static_cast<std::uint64_t>(value) << count_;
+    count_ += bits;
+    if (count_ >= 32) {
+      const auto word = static_cast<std::uint32_t>(acc_);
+      const std::uint8_t b[4] = {
+          static_cast<std::uint8_t>(word), static_cast<std::uint8_t>(word >> 8),
+          static_cast<std::uint8_t>(word >> 16), static_cast<std::uint8_t>(word >> 24)};
+      bits_.insert(bits_.end(), b, b + 4);
+      acc_ >>= 32;
+      count_ -= 32;
+    }
+  }
+  void flush() {
+    while (count_ > 0) {
+      bits_.push_back(static_cast<std::uint8_t>(acc_));
+      acc_ >>= 8;
+      count_ -= 8;
+    }
+    count_ = 0;
+  }
+
+  std::vector<std::uint32_t> tokens_;  // a literal byte, or length << 16 | distance
+  std::array<std::uint32_t, kLitSymbols> lit_freq_{};
+  std::array<std::uint32_t, 3> dist_freq_{};
+  std::array<std::uint8_t, kLitSymbols> lit_len_{};
+  std::array<std::uint16_t, kLitSymbols> lit_code_{};
+  std::array<std::uint8_t, 3> dist_len_{};
+  std::array<std::uint16_t, 3> dist_code_{};
+  std::vector<std::uint8_t> bits_;
+  std::uint64_t acc_ = 0;
+  int count_ = 0;
+  std::uint32_t adler_ = 1;
 };
+
+// The length symbol (257..285) of each match length 3..258.
+const std::array<std::uint16_t, PngDeflate::kMaxMatch + 1> PngDeflate::kLengthSymbol = [] {
+  std::array<std::uint16_t, kMaxMatch + 1> table{};
+  for (int sym = 0; sym < 29; ++sym) {
+    const int end = sym + 1 < 29 ? kLengthBase[sym + 1] : kMaxMatch + 1;
+    for (int l = kLengthBase[sym]; l < end && l <= kMaxMatch; ++l)
+      table[static_cast<std::size_t>(l)] = static_cast<std::uint16_t>(257 + sym);
+  }
+  table[kMaxMatch] = 285;  // 258 has its own symbol, not 284 with 31 extra
+  return table;
+}();
+
+// Per host thread, kept between images: the filtered rows and the encoder's tokens and
+// output, so that a run of frames allocates (and the kernel zeroes) them once, not per image.
+struct PngScratch {
+  std::vector<std::uint8_t> filtered;
+  PngDeflate deflate;
+};
+
+PngScratch& png_scratch() {
+  thread_local PngScratch scratch;
+  return scratch;
+}
 
 }  // namespace
 
@@ -114,54 +396,28 @@ std::string encode_png(int width, int height,
   if (width <= 0 || height <= 0) {
     fail(kWhat, what, fmt::format("invalid size {}x{}", width, height));
   }
-  // The PNG container written here, its zlib stream made by zlib directly (libpng reads):
-  // the rows are filtered a strip at a time, without libpng's per-row calls.
+  // The PNG container written here, its zlib stream made here (PngDeflate) over the whole
+  // filtered image; libpng reads it.
   const std::size_t stride = static_cast<std::size_t>(width) * 3u;
-  if (stride + 1 > std::numeric_limits<uInt>::max()) {  // a row goes to zlib whole
-    fail(kWhat, what, fmt::format("a row of {} pixels is too wide to compress", width));
+  const std::size_t line = stride + 1;
+  if (line > std::numeric_limits<std::size_t>::max() / 4 / static_cast<std::size_t>(height)) {
+    fail(kWhat, what, fmt::format("a {}x{} image is too large to compress", width, height));
   }
+  PngScratch& scratch = png_scratch();
+  std::vector<std::uint8_t>& filtered = scratch.filtered;
+  filtered.resize(line * static_cast<std::size_t>(height));
   std::vector<std::uint8_t> row(stride), above(stride, 0);  // row 0's Up is its bytes
-  const std::size_t strip_rows = std::max<std::size_t>(1, kStripBytes / (stride + 1));
-  std::vector<std::uint8_t> strip(strip_rows * (stride + 1));
-  z_stream z{};
-  if (deflateInit2(&z, kCompressionLevel, Z_DEFLATED, 15, 8, Z_RLE) != Z_OK) {
-    fail(kWhat, what, "zlib could not start");
-  }
-  DeflateGuard guard(z);
-  std::string stream;
-  stream.resize(std::max<std::size_t>(stride * 2, 1u << 16));
-  std::size_t written = 0;
-  // Compresses `n` bytes of filtered rows, growing the stream's buffer as it fills.
-  auto compress = [&](const std::uint8_t* in, std::size_t n, bool last) {
-    z.next_in = const_cast<Bytef*>(in);
-    z.avail_in = static_cast<uInt>(n);
-    for (;;) {
-      if (written == stream.size()) stream.resize(stream.size() * 2);
-      const std::size_t room = std::min<std::size_t>(stream.size() - written, 1u << 30);
-      z.next_out = reinterpret_cast<Bytef*>(&stream[written]);
-      z.avail_out = static_cast<uInt>(room);
-      const int rc = deflate(&z, last ? Z_FINISH : Z_NO_FLUSH);
-      written += room - z.avail_out;
-      if (rc == Z_STREAM_END) return;
-      if (rc != Z_OK && rc != Z_BUF_ERROR) fail(kWhat, what, "zlib reported an error");
-      if (!last && z.avail_in == 0) return;
-    }
-  };
-  std::size_t filled = 0;  // bytes of `strip` in use
   for (int y = 0; y < height; ++y) {
     rows(y, row.data());
-    std::uint8_t* out = strip.data() + filled;
+    std::uint8_t* out = filtered.data() + line * static_cast<std::size_t>(y);
     out[0] = 2;  // the Up filter: each byte less the byte above it
     for (std::size_t i = 0; i < stride; ++i)
       out[1 + i] = static_cast<std::uint8_t>(row[i] - above[i]);
     row.swap(above);
-    filled += stride + 1;
-    const bool last = y + 1 == height;
-    if (last || filled == strip.size()) {
-      compress(strip.data(), filled, last);
-      filled = 0;
-    }
   }
+  std::string stream;
+  scratch.deflate.compress(filtered.data(), filtered.size(), stream);
+  const std::size_t written = stream.size();
   std::string png;
   png.reserve(written + 64 + written / kMaxChunk * 12);
   png.append("\x89PNG\r\n\x1a\n", 8);
