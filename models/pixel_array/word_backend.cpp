@@ -1023,6 +1023,57 @@ bool overlaps(const Field& a, const Field& b) {
 }
 }  // namespace
 
+namespace {
+
+// A field read at pixel p, extended to 64 bits by its signedness: within one 64-bit lane
+// (hi == lo, up == 0: the second read adds nothing), or straddling two.
+struct WordFieldReader {
+  const u64* lo;
+  const u64* hi;
+  int off, up, sign_shift;
+  u64 mask;
+  bool is_signed;
+  u64 operator()(int p) const {
+    u64 v = lo[p] >> off;
+    if (up != 0) v |= hi[p] << up;
+    v &= mask;
+    return is_signed ? static_cast<u64>(static_cast<i64>(v << sign_shift) >> sign_shift) : v;
+  }
+};
+
+// The reader of field f in pixel memory `memory` (lane-major, `pixels` per lane).
+WordFieldReader field_reader(const u64* memory, int pixels, const Field& f) {
+  const u64* lo = memory + static_cast<std::size_t>(f.lo / 64) * pixels;
+  const int off = f.lo % 64;
+  const bool split = off + f.width > 64;
+  return WordFieldReader{lo,
+                         split ? lo + pixels : lo,
+                         off,
+                         split ? 64 - off : 0,
+                         64 - f.width,
+                         low_mask(f.width),
+                         f.is_signed && f.width < 64};
+}
+
+}  // namespace
+
+// value(old, p) merged into dst, a field within one lane, under E, modulo 2^width, over every
+// span, in one pass: `old` is dst's value at p (its bits above the width are whatever lies
+// there; the merge cuts the result to the width).
+template <class Value>
+void WordBackend::merge_lane(const Field& dst, Value value) {
+  u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
+  const int off = dst.lo % 64;
+  const u64 bits = low_mask(dst.width) << off;
+  const std::uint8_t* e = enable_.data();
+  for (const Range& r : spans_) {
+    for (int p = r.begin; p < r.end; ++p) {
+      const u64 m = bits & (u64{0} - e[p]);
+      lane[p] = (lane[p] & ~m) | ((value(lane[p] >> off, p) << off) & m);
+    }
+  }
+}
+
 void WordBackend::multiply(const Field& dst, const Field& a, const Field& b, bool window) {
   materialize();
   check_field(a, "operand");
@@ -1031,27 +1082,26 @@ void WordBackend::multiply(const Field& dst, const Field& a, const Field& b, boo
   if (overlaps(dst, a) || overlaps(dst, b)) {
     throw std::invalid_argument("mul: destination overlaps a source");
   }
-  const int bits = multiply_window_bits(a, window);
+  // The windowed passes (PixelBackend::multiply) drop each window's carry out, but
+  // multiply_window_bits gives a window only for an unsigned `a` of width w, w + 1 bits wide:
+  // before the pass for bit j of b the sum is a (b mod 2^j) < a 2^j, so after adding a 2^j it
+  // is below 2^(j + w + 1), inside the window, and no carry is ever dropped. The result is
+  // the plain product modulo 2^width either way.
+  (void)window;
+  if (dst.lo % 64 + dst.width <= 64) {
+    const WordFieldReader x = field_reader(memory_.data(), pixels_, a),
+                          y = field_reader(memory_.data(), pixels_, b);
+    merge_lane(dst, [x, y](u64, int p) { return x(p) * y(p); });
+    return;
+  }
+  // A destination across two lanes: the operands loaded, multiplied and stored in three
+  // passes, each of which vectorises (quicker than one scalar pass merging two lanes).
   u64* x = scratch().s0.data();
   u64* y = scratch().s1.data();
   for (const Range& r : spans_) {
     load(memory_.data(), a, r, x, true);
     load(memory_.data(), b, r, y, true);
-    if (bits == 0) {
-      for (int p = r.begin; p < r.end; ++p) x[p] *= y[p];
-    } else {
-      // The windowed passes (PixelBackend::multiply), each dropping its window's carry out.
-      for (int p = r.begin; p < r.end; ++p) {
-        u64 sum = 0;
-        for (int j = 0; j < dst.width && j < 64; ++j) {
-          if (((y[p] >> j) & 1) == 0) continue;
-          const u64 mask =
-              (bits + j >= 64 ? ~u64{0} : (u64{1} << (bits + j)) - 1) & ~((u64{1} << j) - 1);
-          sum = (sum & ~mask) | ((sum + (x[p] << j)) & mask);
-        }
-        x[p] = sum;
-      }
-    }
+    for (int p = r.begin; p < r.end; ++p) x[p] *= y[p];
     store(memory_.data(), dst, r, x, true);
   }
 }
@@ -1061,9 +1111,14 @@ void WordBackend::multiply_accumulate(const Field& dst, const Field& a, i64 k) {
   check_field(a, "operand");
   check_field(dst, "mac");
   if (overlaps(dst, a)) throw std::invalid_argument("mac: destination overlaps a source");
+  const u64 m = static_cast<u64>(k);
+  if (dst.lo % 64 + dst.width <= 64) {
+    const WordFieldReader x = field_reader(memory_.data(), pixels_, a);
+    merge_lane(dst, [x, m](u64 old, int p) { return old + x(p) * m; });
+    return;
+  }
   u64* x = scratch().s0.data();
   u64* d = scratch().s1.data();
-  const u64 m = static_cast<u64>(k);
   for (const Range& r : spans_) {
     load(memory_.data(), a, r, x, true);
     load(memory_.data(), dst, r, d, false);

@@ -147,6 +147,10 @@ class WordBackend final : public PixelBackend {
   // alu's path for a destination (and a field source) within one lane each; false when the
   // operands are not such.
   bool alu_in_lane(const Field& dst, const Source& src, Alu op);
+  // value(old, p) (old: dst's value at pixel p) merged into dst, a field within one lane,
+  // under E over every span, in one pass (multiply's and multiply_accumulate's).
+  template <class Value>
+  void merge_lane(const Field& dst, Value value);
   void compare_range(const Field& a, const Source& b, Compare cond, Range r);
   void alu_serial(const Field& dst, const Field& src, Alu op, Range r);
   // E &= (a cond b) over r, a and b extended values; wide when either is an unsigned 64-bit
