@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <array>
 #include <stdexcept>
 
 namespace pp5 {
@@ -64,18 +66,19 @@ class GifBitWriter {
   std::size_t block_size_ = 0;
 };
 
-// The image data of one frame of palette indices: LZW over a code table held as a trie
-// (child of code c by byte b), its entries stamped with the table's generation so that a
-// clear empties it without touching it.
+// The image data of one frame of palette indices: LZW over a code table held as a hash table
+// of (prefix code, byte) -> code, 16384 entries of 4 bytes (at most 4096 codes: a quarter full
+// at most), so that it stays in the cache; a clear empties it. The codes are the table's,
+// not the hash's: the same frames give the same bytes as any other form of the table.
 class GifLzw {
  public:
-  GifLzw() : child_(static_cast<std::size_t>(kGifMaxCodes) * 256), stamp_(child_.size(), 0) {}
+  GifLzw() : slots_(kSlots, 0) {}
   void encode(const std::vector<std::uint8_t>& pixels, std::string& out) {
     out.push_back(static_cast<char>(kGifMinCodeSize));
     GifBitWriter w(out);
     int size = kGifMinCodeSize + 1;
     int max_code = kGifEnd;
-    ++generation_;
+    clear();
     w.code(kGifClear, size);
     int current = -1;
     for (const std::uint8_t p : pixels) {
@@ -83,19 +86,29 @@ class GifLzw {
         current = p;
         continue;
       }
-      const std::size_t slot = static_cast<std::size_t>(current) * 256 + p;
-      if (stamp_[slot] == generation_) {
-        current = child_[slot];
-        continue;
+      // An entry: key (prefix code << 8 | byte, 20 bits) << 12 | code (12 bits); 0 is empty
+      // (every code in the table is above kGifEnd, so no entry is 0).
+      const std::uint32_t key = static_cast<std::uint32_t>(current) << 8 | p;
+      std::uint32_t at = (key * 2654435761u) >> (32 - kSlotBits);
+      bool found = false;
+      for (;;) {
+        const std::uint32_t e = slots_[at];
+        if (e == 0) break;
+        if (e >> 12 == key) {
+          current = static_cast<int>(e & 0xfff);
+          found = true;
+          break;
+        }
+        at = (at + 1) & (kSlots - 1);
       }
+      if (found) continue;
       w.code(current, size);
       ++max_code;
-      child_[slot] = static_cast<std::uint16_t>(max_code);
-      stamp_[slot] = generation_;
+      slots_[at] = key << 12 | static_cast<std::uint32_t>(max_code);
       if (max_code >= (1 << size)) ++size;
       if (max_code == kGifMaxCodes - 1) {
         w.code(kGifClear, size);
-        ++generation_;
+        clear();
         size = kGifMinCodeSize + 1;
         max_code = kGifEnd;
       }
@@ -107,17 +120,37 @@ class GifLzw {
   }
 
  private:
-  std::vector<std::uint16_t> child_;
-  std::vector<std::uint32_t> stamp_;
-  std::uint32_t generation_ = 0;
+  static constexpr int kSlotBits = 14;
+  static constexpr std::uint32_t kSlots = 1u << kSlotBits;
+  void clear() { std::fill(slots_.begin(), slots_.end(), 0u); }
+  std::vector<std::uint32_t> slots_;
 };
+
+// Each channel's share of the palette index, by byte value (the nearest level, scaled).
+struct GifLevelTables {
+  std::array<std::uint8_t, 256> red{}, green{}, blue{};
+  GifLevelTables() {
+    for (int v = 0; v < 256; ++v) {
+      const auto b = static_cast<std::uint8_t>(v);
+      red[static_cast<std::size_t>(v)] =
+          static_cast<std::uint8_t>(gif_level(b, kGifRed) * kGifGreen * kGifBlue);
+      green[static_cast<std::size_t>(v)] =
+          static_cast<std::uint8_t>(gif_level(b, kGifGreen) * kGifBlue);
+      blue[static_cast<std::size_t>(v)] = static_cast<std::uint8_t>(gif_level(b, kGifBlue));
+    }
+  }
+};
+
+const GifLevelTables& gif_level_tables() {
+  static const GifLevelTables tables;
+  return tables;
+}
 
 }  // namespace
 
 std::uint8_t gif_palette_index(const std::uint8_t rgb[3]) {
-  return static_cast<std::uint8_t>(gif_level(rgb[0], kGifRed) * kGifGreen * kGifBlue +
-                                   gif_level(rgb[1], kGifGreen) * kGifBlue +
-                                   gif_level(rgb[2], kGifBlue));
+  const GifLevelTables& t = gif_level_tables();
+  return static_cast<std::uint8_t>(t.red[rgb[0]] + t.green[rgb[1]] + t.blue[rgb[2]]);
 }
 
 void gif_palette_colour(std::uint8_t index, std::uint8_t rgb[3]) {
@@ -161,7 +194,12 @@ std::string encode_gif(const std::vector<const RgbImage*>& frames, int delay_cen
   GifLzw lzw;
   std::vector<std::uint8_t> indices(static_cast<std::size_t>(width) * height);
   for (const RgbImage* f : frames) {
-    for (std::size_t i = 0; i < indices.size(); ++i) indices[i] = gif_palette_index(&f->rgb[3 * i]);
+    const GifLevelTables& t = gif_level_tables();
+    const std::uint8_t* rgb = f->rgb.data();
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+      indices[i] = static_cast<std::uint8_t>(t.red[rgb[3 * i]] + t.green[rgb[3 * i + 1]] +
+                                             t.blue[rgb[3 * i + 2]]);
+    }
     // Graphic control: no disposal, the delay, no transparent colour.
     out += std::string("\x21\xF9\x04\x04", 4);
     put16(out, delay_centiseconds);
