@@ -1042,7 +1042,7 @@ struct WordFieldReader {
 };
 
 // The reader of field f in pixel memory `memory` (lane-major, `pixels` per lane).
-WordFieldReader field_reader(const u64* memory, int pixels, const Field& f) {
+WordFieldReader word_field_reader(const u64* memory, int pixels, const Field& f) {
   const u64* lo = memory + static_cast<std::size_t>(f.lo / 64) * pixels;
   const int off = f.lo % 64;
   const bool split = off + f.width > 64;
@@ -1089,8 +1089,8 @@ void WordBackend::multiply(const Field& dst, const Field& a, const Field& b, boo
   // the plain product modulo 2^width either way.
   (void)window;
   if (dst.lo % 64 + dst.width <= 64) {
-    const WordFieldReader x = field_reader(memory_.data(), pixels_, a),
-                          y = field_reader(memory_.data(), pixels_, b);
+    const WordFieldReader x = word_field_reader(memory_.data(), pixels_, a),
+                          y = word_field_reader(memory_.data(), pixels_, b);
     merge_lane(dst, [x, y](u64, int p) { return x(p) * y(p); });
     return;
   }
@@ -1113,7 +1113,7 @@ void WordBackend::multiply_accumulate(const Field& dst, const Field& a, i64 k) {
   if (overlaps(dst, a)) throw std::invalid_argument("mac: destination overlaps a source");
   const u64 m = static_cast<u64>(k);
   if (dst.lo % 64 + dst.width <= 64) {
-    const WordFieldReader x = field_reader(memory_.data(), pixels_, a);
+    const WordFieldReader x = word_field_reader(memory_.data(), pixels_, a);
     merge_lane(dst, [x, m](u64 old, int p) { return old + x(p) * m; });
     return;
   }
