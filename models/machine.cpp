@@ -41,7 +41,9 @@ Machine::Machine(sc_core::sc_module_name name, const MachineConfig& config, cons
         std::make_unique<GraphicsProcessor>(fmt_name("gp", k).c_str(), k, first, last, gp_wiring));
     gp_reports_.push_back(gps_.back().get());
   }
-  // The stops are numbered once every unit exists. GPs receive nothing.
+  // The stops are numbered once every unit exists. GPs receive only the depth sort's
+  // messages (painter's).
+  for (int k = 0; k < gps; ++k) ring_->attach(gp_stop(k), *gps_[k]);
   for (int k = 0; k < renderers; ++k) {
     ring_->attach(renderer_stop(k), *renderers_[k]);
     renderer_stops_.push_back(renderer_stop(k));

@@ -4,10 +4,13 @@
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace pp5 {
+
+struct DepthSortWork;  // models/gp/depth_sort.hpp
 
 // One mesh vertex in world space. `normal` is unit length; `color` is RGB in [0,1]; `opacity`
 // is the material's, in [0,1] (1 = opaque; only programs with the `opacity` expression use it).
@@ -98,6 +101,11 @@ struct Scene {
   // Whether the GP prunes the expression by the solids' bounding boxes before planning its
   // passes (Goldfeather's geometric pruning, models/gp/pass_plan.hpp); off only to measure it.
   bool prune_csg = true;
+  // Painter's: the GPs' depth sort that put the display list in its order, which the GPs run
+  // (spend and send) before their geometry (GraphicsProcessor); null for none. The order
+  // itself is the display list's: the host computed it (depth_sort) and only the sort's time
+  // and messages are simulated.
+  std::shared_ptr<const DepthSortWork> depth_sort;
 
   // The solid triangle t belongs to, -1 for none.
   int solid_of_triangle(int t) const {

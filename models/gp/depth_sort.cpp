@@ -350,6 +350,7 @@ DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps,
   for (int k = 0; k < gps; ++k) {
     for (long long pos = n * k / gps; pos < n * (k + 1) / gps; ++pos) owner[merged[pos]] = k;
   }
+  r.checker = owner;
   std::vector<int> list = merged;
   std::vector<char> moved(polygons.size(), 0);
   std::size_t head = 0;
@@ -405,6 +406,148 @@ DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps,
     }
   }
   return r;
+}
+
+OpCounts split_triangle_ops(int pieces) {
+  // A vertex's side: the plane test (kPlaneVertex) and one multiply by w.
+  constexpr OpCounts kSide{4, 4, 3, 0, 0, 1, 0};
+  // One crossing: t = ga / (ga - gb) (a subtract, a reciprocal by seed and two Newton steps,
+  // a multiply); ten world values (position 3, normal 3, colour 3, opacity) by a + t (b - a);
+  // the normal renormalised (dot product, reciprocal square root by seed and two Newton
+  // steps, three multiplies); w; the screen position (x, y, z times w, interpolated, over w by
+  // a reciprocal). Loads both end vertices (14 values each), stores the new one.
+  constexpr OpCounts kCrossing{
+      1 + 2 + 20 + 2 + 2 + 1 + 6 + 2, 1 + 5 + 10 + 3 + 6 + 3 + 1 + 6 + 5 + 3, 28, 14, 0, 1, 4};
+  OpCounts ops;
+  for (int k = 0; k < 3; ++k) ops += kSide;
+  ops += kCrossing;
+  ops += kCrossing;
+  for (int k = 0; k < pieces; ++k) ops += prepare_ops(3);
+  return ops;
+}
+
+InsertResult depth_sort_insert(const std::vector<SortPolygon>& polygons, std::vector<int>& order,
+                               const std::vector<int>& pieces, const std::vector<int>& owner,
+                               int gps, Containment containment) {
+  InsertResult r;
+  r.ops.assign(static_cast<std::size_t>(gps), {});
+  std::vector<Record> rec;
+  rec.reserve(polygons.size());
+  for (const SortPolygon& p : polygons) rec.push_back(make_record(p));
+  // The deepest depth extent in the order: a polygon overlapping P in depth has its far end in
+  // (P's near end, P's far end + deepest], a window of the far-depth index.
+  double deepest = 0;
+  for (const int i : order) deepest = std::max(deepest, rec[i].z1 - rec[i].z0);
+  // Far-depth indices (far end descending): of every polygon in the order, and of the dirty
+  // ones (the pieces, and the polygons moved since).
+  const auto by_far = [&rec](int a, int b) { return rec[a].z1 > rec[b].z1; };
+  std::vector<int> all = order;
+  std::stable_sort(all.begin(), all.end(), by_far);
+  std::vector<char> dirty(polygons.size(), 0), moved(polygons.size(), 0);
+  std::vector<int> dirty_index;
+  for (const int x : pieces) {
+    dirty[x] = 1;
+    dirty_index.push_back(x);
+  }
+  std::stable_sort(dirty_index.begin(), dirty_index.end(), by_far);
+  std::vector<std::size_t> pos(polygons.size(), 0);
+  const auto renumber = [&] {
+    for (std::size_t k = 0; k < order.size(); ++k) pos[order[k]] = k;
+  };
+  renumber();
+  constexpr OpCounts kMove{0, 0, 2, 2, 4, 1, 0};
+  // A window's candidate also costs a load of its place in the order (after the head or not).
+  constexpr OpCounts kPlace{0, 0, 1, 0, 0, 1, 0};
+  std::vector<int> after;
+  std::size_t head = 0;
+  while (head < order.size()) {
+    const int p = order[head];
+    OpCounts& ops = r.ops[static_cast<std::size_t>(owner[p])];
+    // A clean head's pairs with clean polygons were checked before and keep their order: only
+    // the dirty polygons are candidates. A dirty head is checked against every polygon.
+    const std::vector<int>& index = dirty[p] ? all : dirty_index;
+    if (index.empty()) {
+      ++head;
+      continue;
+    }
+    for (int k = 0; k < 2 * ceil_log2(static_cast<int>(index.size()) + 1); ++k) ops += kKeyCompare;
+    const auto lo = std::upper_bound(index.begin(), index.end(), rec[p].z1 + deepest,
+                                     [&rec](double z, int v) { return z > rec[v].z1; });
+    after.clear();
+    for (auto it = lo; it != index.end() && rec[*it].z1 > rec[p].z0; ++it) {
+      ops += kPlace;
+      if (*it != p && pos[*it] > head) after.push_back(*it);
+    }
+    std::sort(after.begin(), after.end(), [&pos](int a, int b) { return pos[a] < pos[b]; });
+    bool restarted = false;
+    for (const int q : after) {
+      ++r.tests_run[static_cast<int>(OverlapTest::z_extent)];
+      ops += kZExtent;
+      if (rec[q].z0 >= rec[p].z1) {
+        ++r.decided[static_cast<int>(OverlapTest::z_extent)];
+        continue;
+      }
+      ++r.pairs_checked;
+      const PairVerdict v = check_records(polygons[static_cast<std::size_t>(p)], rec[p],
+                                          polygons[static_cast<std::size_t>(q)], rec[q],
+                                          r.tests_run, ops, containment);
+      if (v.decided_by == OverlapTest::count) {
+        r.unresolved.emplace_back(p, q);
+        continue;
+      }
+      ++r.decided[static_cast<int>(v.decided_by)];
+      if (!v.q_first) continue;
+      if (moved[q]) {
+        r.unresolved.emplace_back(p, q);  // it would have to move again: a cycle
+        continue;
+      }
+      // Q goes ahead of P, as in the sort, and is checked in its turn against every polygon.
+      moved[q] = 1;
+      ++r.moves;
+      ops += kMove;
+      order.erase(order.begin() + static_cast<std::ptrdiff_t>(pos[q]));
+      order.insert(order.begin() + static_cast<std::ptrdiff_t>(head), q);
+      renumber();
+      if (!dirty[q]) {
+        dirty[q] = 1;
+        dirty_index.insert(std::upper_bound(dirty_index.begin(), dirty_index.end(), q, by_far), q);
+      }
+      restarted = true;
+      break;
+    }
+    if (!restarted) ++head;
+  }
+  return r;
+}
+
+DepthSortWork depth_sort_work(const DepthSortResult& sort, std::size_t polygons, int gps,
+                              bool overhead_factor) {
+  if (gps < 1 || sort.costs.prepare.size() != static_cast<std::size_t>(gps) ||
+      sort.checker.size() != polygons) {
+    throw std::invalid_argument("depth_sort_work: the sort was not made for these polygons");
+  }
+  DepthSortWork w;
+  const auto g = static_cast<std::size_t>(gps);
+  w.prepare = sort.costs.prepare;
+  w.merge = sort.costs.merge;
+  w.check = sort.costs.check;
+  w.insert.assign(g, {});
+  w.overhead_factor = overhead_factor;
+  w.run_words.assign(g, 0);
+  w.record_words.assign(g, std::vector<std::uint64_t>(g, 0));
+  const auto n = static_cast<long long>(polygons);
+  for (int k = 0; k < gps; ++k) {
+    const long long first = n * k / gps, last = n * (k + 1) / gps;
+    if (k != 0) w.run_words[static_cast<std::size_t>(k)] = kSortRunWords * (last - first);
+    for (long long i = first; i < last; ++i) {
+      const int to = sort.checker[static_cast<std::size_t>(i)];
+      if (to != k)
+        w.record_words[static_cast<std::size_t>(k)][static_cast<std::size_t>(to)] +=
+            kSortRecordWords;
+    }
+  }
+  w.order_words = gps > 1 ? kSortOrderWords * polygons : 0;
+  return w;
 }
 
 void register_depth_sort_statistics(Statistics& stats, const std::string& prefix,

@@ -42,6 +42,7 @@
 #include <array>
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -126,11 +127,79 @@ struct DepthSortResult {
   std::uint64_t cycles = 0;                     // a moved polygon that would have to move again
   std::uint64_t unorderable = 0;                // pairs no test orders either way
   std::vector<std::pair<int, int>> unresolved;  // (P, Q) input indices, in the order found
+  std::vector<int> checker;  // per input polygon, the GP holding its slice of the merged order
   DepthSortCosts costs;
 };
 
 DepthSortResult depth_sort(const std::vector<SortPolygon>& polygons, int gps,
                            Containment containment = Containment::edges);
+
+// Splitting by insertion (Newell, Newell and Sancha split what the tests cannot order): the
+// pieces of a split polygon take its place in the order a sort made, and only the pairs that
+// touch a piece, or a polygon moved since, are checked again; the pairs of two other
+// polygons keep their relative order, which the sort checked. The check phase runs again
+// over the order as the sort's does (each head P against the polygons after it that overlap
+// it in depth; a Q that must go first moves ahead of P and is checked in its turn; a Q moved
+// once that must move again closes a cycle), but a head that is neither a piece nor moved
+// is checked only against the pieces and moved polygons. The candidates of a head come from
+// a far-depth index by two binary searches (its near end, and its far end plus the deepest
+// polygon's depth extent): of every polygon for a piece or a moved head, of the pieces and
+// moved polygons for the others. Pairs no test orders, and cycles, are unresolved (the next
+// round splits them). `order` holds the polygons drawn (the split ones are not in it); each
+// head's operations go to the GP `owner` names for it.
+struct InsertResult {
+  std::uint64_t pairs_checked = 0;  // pairs checked again
+  std::uint64_t moves = 0;          // polygons moved ahead
+  std::array<std::uint64_t, kOverlapTests> tests_run{};
+  std::array<std::uint64_t, kOverlapTests> decided{};
+  std::vector<std::pair<int, int>> unresolved;  // (P, Q): P earlier in the order
+  std::vector<OpCounts> ops;                    // per GP
+};
+InsertResult depth_sort_insert(const std::vector<SortPolygon>& polygons, std::vector<int>& order,
+                               const std::vector<int>& pieces, const std::vector<int>& owner,
+                               int gps, Containment containment = Containment::edges);
+// The i860 operations of splitting a triangle by a plane into triangles: the plane's side of
+// each vertex (weighted by its clip w), the two edge crossings (the parameter by a reciprocal,
+// the world position, normal, colour, opacity and screen position interpolated, the normal
+// renormalised), each piece's record (extents, plane) prepared.
+OpCounts split_triangle_ops(int pieces);
+
+// A polygon's record as the sort keeps it and the ring moves it, in 32-bit words: three
+// vertices (9), its plane (4) and its extents in x, y and z (6).
+inline constexpr std::uint64_t kSortRecordWords = 19;
+// A sorted run's entry (a far-depth key and an index) and the merged order's (an index).
+inline constexpr std::uint64_t kSortRunWords = 2;
+inline constexpr std::uint64_t kSortOrderWords = 1;
+
+// What each GP computes and sends in one whole-screen sort, for the GP module to spend and
+// send in simulated time (GraphicsProcessor runs it before its geometry when the frame's
+// scene carries one: Scene::depth_sort). Function only: the order is the DepthSortResult's;
+// this says what the phases cost and which words cross the ring:
+//  1. every GP k prepares and sorts its share (prepare[k]), then sends its sorted run to
+//     GP 0 (run_words[k]; GP 0's own stays);
+//  2. GP 0 merges the runs (merge) and sends the merged order around the ring to every GP
+//     (order_words, one message past every GP);
+//  3. every GP j sends each GP k the records of the polygons of j's share that k checks
+//     (record_words[j][k]; none to itself);
+//  4. every GP checks its slice (check[k]), then re-checks the pieces splitting inserted
+//     into it (insert[k]: empty without splitting).
+struct DepthSortWork {
+  std::vector<OpCounts> prepare;
+  OpCounts merge;
+  std::vector<OpCounts> check;
+  std::vector<OpCounts> insert;
+  std::vector<std::uint64_t> run_words;
+  std::uint64_t order_words = 0;
+  std::vector<std::vector<std::uint64_t>> record_words;
+  // The clocks: the sort's own counts (false), or x gp.overhead_factor as the geometry's.
+  bool overhead_factor = false;
+  // A sort run after this one (splitting by sorting again), null for none.
+  std::shared_ptr<const DepthSortWork> next;
+  int gps() const { return static_cast<int>(prepare.size()); }
+};
+// The work of `sort` (depth_sort of `polygons` polygons on `gps` GPs).
+DepthSortWork depth_sort_work(const DepthSortResult& sort, std::size_t polygons, int gps,
+                              bool overhead_factor);
 
 class Statistics;
 // Registers PREFIX.key_comparisons, .pairs_checked, .tests_run.TEST, .decided.TEST,

@@ -52,6 +52,21 @@ void register_gp_statistics(Statistics& stats, int index, const GpStats& g, doub
     stats.add_integer(p + "operations." + ops[k].first, u::count, meaning[k],
                       [&g, field] { return stat_count(g.ops.*field); });
   }
+  if (g.sort.count > 0 || g.sort_messages > 0) {
+    // Painter's depth sort, run before the geometry (a frame without one registers none).
+    stats.add_integer(
+        p + "depth_sort.clocks", u::gp_clocks,
+        "Of busy_clocks, the depth sort's: prepare, merge, checks and inserted pieces",
+        [&g] { return stat_count(g.sort.count); });
+    stats.add_integer(p + "depth_sort.messages", u::count,
+                      "Of messages, the depth sort's: runs, the order and records, GP to GP",
+                      [&g] { return stat_count(g.sort_messages); });
+    stats.add_integer(p + "depth_sort.ring_words", u::count, "Words of those messages",
+                      [&g] { return stat_count(g.sort_words); });
+    stats.add_real(p + "depth_sort.done_seconds", u::seconds,
+                   "When its part of the depth sort ended, from the frame's start",
+                   [&g] { return g.sort_done.to_seconds(); });
+  }
   stats.add_real(p + "waiting_for_stage_seconds", u::seconds,
                  "Waiting for a Renderer to open the (region, pass) stage of its next bin",
                  [&g] { return g.waiting_stage.to_seconds(); });

@@ -5,6 +5,7 @@
 #include <iterator>
 
 #include "common/parallel_for.hpp"
+#include "models/gp/depth_sort.hpp"
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/region_bins.hpp"
 #include "models/gp/setup_memo.hpp"
@@ -233,6 +234,7 @@ void GraphicsProcessor::run() {
 
 void GraphicsProcessor::reset_frame() {
   stats_ = GpStats{};
+  sort_in_.clear();
   activity_.assign(1, {wiring_.clock.start(), GpActivity::compute});
 }
 
@@ -266,6 +268,11 @@ void GraphicsProcessor::geometry(RegionBins& bins, GpStats& stats, int frame, Gr
 
 void GraphicsProcessor::run_frame() {
   const sc_core::sc_time base = wiring_.clock.start();
+  const int frame = wiring_.clock.frame();
+  // Painter's: the depth sort first (every GP takes part, even one with nothing to draw).
+  for (const DepthSortWork* sort = wiring_.plans.of(frame).depth_sort(); sort != nullptr;
+       sort = sort->next.get())
+    depth_sort_phase(*sort, frame);
   // With fewer triangles than GPs, a GP may have none: it takes no part in the frame, and
   // the Renderers expect no bin map from it (Machine::busy_gp_count).
   if (first_ == last_) {
@@ -273,7 +280,6 @@ void GraphicsProcessor::run_frame() {
     return;
   }
   RegionBins bins;
-  const int frame = wiring_.clock.frame();
   Growing growing;
   geometry(bins, stats_, frame, sends_when_full() ? &growing : nullptr);
   send_bins(bins, frame, {}, sends_when_full() ? &growing : nullptr);
@@ -318,6 +324,9 @@ void GraphicsProcessor::run_overlapped() {
         while (!may_start(frame_)) wait(wiring_.clock.progress());
         stats_.waiting_start = sc_core::sc_time_stamp() - t0;
       }
+      for (const DepthSortWork* sort = wiring_.plans.of(frame_).depth_sort(); sort != nullptr;
+           sort = sort->next.get())
+        depth_sort_phase(*sort, frame_);
       geometry(bins[frame_ & 1], stats_, frame_, when_full ? &growing : nullptr);
     } else if (when_full) {
       // The rest of a set-up begun ahead, spent while its full messages go.
@@ -545,7 +554,10 @@ void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahea
     // Nothing of this frame it can send: the next frame's set-up, if it may start it, until
     // a stage it owes opens or frees room.
     if (pick < 0 && ahead != nullptr && !ahead->done) {
-      if (!ahead->started && may_start(ahead->frame)) start_ahead(*ahead);
+      // A frame that sorts first (painter's) is not set up ahead: its sort comes before.
+      if (!ahead->started && may_start(ahead->frame) &&
+          wiring_.plans.of(ahead->frame).depth_sort() == nullptr)
+        start_ahead(*ahead);
       if (ahead->started && !ahead->done) {
         const sc_core::sc_time t0 = sc_core::sc_time_stamp();
         begin(GpActivity::compute);
@@ -592,6 +604,118 @@ void GraphicsProcessor::send_bins(const RegionBins& bins, int frame, Ahead* ahea
     wait(growing->total - growing->spent);
     geometry_piece(t0);
   }
+}
+
+void GraphicsProcessor::receive_sort(const SortArrival& message) {
+  sort_in_.push_back(message);
+  sort_arrived_.notify(sc_core::SC_ZERO_TIME);
+}
+
+void GraphicsProcessor::await_sort(SortArrival::Kind kind, int frame, int count) {
+  const auto mine = [kind, frame](const SortArrival& m) {
+    return m.kind == kind && m.frame == frame;
+  };
+  begin(GpActivity::ring);
+  while (std::count_if(sort_in_.begin(), sort_in_.end(), mine) < count) wait(sort_arrived_);
+  // Every message is booked: the last of them arrives at a known time.
+  sc_core::sc_time last = sc_core::sc_time_stamp();
+  for (const SortArrival& m : sort_in_) {
+    if (mine(m) && last < m.arrival) last = m.arrival;
+  }
+  if (sc_core::sc_time_stamp() < last) wait(last - sc_core::sc_time_stamp());
+  sort_in_.erase(std::remove_if(sort_in_.begin(), sort_in_.end(), mine), sort_in_.end());
+}
+
+void GraphicsProcessor::send_sort(const std::vector<int>& to_gps, SortArrival::Kind kind,
+                                  std::uint64_t words, int frame) {
+  // Starting the message costs what starting a bin's does.
+  spend(plan_.i860().clocks(I860Work::send_bin(), 0));
+  std::vector<int> stops;
+  for (const int g : to_gps) stops.push_back(plan_.gp_stop(g));
+  SortArrival m;
+  m.kind = kind;
+  m.from_gp = index_;
+  m.frame = frame;
+  m.words = words;
+  const RingBooking b = wiring_.ring.send_sort(plan_.gp_stop(index_), stops, m);
+  ++stats_.messages;
+  ++stats_.sort_messages;
+  stats_.ring_words += words;
+  stats_.sort_words += words;
+  begin(GpActivity::ring);
+  stats_.waiting_ring += b.end - sc_core::sc_time_stamp();
+  wait(b.end - sc_core::sc_time_stamp());
+}
+
+void GraphicsProcessor::depth_sort_phase(const DepthSortWork& work, int frame) {
+  // The sort's clocks come from its own counts unless the work says x gp.overhead_factor
+  // (docs/timing.md "Depth sort").
+  I860Params params = plan_.i860().params();
+  if (!work.overhead_factor) params.overhead_factor = 1;
+  const I860Model i860(params);
+  const auto k = static_cast<std::size_t>(index_);
+  const int gps = work.gps();
+  const auto phase = [&](const OpCounts& ops, const char* name) {
+    const GpClocks clocks = i860.clocks(ops, 0);
+    if (clocks.count == 0) return;
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    spend(clocks);
+    stats_.sort += clocks;
+    if (wiring_.timeline.on())
+      wiring_.timeline.add(Unit::gp, index_, name, t0, sc_core::sc_time_stamp());
+  };
+  const auto slice = [&](const char* name, sc_core::sc_time t0) {
+    if (wiring_.timeline.on() && t0 < sc_core::sc_time_stamp())
+      wiring_.timeline.add(Unit::gp, index_, name, t0, sc_core::sc_time_stamp());
+  };
+  // 1. Its share's records and sort; the run to GP 0.
+  phase(work.prepare[k], "depth sort: prepare");
+  if (index_ != 0 && work.run_words[k] > 0) {
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    send_sort({0}, SortArrival::Kind::run, work.run_words[k], frame);
+    slice("depth sort: send run to gp0", t0);
+  }
+  // 2. GP 0 merges the runs and sends the order past every GP.
+  std::vector<int> others;
+  for (int g = 0; g < gps; ++g)
+    if (g != index_) others.push_back(g);
+  if (index_ == 0) {
+    int runs = 0;
+    for (int g = 1; g < gps; ++g) runs += work.run_words[static_cast<std::size_t>(g)] > 0 ? 1 : 0;
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    await_sort(SortArrival::Kind::run, frame, runs);
+    slice("depth sort: await runs", t0);
+    phase(work.merge, "depth sort: merge");
+    if (work.order_words > 0 && !others.empty()) {
+      const sc_core::sc_time t1 = sc_core::sc_time_stamp();
+      send_sort(others, SortArrival::Kind::order, work.order_words, frame);
+      slice("depth sort: send order", t1);
+    }
+  } else if (work.order_words > 0) {
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    await_sort(SortArrival::Kind::order, frame, 1);
+    slice("depth sort: await order", t0);
+  }
+  // 3. Each polygon's record to the GP that checks it.
+  for (const int g : others) {
+    const std::uint64_t words = work.record_words[k][static_cast<std::size_t>(g)];
+    if (words == 0) continue;
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    send_sort({g}, SortArrival::Kind::records, words, frame);
+    slice(("depth sort: send records to gp" + std::to_string(g)).c_str(), t0);
+  }
+  int senders = 0;
+  for (const int g : others)
+    senders += work.record_words[static_cast<std::size_t>(g)][k] > 0 ? 1 : 0;
+  {
+    const sc_core::sc_time t0 = sc_core::sc_time_stamp();
+    await_sort(SortArrival::Kind::records, frame, senders);
+    slice("depth sort: await records", t0);
+  }
+  // 4. The checks of its slice, then the split pieces inserted into it.
+  phase(work.check[k], "depth sort: check");
+  if (k < work.insert.size()) phase(work.insert[k], "depth sort: split and insert");
+  stats_.sort_done = sc_core::sc_time_stamp() - wiring_.clock.start();
 }
 
 void GraphicsProcessor::send_bin_map(int frame) {

@@ -45,6 +45,13 @@ struct GpStats {
   std::uint64_t ring_words = 0;        // words of those messages
   std::uint64_t screen_triangles = 0;  // triangles after clipping that reached set-up
   SetupCounts setup;
+  // Painter's depth sort (Scene::depth_sort), run before the geometry: its clocks (prepare,
+  // merge, checks; in busy too), its ring messages and words (in messages and ring_words
+  // too), and when its last phase ended (relative to the frame's start; zero without a sort).
+  GpClocks sort{};
+  std::uint64_t sort_messages = 0;
+  std::uint64_t sort_words = 0;
+  sc_core::sc_time sort_done;
   sc_core::sc_time geometry_started;  // in the run's time
   sc_core::sc_time geometry_done;
   sc_core::sc_time finished;  // relative to the frame's start; overlapped, the run's time
@@ -70,7 +77,7 @@ struct GpWiring {
   FrameClock& clock;
 };
 
-class GraphicsProcessor : public sc_core::sc_module, public GpReport {
+class GraphicsProcessor : public sc_core::sc_module, public GpReport, public RingEndpoint {
  public:
   SC_HAS_PROCESS(GraphicsProcessor);
   GraphicsProcessor(sc_core::sc_module_name name, int index, int first, int last,
@@ -87,8 +94,18 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   // Overlapped frames (FrameClock::overlapped): every frame it has finished sending, in order.
   const std::vector<GpFrameRecord>& history() const { return history_; }
   bool takes_part() const { return first_ != last_; }
+  // The depth sort's messages from other GPs (the Machine attaches the GP at its stop).
+  void receive_sort(const SortArrival& message) override;
 
  private:
+  // Painter's (Scene::depth_sort): this GP's part of the sort of `frame`, in simulated time:
+  // its phases spent as clocks, its runs, order and records sent and awaited as ring
+  // messages (DepthSortWork's steps), each phase a timeline slice.
+  void depth_sort_phase(const DepthSortWork& work, int frame);
+  // Waits until `count` sort messages of `kind` for `frame` have fully arrived.
+  void await_sort(SortArrival::Kind kind, int frame, int count);
+  void send_sort(const std::vector<int>& to_gps, SortArrival::Kind kind, std::uint64_t words,
+                 int frame);
   void run();
   void run_frame();
   void run_overlapped();
@@ -149,6 +166,8 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport {
   std::vector<std::uint64_t> done_after_[2];
   int frame_ = 0;  // overlapped: the frame it is sending
   std::vector<GpFrameRecord> history_;
+  std::vector<SortArrival> sort_in_;  // sort messages received, not yet consumed
+  sc_core::sc_event sort_arrived_;
   // When each activity began, in time order.
   std::vector<std::pair<sc_core::sc_time, GpActivity>> activity_{
       {sc_core::SC_ZERO_TIME, GpActivity::compute}};

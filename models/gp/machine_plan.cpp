@@ -4,6 +4,7 @@
 
 #include <stdexcept>
 
+#include "models/gp/depth_sort.hpp"
 #include "models/gp/expressions.hpp"
 #include "models/gp/pass_plan.hpp"
 #include "models/gp/primitive_kind.hpp"
@@ -138,6 +139,11 @@ void MachinePlan::derive_from_scene() {
   const Program& program = program_;
   const Scene& scene = *scene_;
   const MachineConfig& config = config_;
+  if (scene.depth_sort && scene.depth_sort->gps() != config.gp.count) {
+    throw std::runtime_error(
+        fmt::format("scene '{}': its depth sort was made for {} GPs, but key 'gp.count' = {}",
+                    scene.name, scene.depth_sort->gps(), config.gp.count));
+  }
   frame_values_ = geometry_->frame_values();
   set_pass_plan(program, scene, frame_values_);
   const ProcedureCode& triangle = program.procedure(Procedure::triangle);

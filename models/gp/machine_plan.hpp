@@ -77,6 +77,10 @@ class MachinePlan {
   // Ring words of one finished region on its way to the frame buffer.
   std::uint64_t region_words() const;
 
+  // The depth sort the GPs run before their geometry (the scene's: Scene::depth_sort), null
+  // for none; checked to be made for gp.count GPs.
+  const DepthSortWork* depth_sort() const { return scene_->depth_sort.get(); }
+
   // The GP cost model and what the firmware asks of each triangle.
   const I860Model& i860() const { return i860_; }
   const GpWorkload& gp_workload() const { return workload_; }

@@ -66,6 +66,10 @@ void RingEndpoint::receive_region(const RegionArrival&) {
   throw std::logic_error("ring: a finished region reached a stop that takes none");
 }
 
+void RingEndpoint::receive_sort(const SortArrival&) {
+  throw std::logic_error("ring: a depth-sort message reached a stop that takes none");
+}
+
 void Ring::attach(int stop, RingEndpoint& endpoint) {
   endpoints_.at(static_cast<std::size_t>(stop)) = &endpoint;
 }
@@ -97,6 +101,19 @@ RingBooking Ring::send_bin_map(int from, const std::vector<int>& to, std::uint64
   const RingBooking b = reserve(from, farthest, words);
   for (int stop : to) {
     endpoint(stop).receive_bin_map({gp, frame, requested, b.end + hop_delay(from, stop)});
+  }
+  return b;
+}
+
+RingBooking Ring::send_sort(int from, const std::vector<int>& to, SortArrival message) {
+  int farthest = to.at(0);
+  for (int stop : to) {
+    if (hops(from, stop) > hops(from, farthest)) farthest = stop;
+  }
+  const RingBooking b = reserve(from, farthest, message.words);
+  for (int stop : to) {
+    message.arrival = b.end + hop_delay(from, stop);
+    endpoint(stop).receive_sort(message);
   }
   return b;
 }

@@ -85,6 +85,16 @@ struct RegionArrival {
   sc_core::sc_time arrival;
 };
 
+// A message of the GPs' depth sort (models/gp/depth_sort.hpp DepthSortWork), GP to GP.
+struct SortArrival {
+  enum class Kind { run, order, records };
+  Kind kind = Kind::run;
+  int from_gp = 0;
+  int frame = 0;
+  std::uint64_t words = 0;
+  sc_core::sc_time arrival;  // fully at this stop
+};
+
 // What a unit at a ring stop receives. Each kind of message has its own entry; a unit
 // overrides those it takes, and the others refuse the message (std::logic_error).
 class RingEndpoint {
@@ -94,6 +104,7 @@ class RingEndpoint {
   virtual void receive_bin(std::shared_ptr<const BinMessage> message);
   virtual void receive_bin_map(const BinMapArrival& map);
   virtual void receive_region(const RegionArrival& region);
+  virtual void receive_sort(const SortArrival& message);
 };
 
 class Ring : public sc_core::sc_module {
@@ -115,6 +126,9 @@ class Ring : public sc_core::sc_module {
   // the nearer ones see it on the way) and hands each its arrival, in the order of `to`.
   RingBooking send_bin_map(int from, const std::vector<int>& to, std::uint64_t words, int gp,
                            int frame = 0);
+  // Books a depth-sort message of `message.words` from `from` past every stop of `to` (one
+  // stop, or several: booked to the farthest, as a bin map) and hands each its arrival.
+  RingBooking send_sort(int from, const std::vector<int>& to, SortArrival message);
   // Books a finished region from `from` to `to`, starting no earlier than `not_before`, and
   // hands it to `to`'s endpoint.
   RingBooking send_region(int from, int to, std::uint64_t words, int region,

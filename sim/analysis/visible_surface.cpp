@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <map>
 #include <stdexcept>
 
 #include "models/machine.hpp"
@@ -54,10 +55,6 @@ std::string region_text(const Difference& d, const MachineConfig& config) {
                      d.densest_region / per_row, d.densest);
 }
 
-// A polygon's record as the sort keeps it and the ring moves it, in 32-bit words: three
-// vertices (9), its plane (4) and its extents in x, y and z (6).
-constexpr std::uint64_t kSortRecordWords = 19;
-
 // The sort's cost on the machine's GPs under one set of choices. Whole screen: each GP
 // prepares and sorts its contiguous share, sends its sorted run (a key and an index a
 // polygon) to GP 0, which merges and sends the order back (an index a polygon), and every
@@ -65,10 +62,11 @@ constexpr std::uint64_t kSortRecordWords = 19;
 // region's polygons (those whose rectangle meets it) are sorted on their own by the GP the
 // region goes to (r mod gp.count), which first receives their records; no merge. The ring
 // time is the larger of all words over the ring's bandwidth and the longest single message.
-// `whole`, if given, is the whole-screen sort already run on `polygons`.
+// `whole`, if given, is the whole-screen sort already run on `polygons`; `insert`, if given,
+// each GP's splitting and inserting after its checks.
 SortCost painter_sort_cost(const MachineConfig& config, const std::vector<SortPolygon>& polygons,
                            bool per_region, bool factor, const DepthSortResult* whole,
-                           Containment containment) {
+                           Containment containment, const std::vector<OpCounts>* insert = nullptr) {
   I860Params params = i860_params(config);
   if (!factor) params.overhead_factor = 1;
   const I860Model i860(params);
@@ -88,7 +86,9 @@ SortCost painter_sort_cost(const MachineConfig& config, const std::vector<SortPo
     for (int k = 0; k < gps; ++k) {
       prepare =
           std::max(prepare, i860.clocks(r.costs.prepare[static_cast<std::size_t>(k)], 0).count);
-      check = std::max(check, i860.clocks(r.costs.check[static_cast<std::size_t>(k)], 0).count);
+      std::uint64_t own = i860.clocks(r.costs.check[static_cast<std::size_t>(k)], 0).count;
+      if (insert != nullptr) own += i860.clocks((*insert)[static_cast<std::size_t>(k)], 0).count;
+      check = std::max(check, own);
     }
     c.prepare_seconds = static_cast<double>(prepare) / hz;
     c.check_seconds = static_cast<double>(check) / hz;
@@ -128,6 +128,16 @@ SortCost painter_sort_cost(const MachineConfig& config, const std::vector<SortPo
   c.transfer_seconds =
       std::max(static_cast<double>(words) / bandwidth, static_cast<double>(longest) / ring_hz);
   return c;
+}
+
+// When the GPs' depth sort ended in a frame that ran it (the latest GP's), 0 if none did.
+double simulated_sort_seconds(const FrameResult& r, int gps) {
+  double t = 0;
+  for (int k = 0; k < gps; ++k) {
+    const std::string name = fmt::format("gp.{}.depth_sort.done_seconds", k);
+    if (r.stats.contains(name)) t = std::max(t, r.stats.real(name));
+  }
+  return t;
 }
 
 // Painter's with splitting: the painted triangles as world-space pieces, each with its screen
@@ -220,56 +230,271 @@ SortPolygon sort_polygon(const PaintPiece& p) {
   return {{p.v[0].screen, p.v[1].screen, p.v[2].screen}};
 }
 
-// Sorts the pieces, splitting one polygon of every pair no test orders by the other's plane
-// (the farther one, P, by Q's plane if it cuts P, else Q by P's) and sorting again, for up
-// to `rounds` rounds. Returns the last sort; `pieces` ends as the polygons it sorted.
-DepthSortResult sort_with_splitting(std::vector<PaintPiece>& pieces, int gps, int rounds,
-                                    VisibleSceneReport& rep,
-                                    std::vector<std::vector<SortPolygon>>& earlier,
-                                    std::vector<DepthSortResult>& earlier_sorts,
-                                    Containment containment) {
+// Splitting leaves T-junctions: a round cuts a piece along a plane that crosses an edge it
+// shares with a sibling piece (of the same scene triangle) the round left whole, so the new
+// vertex lies on the sibling's edge without being a vertex of it, and after the GP snaps
+// vertices to the subpixel grid a sliver between the two can hold a pixel centre that
+// neither covers. Every such sibling is split at the vertex into two triangles (fanned from
+// the opposite vertex) until no vertex of a piece lies inside an edge of a sibling. The
+// halves are parts of one polygon in one plane, so they keep its place in the order: any
+// order that may draw a polygon before or after another may draw a part of it so, and no
+// pair is checked again. Charged per test of a sibling's vertex against an edge (a cross
+// product and the extents along the edge) and per split (the two triangles written) to the
+// GP `gp_of` names. Returns the splits made.
+std::uint64_t remove_t_junctions(std::vector<PaintPiece>& pieces, std::vector<char>& alive,
+                                 std::vector<int>& order, std::vector<int>& gp_of,
+                                 std::vector<OpCounts>& ops) {
+  constexpr OpCounts kVertexOnEdge{5, 2, 4, 0, 0, 1, 0};
+  constexpr OpCounts kHalve{0, 0, 3, 6, 4, 1, 0};
+  constexpr OpCounts kEdgeLookup{0, 0, 4, 0, 2, 2, 0};  // hash the edge, load the sibling
+  std::uint64_t splits = 0;
+  // The pieces of each scene triangle that was split (more than one piece).
+  std::map<int, std::vector<int>> siblings;
+  for (const int k : order) {
+    if (pieces[static_cast<std::size_t>(k)].clipped.empty())
+      siblings[pieces[static_cast<std::size_t>(k)].source].push_back(k);
+  }
+  for (auto& [source, family] : siblings) {
+    if (family.size() < 2) continue;
+    // Each split adds no vertex (v is a sibling's), so the family's edges only subdivide; a
+    // bound keeps near-degenerate slivers from halving without end.
+    std::size_t budget = 8 * family.size();
+    // What a GP that keeps each piece's edges does: for every vertex of a piece, look up the
+    // sibling across the edge the vertex was cut on, and test the vertex against that edge
+    // (the host searches every sibling instead, and starts over after each split).
+    for (const int t : family) {
+      for (int k = 0; k < 3; ++k)
+        ops[static_cast<std::size_t>(gp_of[static_cast<std::size_t>(t)])] +=
+            kEdgeLookup + kVertexOnEdge;
+    }
+    bool changed = true;
+    while (changed && budget > 0) {
+      changed = false;
+      for (std::size_t a = 0; a < family.size() && !changed; ++a) {
+        const int t = family[a];
+        for (std::size_t b = 0; b < family.size() && !changed; ++b) {
+          if (a == b) continue;
+          const PaintPiece& other = pieces[static_cast<std::size_t>(family[b])];
+          for (const PaintVertex& v : other.v) {
+            const PaintPiece& piece = pieces[static_cast<std::size_t>(t)];
+            int edge = -1;
+            for (int e = 0; e < 3 && edge < 0; ++e) {
+              const glm::dvec2 p0(piece.v[static_cast<std::size_t>(e)].screen);
+              const glm::dvec2 p1(piece.v[static_cast<std::size_t>((e + 1) % 3)].screen);
+              const glm::dvec2 d = p1 - p0, q = glm::dvec2(v.screen) - p0;
+              const double len2 = glm::dot(d, d);
+              if (len2 <= 0) continue;
+              const double along = glm::dot(q, d) / len2;
+              const double across = std::abs(d.x * q.y - d.y * q.x) / len2;
+              if (along > 1e-6 && along < 1 - 1e-6 && across < 1e-7) edge = e;
+            }
+            if (edge < 0) continue;
+            // Not a sliver with no area to halve.
+            {
+              const glm::dvec2 a0(piece.v[0].screen), a1(piece.v[1].screen), a2(piece.v[2].screen);
+              const glm::dvec2 u = a1 - a0, w = a2 - a0;
+              if (std::abs(u.x * w.y - u.y * w.x) <= 1e-9 * (glm::dot(u, u) + glm::dot(w, w)))
+                continue;
+            }
+            --budget;
+            // Halve T at v: (A, v, C) and (v, B, C) for its edge A-B, in its winding.
+            const auto e = static_cast<std::size_t>(edge);
+            const PaintVertex pa = piece.v[e], pb = piece.v[(e + 1) % 3], pc = piece.v[(e + 2) % 3];
+            const int source_of = piece.source;
+            ops[static_cast<std::size_t>(gp_of[static_cast<std::size_t>(t)])] += kHalve;
+            for (int k = 0; k < 6; ++k)
+              ops[static_cast<std::size_t>(gp_of[static_cast<std::size_t>(t)])] +=
+                  kEdgeLookup + kVertexOnEdge;
+            const auto first = static_cast<int>(pieces.size());
+            pieces.push_back({{pa, v, pc}, source_of});
+            pieces.push_back({{v, pb, pc}, source_of});
+            alive.push_back(1);
+            alive.push_back(1);
+            gp_of.push_back(gp_of[static_cast<std::size_t>(t)]);
+            gp_of.push_back(gp_of[static_cast<std::size_t>(t)]);
+            alive[static_cast<std::size_t>(t)] = 0;
+            const auto at = std::find(order.begin(), order.end(), t);
+            const auto pos = order.erase(at);
+            order.insert(pos, {first, first + 1});
+            family[a] = first;
+            family.push_back(first + 1);
+            ++splits;
+            changed = true;
+            break;
+          }
+        }
+      }
+    }
+  }
+  return splits;
+}
+
+// Sorts the pieces once; then, for up to `rounds` rounds, splits one polygon of every pair no
+// test orders by the other's plane (the farther one, P, by Q's plane if it cuts P, else Q by
+// P's) and inserts the pieces into the order in its place (depth_sort_insert: only the pairs
+// a piece touches are checked). `pieces` ends as the polygons of the returned order. The
+// returned work is the first sort's, with the splitting and inserting charged (insert) to
+// the GP that checked the split polygon (its pieces' too).
+struct SplitSort {
+  DepthSortResult sort;  // the last sort's counts and costs (with the pieces inserted into it);
+                         // the final order and unresolved pairs
+  // Each sort run, in order (one, or one per round when re-sorting): its polygons, its
+  // result and the GPs' work (the last's insert holds the splitting and inserting).
+  std::vector<std::vector<SortPolygon>> polygons;
+  std::vector<DepthSortResult> sorts;
+  std::vector<DepthSortWork> work;
+  std::uint64_t pairs_rechecked = 0;
+  // The work as the GPs run it: each sort after the one before (DepthSortWork::next).
+  std::shared_ptr<const DepthSortWork> chained() const {
+    std::shared_ptr<DepthSortWork> next;
+    for (auto it = work.rbegin(); it != work.rend(); ++it) {
+      auto w = std::make_shared<DepthSortWork>(*it);
+      w->next = next;
+      next = w;
+    }
+    return next;
+  }
+};
+SplitSort sort_with_splitting(std::vector<PaintPiece>& pieces, int gps, int rounds,
+                              VisibleSceneReport& rep, Containment containment, bool factor,
+                              bool insert) {
+  SplitSort out;
   std::vector<SortPolygon> polys;
-  auto sort_now = [&] {
-    polys.clear();
-    for (const PaintPiece& p : pieces) polys.push_back(sort_polygon(p));
-    return depth_sort(polys, gps, containment);
-  };
-  DepthSortResult r = sort_now();
+  polys.reserve(pieces.size());
+  for (const PaintPiece& p : pieces) polys.push_back(sort_polygon(p));
+  DepthSortResult r = depth_sort(polys, gps, containment);
+  out.polygons.push_back(polys);
+  out.sorts.push_back(r);
+  out.work.push_back(depth_sort_work(r, polys.size(), gps, factor));
   rep.unresolved_before_split = r.unresolved.size();
-  for (int round = 0; round < rounds && !r.unresolved.empty(); ++round) {
+  std::vector<int> gp_of = r.checker;  // who splits and inserts a polygon's pieces
+  std::vector<char> alive(pieces.size(), 1);
+  std::vector<int> order = r.order;
+  std::vector<std::pair<int, int>> unresolved = r.unresolved;
+  for (int round = 0; round < rounds && !unresolved.empty(); ++round) {
     std::vector<char> cut(pieces.size(), 0);
-    std::vector<PaintPiece> added;
-    for (const auto& [pi, qi] : r.unresolved) {
+    std::vector<std::pair<int, int>> carry;
+    // Per cut polygon (in the order found), its pieces' indices.
+    std::vector<std::pair<int, std::vector<int>>> made;
+    for (const auto& [pi, qi] : unresolved) {
       const auto p = static_cast<std::size_t>(pi), q = static_cast<std::size_t>(qi);
-      if (cut[p] || cut[q]) continue;
+      if (!alive[p] || !alive[q]) continue;  // split before: its pieces were checked
+      if (cut[p] || cut[q]) continue;        // split this round: its pieces are checked below
       const SortPolygon& sp = polys[p];
       const SortPolygon& sq = polys[q];
       const PlaneEquation plane_q = plane_of(sq.v[0], sq.v[1], sq.v[2]);
       const PlaneEquation plane_p = plane_of(sp.v[0], sp.v[1], sp.v[2]);
-      if (plane_q.c == 0 && plane_q.a == 0 && plane_q.b == 0) continue;
-      if (split_piece(pieces[p], plane_q, added)) {
-        cut[p] = 1;
+      std::vector<PaintPiece> added;
+      std::size_t parent = p;
+      if (!(plane_q.c == 0 && plane_q.a == 0 && plane_q.b == 0) &&
+          split_piece(pieces[p], plane_q, added)) {
+        parent = p;
       } else if (split_piece(pieces[q], plane_p, added)) {
-        cut[q] = 1;
-      }
-    }
-    if (added.empty()) break;
-    std::vector<PaintPiece> next;
-    for (std::size_t k = 0; k < pieces.size(); ++k) {
-      if (cut[k]) {
-        ++rep.split_triangles;
+        parent = q;
       } else {
-        next.push_back(pieces[k]);
+        carry.emplace_back(pi, qi);  // neither plane cuts the other polygon
+        continue;
       }
+      cut[parent] = 1;
+      std::vector<int> indices;
+      for (PaintPiece& piece : added) {
+        indices.push_back(static_cast<int>(pieces.size()));
+        polys.push_back(sort_polygon(piece));
+        pieces.push_back(std::move(piece));
+        alive.push_back(1);
+        cut.push_back(0);
+        gp_of.push_back(gp_of[parent]);
+      }
+      if (insert)
+        out.work.back().insert[static_cast<std::size_t>(gp_of[parent])] +=
+            split_triangle_ops(static_cast<int>(indices.size()));
+      made.emplace_back(static_cast<int>(parent), std::move(indices));
     }
-    next.insert(next.end(), added.begin(), added.end());
-    pieces = std::move(next);
+    if (made.empty()) break;
+    for (const auto& made_by : made) {
+      alive[static_cast<std::size_t>(made_by.first)] = 0;
+      ++rep.split_triangles;
+    }
+    if (!insert) {
+      // Re-sorting: every polygon left, sorted again from the start (the former behaviour).
+      std::vector<PaintPiece> kept;
+      for (std::size_t k = 0; k < pieces.size(); ++k)
+        if (alive[k]) kept.push_back(std::move(pieces[k]));
+      pieces = std::move(kept);
+      polys.clear();
+      for (const PaintPiece& p : pieces) polys.push_back(sort_polygon(p));
+      r = depth_sort(polys, gps, containment);
+      out.polygons.push_back(polys);
+      out.sorts.push_back(r);
+      out.work.push_back(depth_sort_work(r, polys.size(), gps, factor));
+      gp_of = r.checker;
+      alive.assign(pieces.size(), 1);
+      order = r.order;
+      unresolved = r.unresolved;
+      ++rep.split_rounds;
+      continue;
+    }
+    // The pieces take their polygon's place in the order, then are checked where they stand.
+    std::vector<int> inserted;
+    for (const auto& [parent, indices] : made) {
+      const auto at = std::find(order.begin(), order.end(), parent);
+      const auto pos = order.erase(at);
+      order.insert(pos, indices.begin(), indices.end());
+      inserted.insert(inserted.end(), indices.begin(), indices.end());
+    }
+    const InsertResult ins = depth_sort_insert(polys, order, inserted, gp_of, gps, containment);
+    for (int k = 0; k < gps; ++k)
+      out.work.back().insert[static_cast<std::size_t>(k)] += ins.ops[static_cast<std::size_t>(k)];
+    out.pairs_rechecked += ins.pairs_checked;
+    for (int t = 0; t < kOverlapTests; ++t) {
+      r.tests_run[t] += ins.tests_run[t];
+      r.decided[t] += ins.decided[t];
+    }
+    r.reorders += ins.moves;
+    unresolved = carry;
+    unresolved.insert(unresolved.end(), ins.unresolved.begin(), ins.unresolved.end());
     ++rep.split_rounds;
-    earlier.push_back(polys);
-    earlier_sorts.push_back(std::move(r));
-    r = sort_now();
   }
-  return r;
+  if (rep.split_triangles > 0)
+    rep.t_junctions = remove_t_junctions(pieces, alive, order, gp_of, out.work.back().insert);
+  // The polygons still in the order, renumbered in it.
+  std::vector<int> index(pieces.size(), -1);
+  std::vector<PaintPiece> kept;
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    if (!alive[k]) continue;
+    index[k] = static_cast<int>(kept.size());
+    kept.push_back(std::move(pieces[k]));
+  }
+  pieces = std::move(kept);
+  r.order.clear();
+  for (const int k : order) r.order.push_back(index[static_cast<std::size_t>(k)]);
+  r.unresolved.clear();
+  for (const auto& [p, q] : unresolved) {
+    if (alive[static_cast<std::size_t>(p)] && alive[static_cast<std::size_t>(q)])
+      r.unresolved.emplace_back(index[static_cast<std::size_t>(p)],
+                                index[static_cast<std::size_t>(q)]);
+  }
+  out.sort = std::move(r);
+  return out;
+}
+
+// The closed form of every sort `split` ran (whole screen), summed: the rounds' sorts follow
+// each other; the last's checks include the pieces inserted.
+SortCost split_sort_cost(const MachineConfig& config, const SplitSort& split, bool factor,
+                         Containment containment) {
+  SortCost c;
+  for (std::size_t k = 0; k < split.sorts.size(); ++k) {
+    const bool last = k + 1 == split.sorts.size();
+    const SortCost e = painter_sort_cost(config, split.polygons[k], false, factor, &split.sorts[k],
+                                         containment, last ? &split.work[k].insert : nullptr);
+    c.prepare_seconds += e.prepare_seconds;
+    c.merge_seconds += e.merge_seconds;
+    c.transfer_seconds += e.transfer_seconds;
+    c.check_seconds += e.check_seconds;
+    c.pairs_checked += e.pairs_checked;
+  }
+  c.pairs_checked += split.pairs_rechecked;
+  return c;
 }
 
 // A scene of the pieces in `order` (indices into `pieces`) after the scene triangles in
@@ -320,32 +545,43 @@ PainterTiming painter_against_zbuffer(const MachineConfig& config_in, const Scen
   const std::vector<ScreenPolygon> painted = project_scene(painter_config, scene);
   std::vector<PaintPiece> pieces = paint_pieces(scene, painted);
   VisibleSceneReport scratch;
-  std::vector<std::vector<SortPolygon>> earlier;
-  std::vector<DepthSortResult> earlier_sorts;
-  const DepthSortResult sort =
-      sort_with_splitting(pieces, config.gp.count, options.split_rounds, scratch, earlier,
-                          earlier_sorts, options.containment);
-  std::vector<SortPolygon> sortable;
-  for (const PaintPiece& piece : pieces) sortable.push_back(sort_polygon(piece));
-  SortCost c = painter_sort_cost(config, sortable, per_region, options.overhead_factor,
-                                 per_region ? nullptr : &sort, options.containment);
-  for (std::size_t k = 0; k < earlier.size(); ++k) {
-    c.prepare_seconds += painter_sort_cost(config, earlier[k], false, options.overhead_factor,
-                                           &earlier_sorts[k], options.containment)
-                             .seconds();
+  const SplitSort split =
+      sort_with_splitting(pieces, config.gp.count, options.split_rounds, scratch,
+                          options.containment, options.overhead_factor, options.insert_pieces);
+  SortCost c;
+  if (per_region) {
+    // Per region bin (a cost only): the drawn pieces sorted per bin, after the rounds' sorts
+    // before the last, whole screen, that split them.
+    std::vector<SortPolygon> drawn;
+    for (const PaintPiece& piece : pieces) drawn.push_back(sort_polygon(piece));
+    c = painter_sort_cost(config, drawn, true, options.overhead_factor, nullptr,
+                          options.containment);
+    for (std::size_t k = 0; k + 1 < split.sorts.size(); ++k)
+      c.prepare_seconds +=
+          painter_sort_cost(config, split.polygons[k], false, options.overhead_factor,
+                            &split.sorts[k], options.containment)
+              .seconds();
+  } else {
+    c = split_sort_cost(config, split, options.overhead_factor, options.containment);
   }
-  t.sort_seconds = c.seconds();
+  t.closed_form_sort_seconds = c.seconds();
   std::vector<int> first;
   std::vector<char> placed(scene.mesh.triangles.size(), 0);
   for (const ScreenPolygon& p : painted) placed[static_cast<std::size_t>(p.source)] = 1;
   for (int k = 0; k < static_cast<int>(placed.size()); ++k)
     if (!placed[static_cast<std::size_t>(k)]) first.push_back(k);
-  t.painter_frame_seconds =
-      project_frame(painter_config, pieces_scene(scene, first, pieces, sort.order, false), painter)
-          .frame_seconds;
+  Scene sorted = pieces_scene(scene, first, pieces, split.sort.order, false);
+  // Whole screen, the GPs run the sort in the frame (simulated at fidelity.timing=event);
+  // per region bin it is a cost only, added to the frame.
+  if (!per_region) sorted.depth_sort = split.chained();
+  const FrameResult pr = project_frame(painter_config, sorted, painter);
+  t.simulated_sort_seconds = simulated_sort_seconds(pr, config.gp.count);
+  t.painter_frame_seconds = pr.frame_seconds;
+  // The sort not simulated (per region bin, or a level that does not run the GPs' phases):
+  // its closed form is added.
+  t.sort_seconds = t.simulated_sort_seconds > 0 ? 0 : c.seconds();
   return t;
 }
-
 VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, const Scene& scene,
                                             const Program& zbuffer, const Program& painter,
                                             int threads, const PainterOptions& painter_options) {
@@ -379,26 +615,29 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
       painter_options.remove_back_faces ? project_scene(culling, scene) : polygons;
   const std::vector<ScreenPolygon>& painted = painter_options.remove_back_faces ? front : polygons;
   std::vector<PaintPiece> pieces = paint_pieces(scene, painted);
-  std::vector<std::vector<SortPolygon>> earlier;
-  std::vector<DepthSortResult> earlier_sorts;
-  rep.sort = sort_with_splitting(pieces, config.gp.count, painter_options.split_rounds, rep,
-                                 earlier, earlier_sorts, painter_options.containment);
+  SplitSort split = sort_with_splitting(
+      pieces, config.gp.count, painter_options.split_rounds, rep, painter_options.containment,
+      painter_options.overhead_factor, painter_options.insert_pieces);
+  rep.sort = split.sort;
+  rep.pairs_rechecked = split.pairs_rechecked;
   rep.pieces = pieces.size();
-  std::vector<SortPolygon> sortable;
-  sortable.reserve(pieces.size());
-  for (const PaintPiece& piece : pieces) sortable.push_back(sort_polygon(piece));
   I860Params sort_params = i860_params(config);
   if (!painter_options.overhead_factor) sort_params.overhead_factor = 1;
   const I860Model i860(sort_params);
   std::uint64_t sort_total = 0;
-  for (int k = 0; k < config.gp.count; ++k) {
-    const GpClocks prepare = i860.clocks(rep.sort.costs.prepare[k], 0);
-    const GpClocks check = i860.clocks(rep.sort.costs.check[k], 0);
-    rep.sort_clocks.push_back(GpClocks(prepare.count + check.count));
-    sort_total += prepare.count + check.count;
+  rep.sort_clocks.assign(static_cast<std::size_t>(config.gp.count), GpClocks{});
+  for (const DepthSortWork& w : split.work) {
+    for (int k = 0; k < config.gp.count; ++k) {
+      const auto g = static_cast<std::size_t>(k);
+      const std::uint64_t clocks = i860.clocks(w.prepare[g], 0).count +
+                                   i860.clocks(w.check[g], 0).count +
+                                   i860.clocks(w.insert[g], 0).count;
+      rep.sort_clocks[g] = GpClocks(rep.sort_clocks[g].count + clocks);
+      sort_total += clocks;
+    }
+    rep.merge_clocks = GpClocks(rep.merge_clocks.count + i860.clocks(w.merge, 0).count);
+    sort_total += i860.clocks(w.merge, 0).count;
   }
-  rep.merge_clocks = i860.clocks(rep.sort.costs.merge, 0);
-  sort_total += rep.merge_clocks.count;
   // Every combination of the choices, the one painter's ran with among them.
   {
     std::vector<SortPolygon> fronts, every;
@@ -410,30 +649,19 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
       for (const bool per_region : {false, true}) {
         for (const bool factor : {false, true}) {
           const bool ran = removed == painter_options.remove_back_faces && !per_region;
-          SortCost c = painter_sort_cost(config,
-                                         ran       ? sortable
-                                         : removed ? fronts
-                                                   : every,
-                                         per_region, factor, ran ? &rep.sort : nullptr,
-                                         painter_options.containment);
+          SortCost c = ran ? split_sort_cost(config, split, factor, painter_options.containment)
+                           : painter_sort_cost(config, removed ? fronts : every, per_region, factor,
+                                               nullptr, painter_options.containment);
           c.back_faces_removed = removed;
           c.label = fmt::format("{}, {}, {}", removed ? "back faces removed" : "every face",
                                 per_region ? "per region bin" : "whole screen",
                                 factor ? "x gp.overhead_factor" : "own counts");
           if (ran) {
-            // Splitting: the rounds before the last sorted too, and count.
-            c.polygons = sortable.size();
+            c.polygons = pieces.size();
             if (rep.split_rounds > 0)
-              c.label += fmt::format(", with {} rounds of splitting", rep.split_rounds);
-            for (std::size_t k = 0; k < earlier.size(); ++k) {
-              const SortCost e = painter_sort_cost(config, earlier[k], false, factor,
-                                                   &earlier_sorts[k], painter_options.containment);
-              c.prepare_seconds += e.prepare_seconds;
-              c.merge_seconds += e.merge_seconds;
-              c.transfer_seconds += e.transfer_seconds;
-              c.check_seconds += e.check_seconds;
-              c.pairs_checked += e.pairs_checked;
-            }
+              c.label +=
+                  fmt::format(", with {} rounds of splitting ({})", rep.split_rounds,
+                              painter_options.insert_pieces ? "pieces inserted" : "each re-sorted");
           }
           if (ran && factor == painter_options.overhead_factor) rep.sort_seconds = c.seconds();
           rep.sort_costs.push_back(std::move(c));
@@ -448,12 +676,19 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
   for (const ScreenPolygon& p : painted) placed[static_cast<std::size_t>(p.source)] = 1;
   for (int t = 0; t < static_cast<int>(placed.size()); ++t)
     if (!placed[static_cast<std::size_t>(t)]) first.push_back(t);
-  const Scene sorted = pieces_scene(scene, first, pieces, rep.sort.order, false);
+  Scene sorted = pieces_scene(scene, first, pieces, rep.sort.order, false);
+  // The GPs run the sort in the painter's frame, before their geometry (whole screen).
+  sorted.depth_sort = split.chained();
 
   // The shaded runs: cycles, bits, frame time, and the frames.
   const FrameResult zr = simulate_frame(config, scene, zbuffer, threads);
   const FrameResult pr = simulate_frame(painter_config, sorted, painter, threads);
   const FrameResult cr = simulate_frame(culling, scene, zbuffer, threads);
+  rep.sort_simulated_seconds = simulated_sort_seconds(pr, config.gp.count);
+  for (const FrameResult* f : {&zr, &pr}) {
+    (f == &zr ? rep.zbuffer_ring_words : rep.painter_ring_words) =
+        static_cast<std::uint64_t>(f->stats.integer("ring.words"));
+  }
   rep.zbuffer_frame = zr.image.flat();
   rep.painter_frame = pr.image.flat();
 
@@ -499,7 +734,11 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config_in, cons
   p.gp_clocks_per_primitive = pr.stats.real("frame.gp_clocks_per_triangle") +
                               (triangles > 0 ? static_cast<double>(sort_total) / triangles : 0);
   p.renderer_cycles = busy_cycles(pr);
-  const double painter_seconds = pr.frame_seconds + rep.sort_seconds;
+  // The frame includes the sort, which the GPs ran in it (rep.sort_simulated_seconds); a
+  // level that does not run it (fidelity.timing=analytic) gets the closed form added.
+  const double painter_seconds =
+      pr.frame_seconds + (rep.sort_simulated_seconds > 0 ? 0.0 : rep.sort_seconds);
+  rep.painter_frame_seconds = pr.frame_seconds;
   p.primitives_per_second = painter_seconds > 0 ? triangles / painter_seconds : 0;
   p.work = fmt::format("{} pair checks, {} reorders, {} unresolved", rep.sort.pairs_checked,
                        rep.sort.reorders, rep.sort.unresolved.size());
@@ -691,7 +930,22 @@ std::string visible_notes(const std::vector<VisibleSceneReport>& reports) {
               : 0.0,
           each);
     }
+    if (r.sort_simulated_seconds > 0) {
+      out += fmt::format(
+          "  - depth sort simulated on the GPs (phases spent and messages sent in the painter's "
+          "frame, before the geometry): the last GP's sort ends at {:.3f} ms against {:.3f} ms "
+          "in closed form; the frame takes {:.3f} ms, sort included; its ring carries {} words "
+          "against {} in the z-buffer frame.\n",
+          1e3 * r.sort_simulated_seconds, 1e3 * r.sort_seconds, 1e3 * r.painter_frame_seconds,
+          r.painter_ring_words, r.zbuffer_ring_words);
+    }
     const Difference& painter = r.rows[1].difference;
+    if (r.split_triangles > 0 && r.painter_options.insert_pieces) {
+      out += fmt::format(
+          "  - splitting by insertion: the pieces took their polygon's place and {} pairs they "
+          "touch were checked again (no re-sort).\n",
+          r.pairs_rechecked);
+    }
     if (r.split_triangles > 0) {
       out += fmt::format(
           "  - painter's splits: {} pairs no test ordered (the failure cases of Newell, Newell "

@@ -128,8 +128,14 @@ struct PainterOptions {
   bool remove_back_faces = true;  // false: every face is sorted and drawn (two-sided)
   bool overhead_factor = false;   // true: the sort's clocks x gp.overhead_factor too
   // A pair no test orders: split one polygon by the other's plane (Newell, Newell and
-  // Sancha) and sort again, up to this many rounds; 0 leaves such pairs in far-depth order.
+  // Sancha) and insert the pieces into the order (or sort again: insert_pieces), up to this
+  // many rounds; then halve pieces at their siblings' vertices (no T-junctions); 0 leaves
+  // such pairs in far-depth order.
   int split_rounds = 8;
+  // Splitting inserts the pieces into the order (only the pairs that touch a piece, or a
+  // polygon moved since, checked again: depth_sort_insert); false sorts every polygon again
+  // each round (the former behaviour).
+  bool insert_pieces = true;
   // The projection test's containment step: the centroid against every edge (the default),
   // or the slides' centre against the containing rectangle.
   Containment containment = Containment::edges;
@@ -162,10 +168,19 @@ struct VisibleSceneReport {
   std::uint64_t split_triangles = 0;
   std::uint64_t pieces = 0;
   std::uint64_t unresolved_before_split = 0;
+  std::uint64_t t_junctions = 0;  // siblings halved at a piece's vertex on their edge
   DepthSortResult sort;
   std::vector<GpClocks> sort_clocks;  // per GP: prepare + its share of the checks
   GpClocks merge_clocks{};
-  double sort_seconds = 0;  // the sort painter's ran with (painter_options), transfers included
+  double sort_seconds = 0;  // the sort painter's ran with (painter_options), transfers included:
+                            // the closed form (max prepare + merge + transfers + max checks)
+  // The same sort as the GPs ran it in the painter's frame (each GP's phases and the ring's
+  // messages simulated): when its last GP finished, from the frame's start; and that frame's
+  // time, which includes it.
+  double sort_simulated_seconds = 0;
+  double painter_frame_seconds = 0;
+  std::uint64_t zbuffer_ring_words = 0, painter_ring_words = 0;  // ring.words of the two frames
+  std::uint64_t pairs_rechecked = 0;  // pairs the split pieces were checked against
   // The sort's cost under every combination of the choices (back faces removed or kept,
   // whole screen or per region bin, overhead factor or not): the range it spans.
   std::vector<SortCost> sort_costs;
@@ -191,10 +206,16 @@ VisibleSceneReport analyse_visible_surfaces(const MachineConfig& config, const S
 // fidelity.timing): the z-buffer's frame (`zbuffer`, back faces as `config` says), and
 // painter's frame (`painter`, in the sorted order, pieces split as `options` says) plus the
 // sort's time (whole screen, or `per_region` bins; own counts or x the factor).
+// Whole screen, the GPs run the sort inside painter's frame (Scene::depth_sort), so the
+// frame time includes it (simulated_sort_seconds: when the last GP's sort ended) and
+// sort_seconds is 0; per region bin, or at a level that does not simulate the GPs' phases
+// (fidelity.timing=analytic), the closed form is added (sort_seconds).
 struct PainterTiming {
   double zbuffer_seconds = 0;
   double painter_frame_seconds = 0;
-  double sort_seconds = 0;
+  double sort_seconds = 0;  // added to the frame
+  double simulated_sort_seconds = 0;
+  double closed_form_sort_seconds = 0;
   double painter_seconds() const { return painter_frame_seconds + sort_seconds; }
 };
 PainterTiming painter_against_zbuffer(const MachineConfig& config, const Scene& scene,

@@ -133,6 +133,9 @@ Command add_visible_command(CLI::App& app) {
   cmd->add_flag("--painter-overhead-factor", o->painter.overhead_factor,
                 "Multiply the depth sort's clocks by gp.overhead_factor (fitted to the transform "
                 "loop); by default the sort is costed from its own operation counts");
+  cmd->add_flag("!--painter-resort", o->painter.insert_pieces,
+                "Splitting sorts every polygon again each round; by default the pieces are "
+                "inserted into the order and only the pairs they touch are checked again");
   cmd->add_option("--painter-containment", o->painter.containment,
                   "The depth sort's containment step: edges (a centroid against every edge of "
                   "the other polygon, the default) or rectangle (the slides' minimax test of a "
