@@ -73,6 +73,13 @@ class Machine;
 // order, before the frame is set up. The default gives the session's scene to every frame.
 using SceneSource = std::function<std::shared_ptr<const Scene>(int frame)>;
 
+// One frame of a run of frames looked at closely (Session::run_frames): its boards observed
+// (traces, snapshots); the run's other frames are then timing only.
+struct ObservedFrame {
+  int frame = -1;  // none
+  std::function<BoardObserver*(int renderer)> observe;
+};
+
 // What a run of frames did, over all its frames so far (Session::summary).
 struct RunSummary {
   int frames = 0;
@@ -165,10 +172,22 @@ class Session {
   // figures. Only on a new session (no frame simulated yet); with `timeline`, the whole
   // run's, on which the overlap shows. At fidelity.timing=analytic each frame is the analytic
   // model's and the sustained period is its closed-form estimate.
+  //
+  // The run streams: the kernel runs on the calling thread, in slices, until every unit has
+  // finished the next frame; that frame is then handed over (its records released from the
+  // units), its pixels execute on a helper thread while the kernel simulates later frames, and
+  // once they are done its statistics are built, on_frame is called (on the calling thread)
+  // and the frame is freed. At most two frames are handed over and not yet delivered, so
+  // memory stays flat whatever `count`. The cancel flag is checked between kernel slices and
+  // between frames; FrameCancelled or an error from `scenes` or `on_frame` ends the run (the
+  // frames delivered before it stay delivered).
+  // `observed`, if it names a frame, has that frame's boards observed (traces and snapshots of
+  // a frame as the run drew it); the other frames are then timing only (no pixels).
   const RunSummary& run_frames(int count,
                                const std::function<void(int frame, FrameResult& result)>& on_frame,
                                bool pixels = true, const SceneSource& scenes = {},
-                               nlohmann::json* timeline = nullptr);
+                               nlohmann::json* timeline = nullptr,
+                               const ObservedFrame& observed = {});
   // Frames simulated so far, and the run's summary over them.
   int frames() const { return frames_; }
   const RunSummary& summary() const { return summary_; }
