@@ -727,6 +727,7 @@ std::string RunSummary::text() const {
 
 FrameResult Session::counted(FrameResult r) {
   RunSummary& s = summary_;
+  if (s.frames == 0) s.setup_seconds = setup_seconds_;
   s.shortest_frame_seconds =
       s.frames == 0 ? r.frame_seconds : std::min(s.shortest_frame_seconds, r.frame_seconds);
   s.longest_frame_seconds = std::max(s.longest_frame_seconds, r.frame_seconds);
@@ -999,6 +1000,10 @@ Statistics RunSummary::statistics() const {
   s.add_real("run.host_seconds_per_frame", u::host_seconds,
              "Host time per frame (timing and pixels, start-up included)",
              [r] { return r.frames ? r.host_seconds / r.frames : 0; });
+  s.add_real("run.host_setup_seconds", u::host_seconds,
+             "Host time before the run, not in the figures above: making the scene and "
+             "assembling the program (the first frame's host.setup_seconds)",
+             [r] { return r.setup_seconds; });
   s.add_real("run.host_over_simulated", u::ratio,
              "Host seconds per simulated second of the run's frames (below 1: real time)",
              [r] { return r.host_over_simulated(); });
@@ -1012,6 +1017,7 @@ const RunSummary& Session::run_frames(
   if (count < 1) throw std::invalid_argument("a run of frames needs at least one frame");
   if (frames_ > 0)
     throw std::logic_error("Session::run_frames: the session has simulated frames already");
+  summary_.setup_seconds = setup_seconds_;
   const auto triangles = static_cast<double>(scene_->mesh.triangles.size());
   const auto spheres = static_cast<double>(scene_->spheres.size());
   // The scene of frame f: the source's, or the session's when it gives none.
@@ -1461,11 +1467,12 @@ const RunSummary& Session::run_frames(
 RunSummary simulate_frames(const MachineConfig& config, std::shared_ptr<const Scene> scene,
                            std::shared_ptr<const Program> program, int threads, int count,
                            const std::function<void(int frame, FrameResult& result)>& on_frame,
-                           bool pixels, nlohmann::json* timeline) {
+                           bool pixels, nlohmann::json* timeline, double setup_seconds) {
   // The closed form first: its own SystemC context, freed before the session's is made.
   const double estimate =
       project_frame(config, *scene, *program).stats.real("frame.pipelined_frame_seconds");
   Session session(config, std::move(scene), std::move(program), threads);
+  session.set_setup_seconds(setup_seconds);
   RunSummary summary = session.run_frames(count, on_frame, pixels, {}, timeline);
   summary.estimate_frame_seconds = estimate;
   return summary;

@@ -87,6 +87,9 @@ struct RunSummary {
   double shortest_frame_seconds = 0;
   double longest_frame_seconds = 0;
   double host_seconds = 0;  // host.seconds, summed
+  // The caller's host time before the run (making the scene, assembling the program:
+  // Session::set_setup_seconds), not in host_seconds; the first frame's host.setup_seconds.
+  double setup_seconds = 0;
 
   // A run of overlapped frames (Session::run_frames), as simulated; at
   // fidelity.timing=analytic, the closed-form estimate instead (overlapped false).
@@ -230,11 +233,12 @@ class Session {
 
 // A run of `count` frames of `scene`, overlapped (Session::run_frames), with the closed-form
 // estimate of one frame alone (project_frame's frame.pipelined_frame_seconds) in the summary
-// to compare with the simulated period.
+// to compare with the simulated period. `setup_seconds` as Session::set_setup_seconds.
 RunSummary simulate_frames(const MachineConfig& config, std::shared_ptr<const Scene> scene,
                            std::shared_ptr<const Program> program, int threads, int count,
                            const std::function<void(int frame, FrameResult& result)>& on_frame,
-                           bool pixels = true, nlohmann::json* timeline = nullptr);
+                           bool pixels = true, nlohmann::json* timeline = nullptr,
+                           double setup_seconds = 0);
 
 // The timing model alone, for projections over many configurations (pp5sim validate): the
 // frame time and the statistics of simulate_frame, without executing the firmware on the

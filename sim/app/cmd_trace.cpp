@@ -39,8 +39,9 @@ struct RunOptions {
 
   void add(CLI::App& c) {
     c.add_option("--frame", frame,
-                 "Frame K of the scene's animation, as 'pp5sim animate' draws it: the session "
-                 "runs frames 0 .. K-1 (their timing only) and this command looks at frame K")
+                 "Frame K of the scene's animation, as 'pp5sim animate' draws it: frames 0 .. K "
+                 "(and K+1, which overlaps it) run overlapped, timing only but frame K, which "
+                 "this command looks at")
         ->check(CLI::Range(0, 100000));
     c.add_option("--animation-frames", animation_frames,
                  "Frames of that animation (animate's --frames) [the scene file's, else 24]")
