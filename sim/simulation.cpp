@@ -1095,6 +1095,14 @@ const RunSummary& Session::run_frames(
   machine.overlap(count, plans);
   // With a cancel flag (Ctrl-C from Python), the GPs' set-up passes stop short too.
   machine.plan().set_cancel(cancel_);
+  // However the run ends: the source refers to this call's locals, the flag may go.
+  struct RunEnd {
+    Machine& machine;
+    ~RunEnd() {
+      machine.plan().set_cancel(nullptr);
+      machine.frame_plans().set_source({});
+    }
+  } run_end{machine};
 
   // The streaming pipeline. The calling thread runs the kernel in slices until every unit has
   // finished the next frame, hands that frame over (its records, released from the units),
@@ -1434,8 +1442,6 @@ const RunSummary& Session::run_frames(
       deliver();
     }
   }
-  machine.plan().set_cancel(nullptr);
-  machine.frame_plans().set_source({});  // the source refers to this call's locals
   if (timeline) *timeline = timeline_document(machine);
 
   {
