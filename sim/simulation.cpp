@@ -1413,7 +1413,20 @@ const RunSummary& Session::run_frames(
     rs.simulated_seconds += frame_seconds;
     rs.host_seconds += host;
     ++rs.frames;
-    if (on_frame) on_frame(f, result);
+    if (!on_frame) return;
+    try {
+      on_frame(f, result);
+    } catch (...) {
+      // The units finish the frames they are on and start none after them (at most two are in
+      // flight: none beyond the frame after the one every Renderer is on), so that no unit's
+      // thread is left in the middle of a frame: what it holds there is never unwound.
+      if (!source_error && (cancel_ == nullptr || !cancel_->load())) {
+        machine.overlap(std::min(count, machine.clock().renderers_finished() + 2));
+        event_->kernel.run(cancel_);
+      }
+      frames_ = count;  // no frame can follow
+      throw;
+    }
   };
 
   int handed = 0;
