@@ -55,12 +55,16 @@ bool KernelContext::run(const std::atomic<bool>* cancel) {
     run();
     return true;
   }
+  return run(cancel, {});
+}
+
+bool KernelContext::run(const std::atomic<bool>* cancel, const std::function<bool()>& done) {
   make_current();
   using clock = std::chrono::steady_clock;
   // Slices start at a simulated microsecond and double (to a simulated millisecond) while one
   // takes under 2 ms of host time, halving above 20 ms: few sc_start calls, and a cancel seen
   // within some ms.
-  sc_core::sc_time slice(1, sc_core::SC_US);
+  if (slice_ == sc_core::SC_ZERO_TIME) slice_ = sc_core::sc_time(1, sc_core::SC_US);
   // A context not started yet has no pending activity before its initialisation: run it and
   // the first delta cycle.
   if (sc_core::sc_get_status() == sc_core::SC_ELABORATION) sc_core::sc_start(sc_core::SC_ZERO_TIME);
@@ -68,18 +72,19 @@ bool KernelContext::run(const std::atomic<bool>* cancel) {
     // sc_stop (a unit's error) ends the run as it ends sc_start().
     if (!sc_core::sc_pending_activity() || sc_core::sc_get_status() == sc_core::SC_STOPPED)
       return true;
-    if (cancel->load(std::memory_order_relaxed)) return false;
+    if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return false;
+    if (done && done()) return true;
     // To the next event and a slice beyond it (SC_EXIT_ON_STARVATION does not move time past
     // the last event it ran, as sc_start() does not).
     const sc_core::sc_time left = sc_core::sc_max_time() - sc_core::sc_time_stamp();
     const sc_core::sc_time next = sc_core::sc_time_to_pending_activity();
     const auto t0 = clock::now();
-    sc_core::sc_start(left - next > slice ? next + slice : left, sc_core::SC_EXIT_ON_STARVATION);
+    sc_core::sc_start(left - next > slice_ ? next + slice_ : left, sc_core::SC_EXIT_ON_STARVATION);
     const auto host = clock::now() - t0;
-    if (host < std::chrono::milliseconds(2) && slice < sc_core::sc_time(1, sc_core::SC_MS))
-      slice = slice * 2.0;
-    else if (host > std::chrono::milliseconds(20) && slice > sc_core::sc_time(1, sc_core::SC_NS))
-      slice = slice / 2.0;
+    if (host < std::chrono::milliseconds(2) && slice_ < sc_core::sc_time(1, sc_core::SC_MS))
+      slice_ = slice_ * 2.0;
+    else if (host > std::chrono::milliseconds(20) && slice_ > sc_core::sc_time(1, sc_core::SC_NS))
+      slice_ = slice_ / 2.0;
   }
 }
 

@@ -3,6 +3,7 @@
 // frame after frame and is freed when the run ends.
 
 #include <atomic>
+#include <functional>
 #include <systemc>
 
 namespace pp5 {
@@ -28,6 +29,13 @@ class KernelContext {
   // run()'s, so the results are run()'s; a slice is sized to take some milliseconds of host
   // time, so a cancel is seen within about that.
   bool run(const std::atomic<bool>* cancel);
+  // The same slices (with `cancel` checked between them, when given), until `done()` holds,
+  // checked between slices as well: returns false once cancelled, else true, once `done()`
+  // holds or no event is left (the caller tells which). The kernel may have run a slice
+  // beyond the moment `done()` became true; stopping between slices changes nothing of what
+  // the units do (run()'s events in run()'s order), so a run of many calls gives run()'s
+  // results.
+  bool run(const std::atomic<bool>* cancel, const std::function<bool()>& done);
   // Advances simulated time to `t` (running whatever events lie before it); nothing if `t` is
   // not later than now.
   void run_until(sc_core::sc_time t);
@@ -37,6 +45,7 @@ class KernelContext {
 
  private:
   sc_core::sc_simcontext* context_;
+  sc_core::sc_time slice_;  // run()'s slice of simulated time, kept from call to call
 };
 
 // For tests that build modules without an owner of the context: a fresh context made current

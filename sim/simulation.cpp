@@ -6,16 +6,21 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <exception>
 #include <fstream>
 #include <functional>
 #include <future>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <system_error>
 #include <systemc>
+#include <thread>
 
 #include "firmware/assembler/program_statistics.hpp"
 #include "models/frame_buffer/frame_buffer.hpp"
@@ -108,37 +113,65 @@ struct FramePixels {
   double seconds = 0;
 };
 
-// A run's frames' pixels (`run(f)`, f = 0 .. count - 1, taken in order), each frame's
-// started on a helper thread as the frame before is taken: what the caller does with frame
-// f (its statistics, on_frame) overlaps frame f + 1's pixel execution. One frame ahead
-// only: `run` must not be called for two frames at once (they share the frame buffer).
-// An exception from run(f) is thrown by take(f); the destructor waits for a frame still
-// executing (the caller's on_frame threw), so nothing `run` uses goes before it.
-class FramesAhead {
+// The pixels of a run's frames, executed on one helper thread, job after job in the order
+// submitted, while the caller goes on (the kernel simulating later frames): each job's result
+// (or exception) through its future. Jobs run one at a time (they share one frame buffer).
+// The destructor lets the job running finish and drops those not started (the caller has
+// stopped waiting for them: on_frame threw, or the run was cancelled), so nothing a job uses
+// goes before it. Without a helper thread (none could be made), submit runs the job itself.
+class FramePixelsWorker {
  public:
-  FramesAhead(std::function<FramePixels(int)> run, int count)
-      : run_(std::move(run)), count_(count) {}
-  FramesAhead(const FramesAhead&) = delete;
-  FramesAhead& operator=(const FramesAhead&) = delete;
-  ~FramesAhead() {
-    if (next_.valid()) next_.wait();
-  }
-  FramePixels take(int f) {
-    FramePixels out = next_.valid() ? next_.get() : run_(f);
-    if (f + 1 < count_) {
-      try {
-        next_ = std::async(std::launch::async, run_, f + 1);
-      } catch (const std::system_error&) {
-        // No helper thread: the next take executes the frame itself.
-      }
+  FramePixelsWorker() {
+    try {
+      thread_ = std::thread([this] { loop(); });
+    } catch (const std::system_error&) {
+      // No helper thread: submit executes each frame itself.
     }
+  }
+  FramePixelsWorker(const FramePixelsWorker&) = delete;
+  FramePixelsWorker& operator=(const FramePixelsWorker&) = delete;
+  ~FramePixelsWorker() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+  std::future<FramePixels> submit(std::function<FramePixels()> job) {
+    std::packaged_task<FramePixels()> task(std::move(job));
+    std::future<FramePixels> out = task.get_future();
+    if (!thread_.joinable()) {
+      task();
+      return out;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      jobs_.push_back(std::move(task));
+    }
+    wake_.notify_one();
     return out;
   }
 
  private:
-  std::function<FramePixels(int)> run_;
-  int count_;
-  std::future<FramePixels> next_;
+  void loop() {
+    for (;;) {
+      std::packaged_task<FramePixels()> task;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
+        if (stop_) return;
+        task = std::move(jobs_.front());
+        jobs_.pop_front();
+      }
+      task();
+    }
+  }
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::deque<std::packaged_task<FramePixels()>> jobs_;
+  bool stop_ = false;
+  std::thread thread_;  // last: it starts once the rest exists
 };
 
 }  // namespace
@@ -648,6 +681,9 @@ struct Session::Event {
   KernelContext kernel;
   std::unique_ptr<Machine> machine;
   std::unique_ptr<SetupMemo> own_memo;
+  // run_frames': where a frame's pixels execute while the kernel goes on (the machine's frame
+  // buffer receives the regions' arrivals meanwhile).
+  std::unique_ptr<FrameBuffer> pixel_frame_buffer;
 };
 
 Session::Session(const MachineConfig& config, std::shared_ptr<const Scene> scene,
@@ -691,6 +727,7 @@ std::string RunSummary::text() const {
 
 FrameResult Session::counted(FrameResult r) {
   RunSummary& s = summary_;
+  if (s.frames == 0) s.setup_seconds = setup_seconds_;
   s.shortest_frame_seconds =
       s.frames == 0 ? r.frame_seconds : std::min(s.shortest_frame_seconds, r.frame_seconds);
   s.longest_frame_seconds = std::max(s.longest_frame_seconds, r.frame_seconds);
@@ -963,6 +1000,10 @@ Statistics RunSummary::statistics() const {
   s.add_real("run.host_seconds_per_frame", u::host_seconds,
              "Host time per frame (timing and pixels, start-up included)",
              [r] { return r.frames ? r.host_seconds / r.frames : 0; });
+  s.add_real("run.host_setup_seconds", u::host_seconds,
+             "Host time before the run, not in the figures above: making the scene and "
+             "assembling the program (the first frame's host.setup_seconds)",
+             [r] { return r.setup_seconds; });
   s.add_real("run.host_over_simulated", u::ratio,
              "Host seconds per simulated second of the run's frames (below 1: real time)",
              [r] { return r.host_over_simulated(); });
@@ -972,10 +1013,11 @@ Statistics RunSummary::statistics() const {
 
 const RunSummary& Session::run_frames(
     int count, const std::function<void(int frame, FrameResult& result)>& on_frame, bool pixels,
-    const SceneSource& scenes, nlohmann::json* timeline) {
+    const SceneSource& scenes, nlohmann::json* timeline, const ObservedFrame& observed) {
   if (count < 1) throw std::invalid_argument("a run of frames needs at least one frame");
   if (frames_ > 0)
     throw std::logic_error("Session::run_frames: the session has simulated frames already");
+  summary_.setup_seconds = setup_seconds_;
   const auto triangles = static_cast<double>(scene_->mesh.triangles.size());
   const auto spheres = static_cast<double>(scene_->spheres.size());
   // The scene of frame f: the source's, or the session's when it gives none.
@@ -985,6 +1027,11 @@ const RunSummary& Session::run_frames(
   };
   if (!event_) {
     // The analytic level: each frame alone; the sustained period is the closed form's.
+    if (observed.frame >= 0) {
+      throw std::invalid_argument(
+          "traces and snapshots need fidelity.timing=event (the analytic model runs no events "
+          "and records no start cycles)");
+    }
     double estimate = 0;
     for (int f = 0; f < count; ++f) {
       const std::shared_ptr<const Scene> given = scene_of(f);
@@ -1000,13 +1047,12 @@ const RunSummary& Session::run_frames(
     summary_.sustained_spheres_per_second = estimate > 0 ? spheres / estimate : 0;
     return summary_;
   }
-  const auto t0 = std::chrono::steady_clock::now();
   Machine& machine = *event_->machine;
   // A scene that changes from frame to frame (an animation): each frame in flight works from
   // its own plan (FramePlans), made inside the kernel when a unit first asks for the frame,
   // with the GPs' set-up memo of its scene when the display list is large. Only its frame
   // values outlive it, for the frame's pixels.
-  std::vector<std::optional<FrameValues>> values(static_cast<std::size_t>(count));
+  std::map<int, FrameValues> values;  // each frame's, until it is handed over
   std::exception_ptr source_error;
   FramePlans::Source plans;
   if (scenes) {
@@ -1032,7 +1078,7 @@ const RunSummary& Session::run_frames(
           p->plan->use_setup_memo(*p->memo);
           fill_setup_memo(*p->plan, threads_);
         }
-        values[static_cast<std::size_t>(f)] = p->plan->frame_values();
+        values.emplace(f, p->plan->frame_values());
         return std::shared_ptr<const MachinePlan>(p, p->plan.get());
       } catch (...) {
         // Not through the kernel: stop it, and throw once it has returned.
@@ -1047,177 +1093,212 @@ const RunSummary& Session::run_frames(
   }
   machine.record_timeline(timeline != nullptr);
   machine.overlap(count, plans);
-  // With a cancel flag (Ctrl-C from Python), the kernel runs in slices and stops between them;
-  // the GPs' set-up passes stop short too.
+  // With a cancel flag (Ctrl-C from Python), the GPs' set-up passes stop short too.
   machine.plan().set_cancel(cancel_);
-  const bool ran = event_->kernel.run(cancel_);
-  machine.plan().set_cancel(nullptr);
-  machine.frame_plans().set_source({});  // the source refers to this call's locals
-  if (source_error) {
-    frames_ = count;  // the machine stopped mid-run: no frame can follow
-    std::rethrow_exception(source_error);
-  }
-  if (!ran || (cancel_ != nullptr && cancel_->load())) {
-    frames_ = count;  // likewise: the caller frees the machine
-    throw FrameCancelled();
-  }
-  if (timeline) *timeline = timeline_document(machine);
-  const double timing_seconds = seconds_since(t0) + startup_seconds_;
+  // However the run ends: the source refers to this call's locals, the flag may go.
+  struct RunEnd {
+    Machine& machine;
+    ~RunEnd() {
+      machine.plan().set_cancel(nullptr);
+      machine.frame_plans().set_source({});
+    }
+  } run_end{machine};
 
-  // Each frame's span from the units' records: it starts when the first GP starts its set-up
-  // and ends when its last region reaches the frame buffer.
+  // The streaming pipeline. The calling thread runs the kernel in slices until every unit has
+  // finished the next frame, hands that frame over (its records, released from the units),
+  // and runs on; a helper thread executes the handed-over frames' pixels, in order, on a
+  // frame buffer of its own; once a frame's pixels are done, the calling thread builds its
+  // statistics and result, calls on_frame and frees the frame. At most kFramesWaiting frames
+  // are handed over and not yet delivered, so memory stays flat whatever the count.
+  constexpr std::size_t kFramesWaiting = 2;
   std::vector<const GraphicsProcessor*> gps;
+  std::vector<int> gp_index;
   for (int k = 0; k < machine.gp_count(); ++k) {
-    if (machine.gp(k).takes_part()) gps.push_back(&machine.gp(k));
-  }
-  std::vector<double> start(static_cast<std::size_t>(count), -1),
-      end(static_cast<std::size_t>(count), 0);
-  std::vector<double> computed(static_cast<std::size_t>(count), 0);
-  double gp_busy = 0;
-  double gp_wait = 0;
-  double gp_end = 0;
-  for (const GraphicsProcessor* g : gps) {
-    if (static_cast<int>(g->history().size()) != count)
-      throw std::logic_error("run_frames: a GP did not finish every frame");
-    for (const GpFrameRecord& rec : g->history()) {
-      double& st = start[static_cast<std::size_t>(rec.frame)];
-      const double t = rec.stats.geometry_started.to_seconds();
-      st = st < 0 ? t : std::min(st, t);
-      gp_busy += rec.stats.busy.seconds(config_.gp.clock_hz);
-      gp_wait += (rec.stats.waiting_stage + rec.stats.waiting_queue + rec.stats.waiting_start)
-                     .to_seconds();
-      gp_end = std::max(gp_end, rec.stats.finished.to_seconds());
+    if (machine.gp(k).takes_part()) {
+      gps.push_back(&machine.gp(k));
+      gp_index.push_back(k);
     }
   }
-  double renderer_wait = 0;
-  for (int k = 0; k < machine.renderer_count(); ++k) {
-    const Renderer& rd = machine.renderer(k);
-    if (static_cast<int>(rd.history().size()) != count)
-      throw std::logic_error("run_frames: a Renderer did not finish every frame");
-    for (const Renderer::FrameRecord& rec : rd.history()) {
-      const auto f = static_cast<std::size_t>(rec.frame);
-      end[f] = std::max(end[f], (rec.began + rec.stats.finished).to_seconds());
-      computed[f] = std::max(computed[f], (rec.began + rec.stats.computed).to_seconds());
-      if (rec.frame > 0) {
-        renderer_wait += rec.stats.waiting_first.to_seconds();
-      }
-    }
-  }
-  RunSummary& sum = summary_;
-  sum.overlapped = true;
-  {
-    const Ring& r = machine.ring();
-    sum.ring_messages = r.messages();
-    sum.ring_words = r.words();
-    sum.ring_contention_cycles = r.contention().count;
-    const double run_seconds = end.back();
-    double busiest = 0;
-    for (const RingCycles& c : r.busy())
-      busiest = std::max(busiest, c.seconds(r.params().clock_hz));
-    sum.ring_channel_utilisation_max = run_seconds > 0 ? busiest / run_seconds : 0;
-    sum.gp_busy_clocks = 0;
+  auto frame_done = [&](int f) {
     for (const GraphicsProcessor* g : gps) {
-      for (const GpFrameRecord& rec : g->history()) sum.gp_busy_clocks += rec.stats.busy.count;
+      if (g->history().empty() || g->history().front().frame != f) return false;
     }
-    sum.renderer_busy_cycles = 0;
     for (int k = 0; k < machine.renderer_count(); ++k) {
-      for (const Renderer::FrameRecord& rec : machine.renderer(k).history())
-        sum.renderer_busy_cycles += rec.stats.busy.count;
+      const auto& h = machine.renderer(k).history();
+      if (h.empty() || h.front().frame != f) return false;
     }
-  }
-  const double last_end = end.back();
-  const double first_start = start.empty() || start[0] < 0 ? 0 : start[0];
-  sum.sustained_frame_seconds = count > 1 ? (last_end - end[0]) / (count - 1) : end[0];
-  const double period = sum.sustained_frame_seconds;
-  sum.sustained_triangles_per_second = period > 0 ? triangles / period : 0;
-  sum.sustained_spheres_per_second = period > 0 ? spheres / period : 0;
-  const double gp_span = (gp_end - first_start) * static_cast<double>(gps.size());
-  sum.gp_busy_share = gp_span > 0 ? gp_busy / gp_span : 0;
-  sum.gp_wait_share = gp_span > 0 ? gp_wait / gp_span : 0;
-  const double later = last_end - end[0];
-  sum.renderer_wait_share = later > 0 ? renderer_wait / (later * machine.renderer_count()) : 0;
-  double latency_sum = 0;
-  sum.longest_latency_seconds = 0;
-  sum.overlapped_frames = 0;
-  for (int f = 0; f < count; ++f) {
-    const auto i = static_cast<std::size_t>(f);
-    const double latency = end[i] - std::max(0.0, start[i]);
-    latency_sum += latency;
-    sum.longest_latency_seconds = std::max(sum.longest_latency_seconds, latency);
-    if (f > 0 && start[i] >= 0 && start[i] < computed[i - 1]) ++sum.overlapped_frames;
-  }
-  sum.mean_latency_seconds = latency_sum / count;
-
-  // Each frame's result: its pixels from the regions its Renderers recorded, and the unit
-  // statistics of its own records (the GPs' set-up and sending of that frame, the Renderers'
-  // regions of it); what the units do not record per frame (the ring's channels) is the run's.
-  // Frame f + 1's pixels execute on a helper thread while frame f's result is made and handed
-  // to `on_frame` (encoding a PNG, say): the same pixels, one frame ahead.
-  FrameBuffer& fb = machine.frame_buffer();
-  const double timing_per_frame = timing_seconds / count;
+    return true;
+  };
   const double gp_hz = config_.gp.clock_hz;
   const double array_hz = config_.renderer.clock_hz;
   const RingParams& ring = machine.ring().params();
   const std::uint64_t region_words = machine.plan().region_words();
-  const sc_core::sc_time run_end = sc_core::sc_time_stamp();
   const bool execute = pixels && config_.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
-  auto frame_pixels = [this, &machine, &fb, &values, run_end, execute](int f) -> FramePixels {
-    const auto t1 = std::chrono::steady_clock::now();
-    const auto i = static_cast<std::size_t>(f);
-    fb.begin_frame(run_end);
-    std::vector<const std::vector<RegionWork>*> work;
-    for (int k = 0; k < machine.renderer_count(); ++k)
-      work.push_back(&machine.renderer(k).history()[i].work);
-    if (execute) {
-      const FrameValues& v = values[i] ? *values[i] : machine.plan().frame_values();
-      execute_pixels(machine.plan(), v, fb, work, threads_, {});
-    }
-    values[i].reset();  // each frame's values are touched by one thread only
-    FramePixels out;
-    out.image = fb.take_image();
-    out.seconds = seconds_since(t1);
-    return out;
+  // The pixels' frame buffer: the machine's receives the regions' arrivals as the kernel runs.
+  // A module, made before the kernel first starts (run_frames runs on a new session only).
+  if (!event_->pixel_frame_buffer) {
+    event_->kernel.make_current();
+    event_->pixel_frame_buffer = std::make_unique<FrameBuffer>(
+        "pixel_frame_buffer", config_.screen.width, config_.screen.height,
+        config_.renderer.region_width, config_.renderer.region_height, config_.regions(),
+        config_.fidelity.pixels != MachineConfig::Fidelity::Pixels::none);
+  }
+  FrameBuffer& pixel_fb = *event_->pixel_frame_buffer;
+
+  // The run summary, summed frame by frame as frames are handed over.
+  RunSummary& sum = summary_;
+  sum.overlapped = true;
+  sum.gp_busy_clocks = 0;
+  sum.renderer_busy_cycles = 0;
+  // Sums kept exact (clocks, picoseconds) and converted once at the end: the same whatever
+  // the order frames and units are visited in.
+  sc_core::sc_time gp_wait, renderer_wait;
+  double gp_end = 0;
+  double first_start = 0, first_end = 0, last_end = 0, previous_computed = 0;
+  double previous_end = 0;  // the frame delivered last's end
+  double latency_sum = 0;
+  sum.longest_latency_seconds = 0;
+  sum.overlapped_frames = 0;
+
+  // A frame handed over: its records, and its pixels in flight.
+  struct Pending {
+    int frame = 0;
+    double start = 0, end = 0;    // in the run's time
+    double timing_seconds = 0;    // the kernel's host time since the frame before
+    std::vector<GpStats> gstats;  // per GP (those taking part), times from the frame's start
+    std::vector<Renderer::FrameRecord> renderers;
+    std::vector<RegionLoad> regions;
+    std::future<FramePixels> pixels;
   };
-  FramesAhead ahead(frame_pixels, count);
-  for (int f = 0; f < count; ++f) {
-    const auto i = static_cast<std::size_t>(f);
-    if (cancel_ != nullptr && cancel_->load()) throw FrameCancelled();  // between frames
-    FrameResult result;
-    const double frame_start = std::max(0.0, start[i]);
-    const double frame_end = end[i];
-    const sc_core::sc_time start_time(frame_start, sc_core::SC_SEC);
-    std::vector<const std::vector<RegionWork>*> work;
+  std::deque<std::unique_ptr<Pending>> pending;  // before the worker, which refers to them
+  FramePixelsWorker worker;
+
+  double kernel_seconds = startup_seconds_;  // host time in the kernel not yet handed over
+  auto run_kernel = [&](const std::function<bool()>& done) {
+    const auto k0 = std::chrono::steady_clock::now();
+    const bool ran = event_->kernel.run(cancel_, done);
+    kernel_seconds += seconds_since(k0);
+    if (source_error) {
+      frames_ = count;  // the machine stopped mid-run: no frame can follow
+      std::rethrow_exception(source_error);
+    }
+    if (!ran || (cancel_ != nullptr && cancel_->load())) {
+      frames_ = count;  // likewise: the caller frees the machine
+      throw FrameCancelled();
+    }
+  };
+
+  auto hand_over = [&](int f) {
+    auto p = std::make_unique<Pending>();
+    p->frame = f;
+    // Every Renderer is past frame f: no GP's activity before its start of f is asked for.
+    sc_core::sc_time renderers_began = sc_core::sc_max_time();
+    for (int k = 0; k < machine.renderer_count(); ++k)
+      renderers_began = std::min(renderers_began, machine.renderer(k).history().front().began);
+    // Its span: from the first GP starting its set-up to its last region reaching the frame
+    // buffer.
+    double start = -1;
+    std::vector<GpFrameRecord> grec;
+    for (std::size_t i = 0; i < gps.size(); ++i) {
+      grec.push_back(machine.gp(gp_index[i]).release_frame(f, renderers_began));
+      const GpStats& st = grec.back().stats;
+      const double t = st.geometry_started.to_seconds();
+      start = start < 0 ? t : std::min(start, t);
+      gp_wait += st.waiting_stage + st.waiting_queue + st.waiting_start;
+      gp_end = std::max(gp_end, st.finished.to_seconds());
+      sum.gp_busy_clocks += st.busy.count;
+    }
+    double end = 0, computed = 0;
+    for (int k = 0; k < machine.renderer_count(); ++k) {
+      p->renderers.push_back(machine.renderer(k).release_frame(f));
+      const Renderer::FrameRecord& rec = p->renderers.back();
+      end = std::max(end, (rec.began + rec.stats.finished).to_seconds());
+      computed = std::max(computed, (rec.began + rec.stats.computed).to_seconds());
+      if (f > 0) renderer_wait += rec.stats.waiting_first;
+      sum.renderer_busy_cycles += rec.stats.busy.count;
+    }
+    if (f == 0) {
+      first_start = start < 0 ? 0 : start;
+      first_end = end;
+    }
+    last_end = end;
+    const double latency = end - std::max(0.0, start);
+    latency_sum += latency;
+    sum.longest_latency_seconds = std::max(sum.longest_latency_seconds, latency);
+    if (f > 0 && start >= 0 && start < previous_computed) ++sum.overlapped_frames;
+    previous_computed = computed;
+    p->start = std::max(0.0, start);
+    p->end = end;
+    p->timing_seconds = kernel_seconds;
+    kernel_seconds = 0;
     // Times relative to the frame's start, as a frame alone reports them.
+    const sc_core::sc_time start_time(p->start, sc_core::SC_SEC);
     auto since_start = [start_time](sc_core::sc_time t) {
       return t > start_time ? t - start_time : sc_core::SC_ZERO_TIME;
     };
-    std::vector<RendererStats> rstats;
-    std::vector<sc_core::sc_time> began;
-    for (int k = 0; k < machine.renderer_count(); ++k) {
-      const Renderer::FrameRecord& rec = machine.renderer(k).history()[i];
-      work.push_back(&rec.work);
-      for (const RegionWork& w : rec.work)
-        result.regions.push_back(region_load(config_, w.region, k, w.busy_cycles));
-      RendererStats st = rec.stats;
-      st.computed = since_start(rec.began + rec.stats.computed);
-      st.finished = since_start(rec.began + rec.stats.finished);
-      rstats.push_back(st);
-      began.push_back(start_time);
-    }
-    std::vector<GpStats> gstats(static_cast<std::size_t>(machine.gp_count()));
-    for (int k = 0; k < machine.gp_count(); ++k) {
-      const GraphicsProcessor& g = machine.gp(k);
-      if (!g.takes_part()) continue;
-      GpStats st = g.history()[i].stats;
+    p->gstats.resize(static_cast<std::size_t>(machine.gp_count()));
+    for (std::size_t i = 0; i < gps.size(); ++i) {
+      GpStats st = grec[i].stats;
       st.geometry_done = since_start(st.geometry_done);
       st.finished = since_start(st.finished);
-      gstats[static_cast<std::size_t>(k)] = st;
+      p->gstats[static_cast<std::size_t>(gp_index[i])] = st;
     }
-    FramePixels executed = ahead.take(f);
+    std::vector<const std::vector<RegionWork>*> work;
+    for (int k = 0; k < machine.renderer_count(); ++k) {
+      Renderer::FrameRecord& rec = p->renderers[static_cast<std::size_t>(k)];
+      work.push_back(&rec.work);
+      for (const RegionWork& w : rec.work)
+        p->regions.push_back(region_load(config_, w.region, k, w.busy_cycles));
+      rec.stats.computed = since_start(rec.began + rec.stats.computed);
+      rec.stats.finished = since_start(rec.began + rec.stats.finished);
+    }
+    // Its pixels, on the helper thread: from its frame values (an animation frame's, made with
+    // its plan; that plan may be gone by now).
+    std::shared_ptr<const FrameValues> v;
+    if (auto it = values.find(f); it != values.end()) {
+      v = std::make_shared<const FrameValues>(std::move(it->second));
+      values.erase(it);
+    }
+    const MachinePlan& plan = machine.plan();
+    const int threads = threads_;
+    const std::atomic<bool>* cancel = cancel_;
+    const bool executes = execute && (observed.frame < 0 || f == observed.frame);
+    std::function<BoardObserver*(int)> observe =
+        f == observed.frame ? observed.observe : std::function<BoardObserver*(int)>();
+    p->pixels = worker.submit([&pixel_fb, &plan, work, v, threads, cancel, executes, observe] {
+      const auto t1 = std::chrono::steady_clock::now();
+      pixel_fb.begin_frame(sc_core::SC_ZERO_TIME);
+      if (executes)
+        execute_pixels(plan, v ? *v : plan.frame_values(), pixel_fb, work, threads, observe,
+                       cancel);
+      FramePixels out;
+      out.image = pixel_fb.take_image();
+      out.seconds = seconds_since(t1);
+      return out;
+    });
+    pending.push_back(std::move(p));
+  };
+
+  // Frame p's result once its pixels are done: its statistics from its own records (the GPs'
+  // set-up and sending of that frame, the Renderers' regions of it); what the units do not
+  // record per frame (the ring's channels) is the run's. Then on_frame, and the frame goes.
+  auto deliver = [&] {
+    std::unique_ptr<Pending> p = std::move(pending.front());
+    pending.pop_front();
+    FramePixels executed = p->pixels.get();
+    if (cancel_ != nullptr && cancel_->load()) {
+      frames_ = count;
+      throw FrameCancelled();
+    }
+    const int f = p->frame;
+    FrameResult result;
     result.image = std::move(executed.image);
+    result.regions = std::move(p->regions);
     const double pixel_seconds = executed.seconds;
-    const double previous_end = f > 0 ? end[i - 1] : 0;
+    const double frame_start = p->start;
+    const double frame_end = p->end;
     result.frame_seconds = frame_end - previous_end;
+    previous_end = frame_end;
     result.triangles_per_second = result.frame_seconds > 0 ? triangles / result.frame_seconds : 0;
     namespace u = stat_unit;
     Statistics& s = result.stats;
@@ -1254,7 +1335,7 @@ const RunSummary& Session::run_frames(
     std::vector<const GpStats*> gp_of;
     std::uint64_t words = 0, messages = 0;
     for (int k = 0; k < machine.gp_count(); ++k) {
-      const GpStats& g = gstats[static_cast<std::size_t>(k)];
+      const GpStats& g = p->gstats[static_cast<std::size_t>(k)];
       register_gp_statistics(s, k, g, gp_hz, frame_seconds);
       if (machine.gp(k).takes_part()) gp_of.push_back(&g);
       words += g.ring_words;
@@ -1270,12 +1351,17 @@ const RunSummary& Session::run_frames(
                });
     register_setup_statistics(s, gp_of);
     std::vector<const RendererStats*> renderer_of;
+    std::vector<const std::vector<RegionWork>*> work;
+    std::vector<sc_core::sc_time> began;
+    const sc_core::sc_time start_time(frame_start, sc_core::SC_SEC);
     for (int k = 0; k < machine.renderer_count(); ++k) {
-      const RendererStats& st = rstats[static_cast<std::size_t>(k)];
-      register_renderer_statistics(s, k, st, array_hz, frame_seconds);
-      renderer_of.push_back(&st);
-      words += st.regions * region_words;
-      messages += st.regions;
+      const Renderer::FrameRecord& rec = p->renderers[static_cast<std::size_t>(k)];
+      register_renderer_statistics(s, k, rec.stats, array_hz, frame_seconds);
+      renderer_of.push_back(&rec.stats);
+      work.push_back(&rec.work);
+      began.push_back(start_time);
+      words += rec.stats.regions * region_words;
+      messages += rec.stats.regions;
     }
     register_renderer_totals(s, renderer_of, work, config_.regions());
     s.add_integer("ring.messages", u::count,
@@ -1295,13 +1381,21 @@ const RunSummary& Session::run_frames(
         frame_attribution(renderer_of, began, array_hz, frame_seconds);
     register_timing_statistics(s, attribution, config_, false);
     register_program_statistics(s, *program_);
-    const double host = timing_per_frame + pixel_seconds;
+    const double timing_seconds = p->timing_seconds;
+    const double host = timing_seconds + pixel_seconds;
     s.add_real("host.seconds", u::host_seconds,
-               "Host time of the frame: its share of the run's timing, and its pixels",
+               "Host time of the frame: the timing model's host time since the frame before "
+               "was handed over, and its pixels",
                [host] { return host; });
+    const double setup = f == 0 ? setup_seconds_ : 0;
+    s.add_real("host.setup_seconds", u::host_seconds,
+               "Host time before the run, not in host.seconds: making the scene and assembling the "
+               "program (pp5sim render's, a Python session's first frame's; 0 in a later frame)",
+               [setup] { return setup; });
     s.add_real("host.timing_seconds", u::host_seconds,
-               "The run's host time of the timing model (the SystemC run), over its frames",
-               [timing_per_frame] { return timing_per_frame; });
+               "Host time of the timing model (the SystemC run) from the frame before's hand-over "
+               "to this frame's (the first frame's: from elaborating the machine)",
+               [timing_seconds] { return timing_seconds; });
     s.add_real("host.pixel_seconds", u::host_seconds,
                "Host time executing the firmware on the pixel arrays",
                [pixel_seconds] { return pixel_seconds; });
@@ -1310,6 +1404,7 @@ const RunSummary& Session::run_frames(
                   [threads] { return std::int64_t{threads}; });
     s.freeze();
     result.stats_json = s.to_json();
+    p.reset();  // the frame's records and packets go
     ++frames_;
     RunSummary& rs = summary_;
     rs.shortest_frame_seconds =
@@ -1318,19 +1413,85 @@ const RunSummary& Session::run_frames(
     rs.simulated_seconds += frame_seconds;
     rs.host_seconds += host;
     ++rs.frames;
-    if (on_frame) on_frame(f, result);
+    if (!on_frame) return;
+    try {
+      on_frame(f, result);
+    } catch (...) {
+      // The units finish the frames they are on and start none after them (at most two are in
+      // flight: none beyond the frame after the one every Renderer is on), so that no unit's
+      // thread is left in the middle of a frame: what it holds there is never unwound.
+      if (!source_error && (cancel_ == nullptr || !cancel_->load())) {
+        machine.overlap(std::min(count, machine.clock().renderers_finished() + 2));
+        event_->kernel.run(cancel_);
+      }
+      frames_ = count;  // no frame can follow
+      throw;
+    }
+  };
+
+  int handed = 0;
+  while (handed < count || !pending.empty()) {
+    if (cancel_ != nullptr && cancel_->load()) {  // between frames
+      frames_ = count;
+      throw FrameCancelled();
+    }
+    // What the helper thread has done, in frame order.
+    while (!pending.empty() &&
+           pending.front()->pixels.wait_for(std::chrono::seconds(0)) == std::future_status::ready)
+      deliver();
+    if (handed < count && pending.size() < kFramesWaiting) {
+      run_kernel([&] { return frame_done(handed); });
+      if (handed == count - 1) {
+        // The last frame: the kernel runs on until no event is left (the ring's last
+        // bookings, for the ring's totals and the timeline).
+        run_kernel({});
+      }
+      if (!frame_done(handed))
+        throw std::logic_error(
+            fmt::format("run_frames: the units did not finish frame {} of {} (no event was left)",
+                        handed, count));
+      hand_over(handed++);
+    } else if (!pending.empty()) {
+      deliver();
+    }
   }
+  if (timeline) *timeline = timeline_document(machine);
+
+  {
+    const Ring& r = machine.ring();
+    sum.ring_messages = r.messages();
+    sum.ring_words = r.words();
+    sum.ring_contention_cycles = r.contention().count;
+    const double run_seconds = last_end;
+    double busiest = 0;
+    for (const RingCycles& c : r.busy())
+      busiest = std::max(busiest, c.seconds(r.params().clock_hz));
+    sum.ring_channel_utilisation_max = run_seconds > 0 ? busiest / run_seconds : 0;
+  }
+  sum.sustained_frame_seconds = count > 1 ? (last_end - first_end) / (count - 1) : first_end;
+  const double period = sum.sustained_frame_seconds;
+  sum.sustained_triangles_per_second = period > 0 ? triangles / period : 0;
+  sum.sustained_spheres_per_second = period > 0 ? spheres / period : 0;
+  const double gp_span = (gp_end - first_start) * static_cast<double>(gps.size());
+  const double gp_busy = static_cast<double>(sum.gp_busy_clocks) / gp_hz;
+  sum.gp_busy_share = gp_span > 0 ? gp_busy / gp_span : 0;
+  sum.gp_wait_share = gp_span > 0 ? gp_wait.to_seconds() / gp_span : 0;
+  const double later = last_end - first_end;
+  sum.renderer_wait_share =
+      later > 0 ? renderer_wait.to_seconds() / (later * machine.renderer_count()) : 0;
+  sum.mean_latency_seconds = latency_sum / count;
   return summary_;
 }
 
 RunSummary simulate_frames(const MachineConfig& config, std::shared_ptr<const Scene> scene,
                            std::shared_ptr<const Program> program, int threads, int count,
                            const std::function<void(int frame, FrameResult& result)>& on_frame,
-                           bool pixels, nlohmann::json* timeline) {
+                           bool pixels, nlohmann::json* timeline, double setup_seconds) {
   // The closed form first: its own SystemC context, freed before the session's is made.
   const double estimate =
       project_frame(config, *scene, *program).stats.real("frame.pipelined_frame_seconds");
   Session session(config, std::move(scene), std::move(program), threads);
+  session.set_setup_seconds(setup_seconds);
   RunSummary summary = session.run_frames(count, on_frame, pixels, {}, timeline);
   summary.estimate_frame_seconds = estimate;
   return summary;

@@ -73,6 +73,13 @@ class Machine;
 // order, before the frame is set up. The default gives the session's scene to every frame.
 using SceneSource = std::function<std::shared_ptr<const Scene>(int frame)>;
 
+// One frame of a run of frames looked at closely (Session::run_frames): its boards observed
+// (traces, snapshots); the run's other frames are then timing only.
+struct ObservedFrame {
+  int frame = -1;  // none
+  std::function<BoardObserver*(int renderer)> observe;
+};
+
 // What a run of frames did, over all its frames so far (Session::summary).
 struct RunSummary {
   int frames = 0;
@@ -80,6 +87,9 @@ struct RunSummary {
   double shortest_frame_seconds = 0;
   double longest_frame_seconds = 0;
   double host_seconds = 0;  // host.seconds, summed
+  // The caller's host time before the run (making the scene, assembling the program:
+  // Session::set_setup_seconds), not in host_seconds; the first frame's host.setup_seconds.
+  double setup_seconds = 0;
 
   // A run of overlapped frames (Session::run_frames), as simulated; at
   // fidelity.timing=analytic, the closed-form estimate instead (overlapped false).
@@ -165,10 +175,22 @@ class Session {
   // figures. Only on a new session (no frame simulated yet); with `timeline`, the whole
   // run's, on which the overlap shows. At fidelity.timing=analytic each frame is the analytic
   // model's and the sustained period is its closed-form estimate.
+  //
+  // The run streams: the kernel runs on the calling thread, in slices, until every unit has
+  // finished the next frame; that frame is then handed over (its records released from the
+  // units), its pixels execute on a helper thread while the kernel simulates later frames, and
+  // once they are done its statistics are built, on_frame is called (on the calling thread)
+  // and the frame is freed. At most two frames are handed over and not yet delivered, so
+  // memory stays flat whatever `count`. The cancel flag is checked between kernel slices and
+  // between frames; FrameCancelled or an error from `scenes` or `on_frame` ends the run (the
+  // frames delivered before it stay delivered).
+  // `observed`, if it names a frame, has that frame's boards observed (traces and snapshots of
+  // a frame as the run drew it); the other frames are then timing only (no pixels).
   const RunSummary& run_frames(int count,
                                const std::function<void(int frame, FrameResult& result)>& on_frame,
                                bool pixels = true, const SceneSource& scenes = {},
-                               nlohmann::json* timeline = nullptr);
+                               nlohmann::json* timeline = nullptr,
+                               const ObservedFrame& observed = {});
   // Frames simulated so far, and the run's summary over them.
   int frames() const { return frames_; }
   const RunSummary& summary() const { return summary_; }
@@ -211,11 +233,12 @@ class Session {
 
 // A run of `count` frames of `scene`, overlapped (Session::run_frames), with the closed-form
 // estimate of one frame alone (project_frame's frame.pipelined_frame_seconds) in the summary
-// to compare with the simulated period.
+// to compare with the simulated period. `setup_seconds` as Session::set_setup_seconds.
 RunSummary simulate_frames(const MachineConfig& config, std::shared_ptr<const Scene> scene,
                            std::shared_ptr<const Program> program, int threads, int count,
                            const std::function<void(int frame, FrameResult& result)>& on_frame,
-                           bool pixels = true, nlohmann::json* timeline = nullptr);
+                           bool pixels = true, nlohmann::json* timeline = nullptr,
+                           double setup_seconds = 0);
 
 // The timing model alone, for projections over many configurations (pp5sim validate): the
 // frame time and the statistics of simulate_frame, without executing the firmware on the

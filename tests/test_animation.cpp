@@ -184,6 +184,15 @@ TEST_CASE("gif: what encode_gif writes decodes to the palette colours of every p
     }
     CHECK(wrong == 0);
   }
+  // A frame at a time (GifWriter, as pp5sim animate encodes; encode_gif is built on it): a
+  // frame of another size is refused, naming it, and the frames kept give the same file.
+  GifWriter writer(8);
+  for (const RgbImage& i : frames) writer.add(i);
+  RgbImage other;
+  other.width = other.height = 2;
+  other.rgb.resize(12);
+  CHECK_THROWS_WITH(writer.add(other), "GIF frame 3 is 2x2, frame 0 203x97");
+  CHECK(writer.finish() == bytes);
   // The palette is near: no channel more than half a level away.
   const std::uint8_t c[3] = {200, 13, 128};
   std::uint8_t back[3];

@@ -1,8 +1,12 @@
 #include "models/gp/graphics_processor.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <iterator>
+#include <stdexcept>
+#include <string>
 
 #include "common/parallel_for.hpp"
 #include "models/gp/depth_sort.hpp"
@@ -353,6 +357,21 @@ void GraphicsProcessor::run_overlapped() {
     stats_.finished = sc_core::sc_time_stamp();
     history_.push_back({frame_, stats_});
   }
+}
+
+GpFrameRecord GraphicsProcessor::release_frame(int frame, sc_core::sc_time before) {
+  if (history_.empty() || history_.front().frame != frame) {
+    throw std::logic_error(fmt::format(
+        "{}: frame {} released, but its oldest record is {}", name(), frame,
+        history_.empty() ? std::string("none") : std::to_string(history_.front().frame)));
+  }
+  GpFrameRecord out = std::move(history_.front());
+  history_.erase(history_.begin());
+  // The activity in force at `before` stays (activity() looks back to it).
+  auto it = std::upper_bound(activity_.begin(), activity_.end(), before,
+                             [](sc_core::sc_time v, const auto& e) { return v < e.first; });
+  if (it != activity_.begin()) activity_.erase(activity_.begin(), std::prev(it));
+  return out;
 }
 
 void GraphicsProcessor::start_ahead(Ahead& ahead) {

@@ -92,7 +92,13 @@ class GraphicsProcessor : public sc_core::sc_module, public GpReport, public Rin
   // How the GP spent [from, to): so that a Renderer's wait for this GP can be attributed.
   GpActivityTimes activity(sc_core::sc_time from, sc_core::sc_time to) const override;
   // Overlapped frames (FrameClock::overlapped): every frame it has finished sending, in order.
+  // Each record is final once it is there; a streaming run hands it over and releases it.
   const std::vector<GpFrameRecord>& history() const { return history_; }
+  // Overlapped frames: hands over the record of `frame`, which must be the oldest it keeps,
+  // and forgets it, with its activity before `before` (a time from which on no Renderer asks
+  // about it: every Renderer is past the frame). Between kernel runs; a frame's record kept
+  // until then.
+  GpFrameRecord release_frame(int frame, sc_core::sc_time before);
   bool takes_part() const { return first_ != last_; }
   // The depth sort's messages from other GPs (the Machine attaches the GP at its stop).
   void receive_sort(const SortArrival& message) override;

@@ -1,7 +1,11 @@
 #include "models/renderer/renderer.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/ring/ring.hpp"
@@ -272,6 +276,17 @@ void Renderer::run_overlapped() {
     forget_maps(frame_, sc_core::SC_ZERO_TIME);
     wiring_.clock.renderer_finished(index_);
   }
+}
+
+Renderer::FrameRecord Renderer::release_frame(int frame) {
+  if (history_.empty() || history_.front().frame != frame) {
+    throw std::logic_error(fmt::format(
+        "{}: frame {} released, but its oldest record is {}", name(), frame,
+        history_.empty() ? std::string("none") : std::to_string(history_.front().frame)));
+  }
+  FrameRecord out = std::move(history_.front());
+  history_.erase(history_.begin());
+  return out;
 }
 
 void Renderer::run_frame() {

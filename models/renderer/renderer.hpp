@@ -129,7 +129,11 @@ class Renderer : public sc_core::sc_module, public RingEndpoint, public Renderer
     RendererStats stats;     // computed and finished relative to `began`
     std::vector<RegionWork> work;
   };
+  // Each record is final once it is there; a streaming run hands it over and releases it.
   const std::vector<FrameRecord>& history() const { return history_; }
+  // Overlapped frames: hands over the record of `frame`, which must be the oldest it keeps,
+  // and forgets it (its regions' packets go with it). Between kernel runs.
+  FrameRecord release_frame(int frame);
   // Registers renderer.INDEX.* (models/renderer/renderer_statistics.cpp); read once the frame
   // has run.
   void register_statistics(Statistics& stats, double frame_seconds) const;

@@ -108,7 +108,8 @@ int run_animate(AnimateOptions o) {
   const bool record_timeline = event && !o.no_timeline;
   std::string csv = kFramesCsvHeader;
   nlohmann::json stats = {{"frames", nlohmann::json::array()}};
-  std::vector<RgbImage> images;
+  // The GIF is encoded a frame at a time: no frame's image is kept.
+  GifWriter gif(std::max(2, static_cast<int>(std::lround(100.0 / animation.fps()))));
   std::map<int, RegionLoad> summed;  // by region
   FrameResult last;
   AnimationReportInput report_in;
@@ -126,7 +127,7 @@ int run_animate(AnimateOptions o) {
       std::string png = encode_png(r.image);
       if (o.report) report_in.frame_pngs.push_back(png);
       outputs.add((dir / fmt::format("frame-{:04d}.png", k)).string(), std::move(png));
-      images.push_back(r.image.flat());
+      gif.add(r.image.flat());
     }
     AnimationFrameRow row;
     row.start_seconds = start;
@@ -163,12 +164,9 @@ int run_animate(AnimateOptions o) {
                            {"fps", animation.fps()},
                            {"motion", animation.motion()}});
   if (pixels) {
-    std::vector<const RgbImage*> list;
-    for (const RgbImage& i : images) list.push_back(&i);
-    const int delay = std::max(2, static_cast<int>(std::lround(100.0 / animation.fps())));
-    std::string gif = encode_gif(list, delay);
-    if (o.report) report_in.gif = gif;
-    outputs.add((dir / "animation.gif").string(), std::move(gif));
+    std::string bytes = gif.finish();
+    if (o.report) report_in.gif = bytes;
+    outputs.add((dir / "animation.gif").string(), std::move(bytes));
   }
   std::vector<RegionLoad> loads;
   for (const auto& [region, load] : summed) loads.push_back(load);

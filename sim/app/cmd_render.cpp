@@ -42,7 +42,7 @@ struct RenderOptions {
 // `render --frames N`: N frames of the scene overlapped; writes the last frame's outputs, the
 // run's statistics (run.json) and prints the sustained figures.
 int run_render_frames(const RenderOptions& o, const MachineConfig& config, const Scene& scene,
-                      const Program& program) {
+                      const Program& program, double setup_seconds) {
   const bool pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
   nlohmann::json timeline;
   FrameResult last;
@@ -52,7 +52,7 @@ int run_render_frames(const RenderOptions& o, const MachineConfig& config, const
       [&last, n = o.frames](int f, FrameResult& r) {
         if (f == n - 1) last = std::move(r);
       },
-      true, o.timeline.empty() ? nullptr : &timeline);
+      true, o.timeline.empty() ? nullptr : &timeline, setup_seconds);
   const fs::path dir(o.out_dir);
   OutputSet outputs;
   const bool heat_map = !last.regions.empty();
@@ -158,7 +158,7 @@ int run_render(RenderOptions o) {
   if (o.out_dir.empty()) o.out_dir = default_output_folder(scene.name);
   const bool replacing = prepare_output_folder(o.out_dir, "--out");
 
-  if (o.frames > 1) return run_render_frames(o, config, scene, program);
+  if (o.frames > 1) return run_render_frames(o, config, scene, program, setup_seconds);
 
   nlohmann::json timeline;
   // report.html draws the timeline: recorded for it too where the timing model has events.

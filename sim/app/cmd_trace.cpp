@@ -39,8 +39,9 @@ struct RunOptions {
 
   void add(CLI::App& c) {
     c.add_option("--frame", frame,
-                 "Frame K of the scene's animation, as 'pp5sim animate' draws it: the session "
-                 "runs frames 0 .. K-1 (their timing only) and this command looks at frame K")
+                 "Frame K of the scene's animation, as 'pp5sim animate' draws it: frames 0 .. K "
+                 "(and K+1, which overlaps it) run overlapped, timing only but frame K, which "
+                 "this command looks at")
         ->check(CLI::Range(0, 100000));
     c.add_option("--animation-frames", animation_frames,
                  "Frames of that animation (animate's --frames) [the scene file's, else 24]")
@@ -79,19 +80,38 @@ struct RunOptions {
     return load_scene(scene_name, scene_options());
   }
   // The frame looked at, with `observe` on its Renderers: one frame, or frame K of the
-  // animation's session, after frames 0 .. K-1.
+  // animation as `pp5sim animate` draws it: frames 0 .. K overlapped in one session
+  // (Session::run_frames), frames 0 .. K-1 timing only.
   FrameResult simulate(const MachineConfig& config, const Scene& scene, const Program& program,
                        const std::function<BoardObserver*(int renderer)>& observe) const {
     const auto a = animation();
     if (!a) return simulate_frame(config, scene, program, threads, observe);
-    Session session(config, std::make_shared<const Scene>(a->scene(0)),
-                    std::shared_ptr<const Program>(&program, [](const Program*) {}), threads);
-    for (int k = 0; k < frame; ++k) {
-      if (k > 0) session.set_scene(std::make_shared<const Scene>(a->scene(k)));
-      session.frame({}, nullptr, false);
+    if (config.fidelity.timing != MachineConfig::Fidelity::Timing::event) {
+      throw std::invalid_argument(
+          "traces and snapshots need fidelity.timing=event (the analytic model runs no events "
+          "and records no start cycles)");
     }
-    if (frame > 0) session.set_scene(std::make_shared<const Scene>(scene));
-    return session.frame(observe);
+    if (config.fidelity.pixels == MachineConfig::Fidelity::Pixels::none)
+      throw std::invalid_argument("an observer of the boards needs fidelity.pixels=bit or word");
+    // Frame K + 1 as well, when the animation has it: its set-up overlaps frame K (frame K + 2
+    // begins only once every Renderer has finished K + 1).
+    const auto first = std::make_shared<const Scene>(a->scene(0));
+    Session session(config, first, std::shared_ptr<const Program>(&program, [](const Program*) {}),
+                    threads);
+    const int count = frame + 1 < a->frames() ? frame + 2 : frame + 1;
+    FrameResult out;
+    session.run_frames(
+        count,
+        [&out, this](int k, FrameResult& r) {
+          if (k == frame) out = std::move(r);
+        },
+        true,
+        [&a, &scene, &first, this](int k) {
+          if (k == 0) return first;
+          return std::make_shared<const Scene>(k == frame ? scene : a->scene(k));
+        },
+        nullptr, ObservedFrame{frame, observe});
+    return out;
   }
 };
 

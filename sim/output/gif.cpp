@@ -66,6 +66,8 @@ class GifBitWriter {
   std::size_t block_size_ = 0;
 };
 
+}  // namespace
+
 // The image data of one frame of palette indices: LZW over a code table held as a hash table
 // of (prefix code, byte) -> code, 16384 entries of 4 bytes (at most 4096 codes: a quarter full
 // at most), so that it stays in the cache; a clear empties it. The codes are the table's,
@@ -126,6 +128,8 @@ class GifLzw {
   std::vector<std::uint32_t> slots_;
 };
 
+namespace {
+
 // Each channel's share of the palette index, by byte value (the nearest level, scaled).
 struct GifLevelTables {
   std::array<std::uint8_t, 256> red{}, green{}, blue{};
@@ -163,57 +167,73 @@ void gif_palette_colour(std::uint8_t index, std::uint8_t rgb[3]) {
   rgb[2] = gif_level_value(index % kGifBlue, kGifBlue);
 }
 
+GifWriter::GifWriter(int delay_centiseconds) : delay_(delay_centiseconds) {}
+GifWriter::~GifWriter() = default;
+
+void GifWriter::add(const RgbImage& f) {
+  const int k = frames_;
+  if (k > 0 && (f.width != width_ || f.height != height_)) {
+    throw std::invalid_argument(
+        fmt::format("GIF frame {} is {}x{}, frame 0 {}x{}", k, f.width, f.height, width_, height_));
+  }
+  if (f.width < 1 || f.height < 1 || f.width > 65535 || f.height > 65535 ||
+      f.rgb.size() != static_cast<std::size_t>(f.width) * f.height * 3) {
+    throw std::invalid_argument(fmt::format("GIF frame {} is {}x{} with {} bytes of pixels", k,
+                                            f.width, f.height, f.rgb.size()));
+  }
+  if (k == 0) {
+    width_ = f.width;
+    height_ = f.height;
+    out_ = "GIF89a";
+    put16(out_, width_);
+    put16(out_, height_);
+    out_.push_back(static_cast<char>(0xF7));  // a global table of 256 colours, 8 bits each
+    out_.push_back('\0');                     // background colour index
+    out_.push_back('\0');                     // square pixels
+    for (int i = 0; i < 256; ++i) {
+      std::uint8_t rgb[3];
+      gif_palette_colour(static_cast<std::uint8_t>(i), rgb);
+      out_.append(reinterpret_cast<const char*>(rgb), 3);
+    }
+    // Loop forever.
+    out_ += std::string("\x21\xFF\x0B", 3) + "NETSCAPE2.0" + std::string("\x03\x01\x00\x00\x00", 5);
+  }
+  std::vector<std::uint8_t> indices(static_cast<std::size_t>(width_) * height_);
+  const GifLevelTables& t = gif_level_tables();
+  const std::uint8_t* rgb = f.rgb.data();
+  for (std::size_t i = 0; i < indices.size(); ++i) {
+    indices[i] = static_cast<std::uint8_t>(t.red[rgb[3 * i]] + t.green[rgb[3 * i + 1]] +
+                                           t.blue[rgb[3 * i + 2]]);
+  }
+  // Graphic control: no disposal, the delay, no transparent colour.
+  out_ += std::string("\x21\xF9\x04\x04", 4);
+  put16(out_, delay_);
+  out_ += std::string("\x00\x00", 2);
+  out_.push_back(static_cast<char>(0x2C));
+  put16(out_, 0);
+  put16(out_, 0);
+  put16(out_, width_);
+  put16(out_, height_);
+  out_.push_back('\0');  // no local table, not interlaced
+  if (!lzw_) lzw_ = std::make_unique<GifLzw>();
+  lzw_->encode(indices, out_);
+  ++frames_;
+}
+
+std::string GifWriter::finish() {
+  if (frames_ == 0) throw std::invalid_argument("an animated GIF needs at least one frame");
+  std::string out = std::move(out_);
+  out.push_back(static_cast<char>(0x3B));
+  out_.clear();
+  frames_ = 0;
+  return out;
+}
+
 std::string encode_gif(const std::vector<const RgbImage*>& frames, int delay_centiseconds) {
   if (frames.empty()) throw std::invalid_argument("an animated GIF needs at least one frame");
-  const int width = frames[0]->width, height = frames[0]->height;
-  for (std::size_t k = 0; k < frames.size(); ++k) {
-    const RgbImage& f = *frames[k];
-    if (f.width != width || f.height != height) {
-      throw std::invalid_argument(
-          fmt::format("GIF frame {} is {}x{}, frame 0 {}x{}", k, f.width, f.height, width, height));
-    }
-    if (f.width < 1 || f.height < 1 || f.width > 65535 || f.height > 65535 ||
-        f.rgb.size() != static_cast<std::size_t>(f.width) * f.height * 3) {
-      throw std::invalid_argument(fmt::format("GIF frame {} is {}x{} with {} bytes of pixels", k,
-                                              f.width, f.height, f.rgb.size()));
-    }
-  }
-  std::string out = "GIF89a";
-  put16(out, width);
-  put16(out, height);
-  out.push_back(static_cast<char>(0xF7));  // a global table of 256 colours, 8 bits each
-  out.push_back('\0');                     // background colour index
-  out.push_back('\0');                     // square pixels
-  for (int i = 0; i < 256; ++i) {
-    std::uint8_t rgb[3];
-    gif_palette_colour(static_cast<std::uint8_t>(i), rgb);
-    out.append(reinterpret_cast<const char*>(rgb), 3);
-  }
-  // Loop forever.
-  out += std::string("\x21\xFF\x0B", 3) + "NETSCAPE2.0" + std::string("\x03\x01\x00\x00\x00", 5);
-  GifLzw lzw;
-  std::vector<std::uint8_t> indices(static_cast<std::size_t>(width) * height);
-  for (const RgbImage* f : frames) {
-    const GifLevelTables& t = gif_level_tables();
-    const std::uint8_t* rgb = f->rgb.data();
-    for (std::size_t i = 0; i < indices.size(); ++i) {
-      indices[i] = static_cast<std::uint8_t>(t.red[rgb[3 * i]] + t.green[rgb[3 * i + 1]] +
-                                             t.blue[rgb[3 * i + 2]]);
-    }
-    // Graphic control: no disposal, the delay, no transparent colour.
-    out += std::string("\x21\xF9\x04\x04", 4);
-    put16(out, delay_centiseconds);
-    out += std::string("\x00\x00", 2);
-    out.push_back(static_cast<char>(0x2C));
-    put16(out, 0);
-    put16(out, 0);
-    put16(out, width);
-    put16(out, height);
-    out.push_back('\0');  // no local table, not interlaced
-    lzw.encode(indices, out);
-  }
-  out.push_back(static_cast<char>(0x3B));
-  return out;
+  GifWriter gif(delay_centiseconds);
+  for (const RgbImage* f : frames) gif.add(*f);
+  return gif.finish();
 }
 
 DecodedGif decode_gif(const std::string& bytes) {

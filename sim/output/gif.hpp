@@ -12,6 +12,7 @@
 //  - decode_gif reads back what encode_gif writes (one global palette, no local ones,
 //    no interlace): the frames as palette colours. For tests.
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,28 @@
 namespace pp5 {
 
 std::string encode_gif(const std::vector<const RgbImage*>& frames, int delay_centiseconds);
+
+// The same, a frame at a time (pp5sim animate adds each frame as it is drawn, and keeps no
+// image): add() checks and encodes a frame (std::invalid_argument as above), finish() returns
+// the file and starts a new one. The bytes are encode_gif's for the same frames.
+class GifLzw;
+class GifWriter {
+ public:
+  explicit GifWriter(int delay_centiseconds);
+  ~GifWriter();
+  GifWriter(const GifWriter&) = delete;
+  GifWriter& operator=(const GifWriter&) = delete;
+  void add(const RgbImage& frame);
+  std::string finish();
+  int frames() const { return frames_; }
+
+ private:
+  int delay_;
+  int width_ = 0, height_ = 0;
+  int frames_ = 0;
+  std::string out_;
+  std::unique_ptr<GifLzw> lzw_;  // its code table, kept from frame to frame
+};
 
 // The fixed palette's colour nearest `rgb` (what encode_gif draws a pixel as).
 std::uint8_t gif_palette_index(const std::uint8_t rgb[3]);
