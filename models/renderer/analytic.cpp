@@ -4,6 +4,7 @@
 #include <deque>
 #include <functional>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <queue>
 #include <stdexcept>
@@ -11,6 +12,7 @@
 
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/setup_memo.hpp"
+#include "models/ring/ring.hpp"
 
 namespace pp5 {
 
@@ -205,22 +207,37 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     double consumed;
     std::uint64_t words;
   };
+  // A message of the stage the Renderer has open: sent, consumed once the stage's order is
+  // known (consume_stage).
+  struct StageMessage {
+    double requested = 0;  // when it reached the Renderer's queue (the ring booked it)
+    double arrival = 0;    // its last word in
+    double gp_from = 0;    // the GPs' part of a wait for it ends here (attribute_wait)
+    std::uint64_t cycles = 0;
+    std::uint64_t words = 0;
+    double begin = 0, end = 0;  // the array's, from consume_stage
+    bool freed = false;         // its room counted free (consumed before a later send)
+  };
   struct RendererState {
     std::size_t region = 0;  // static balancing: the next of a.regions[j]
     int current = -1;        // the region it renders, -1 before it has one
     int pass = 0;
     bool entered = false;  // the stage's region-wide steps and messages are made
     std::vector<AnalyticMessage> messages;
-    std::size_t next = 0;      // the stage's messages sent
-    std::vector<char> sent;    // by message of the stage
-    double stage_open = 0;     // when the stage opened for input
-    double last_sent = 0;      // the latest booking of the stage's messages
-    double room = 0;           // when the queue has room for the next message
-    double array = 0;          // when the array is free
-    double ship_free = 0;      // the video-RAM port's next free time
-    double finished = 0;       // its last region at the frame buffer
-    std::deque<Queued> queue;  // messages sent, not yet consumed, in order
-    std::deque<double> ships;  // finished regions whose copy-out is done, not yet booked
+    std::size_t next = 0;             // the stage's messages sent
+    std::vector<char> sent;           // by message of the stage
+    double stage_open = 0;            // when the stage opened for input
+    double started = 0;               // when the array started on the stage
+    double last_sent = 0;             // the latest booking of the stage's messages
+    double room = 0;                  // when the queue has room for the next message
+    double array = 0;                 // when the array is free
+    double ship_free = 0;             // the video-RAM port's next free time
+    double finished = 0;              // its last region at the frame buffer
+    std::deque<Queued> queue;         // messages of earlier stages, not yet consumed, in order
+    std::vector<StageMessage> stage;  // the open stage's messages sent, in the order sent
+    std::vector<std::size_t> order;   // ... in the order the array consumes them
+    double stage_base = 0;            // when the array is ready for the stage's messages
+    std::deque<double> ships;         // finished regions whose copy-out is done, not yet booked
     std::uint64_t queued = 0;
     double gp_s = 0, ring_s = 0, renderer_s = 0;  // its time, attributed
     bool maps_waited = false;
@@ -242,6 +259,56 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     st.array += t;
     st.renderer_s += t;
   };
+  // The order in which the array consumes the open stage's messages, as Renderer::run_frame
+  // takes them: whenever it is free, of the stage's messages in its queue (delivered when the
+  // ring booked them) the one whose last word arrives first (ties to the one delivered
+  // first), waiting for its arrival; with none in the queue, the first delivered next. The
+  // messages sent so far are all those delivered before any later send's request, so the
+  // order up to the time of the latest send is final.
+  auto consume_stage = [&](RendererState& st) {
+    st.order.clear();
+    double t = st.stage_base;
+    std::vector<char> taken(st.stage.size(), 0);
+    for (std::size_t n = 0; n < st.stage.size(); ++n) {
+      double delivered = t;
+      bool any = false;
+      for (std::size_t i = 0; i < st.stage.size(); ++i) {
+        if (!taken[i] && st.stage[i].requested <= t) any = true;
+      }
+      if (!any) {
+        delivered = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < st.stage.size(); ++i) {
+          if (!taken[i]) delivered = std::min(delivered, st.stage[i].requested);
+        }
+      }
+      std::size_t pick = st.stage.size();
+      for (std::size_t i = 0; i < st.stage.size(); ++i) {
+        if (taken[i] || st.stage[i].requested > delivered) continue;
+        if (pick == st.stage.size() || st.stage[i].arrival < st.stage[pick].arrival) pick = i;
+      }
+      taken[pick] = 1;
+      StageMessage& m = st.stage[pick];
+      m.begin = std::max(t, m.arrival);
+      m.end = m.begin + static_cast<double>(m.cycles) * cycle;
+      t = m.end;
+      st.order.push_back(pick);
+    }
+    return t;
+  };
+  // The stage is all sent: its messages consumed in that order, the array's waits
+  // attributed, and those not yet counted free kept in the queue for the stages after it.
+  auto close_stage = [&](RendererState& st) {
+    consume_stage(st);
+    for (const std::size_t i : st.order) {
+      const StageMessage& m = st.stage[i];
+      attribute_wait(st, st.array, m.begin, m.gp_from, m.requested);
+      st.array = m.begin;
+      run_array(st, m.cycles);
+      if (!m.freed) st.queue.push_back({m.end, m.words});
+    }
+    st.stage.clear();
+    st.order.clear();
+  };
   // Static balancing: Renderer j renders a.regions[j] in order. Dynamic: a Renderer claims
   // the next unclaimed region when it opens its next stage (RegionScheduler::claim_region),
   // in time order among the Renderers (claims go through the heap below).
@@ -260,10 +327,14 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     for (;;) {
       if (st.entered && st.next < st.messages.size()) return Next::message;
       if (st.entered) {
+        close_stage(st);
         // The stage is all sent (its messages consumed as they came): the next one opens
         // when its last message was sent, or, for an empty stage, when the Renderer
-        // started on it.
-        st.stage_open = st.messages.empty() ? std::max(st.stage_open, st.array) : st.last_sent;
+        // started on it (before its region-wide steps, Renderer::run_frame); either once
+        // every bin map is in, which says who sends (Renderer::advance).
+        st.stage_open =
+            std::max(st.messages.empty() ? std::max(st.stage_open, st.started) : st.last_sent,
+                     maps_requested[static_cast<std::size_t>(j)]);
         st.entered = false;
         if (st.pass + 1 < passes) {
           ++st.pass;
@@ -294,6 +365,7 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
         out.regions[static_cast<std::size_t>(j)].push_back(st.current);
       }
       st.entered = true;
+      st.started = st.array;
       run_array(st, before[static_cast<std::size_t>(st.pass)]);
       if (!st.maps_waited) {
         // The array waits for every GP's bin map before its first message.
@@ -302,6 +374,7 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
         attribute_wait(st, st.array, in, 0.0, maps_requested[static_cast<std::size_t>(j)]);
         st.array = in;
       }
+      st.stage_base = st.array;
       stage_messages(st.current, st.pass, st.messages);
       st.sent.assign(st.messages.size(), 0);
       st.next = 0;
@@ -316,9 +389,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   // When Renderer j's next message can go: its stage open, room in the queue, its GP free.
   // When Renderer j's next message can go, and which: of each GP's next message of the
   // stage (a GP's messages of one bin go in order), the one that can go first (its stage
-  // open, room in the queue for it, its GP free), ties to the lower GP; as the event model's
-  // GPs each send to an open stage they owe whenever they can, and the Renderer takes its
-  // messages as they arrive.
+  // open, room in the queue for it, its GP free), ties in the scheduler's order (gp_rank
+  // below); as the event model's GPs each send to an open stage they owe whenever they can.
+  // The queue's room: the earlier stages' messages go first, then the open stage's in the
+  // order the array consumes them (consume_stage, kept up to date as messages are sent).
   auto room_for = [&](const RendererState& st, std::uint64_t words) {
     double t = st.room;
     std::uint64_t queued = st.queued;
@@ -326,11 +400,38 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
       t = std::max(t, it->consumed);
       queued -= it->words;
     }
+    for (auto it = st.order.begin(); it != st.order.end() && queued + words > capacity; ++it) {
+      const StageMessage& m = st.stage[*it];
+      if (m.freed) continue;
+      t = std::max(t, m.end);
+      queued -= m.words;
+    }
     return t;
   };
+  // Of GPs that could go at one instant, which goes first: RegionScheduler::arbitrate's
+  // order (gp.send_order): the fewest hops to the Renderer, then the lower GP; the lower GP;
+  // or round-robin from the GP after the one that sent last.
+  const MachineConfig::Gp::SendOrder send_order = config.gp.send_order;
+  int next_turn = 0;
+  auto gp_rank = [&](int gp, int j) -> long {
+    switch (send_order) {
+      case MachineConfig::Gp::SendOrder::nearest:
+        return static_cast<long>(
+                   ring_hops(plan.gp_stop(gp), plan.renderer_stop(j), plan.ring_stops())) *
+                   gps +
+               gp;
+      case MachineConfig::Gp::SendOrder::lowest:
+        return gp;
+      case MachineConfig::Gp::SendOrder::round_robin:
+        return (gp - next_turn + gps) % gps;
+    }
+    return gp;
+  };
+  constexpr double kTie = 1e-12;  // one picosecond, SystemC's time resolution
   auto pick_message = [&](int j) {
     RendererState& st = rs[static_cast<std::size_t>(j)];
     double best = 0;
+    long best_rank = 0;
     std::size_t pick = st.messages.size();
     int previous_gp = -1;
     for (std::size_t i = 0; i < st.messages.size(); ++i) {
@@ -343,7 +444,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
       const double t =
           std::max({st.stage_open, room_for(st, m.words), gp_free[static_cast<std::size_t>(m.gp)],
                     pass_ready(m.gp, st.pass)});
-      if (pick == st.messages.size() || t < best) best = t, pick = i;
+      const long rank = gp_rank(m.gp, j);
+      if (pick == st.messages.size() || t < best - kTie || (t <= best + kTie && rank < best_rank)) {
+        best = t, best_rank = rank, pick = i;
+      }
     }
     return std::make_pair(best, pick);
   };
@@ -401,11 +505,19 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     const AnalyticMessage m = st.messages[picked];
     st.sent[picked] = 1;
     ++st.next;
+    next_turn = (m.gp + 1) % gps;
     // The queue's room for it: messages consumed by the time it could go are out.
     while (!st.queue.empty() && st.queued + m.words > capacity) {
       st.room = std::max(st.room, st.queue.front().consumed);
       st.queued -= st.queue.front().words;
       st.queue.pop_front();
+    }
+    for (auto it = st.order.begin(); it != st.order.end() && st.queued + m.words > capacity; ++it) {
+      StageMessage& q = st.stage[*it];
+      if (q.freed) continue;
+      st.room = std::max(st.room, q.end);
+      st.queued -= q.words;
+      q.freed = true;
     }
     const auto g = static_cast<std::size_t>(m.gp);
     // The GP starts the message (i860 clocks), then holds its interface for the words.
@@ -415,15 +527,17 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     st.last_sent = std::max(st.last_sent, requested);
     const double arrival =
         end + plan.hop_delay(plan.gp_stop(m.gp), plan.renderer_stop(j)).to_seconds();
-    // The array consumes it after the messages before it, once it has arrived.
-    const double begin = std::max(st.array, arrival);
-    // The GP computed until it could start this message if its geometry (or a traversal)
-    // held it; otherwise only while starting it.
-    attribute_wait(st, st.array, begin, pass_ready(m.gp, st.pass) >= ready ? 0.0 : ready,
-                   requested);
-    st.array = begin;
-    run_array(st, m.cycles);
-    st.queue.push_back({st.array, m.words});
+    // The array consumes it in the stage's order (consume_stage). A wait for it is the GPs'
+    // while the GP computed, if its geometry (or a traversal) held it, otherwise only while
+    // it started the message; the ring's after.
+    StageMessage q;
+    q.requested = requested;
+    q.arrival = arrival;
+    q.gp_from = pass_ready(m.gp, st.pass) >= ready ? 0.0 : ready;
+    q.cycles = m.cycles;
+    q.words = m.words;
+    st.stage.push_back(q);
+    consume_stage(st);
     st.queued += m.words;
     schedule(j);
   }
