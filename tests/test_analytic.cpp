@@ -144,12 +144,9 @@ TEST_CASE("analytic timing with word pixels draws the event model's image", "[an
 // The analytic level against the event level on a held-out grid: machines drawn with a
 // seeded generator over scenes, programs, screens and every timing knob, which the model was
 // never adjusted on (sim/analysis/analytic_validation.hpp; it was adjusted on the 48-point
-// torus grids and on the grids of seeds 0x3434 to 0x3437, each once held out). Targets
-// (docs/timing.md): worst frame-time error at most 15%, Kendall tau at least 0.9. Measured on
-// this grid (seed 0x3438, 120 machines, fixed before either model was run on it): mean
-// 0.88%, worst 12.5% (dynamic balancing; static 6.7%), bottleneck agrees at 117 of 120, tau
-// 0.990. The targets do not hold on every held-out grid: on seed 0x3439 the worst is 22.5%
-// (docs/timing.md says which machine and why).
+// torus grids and on the grids of seeds 0x3434 to 0x343a, each once held out). Targets
+// (docs/timing.md): worst frame-time error at most 15%, Kendall tau at least 0.9. This grid
+// (seed 0x343b, 120 machines) was chosen and committed before either model was run on it.
 TEST_CASE("analytic frame time on the held-out grid: error, bottleneck and rank against events",
           "[analytic]") {
   const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
@@ -220,6 +217,33 @@ TEST_CASE("analytic ring books regions as the event ring: idle gaps held", "[ana
         "ring.channels=4", "renderer.queue_words=2048", "renderer.balancing=dynamic",
         "renderer.overlap_shipping=1", "ring.hop_latency_cycles=2", "evaluator.double_buffered=0",
         "gp.code=assembly"}}};
+  const AnalyticValidation v = validate_analytic("looked at", machines, load);
+  for (const AnalyticPoint& p : v.points) {
+    WARN(fmt::format("{}: event {:.3f} ms, analytic {:.3f} ms ({:+.1f}%)", p.machine.label(),
+                     1e3 * p.event_seconds, 1e3 * p.analytic_seconds, 100 * p.error()));
+    CHECK(std::abs(p.error()) <= 0.05);
+  }
+}
+
+// The former worst machine of the grid of seed 0x3439 (held out when it was measured: 52.3%,
+// 16.725 ms against 10.980 ms): its frame is each Renderer's ring interface shipping its
+// regions in series, so it ends with the Renderer that holds the most regions. An empty
+// stage that opened the next one after its clear rather than at its start, and GPs that
+// could send at one instant going lowest first rather than nearest first (gp.send_order),
+// let one Renderer claim a run of empty regions and book every channel ahead of the others'
+// messages. Now 10.980 ms against 10.980 ms; without the send order 22.5%.
+TEST_CASE("analytic former worst machine: dynamic balancing spreads the empty regions",
+          "[analytic]") {
+  const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
+    return test::load_program(name, c);
+  };
+  const std::vector<GridMachine> machines = {
+      {"spheres-and-triangles",
+       "threshold",
+       {"screen.width=1280", "screen.height=1024", "gp.count=24", "renderer.count=10",
+        "ring.channels=16", "renderer.queue_words=1024", "renderer.balancing=dynamic",
+        "renderer.overlap_shipping=1", "ring.hop_latency_cycles=0", "evaluator.double_buffered=1",
+        "gp.code=compiled"}}};
   const AnalyticValidation v = validate_analytic("looked at", machines, load);
   for (const AnalyticPoint& p : v.points) {
     WARN(fmt::format("{}: event {:.3f} ms, analytic {:.3f} ms ({:+.1f}%)", p.machine.label(),
