@@ -53,6 +53,9 @@ struct AnalyticMessage {
   int gp = 0;
   std::uint64_t words = 0;
   std::uint64_t cycles = 0;
+  // With evaluator.double_buffered, the cycles its first drawn packet's coefficients take to
+  // load: the array stalls for them when it has waited for the message (below).
+  std::uint64_t first_load = 0;
 };
 
 ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo::Summary& summary,
@@ -113,16 +116,24 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     const std::uint32_t end = summary.region_first[i + 1];
     for (int k = 0; k < gps && at < end; ++k) {
       const int last = block_end[static_cast<std::size_t>(k)];
-      AnalyticMessage m{k, 0, 0};
+      AnalyticMessage m{k, 0, 0, 0};
+      bool loaded = false;  // a packet of the message drawn in this pass
       for (; at < end && summary.region_primitive[at] < last; ++at) {
         const Packet& p = **summary.region_packets[at];
         if (m.words > 0 && m.words + p.words > capacity) {
           out.push_back(m);
-          m = AnalyticMessage{k, 0, 0};
+          m = AnalyticMessage{k, 0, 0, 0};
+          loaded = false;
         }
         if (m.words == 0) m.words = 1;
         m.words += p.words;
         m.cycles += packet_cycles(p, pass);
+        if (!loaded && config.evaluator.double_buffered && stream.packet(p, pass, 0).code.defined) {
+          loaded = true;
+          m.first_load =
+              ceil_div(p.words > 0 ? p.words - 1 : 0,
+                       static_cast<std::uint64_t>(config.evaluator.coefficient_words_per_cycle));
+        }
       }
       if (m.words > 0) out.push_back(m);
     }
@@ -215,7 +226,8 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     double gp_from = 0;    // the GPs' part of a wait for it ends here (attribute_wait)
     std::uint64_t cycles = 0;
     std::uint64_t words = 0;
-    double begin = 0, end = 0;  // the array's, from consume_stage
+    double load = 0;            // its first packet's coefficients (AnalyticMessage::first_load)
+    double begin = 0, end = 0;  // the array's, from consume_stage (begin after any stall)
     bool freed = false;         // its room counted free (consumed before a later send)
   };
   struct RendererState {
@@ -288,7 +300,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
       }
       taken[pick] = 1;
       StageMessage& m = st.stage[pick];
-      m.begin = std::max(t, m.arrival);
+      // Double-buffered, a packet's coefficients load while the packet before it runs; the
+      // first packet's start only once it has arrived, so the array stalls for that load
+      // as far as it waited (Renderer::load_coefficients).
+      m.begin = std::max(t, m.arrival + m.load);
       m.end = m.begin + static_cast<double>(m.cycles) * cycle;
       t = m.end;
       st.order.push_back(pick);
@@ -301,7 +316,9 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     consume_stage(st);
     for (const std::size_t i : st.order) {
       const StageMessage& m = st.stage[i];
-      attribute_wait(st, st.array, m.begin, m.gp_from, m.requested);
+      const double in = std::max(st.array, std::min(m.begin, m.arrival));
+      attribute_wait(st, st.array, in, m.gp_from, m.requested);
+      st.renderer_s += m.begin - in;  // the stall for its coefficients
       st.array = m.begin;
       run_array(st, m.cycles);
       if (!m.freed) st.queue.push_back({m.end, m.words});
@@ -536,6 +553,7 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     q.gp_from = pass_ready(m.gp, st.pass) >= ready ? 0.0 : ready;
     q.cycles = m.cycles;
     q.words = m.words;
+    q.load = static_cast<double>(m.first_load) * cycle;
     st.stage.push_back(q);
     consume_stage(st);
     st.queued += m.words;

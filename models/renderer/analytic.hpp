@@ -20,9 +20,11 @@
 //    first goes first, ties in the scheduler's order (gp.send_order; round-robin's turn
 //    advanced per message rather than per wake-up); the array takes a stage's messages in
 //    the order of their arrival among those delivered (Renderer::run_frame); an empty
-//    stage lets the next open when the Renderer starts on it. What it leaves out:
-//    backing-store port stalls, the double-buffered coefficient load's stall after a wait,
-//    and, at one instant, the interleaving of GPs woken for several Renderers. With
+//    stage lets the next open when the Renderer starts on it; double-buffered, the array
+//    stalls for a message's first packet's coefficients when it waited for the message
+//    (Renderer::load_coefficients). What it leaves out: backing-store port stalls, a
+//    double-buffered load's stall on a later packet shorter than its successor's load, and,
+//    at one instant, the order in which GPs woken for several Renderers book the ring. With
 //    renderer.overlap_shipping its ring books as Ring::reserve does, in request order;
 //    without it, finished regions are booked when they finish, ahead of messages asked for
 //    earlier, on channel calendars that fill the gaps before them. The error this makes is
