@@ -52,7 +52,8 @@ std::vector<GridMachine> analytic_tuning_grid(const std::string& balancing = "st
 // 0x343f, 0x3440) were chosen and committed after that change and before either model was
 // run on their machines; the test asserts on the first.
 constexpr std::uint64_t kLookedAtSeed = 0x3434;
-constexpr std::uint64_t kLookedAtSeeds[] = {0x3434, 0x3435, 0x3436, 0x3437, 0x3438, 0x3439, 0x343a};
+constexpr std::uint64_t kLookedAtSeeds[] = {0x3434, 0x3435, 0x3436, 0x3437, 0x3438,
+                                            0x3439, 0x343a, 0x343b, 0x343c, 0x343d};
 constexpr std::uint64_t kHeldOutSeeds[] = {0x343e, 0x343f, 0x3440};
 constexpr std::uint64_t kHeldOutSeed = kHeldOutSeeds[0];
 std::vector<GridMachine> analytic_heldout_grid(int count = 120, std::uint64_t seed = kHeldOutSeed);
