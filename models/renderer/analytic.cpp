@@ -5,7 +5,6 @@
 #include <functional>
 #include <iterator>
 #include <limits>
-#include <map>
 #include <queue>
 #include <stdexcept>
 #include <tuple>
@@ -139,48 +138,24 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     }
   };
 
-  // The ring's channels, each a calendar of the intervals it is booked for.
-  // With renderer.overlap_shipping every booking is made in the order of the time it is asked
-  // for (messages through the heap below, finished regions when their copy-out is done), so
-  // the channels book as Ring::reserve does: the channel whose last booking ends first (ties
-  // to the lowest), held from then, or from the request, until the message's last word. A
-  // finished region may start only when its Renderer's interface has sent the region before
-  // (`not_before`): the channel is held, idle, until then, as in the event model, where the
-  // Renderers that finish empty regions quickly book their next ones far ahead.
-  // Without it, a Renderer's finished region is booked when its array finishes, which may be
-  // later than messages booked after it; the calendar then gives a message the first gap
-  // long enough from the time it is asked for, so that such a booking does not block the
-  // gap before it (no booking there starts later than asked, so the event model leaves no
-  // gap idle either).
-  std::vector<std::map<double, double>> channels(static_cast<std::size_t>(config.ring.channels));
-  const bool in_order = config.renderer.overlap_shipping;
+  // The ring's channels. Every booking is made in the order of the time it is asked for
+  // (messages through the heap below, finished regions when their copy-out is done or, without
+  // overlapped shipping, when the array finishes them), so the channels book as Ring::reserve
+  // does: the channel whose last booking ends first (ties to the lowest), held from then, or
+  // from the request, until the message's last word. A finished region may start only when
+  // its Renderer's interface has sent the region before (`not_before`): the channel is held,
+  // idle, until then, as in the event model, where the Renderers that finish empty regions
+  // quickly book their next ones far ahead.
+  std::vector<double> channel_free(static_cast<std::size_t>(config.ring.channels), 0.0);
   auto book = [&](double at, std::uint64_t words, double not_before = 0) {
     const double length = static_cast<double>(words) / ring_hz;
-    if (in_order) {
-      std::size_t c = 0;
-      auto free_at = [&](std::size_t k) {
-        return channels[k].empty() ? 0.0 : channels[k].rbegin()->second;
-      };
-      for (std::size_t k = 1; k < channels.size(); ++k) {
-        if (free_at(k) < free_at(c)) c = k;
-      }
-      const double held = std::max(at, free_at(c));
-      const double start = std::max(held, not_before);
-      channels[c].emplace(held, start + length);
-      return start + length;
+    std::size_t c = 0;
+    for (std::size_t k = 1; k < channel_free.size(); ++k) {
+      if (channel_free[k] < channel_free[c]) c = k;
     }
-    double best = 0;
-    std::size_t best_channel = 0;
-    for (std::size_t c = 0; c < channels.size(); ++c) {
-      const std::map<double, double>& booked = channels[c];
-      double t = std::max(at, not_before);
-      auto it = booked.upper_bound(t);
-      if (it != booked.begin() && std::prev(it)->second > t) t = std::prev(it)->second;
-      for (; it != booked.end() && it->first < t + length; ++it) t = std::max(t, it->second);
-      if (c == 0 || t < best) best = t, best_channel = c;
-    }
-    channels[best_channel].emplace(best, best + length);
-    return best + length;  // the end of its last word
+    const double start = std::max({at, channel_free[c], not_before});
+    channel_free[c] = start + length;
+    return start + length;  // the end of its last word
   };
   std::vector<double> geometry_end(static_cast<std::size_t>(gps), 0.0);
   std::vector<double> gp_free(static_cast<std::size_t>(gps), 0.0);
@@ -230,6 +205,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     double begin = 0, end = 0;  // the array's, from consume_stage (begin after any stall)
     bool freed = false;         // its room counted free (consumed before a later send)
   };
+  struct Parked {
+    int pass = 0;
+    std::vector<StageMessage> stage;
+  };
   struct RendererState {
     std::size_t region = 0;  // static balancing: the next of a.regions[j]
     int current = -1;        // the region it renders, -1 before it has one
@@ -249,6 +228,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     std::vector<StageMessage> stage;  // the open stage's messages sent, in the order sent
     std::vector<std::size_t> order;   // ... in the order the array consumes them
     double stage_base = 0;            // when the array is ready for the stage's messages
+    bool shipping = false;            // without overlapped shipping: its array waits for the
+                                      // trip of its finished region, not yet booked
+    bool array_entered = false;       // the array has started on the entered stage
+    std::deque<Parked> parked;        // stages all sent, waiting for the array, in order
     std::deque<double> ships;         // finished regions whose copy-out is done, not yet booked
     std::uint64_t queued = 0;
     double gp_s = 0, ring_s = 0, renderer_s = 0;  // its time, attributed
@@ -333,9 +316,60 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   const int regions = config.regions();
   int unclaimed = 0;
   out.regions.assign(static_cast<std::size_t>(renderers), {});
-  using Candidate = std::tuple<double, int, int, int>;
+  // The last entry pushed for each Renderer (kinds 0 and 1); an older one is stale.
+  std::vector<std::uint64_t> token(static_cast<std::size_t>(renderers), 0);
+  using Candidate = std::tuple<double, int, int, int, std::uint64_t>;
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> heap;
-  enum class Next { message, claim, done };
+  enum class Next { message, claim, wait, done };
+  // The array starts on the entered stage: its region-wide steps, the wait for the bin maps.
+  auto enter_array = [&](RendererState& st, int j, int pass) {
+    st.array_entered = true;
+    st.started = st.array;
+    run_array(st, before[static_cast<std::size_t>(pass)]);
+    if (!st.maps_waited) {
+      // The array waits for every GP's bin map before its first message.
+      st.maps_waited = true;
+      const double in = std::max(st.array, maps_in[static_cast<std::size_t>(j)]);
+      attribute_wait(st, st.array, in, 0.0, maps_requested[static_cast<std::size_t>(j)]);
+      st.array = in;
+    }
+    st.stage_base = st.array;
+    if (!st.stage.empty()) consume_stage(st);  // its messages' times, now known
+  };
+  // The region is finished (its last pass consumed): its closing steps, then its trip,
+  // booked when the copy-out is done (Renderer::ship) or, without overlapped shipping, when
+  // the array finishes the region, in time order with the other bookings (through the heap).
+  // Without overlapped shipping the array waits for the region's arrival before it starts on
+  // its next stage (that stage may open and take messages meanwhile, as in the event model).
+  auto ship_region = [&](RendererState& st, int j) {
+    run_array(st, after);
+    st.ships.push_back(st.array);
+    st.shipping = !config.renderer.overlap_shipping;
+    heap.emplace(st.array - start_s, 2, 0, j, 0);
+  };
+  // The trip is booked: the array takes the stages that opened meanwhile, all sent, in order
+  // (until another region is finished and waits for its trip), then the open stage.
+  auto drain = [&](RendererState& st, int j) {
+    while (!st.shipping && !st.parked.empty()) {
+      Parked p = std::move(st.parked.front());
+      st.parked.pop_front();
+      std::vector<StageMessage> open = std::move(st.stage);
+      std::vector<std::size_t> open_order = std::move(st.order);
+      const double open_base = st.stage_base;
+      st.stage = std::move(p.stage);
+      st.order.clear();
+      enter_array(st, j, p.pass);
+      close_stage(st);
+      st.stage = std::move(open);
+      st.order = std::move(open_order);
+      st.stage_base = open_base;
+      st.array_entered = false;  // the open stage's array is not yet on it
+      if (p.pass + 1 == passes) ship_region(st, j);
+    }
+    if (!st.shipping && st.parked.empty() && st.entered && !st.array_entered) {
+      enter_array(st, j, st.pass);
+    }
+  };
   // Moves Renderer j to a stage with a message to send, running the region-wide steps and
   // empty stages on the way: Next::message, or Next::claim when it needs its next region
   // (dynamic balancing), or Next::done.
@@ -343,7 +377,23 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     RendererState& st = rs[static_cast<std::size_t>(j)];
     for (;;) {
       if (st.entered && st.next < st.messages.size()) return Next::message;
-      if (st.entered) {
+      if (st.entered && !st.array_entered) {
+        // Its array waits for the last region's trip, not yet booked. An empty stage opens the
+        // next when the array starts on it: wait. Otherwise the next stage opens now, and the
+        // array takes this one once the trip is booked (drain).
+        if (st.messages.empty()) return Next::wait;
+        st.parked.push_back({st.pass, std::move(st.stage)});
+        st.stage.clear();
+        st.order.clear();
+        st.stage_open = std::max(st.last_sent, maps_requested[static_cast<std::size_t>(j)]);
+        st.entered = false;
+        if (st.pass + 1 < passes) {
+          ++st.pass;
+        } else {
+          st.current = -1;
+          st.pass = 0;
+        }
+      } else if (st.entered) {
         close_stage(st);
         // The stage is all sent (its messages consumed as they came): the next one opens
         // when its last message was sent, or, for an empty stage, when the Renderer
@@ -356,20 +406,7 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
         if (st.pass + 1 < passes) {
           ++st.pass;
         } else {
-          run_array(st, after);
-          const double trip =
-              plan.hop_delay(plan.renderer_stop(j), plan.frame_buffer_stop()).to_seconds();
-          if (config.renderer.overlap_shipping) {
-            // Booked when the copy-out is done (Renderer::ship), in time order with the
-            // other bookings: through the heap.
-            st.ships.push_back(st.array);
-            heap.emplace(st.array - start_s, 2, 0, j);
-          } else {
-            const double end = book(st.array, plan.region_words()) + trip;
-            st.ring_s += end - st.array;
-            st.array = end;
-            st.finished = std::max(st.finished, end);
-          }
+          ship_region(st, j);
           st.current = -1;
           st.pass = 0;
         }
@@ -382,20 +419,15 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
         out.regions[static_cast<std::size_t>(j)].push_back(st.current);
       }
       st.entered = true;
-      st.started = st.array;
-      run_array(st, before[static_cast<std::size_t>(st.pass)]);
-      if (!st.maps_waited) {
-        // The array waits for every GP's bin map before its first message.
-        st.maps_waited = true;
-        const double in = std::max(st.array, maps_in[static_cast<std::size_t>(j)]);
-        attribute_wait(st, st.array, in, 0.0, maps_requested[static_cast<std::size_t>(j)]);
-        st.array = in;
-      }
-      st.stage_base = st.array;
       stage_messages(st.current, st.pass, st.messages);
       st.sent.assign(st.messages.size(), 0);
       st.next = 0;
       st.last_sent = st.stage_open;
+      st.array_entered = false;
+      // While its last region's trip is not booked, the array's times are not known: its
+      // messages cannot yet be consumed (no room freed by them).
+      st.stage_base = std::numeric_limits<double>::infinity();
+      if (!st.shipping && st.parked.empty()) enter_array(st, j, st.pass);
     }
   };
   // Retraversal: a GP's packets of pass k exist after k more traversals of its share.
@@ -416,6 +448,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     for (auto it = st.queue.begin(); it != st.queue.end() && queued + words > capacity; ++it) {
       t = std::max(t, it->consumed);
       queued -= it->words;
+    }
+    // The parked stages' messages go next, at times not known until the array takes them.
+    if (queued + words > capacity && !st.parked.empty()) {
+      return std::numeric_limits<double>::infinity();
     }
     for (auto it = st.order.begin(); it != st.order.end() && queued + words > capacity; ++it) {
       const StageMessage& m = st.stage[*it];
@@ -480,19 +516,26 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   };
   auto schedule = [&](int j) {
     switch (advance(j)) {
-      case Next::message:
-        heap.emplace(ready_time(j), 1, stage_of(j), j);
+      case Next::message: {
+        const double ready = ready_time(j);
+        // Not before its array's times are known (its trip booked: it schedules it then).
+        if (ready < std::numeric_limits<double>::infinity()) {
+          heap.emplace(ready, 1, stage_of(j), j, ++token[static_cast<std::size_t>(j)]);
+        }
         break;
+      }
       case Next::claim:
-        heap.emplace(rs[static_cast<std::size_t>(j)].stage_open, 0, 0, j);
+        heap.emplace(rs[static_cast<std::size_t>(j)].stage_open, 0, 0, j,
+                     ++token[static_cast<std::size_t>(j)]);
         break;
+      case Next::wait:
       case Next::done:
         break;
     }
   };
   for (int j = 0; j < renderers; ++j) schedule(j);
   while (!heap.empty()) {
-    const auto [when, kind, stage, j] = heap.top();
+    const auto [when, kind, stage, j, tok] = heap.top();
     heap.pop();
     RendererState& st = rs[static_cast<std::size_t>(j)];
     if (kind == 2) {
@@ -503,8 +546,17 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
       const double end = book(requested, plan.region_words(), st.ship_free);
       st.ship_free = end;
       st.finished = std::max(st.finished, end + trip);
+      if (st.shipping) {
+        // The array waited for the region's arrival (Renderer::ship).
+        st.ring_s += end + trip - st.array;
+        st.array = end + trip;
+        st.shipping = false;
+        drain(st, j);
+        schedule(j);
+      }
       continue;
     }
+    if (tok != token[static_cast<std::size_t>(j)]) continue;  // stale
     if (kind == 0) {
       if (unclaimed < regions) {
         st.current = unclaimed++;
@@ -515,7 +567,9 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     }
     const double ready = ready_time(j);
     if (ready > when) {  // its GP was taken meanwhile
-      heap.emplace(ready, 1, stage, j);
+      if (ready < std::numeric_limits<double>::infinity()) {
+        heap.emplace(ready, 1, stage, j, ++token[static_cast<std::size_t>(j)]);
+      }
       continue;
     }
     const std::size_t picked = pick_message(j).second;
