@@ -147,6 +147,9 @@ TEST_CASE("analytic timing with word pixels draws the event model's image", "[an
 // torus grids and on the grids of seeds 0x3434 to 0x3440, each once held out). Targets
 // (docs/timing.md): worst frame-time error at most 15%, Kendall tau at least 0.9. This grid
 // (seed 0x3441, 120 machines) was chosen and committed before either model was run on it.
+// Measured once, after that: mean 0.5%, worst 9.0% (dynamic; static 5.9%), bottleneck agrees
+// at 117 of 120, tau 0.994; the other two, 0x3442 and 0x3443, worst 5.9% and 4.5% (tau 0.996,
+// 0.997).
 TEST_CASE("analytic frame time on the held-out grid: error, bottleneck and rank against events",
           "[analytic]") {
   const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
@@ -249,6 +252,33 @@ TEST_CASE("analytic former worst machine: dynamic balancing spreads the empty re
     WARN(fmt::format("{}: event {:.3f} ms, analytic {:.3f} ms ({:+.1f}%)", p.machine.label(),
                      1e3 * p.event_seconds, 1e3 * p.analytic_seconds, 100 * p.error()));
     CHECK(std::abs(p.error()) <= 0.05);
+  }
+}
+
+// The worst machine of the grid of seed 0x3440 (held out when it was measured: 19.797 ms
+// against 25.570 ms, -22.6%): shipping not overlapped, so each Renderer's array waits for its
+// finished region's trip. The recurrence booked that trip on channel calendars as soon as the
+// region was closed, ahead of messages asked for before it, which then waited a whole trip;
+// the event ring books it when the array finishes, in request order, and the Renderer's next
+// stages open and fill meanwhile. With that rule 22.002 ms (-14.0%; the rest is the order in
+// which Renderers booking at one instant go, the SystemC kernel's).
+TEST_CASE("analytic shipping without overlap: a region's trip booked in request order",
+          "[analytic]") {
+  const ProgramLoader load = [](const std::string& name, const MachineConfig& c) {
+    return test::load_program(name, c);
+  };
+  const std::vector<GridMachine> machines = {
+      {"spheres-and-triangles",
+       "phong",
+       {"screen.width=1280", "screen.height=1024", "gp.count=5", "renderer.count=9",
+        "ring.channels=8", "renderer.queue_words=16384", "renderer.balancing=dynamic",
+        "renderer.overlap_shipping=0", "ring.hop_latency_cycles=0", "evaluator.double_buffered=0",
+        "gp.code=compiled"}}};
+  const AnalyticValidation v = validate_analytic("looked at", machines, load);
+  for (const AnalyticPoint& p : v.points) {
+    WARN(fmt::format("{}: event {:.3f} ms, analytic {:.3f} ms ({:+.1f}%)", p.machine.label(),
+                     1e3 * p.event_seconds, 1e3 * p.analytic_seconds, 100 * p.error()));
+    CHECK(std::abs(p.error()) <= 0.15);
   }
 }
 
