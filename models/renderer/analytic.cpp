@@ -4,13 +4,14 @@
 #include <deque>
 #include <functional>
 #include <iterator>
-#include <map>
+#include <limits>
 #include <queue>
 #include <stdexcept>
 #include <tuple>
 
 #include "models/gp/primitive_kind.hpp"
 #include "models/gp/setup_memo.hpp"
+#include "models/ring/ring.hpp"
 
 namespace pp5 {
 
@@ -51,6 +52,9 @@ struct AnalyticMessage {
   int gp = 0;
   std::uint64_t words = 0;
   std::uint64_t cycles = 0;
+  // With evaluator.double_buffered, the cycles its first drawn packet's coefficients take to
+  // load: the array stalls for them when it has waited for the message (below).
+  std::uint64_t first_load = 0;
 };
 
 ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo::Summary& summary,
@@ -111,63 +115,47 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     const std::uint32_t end = summary.region_first[i + 1];
     for (int k = 0; k < gps && at < end; ++k) {
       const int last = block_end[static_cast<std::size_t>(k)];
-      AnalyticMessage m{k, 0, 0};
+      AnalyticMessage m{k, 0, 0, 0};
+      bool loaded = false;  // a packet of the message drawn in this pass
       for (; at < end && summary.region_primitive[at] < last; ++at) {
         const Packet& p = **summary.region_packets[at];
         if (m.words > 0 && m.words + p.words > capacity) {
           out.push_back(m);
-          m = AnalyticMessage{k, 0, 0};
+          m = AnalyticMessage{k, 0, 0, 0};
+          loaded = false;
         }
         if (m.words == 0) m.words = 1;
         m.words += p.words;
         m.cycles += packet_cycles(p, pass);
+        if (!loaded && config.evaluator.double_buffered && stream.packet(p, pass, 0).code.defined) {
+          loaded = true;
+          m.first_load =
+              ceil_div(p.words > 0 ? p.words - 1 : 0,
+                       static_cast<std::uint64_t>(config.evaluator.coefficient_words_per_cycle));
+        }
       }
       if (m.words > 0) out.push_back(m);
     }
   };
 
-  // The ring's channels, each a calendar of the intervals it is booked for.
-  // With renderer.overlap_shipping every booking is made in the order of the time it is asked
-  // for (messages through the heap below, finished regions when their copy-out is done), so
-  // the channels book as Ring::reserve does: the channel whose last booking ends first (ties
-  // to the lowest), held from then, or from the request, until the message's last word. A
-  // finished region may start only when its Renderer's interface has sent the region before
-  // (`not_before`): the channel is held, idle, until then, as in the event model, where the
-  // Renderers that finish empty regions quickly book their next ones far ahead.
-  // Without it, a Renderer's finished region is booked when its array finishes, which may be
-  // later than messages booked after it; the calendar then gives a message the first gap
-  // long enough from the time it is asked for, so that such a booking does not block the
-  // gap before it (no booking there starts later than asked, so the event model leaves no
-  // gap idle either).
-  std::vector<std::map<double, double>> channels(static_cast<std::size_t>(config.ring.channels));
-  const bool in_order = config.renderer.overlap_shipping;
+  // The ring's channels. Every booking is made in the order of the time it is asked for
+  // (messages through the heap below, finished regions when their copy-out is done or, without
+  // overlapped shipping, when the array finishes them), so the channels book as Ring::reserve
+  // does: the channel whose last booking ends first (ties to the lowest), held from then, or
+  // from the request, until the message's last word. A finished region may start only when
+  // its Renderer's interface has sent the region before (`not_before`): the channel is held,
+  // idle, until then, as in the event model, where the Renderers that finish empty regions
+  // quickly book their next ones far ahead.
+  std::vector<double> channel_free(static_cast<std::size_t>(config.ring.channels), 0.0);
   auto book = [&](double at, std::uint64_t words, double not_before = 0) {
     const double length = static_cast<double>(words) / ring_hz;
-    if (in_order) {
-      std::size_t c = 0;
-      auto free_at = [&](std::size_t k) {
-        return channels[k].empty() ? 0.0 : channels[k].rbegin()->second;
-      };
-      for (std::size_t k = 1; k < channels.size(); ++k) {
-        if (free_at(k) < free_at(c)) c = k;
-      }
-      const double held = std::max(at, free_at(c));
-      const double start = std::max(held, not_before);
-      channels[c].emplace(held, start + length);
-      return start + length;
+    std::size_t c = 0;
+    for (std::size_t k = 1; k < channel_free.size(); ++k) {
+      if (channel_free[k] < channel_free[c]) c = k;
     }
-    double best = 0;
-    std::size_t best_channel = 0;
-    for (std::size_t c = 0; c < channels.size(); ++c) {
-      const std::map<double, double>& booked = channels[c];
-      double t = std::max(at, not_before);
-      auto it = booked.upper_bound(t);
-      if (it != booked.begin() && std::prev(it)->second > t) t = std::prev(it)->second;
-      for (; it != booked.end() && it->first < t + length; ++it) t = std::max(t, it->second);
-      if (c == 0 || t < best) best = t, best_channel = c;
-    }
-    channels[best_channel].emplace(best, best + length);
-    return best + length;  // the end of its last word
+    const double start = std::max({at, channel_free[c], not_before});
+    channel_free[c] = start + length;
+    return start + length;  // the end of its last word
   };
   std::vector<double> geometry_end(static_cast<std::size_t>(gps), 0.0);
   std::vector<double> gp_free(static_cast<std::size_t>(gps), 0.0);
@@ -205,22 +193,46 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     double consumed;
     std::uint64_t words;
   };
+  // A message of the stage the Renderer has open: sent, consumed once the stage's order is
+  // known (consume_stage).
+  struct StageMessage {
+    double requested = 0;  // when it reached the Renderer's queue (the ring booked it)
+    double arrival = 0;    // its last word in
+    double gp_from = 0;    // the GPs' part of a wait for it ends here (attribute_wait)
+    std::uint64_t cycles = 0;
+    std::uint64_t words = 0;
+    double load = 0;            // its first packet's coefficients (AnalyticMessage::first_load)
+    double begin = 0, end = 0;  // the array's, from consume_stage (begin after any stall)
+    bool freed = false;         // its room counted free (consumed before a later send)
+  };
+  struct Parked {
+    int pass = 0;
+    std::vector<StageMessage> stage;
+  };
   struct RendererState {
     std::size_t region = 0;  // static balancing: the next of a.regions[j]
     int current = -1;        // the region it renders, -1 before it has one
     int pass = 0;
     bool entered = false;  // the stage's region-wide steps and messages are made
     std::vector<AnalyticMessage> messages;
-    std::size_t next = 0;      // the stage's messages sent
-    std::vector<char> sent;    // by message of the stage
-    double stage_open = 0;     // when the stage opened for input
-    double last_sent = 0;      // the latest booking of the stage's messages
-    double room = 0;           // when the queue has room for the next message
-    double array = 0;          // when the array is free
-    double ship_free = 0;      // the video-RAM port's next free time
-    double finished = 0;       // its last region at the frame buffer
-    std::deque<Queued> queue;  // messages sent, not yet consumed, in order
-    std::deque<double> ships;  // finished regions whose copy-out is done, not yet booked
+    std::size_t next = 0;             // the stage's messages sent
+    std::vector<char> sent;           // by message of the stage
+    double stage_open = 0;            // when the stage opened for input
+    double started = 0;               // when the array started on the stage
+    double last_sent = 0;             // the latest booking of the stage's messages
+    double room = 0;                  // when the queue has room for the next message
+    double array = 0;                 // when the array is free
+    double ship_free = 0;             // the video-RAM port's next free time
+    double finished = 0;              // its last region at the frame buffer
+    std::deque<Queued> queue;         // messages of earlier stages, not yet consumed, in order
+    std::vector<StageMessage> stage;  // the open stage's messages sent, in the order sent
+    std::vector<std::size_t> order;   // ... in the order the array consumes them
+    double stage_base = 0;            // when the array is ready for the stage's messages
+    bool shipping = false;            // without overlapped shipping: its array waits for the
+                                      // trip of its finished region, not yet booked
+    bool array_entered = false;       // the array has started on the entered stage
+    std::deque<Parked> parked;        // stages all sent, waiting for the array, in order
+    std::deque<double> ships;         // finished regions whose copy-out is done, not yet booked
     std::uint64_t queued = 0;
     double gp_s = 0, ring_s = 0, renderer_s = 0;  // its time, attributed
     bool maps_waited = false;
@@ -242,6 +254,61 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     st.array += t;
     st.renderer_s += t;
   };
+  // The order in which the array consumes the open stage's messages, as Renderer::run_frame
+  // takes them: whenever it is free, of the stage's messages in its queue (delivered when the
+  // ring booked them) the one whose last word arrives first (ties to the one delivered
+  // first), waiting for its arrival; with none in the queue, the first delivered next. The
+  // messages sent so far are all those delivered before any later send's request, so the
+  // order up to the time of the latest send is final.
+  auto consume_stage = [&](RendererState& st) {
+    st.order.clear();
+    double t = st.stage_base;
+    std::vector<char> taken(st.stage.size(), 0);
+    for (std::size_t n = 0; n < st.stage.size(); ++n) {
+      double delivered = t;
+      bool any = false;
+      for (std::size_t i = 0; i < st.stage.size(); ++i) {
+        if (!taken[i] && st.stage[i].requested <= t) any = true;
+      }
+      if (!any) {
+        delivered = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < st.stage.size(); ++i) {
+          if (!taken[i]) delivered = std::min(delivered, st.stage[i].requested);
+        }
+      }
+      std::size_t pick = st.stage.size();
+      for (std::size_t i = 0; i < st.stage.size(); ++i) {
+        if (taken[i] || st.stage[i].requested > delivered) continue;
+        if (pick == st.stage.size() || st.stage[i].arrival < st.stage[pick].arrival) pick = i;
+      }
+      taken[pick] = 1;
+      StageMessage& m = st.stage[pick];
+      // Double-buffered, a packet's coefficients load while the packet before it runs; the
+      // first packet's start only once it has arrived, so the array stalls for that load
+      // as far as it waited (Renderer::load_coefficients).
+      m.begin = std::max(t, m.arrival + m.load);
+      m.end = m.begin + static_cast<double>(m.cycles) * cycle;
+      t = m.end;
+      st.order.push_back(pick);
+    }
+    return t;
+  };
+  // The stage is all sent: its messages consumed in that order, the array's waits
+  // attributed, and those not yet counted free kept in the queue for the stages after it.
+  auto close_stage = [&](RendererState& st) {
+    consume_stage(st);
+    for (const std::size_t i : st.order) {
+      const StageMessage& m = st.stage[i];
+      const double in = std::max(st.array, std::min(m.begin, m.arrival));
+      attribute_wait(st, st.array, in, m.gp_from, m.requested);
+      st.renderer_s += m.begin - in;  // the stall for its coefficients
+      st.array = m.begin;
+      run_array(st, m.cycles);
+      if (!m.freed) st.queue.push_back({m.end, m.words});
+    }
+    st.stage.clear();
+    st.order.clear();
+  };
   // Static balancing: Renderer j renders a.regions[j] in order. Dynamic: a Renderer claims
   // the next unclaimed region when it opens its next stage (RegionScheduler::claim_region),
   // in time order among the Renderers (claims go through the heap below).
@@ -249,9 +316,60 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   const int regions = config.regions();
   int unclaimed = 0;
   out.regions.assign(static_cast<std::size_t>(renderers), {});
-  using Candidate = std::tuple<double, int, int, int>;
+  // The last entry pushed for each Renderer (kinds 0 and 1); an older one is stale.
+  std::vector<std::uint64_t> token(static_cast<std::size_t>(renderers), 0);
+  using Candidate = std::tuple<double, int, int, int, std::uint64_t>;
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> heap;
-  enum class Next { message, claim, done };
+  enum class Next { message, claim, wait, done };
+  // The array starts on the entered stage: its region-wide steps, the wait for the bin maps.
+  auto enter_array = [&](RendererState& st, int j, int pass) {
+    st.array_entered = true;
+    st.started = st.array;
+    run_array(st, before[static_cast<std::size_t>(pass)]);
+    if (!st.maps_waited) {
+      // The array waits for every GP's bin map before its first message.
+      st.maps_waited = true;
+      const double in = std::max(st.array, maps_in[static_cast<std::size_t>(j)]);
+      attribute_wait(st, st.array, in, 0.0, maps_requested[static_cast<std::size_t>(j)]);
+      st.array = in;
+    }
+    st.stage_base = st.array;
+    if (!st.stage.empty()) consume_stage(st);  // its messages' times, now known
+  };
+  // The region is finished (its last pass consumed): its closing steps, then its trip,
+  // booked when the copy-out is done (Renderer::ship) or, without overlapped shipping, when
+  // the array finishes the region, in time order with the other bookings (through the heap).
+  // Without overlapped shipping the array waits for the region's arrival before it starts on
+  // its next stage (that stage may open and take messages meanwhile, as in the event model).
+  auto ship_region = [&](RendererState& st, int j) {
+    run_array(st, after);
+    st.ships.push_back(st.array);
+    st.shipping = !config.renderer.overlap_shipping;
+    heap.emplace(st.array - start_s, 2, 0, j, 0);
+  };
+  // The trip is booked: the array takes the stages that opened meanwhile, all sent, in order
+  // (until another region is finished and waits for its trip), then the open stage.
+  auto drain = [&](RendererState& st, int j) {
+    while (!st.shipping && !st.parked.empty()) {
+      Parked p = std::move(st.parked.front());
+      st.parked.pop_front();
+      std::vector<StageMessage> open = std::move(st.stage);
+      std::vector<std::size_t> open_order = std::move(st.order);
+      const double open_base = st.stage_base;
+      st.stage = std::move(p.stage);
+      st.order.clear();
+      enter_array(st, j, p.pass);
+      close_stage(st);
+      st.stage = std::move(open);
+      st.order = std::move(open_order);
+      st.stage_base = open_base;
+      st.array_entered = false;  // the open stage's array is not yet on it
+      if (p.pass + 1 == passes) ship_region(st, j);
+    }
+    if (!st.shipping && st.parked.empty() && st.entered && !st.array_entered) {
+      enter_array(st, j, st.pass);
+    }
+  };
   // Moves Renderer j to a stage with a message to send, running the region-wide steps and
   // empty stages on the way: Next::message, or Next::claim when it needs its next region
   // (dynamic balancing), or Next::done.
@@ -259,29 +377,36 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     RendererState& st = rs[static_cast<std::size_t>(j)];
     for (;;) {
       if (st.entered && st.next < st.messages.size()) return Next::message;
-      if (st.entered) {
-        // The stage is all sent (its messages consumed as they came): the next one opens
-        // when its last message was sent, or, for an empty stage, when the Renderer
-        // started on it.
-        st.stage_open = st.messages.empty() ? std::max(st.stage_open, st.array) : st.last_sent;
+      if (st.entered && !st.array_entered) {
+        // Its array waits for the last region's trip, not yet booked. An empty stage opens the
+        // next when the array starts on it: wait. Otherwise the next stage opens now, and the
+        // array takes this one once the trip is booked (drain).
+        if (st.messages.empty()) return Next::wait;
+        st.parked.push_back({st.pass, std::move(st.stage)});
+        st.stage.clear();
+        st.order.clear();
+        st.stage_open = std::max(st.last_sent, maps_requested[static_cast<std::size_t>(j)]);
         st.entered = false;
         if (st.pass + 1 < passes) {
           ++st.pass;
         } else {
-          run_array(st, after);
-          const double trip =
-              plan.hop_delay(plan.renderer_stop(j), plan.frame_buffer_stop()).to_seconds();
-          if (config.renderer.overlap_shipping) {
-            // Booked when the copy-out is done (Renderer::ship), in time order with the
-            // other bookings: through the heap.
-            st.ships.push_back(st.array);
-            heap.emplace(st.array - start_s, 2, 0, j);
-          } else {
-            const double end = book(st.array, plan.region_words()) + trip;
-            st.ring_s += end - st.array;
-            st.array = end;
-            st.finished = std::max(st.finished, end);
-          }
+          st.current = -1;
+          st.pass = 0;
+        }
+      } else if (st.entered) {
+        close_stage(st);
+        // The stage is all sent (its messages consumed as they came): the next one opens
+        // when its last message was sent, or, for an empty stage, when the Renderer
+        // started on it (before its region-wide steps, Renderer::run_frame); either once
+        // every bin map is in, which says who sends (Renderer::advance).
+        st.stage_open =
+            std::max(st.messages.empty() ? std::max(st.stage_open, st.started) : st.last_sent,
+                     maps_requested[static_cast<std::size_t>(j)]);
+        st.entered = false;
+        if (st.pass + 1 < passes) {
+          ++st.pass;
+        } else {
+          ship_region(st, j);
           st.current = -1;
           st.pass = 0;
         }
@@ -294,18 +419,15 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
         out.regions[static_cast<std::size_t>(j)].push_back(st.current);
       }
       st.entered = true;
-      run_array(st, before[static_cast<std::size_t>(st.pass)]);
-      if (!st.maps_waited) {
-        // The array waits for every GP's bin map before its first message.
-        st.maps_waited = true;
-        const double in = std::max(st.array, maps_in[static_cast<std::size_t>(j)]);
-        attribute_wait(st, st.array, in, 0.0, maps_requested[static_cast<std::size_t>(j)]);
-        st.array = in;
-      }
       stage_messages(st.current, st.pass, st.messages);
       st.sent.assign(st.messages.size(), 0);
       st.next = 0;
       st.last_sent = st.stage_open;
+      st.array_entered = false;
+      // While its last region's trip is not booked, the array's times are not known: its
+      // messages cannot yet be consumed (no room freed by them).
+      st.stage_base = std::numeric_limits<double>::infinity();
+      if (!st.shipping && st.parked.empty()) enter_array(st, j, st.pass);
     }
   };
   // Retraversal: a GP's packets of pass k exist after k more traversals of its share.
@@ -316,9 +438,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   // When Renderer j's next message can go: its stage open, room in the queue, its GP free.
   // When Renderer j's next message can go, and which: of each GP's next message of the
   // stage (a GP's messages of one bin go in order), the one that can go first (its stage
-  // open, room in the queue for it, its GP free), ties to the lower GP; as the event model's
-  // GPs each send to an open stage they owe whenever they can, and the Renderer takes its
-  // messages as they arrive.
+  // open, room in the queue for it, its GP free), ties in the scheduler's order (gp_rank
+  // below); as the event model's GPs each send to an open stage they owe whenever they can.
+  // The queue's room: the earlier stages' messages go first, then the open stage's in the
+  // order the array consumes them (consume_stage, kept up to date as messages are sent).
   auto room_for = [&](const RendererState& st, std::uint64_t words) {
     double t = st.room;
     std::uint64_t queued = st.queued;
@@ -326,11 +449,42 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
       t = std::max(t, it->consumed);
       queued -= it->words;
     }
+    // The parked stages' messages go next, at times not known until the array takes them.
+    if (queued + words > capacity && !st.parked.empty()) {
+      return std::numeric_limits<double>::infinity();
+    }
+    for (auto it = st.order.begin(); it != st.order.end() && queued + words > capacity; ++it) {
+      const StageMessage& m = st.stage[*it];
+      if (m.freed) continue;
+      t = std::max(t, m.end);
+      queued -= m.words;
+    }
     return t;
   };
+  // Of GPs that could go at one instant, which goes first: RegionScheduler::arbitrate's
+  // order (gp.send_order): the fewest hops to the Renderer, then the lower GP; the lower GP;
+  // or round-robin from the GP after the one that sent last.
+  const MachineConfig::Gp::SendOrder send_order = config.gp.send_order;
+  int next_turn = 0;
+  auto gp_rank = [&](int gp, int j) -> long {
+    switch (send_order) {
+      case MachineConfig::Gp::SendOrder::nearest:
+        return static_cast<long>(
+                   ring_hops(plan.gp_stop(gp), plan.renderer_stop(j), plan.ring_stops())) *
+                   gps +
+               gp;
+      case MachineConfig::Gp::SendOrder::lowest:
+        return gp;
+      case MachineConfig::Gp::SendOrder::round_robin:
+        return (gp - next_turn + gps) % gps;
+    }
+    return gp;
+  };
+  constexpr double kTie = 1e-12;  // one picosecond, SystemC's time resolution
   auto pick_message = [&](int j) {
     RendererState& st = rs[static_cast<std::size_t>(j)];
     double best = 0;
+    long best_rank = 0;
     std::size_t pick = st.messages.size();
     int previous_gp = -1;
     for (std::size_t i = 0; i < st.messages.size(); ++i) {
@@ -343,7 +497,10 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
       const double t =
           std::max({st.stage_open, room_for(st, m.words), gp_free[static_cast<std::size_t>(m.gp)],
                     pass_ready(m.gp, st.pass)});
-      if (pick == st.messages.size() || t < best) best = t, pick = i;
+      const long rank = gp_rank(m.gp, j);
+      if (pick == st.messages.size() || t < best - kTie || (t <= best + kTie && rank < best_rank)) {
+        best = t, best_rank = rank, pick = i;
+      }
     }
     return std::make_pair(best, pick);
   };
@@ -359,19 +516,26 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   };
   auto schedule = [&](int j) {
     switch (advance(j)) {
-      case Next::message:
-        heap.emplace(ready_time(j), 1, stage_of(j), j);
+      case Next::message: {
+        const double ready = ready_time(j);
+        // Not before its array's times are known (its trip booked: it schedules it then).
+        if (ready < std::numeric_limits<double>::infinity()) {
+          heap.emplace(ready, 1, stage_of(j), j, ++token[static_cast<std::size_t>(j)]);
+        }
         break;
+      }
       case Next::claim:
-        heap.emplace(rs[static_cast<std::size_t>(j)].stage_open, 0, 0, j);
+        heap.emplace(rs[static_cast<std::size_t>(j)].stage_open, 0, 0, j,
+                     ++token[static_cast<std::size_t>(j)]);
         break;
+      case Next::wait:
       case Next::done:
         break;
     }
   };
   for (int j = 0; j < renderers; ++j) schedule(j);
   while (!heap.empty()) {
-    const auto [when, kind, stage, j] = heap.top();
+    const auto [when, kind, stage, j, tok] = heap.top();
     heap.pop();
     RendererState& st = rs[static_cast<std::size_t>(j)];
     if (kind == 2) {
@@ -382,8 +546,17 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
       const double end = book(requested, plan.region_words(), st.ship_free);
       st.ship_free = end;
       st.finished = std::max(st.finished, end + trip);
+      if (st.shipping) {
+        // The array waited for the region's arrival (Renderer::ship).
+        st.ring_s += end + trip - st.array;
+        st.array = end + trip;
+        st.shipping = false;
+        drain(st, j);
+        schedule(j);
+      }
       continue;
     }
+    if (tok != token[static_cast<std::size_t>(j)]) continue;  // stale
     if (kind == 0) {
       if (unclaimed < regions) {
         st.current = unclaimed++;
@@ -394,18 +567,28 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     }
     const double ready = ready_time(j);
     if (ready > when) {  // its GP was taken meanwhile
-      heap.emplace(ready, 1, stage, j);
+      if (ready < std::numeric_limits<double>::infinity()) {
+        heap.emplace(ready, 1, stage, j, ++token[static_cast<std::size_t>(j)]);
+      }
       continue;
     }
     const std::size_t picked = pick_message(j).second;
     const AnalyticMessage m = st.messages[picked];
     st.sent[picked] = 1;
     ++st.next;
+    next_turn = (m.gp + 1) % gps;
     // The queue's room for it: messages consumed by the time it could go are out.
     while (!st.queue.empty() && st.queued + m.words > capacity) {
       st.room = std::max(st.room, st.queue.front().consumed);
       st.queued -= st.queue.front().words;
       st.queue.pop_front();
+    }
+    for (auto it = st.order.begin(); it != st.order.end() && st.queued + m.words > capacity; ++it) {
+      StageMessage& q = st.stage[*it];
+      if (q.freed) continue;
+      st.room = std::max(st.room, q.end);
+      st.queued -= q.words;
+      q.freed = true;
     }
     const auto g = static_cast<std::size_t>(m.gp);
     // The GP starts the message (i860 clocks), then holds its interface for the words.
@@ -415,15 +598,18 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
     st.last_sent = std::max(st.last_sent, requested);
     const double arrival =
         end + plan.hop_delay(plan.gp_stop(m.gp), plan.renderer_stop(j)).to_seconds();
-    // The array consumes it after the messages before it, once it has arrived.
-    const double begin = std::max(st.array, arrival);
-    // The GP computed until it could start this message if its geometry (or a traversal)
-    // held it; otherwise only while starting it.
-    attribute_wait(st, st.array, begin, pass_ready(m.gp, st.pass) >= ready ? 0.0 : ready,
-                   requested);
-    st.array = begin;
-    run_array(st, m.cycles);
-    st.queue.push_back({st.array, m.words});
+    // The array consumes it in the stage's order (consume_stage). A wait for it is the GPs'
+    // while the GP computed, if its geometry (or a traversal) held it, otherwise only while
+    // it started the message; the ring's after.
+    StageMessage q;
+    q.requested = requested;
+    q.arrival = arrival;
+    q.gp_from = pass_ready(m.gp, st.pass) >= ready ? 0.0 : ready;
+    q.cycles = m.cycles;
+    q.words = m.words;
+    q.load = static_cast<double>(m.first_load) * cycle;
+    st.stage.push_back(q);
+    consume_stage(st);
     st.queued += m.words;
     schedule(j);
   }

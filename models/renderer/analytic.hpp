@@ -16,14 +16,20 @@
 //    complete, then sums each GP's share of the display list from the memo's summary
 //    (SetupMemo::Summary), so its packets, set-up counts and GP clocks are exactly the event
 //    model's, and a run of frames of one scene (a sweep) sets it up once.
-//  - What it leaves out against the event model: backing-store port stalls, the double-
-//    buffered coefficient load's stall after a wait, and the scheduler's order among waiting
-//    GPs (of a stage's messages, the one whose GP can go first goes first, ties to the lower
-//    GP). With renderer.overlap_shipping its ring books as Ring::reserve does, in request
-//    order; without it, finished regions are booked when they finish, ahead of messages asked
-//    for earlier, on channel calendars that fill the gaps before them. The error this makes
-//    is measured on held-out machines (sim/analysis/analytic_validation.hpp,
-//    `pp5sim fidelity`), not assumed.
+//  - It follows the event model's rules: of a stage's messages, the one whose GP can go
+//    first goes first, ties in the scheduler's order (gp.send_order; round-robin's turn
+//    advanced per message rather than per wake-up); the array takes a stage's messages in
+//    the order of their arrival among those delivered (Renderer::run_frame); an empty
+//    stage lets the next open when the Renderer starts on it; double-buffered, the array
+//    stalls for a message's first packet's coefficients when it waited for the message
+//    (Renderer::load_coefficients). What it leaves out: backing-store port stalls, a
+//    double-buffered load's stall on a later packet shorter than its successor's load, and,
+//    at one instant, the order in which GPs woken for several Renderers book the ring. With
+//    renderer.overlap_shipping its ring books as Ring::reserve does, in request order;
+//    without it, finished regions are booked when they finish, ahead of messages asked for
+//    earlier, on channel calendars that fill the gaps before them. The error this makes is
+//    measured on held-out machines (sim/analysis/analytic_validation.hpp, `pp5sim
+//    fidelity`), not assumed.
 //  - Regions go to Renderers as the event model's static balancing does (r mod count); with
 //    dynamic balancing, as the recurrence's Renderers claim them, each taking the next
 //    region when it opens its next stage, in time order (the closed form kept beside it
