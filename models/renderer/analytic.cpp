@@ -260,28 +260,41 @@ ContentionResult contention_recurrence(const MachinePlan& plan, const SetupMemo:
   // first), waiting for its arrival; with none in the queue, the first delivered next. The
   // messages sent so far are all those delivered before any later send's request, so the
   // order up to the time of the latest send is final.
+  // Kept sorted by request (a heap of the delivered by arrival, then by index): the same
+  // choice as scanning every message each time, in n log n.
+  std::vector<std::size_t> by_request;
+  std::vector<std::size_t> delivered_heap;
   auto consume_stage = [&](RendererState& st) {
     st.order.clear();
+    const std::size_t n = st.stage.size();
+    by_request.resize(n);
+    for (std::size_t i = 0; i < n; ++i) by_request[i] = i;
+    std::stable_sort(by_request.begin(), by_request.end(), [&](std::size_t x, std::size_t y) {
+      return st.stage[x].requested < st.stage[y].requested;
+    });
+    // The heap's top: the earliest arrival, ties to the one sent first.
+    auto later = [&](std::size_t x, std::size_t y) {
+      const double ax = st.stage[x].arrival, ay = st.stage[y].arrival;
+      return ax > ay || (ax == ay && x > y);
+    };
+    delivered_heap.clear();
+    std::size_t next = 0;
+    auto deliver_until = [&](double until) {
+      while (next < n && st.stage[by_request[next]].requested <= until) {
+        delivered_heap.push_back(by_request[next++]);
+        std::push_heap(delivered_heap.begin(), delivered_heap.end(), later);
+      }
+    };
     double t = st.stage_base;
-    std::vector<char> taken(st.stage.size(), 0);
-    for (std::size_t n = 0; n < st.stage.size(); ++n) {
-      double delivered = t;
-      bool any = false;
-      for (std::size_t i = 0; i < st.stage.size(); ++i) {
-        if (!taken[i] && st.stage[i].requested <= t) any = true;
-      }
-      if (!any) {
-        delivered = std::numeric_limits<double>::infinity();
-        for (std::size_t i = 0; i < st.stage.size(); ++i) {
-          if (!taken[i]) delivered = std::min(delivered, st.stage[i].requested);
-        }
-      }
-      std::size_t pick = st.stage.size();
-      for (std::size_t i = 0; i < st.stage.size(); ++i) {
-        if (taken[i] || st.stage[i].requested > delivered) continue;
-        if (pick == st.stage.size() || st.stage[i].arrival < st.stage[pick].arrival) pick = i;
-      }
-      taken[pick] = 1;
+    for (std::size_t k = 0; k < n; ++k) {
+      // Those delivered by now; with none, the first delivered next (and any delivered at
+      // that instant). A message arrives after it is delivered, so every one in the heap
+      // stays delivered as t moves on.
+      deliver_until(t);
+      if (delivered_heap.empty()) deliver_until(st.stage[by_request[next]].requested);
+      std::pop_heap(delivered_heap.begin(), delivered_heap.end(), later);
+      const std::size_t pick = delivered_heap.back();
+      delivered_heap.pop_back();
       StageMessage& m = st.stage[pick];
       // Double-buffered, a packet's coefficients load while the packet before it runs; the
       // first packet's start only once it has arrived, so the array stalls for that load
