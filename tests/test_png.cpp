@@ -98,7 +98,24 @@ TEST_CASE("the encoder's runs and literals decode to the exact bytes", "[png]") 
     state = state * 1664525u + 1013904223u;
     return static_cast<std::uint8_t>(state >> 24);
   };
+  // Noise with short repeats of the byte before or the pixel before (runs of 2 to 5 bytes,
+  // so that runs start just before, at and just after the ends of the encoder's 16-byte
+  // blocks), in the order make() asks for the bytes.
+  std::vector<std::uint8_t> made;
+  auto repeats = [&state, &made](int, int, int) {
+    state = state * 1664525u + 1013904223u;
+    const unsigned pick = state >> 28;
+    std::uint8_t b = static_cast<std::uint8_t>(state >> 20);
+    if (pick < 5 && !made.empty()) b = made.back();
+    if (pick >= 5 && pick < 9 && made.size() >= 3) b = made[made.size() - 3];
+    made.push_back(b);
+    return b;
+  };
   const std::vector<RgbImage> images = {
+      make(1, 1, noise),
+      make(2, 1, [](int, int, int) { return std::uint8_t{7}; }),
+      make(1, 3, [](int, int, int) { return std::uint8_t{9}; }),
+      make(61, 37, repeats),
       make(300, 40,
            [](int x, int y, int c) {  // runs whose lengths grow along the row
              return static_cast<std::uint8_t>(((x * 3 + c) / (1 + y * 7)) * 53);
@@ -107,7 +124,8 @@ TEST_CASE("the encoder's runs and literals decode to the exact bytes", "[png]") 
            [](int x, int y, int c) {  // flat colours changing from row to row
              return static_cast<std::uint8_t>((x / 17) * 40 + y * 9 + c * 70);
            }),
-      make(257, 19, noise), make(500, 500, [](int, int, int) { return std::uint8_t{200}; }),
+      make(257, 19, noise),
+      make(500, 500, [](int, int, int) { return std::uint8_t{200}; }),
       make(3, 20000, [](int x, int y, int c) {
         return static_cast<std::uint8_t>(y % 5 == 0 ? 255 : (x + y / 3 + c) & 0xff);
       })};

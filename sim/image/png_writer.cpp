@@ -4,6 +4,10 @@
 #include <png.h>
 #include <zlib.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -82,30 +86,61 @@ class PngDeflate {
   void compress(const std::uint8_t* in, std::size_t n, std::string& out) {
     tokenize(in, n);
     build_codes();
-    bits_.clear();
+    // At most 15 bits a literal, 5 + 5 + 1 + 15 a run of at least 3 bytes, the header's 300
+    // symbols of at most 7 + 7 bits, and 4 bytes of slack for the last 32-bit store.
+    bits_.resize(n * 2 + 1024);
+    dst_ = bits_.data();
     acc_ = 0;
     count_ = 0;
     put(1, 1);  // BFINAL
     put(2, 2);  // BTYPE = dynamic Huffman
     write_header();
-    for (const std::uint32_t t : tokens_) {
-      if (t < 256) {
-        put(lit_code_[t], lit_len_[t]);
-        continue;
+    std::uint32_t lit[kLitSymbols];
+    for (int k = 0; k < kLitSymbols; ++k)
+      lit[k] = static_cast<std::uint32_t>(lit_len_[static_cast<std::size_t>(k)]) << 16 |
+               lit_code_[static_cast<std::size_t>(k)];
+    // The body's bits in locals (the member writer's state, stored through the byte pointer,
+    // would be reloaded after every store).
+    std::uint64_t acc = acc_;
+    int count = count_;
+    std::uint8_t* dst = dst_;
+    auto emit = [&acc, &count, &dst](std::uint32_t value, int bits) {
+      acc |= static_cast<std::uint64_t>(value) << count;
+      count += bits;
+      if (count >= 32) {
+        const auto word = static_cast<std::uint32_t>(acc);
+        dst[0] = static_cast<std::uint8_t>(word);
+        dst[1] = static_cast<std::uint8_t>(word >> 8);
+        dst[2] = static_cast<std::uint8_t>(word >> 16);
+        dst[3] = static_cast<std::uint8_t>(word >> 24);
+        dst += 4;
+        acc >>= 32;
+        count -= 32;
       }
-      const int length = static_cast<int>(t >> 16), distance = static_cast<int>(t & 0xffff);
-      const int sym = kLengthSymbol[length];
-      put(lit_code_[sym], lit_len_[sym]);
+    };
+    const std::uint8_t* p = in;
+    for (const Segment seg : segments_) {
+      for (const std::uint8_t* end = p + (seg & kMaxLiterals); p < end; ++p)
+        emit(lit[*p] & 0xffff, static_cast<int>(lit[*p] >> 16));
+      const int length = static_cast<int>(seg >> 40 & 0x1ff);
+      if (length == 0) continue;
+      const int sym = kLengthSymbol[static_cast<std::size_t>(length)];
+      emit(lit[sym] & 0xffff, static_cast<int>(lit[sym] >> 16));
       const int extra = kLengthExtra[sym - 257];
-      if (extra > 0) put(static_cast<std::uint32_t>(length - kLengthBase[sym - 257]), extra);
-      const int d = distance == 1 ? 0 : 2;  // distance codes 0 (1) and 2 (3), no extra bits
-      put(dist_code_[d], dist_len_[d]);
+      if (extra > 0) emit(static_cast<std::uint32_t>(length - kLengthBase[sym - 257]), extra);
+      const int d = (seg >> 49 & 1) != 0 ? 2 : 0;  // distance codes 0 (1) and 2 (3), no extra bits
+      emit(dist_code_[static_cast<std::size_t>(d)], dist_len_[static_cast<std::size_t>(d)]);
+      p += length;
     }
+    acc_ = acc;
+    count_ = count;
+    dst_ = dst;
     put(lit_code_[256], lit_len_[256]);
     flush();
     out.push_back('\x78');  // zlib header: deflate, 32K window, no dictionary, FLEVEL 0
     out.push_back('\x01');
-    out.append(reinterpret_cast<const char*>(bits_.data()), bits_.size());
+    out.append(reinterpret_cast<const char*>(bits_.data()),
+               static_cast<std::size_t>(dst_ - bits_.data()));
     put_u32(out, adler_);
   }
 
@@ -134,60 +169,95 @@ class PngDeflate {
     return k;
   }
 
+  // Whether a run of at least 3 bytes (distance 1 or 3) starts at byte i.
+  static bool run_starts(const std::uint8_t* in, std::size_t i, std::size_t n) {
+    if (i + 3 > n) return false;
+    if (i >= 1 && in[i] == in[i - 1] && in[i + 1] == in[i] && in[i + 2] == in[i + 1]) return true;
+    return i >= 3 && in[i] == in[i - 3] && in[i + 1] == in[i - 2] && in[i + 2] == in[i - 1];
+  }
+
+  // The first byte at or after i where a run starts (run_starts), else n. Sixteen bytes are
+  // compared with the one before and the pixel before at once where SSE2 is there.
+  static std::size_t next_run(const std::uint8_t* in, std::size_t i, std::size_t n) {
+    while (i < 3 && i < n) {
+      if (run_starts(in, i, n)) return i;
+      ++i;
+    }
+#if defined(__SSE2__)
+    // Bit k of m1 (m3): byte i + k equals the one 1 (3) before it; a run starts at k when
+    // bits k, k + 1 and k + 2 are set, which 16 bytes decide for k up to 13.
+    for (; i + 16 <= n; i += 14) {
+      const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i));
+      const auto m1 = static_cast<unsigned>(_mm_movemask_epi8(
+          _mm_cmpeq_epi8(v, _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i - 1)))));
+      const auto m3 = static_cast<unsigned>(_mm_movemask_epi8(
+          _mm_cmpeq_epi8(v, _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i - 3)))));
+      const unsigned r = ((m1 & m1 >> 1 & m1 >> 2) | (m3 & m3 >> 1 & m3 >> 2)) & 0x3fffu;
+      if (r != 0) return i + static_cast<std::size_t>(__builtin_ctz(r));
+    }
+#endif
+    for (; i < n; ++i) {
+      if (run_starts(in, i, n)) return i;
+    }
+    return n;
+  }
+
   // Greedy: at each byte the longer run (distance 1 or 3) if it is at least 3 bytes long,
-  // else the byte as a literal. The zlib stream's Adler-32 is summed token by token: a run of
-  // one byte in closed form, so that the long runs of 0 cost nothing per byte.
+  // else the byte as a literal; the bytes between runs are found a block at a time
+  // (next_run). The zlib stream's Adler-32 is summed as it goes: a run of one byte in closed
+  // form, so that the long runs of 0 cost nothing per byte.
   void tokenize(const std::uint8_t* in, std::size_t n) {
-    tokens_.clear();
+    segments_.clear();
     lit_freq_.fill(0);
     dist_freq_.fill(0);
     constexpr std::uint64_t kBase = 65521;
     std::uint64_t s1 = 1, s2 = 0;
-    int since_reduce = 0;
-    std::size_t i = 0;
+    std::size_t i = 0, literals_from = 0;
+    // Bytes summed since the last reduction, at most 4096: s1 stays below 2^21, s2 below 2^33.
+    std::size_t since = 0;
+    auto reduce = [&] {
+      s1 %= kBase;
+      s2 %= kBase;
+      since = 0;
+    };
     while (i < n) {
-      const std::uint8_t b = in[i];
-      // A literal unless the byte repeats the one before or the pixel before (cheap tests
-      // first: most literals fail both).
-      const bool run1 = i >= 1 && b == in[i - 1];
-      const bool run3 = i >= 3 && b == in[i - 3];
-      std::size_t best = 0, distance = 0;
-      if (run1 || run3) {
-        const std::size_t limit = std::min<std::size_t>(kMaxMatch, n - i);
-        if (run1) best = run_length(in, i, 1, limit), distance = 1;
-        if (run3 && best < limit) {
-          const std::size_t r = run_length(in, i, 3, limit);
-          if (r > best) best = r, distance = 3;
+      const std::size_t at = next_run(in, i, n);
+      // Literals [i, at), in pieces that keep at most 4096 bytes between reductions.
+      for (std::size_t k = i; k < at;) {
+        const std::size_t end = std::min(at, k + (4096 - since));
+        since += end - k;
+        for (; k < end; ++k) {
+          ++lit_freq_[in[k]];
+          s1 += in[k];
+          s2 += s1;
         }
+        if (since == 4096) reduce();
       }
-      if (best >= 3) {
-        tokens_.push_back(static_cast<std::uint32_t>(best << 16 | distance));
-        ++lit_freq_[kLengthSymbol[best]];
-        ++dist_freq_[distance == 1 ? 0 : 2];
-        if (distance == 1) {  // best copies of b: s2 gains best s1 + b (1 + 2 + ... + best)
-          s2 += best * s1 + b * (best * (best + 1) / 2);
-          s1 += best * b;
-        } else {
-          for (std::size_t k = 0; k < best; ++k) {
-            s1 += in[i + k];
-            s2 += s1;
-          }
-        }
-        i += best;
+      if (at == n) break;
+      const std::size_t limit = std::min<std::size_t>(kMaxMatch, n - at);
+      const std::size_t r1 = at >= 1 ? run_length(in, at, 1, limit) : 0;
+      const std::size_t r3 = at >= 3 && r1 < limit ? run_length(in, at, 3, limit) : 0;
+      const std::size_t best = r3 > r1 ? r3 : r1;
+      const int distance = r3 > r1 ? 3 : 1;
+      add_segments(at - literals_from, best, distance);
+      ++lit_freq_[kLengthSymbol[best]];
+      ++dist_freq_[distance == 1 ? 0 : 2];
+      // A run of at most 258 bytes: reduced before when it could take the count past 4096.
+      if (since + best > 4096) reduce();
+      since += best;
+      if (distance == 1) {  // best copies of b: s2 gains best s1 + b (1 + 2 + ... + best)
+        const std::uint64_t b = in[at];
+        s2 += best * s1 + b * (best * (best + 1) / 2);
+        s1 += best * b;
       } else {
-        tokens_.push_back(b);
-        ++lit_freq_[b];
-        s1 += b;
-        s2 += s1;
-        ++i;
+        for (std::size_t k = 0; k < best; ++k) {
+          s1 += in[at + k];
+          s2 += s1;
+        }
       }
-      // At most 4096 tokens between reductions: s1 stays below 2^29 and s2 below 2^49.
-      if (++since_reduce == 4096) {
-        s1 %= kBase;
-        s2 %= kBase;
-        since_reduce = 0;
-      }
+      i = literals_from = at + best;
     }
+    if (literals_from < n) add_segments(n - literals_from, 0, 1);
     lit_freq_[256] = 1;
     adler_ = static_cast<std::uint32_t>((s2 % kBase) << 16 | (s1 % kBase));
   }
@@ -308,31 +378,48 @@ class PngDeflate {
     count_ += bits;
     if (count_ >= 32) {
       const auto word = static_cast<std::uint32_t>(acc_);
-      const std::uint8_t b[4] = {
-          static_cast<std::uint8_t>(word), static_cast<std::uint8_t>(word >> 8),
-          static_cast<std::uint8_t>(word >> 16), static_cast<std::uint8_t>(word >> 24)};
-      bits_.insert(bits_.end(), b, b + 4);
+      dst_[0] = static_cast<std::uint8_t>(word);
+      dst_[1] = static_cast<std::uint8_t>(word >> 8);
+      dst_[2] = static_cast<std::uint8_t>(word >> 16);
+      dst_[3] = static_cast<std::uint8_t>(word >> 24);
+      dst_ += 4;
       acc_ >>= 32;
       count_ -= 32;
     }
   }
   void flush() {
     while (count_ > 0) {
-      bits_.push_back(static_cast<std::uint8_t>(acc_));
+      *dst_++ = static_cast<std::uint8_t>(acc_);
       acc_ >>= 8;
       count_ -= 8;
     }
     count_ = 0;
   }
 
-  std::vector<std::uint32_t> tokens_;  // a literal byte, or length << 16 | distance
+  // A segment, one word (a store of a few fields, read back whole, stalls the store buffer):
+  // bits 0..39 a count of literals, then bits 40..48 the length of a run after them (0: none)
+  // and bit 49 its distance (set: 3, else 1).
+  using Segment = std::uint64_t;
+  static constexpr std::uint64_t kMaxLiterals = (std::uint64_t{1} << 40) - 1;
+  static Segment segment(std::size_t literals, std::size_t length, int distance) {
+    return static_cast<std::uint64_t>(literals) | static_cast<std::uint64_t>(length) << 40 |
+           static_cast<std::uint64_t>(distance == 3) << 49;
+  }
+  // `literals` literals (a segment each 2^40 - 1 of them) and the run after them.
+  void add_segments(std::size_t literals, std::size_t length, int distance) {
+    for (; literals > kMaxLiterals; literals -= kMaxLiterals)
+      segments_.push_back(segment(kMaxLiterals, 0, 1));
+    segments_.push_back(segment(literals, length, distance));
+  }
+  std::vector<Segment> segments_;
   std::array<std::uint32_t, kLitSymbols> lit_freq_{};
   std::array<std::uint32_t, 3> dist_freq_{};
   std::array<std::uint8_t, kLitSymbols> lit_len_{};
   std::array<std::uint16_t, kLitSymbols> lit_code_{};
   std::array<std::uint8_t, 3> dist_len_{};
   std::array<std::uint16_t, 3> dist_code_{};
-  std::vector<std::uint8_t> bits_;
+  std::vector<std::uint8_t> bits_;  // the deflate stream, written at dst_
+  std::uint8_t* dst_ = nullptr;
   std::uint64_t acc_ = 0;
   int count_ = 0;
   std::uint32_t adler_ = 1;
