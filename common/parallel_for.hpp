@@ -12,20 +12,31 @@
 //  - If a body throws, no further index is started; once every running body has returned,
 //    the exception is rethrown on the calling thread (the first one thrown, if several are).
 //    An exception never escapes a worker thread, so it never terminates the process.
+//  - The other threads are kept host threads (host_threads_start): made on first use and
+//    kept for the next call, so a run of many frames pays neither a thread's start nor a
+//    new thread's first allocations (page faults in a malloc arena of its own) per frame. A
+//    call made while every kept thread is busy (a nested call, or calls from several
+//    threads) gets new ones, so it never waits for another call's work.
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <exception>
+#include <functional>
 #include <mutex>
-#include <system_error>
-#include <thread>
 #include <type_traits>
-#include <vector>
 
 namespace pp5 {
 
 inline int parallel_workers(int count, int threads) {
   return std::max(1, std::min(threads, count));
 }
+
+// Runs job() and then done() on a kept host thread that is idle, or on a new one (kept
+// afterwards); the thread is idle again before done() is called. False when no thread is
+// idle and none can be made (neither is then called). Defined in common/parallel_for.cpp.
+bool host_threads_start(std::function<void()> job, std::function<void()> done);
+// Host threads kept so far (idle or busy): for tests.
+int host_threads_kept();
 
 template <class Body>
 void parallel_for(int count, int threads, Body&& body) {
@@ -49,18 +60,32 @@ void parallel_for(int count, int threads, Body&& body) {
     }
   };
   const int n = parallel_workers(count, threads);
-  std::vector<std::thread> pool;
-  pool.reserve(static_cast<std::size_t>(n - 1));
+  std::mutex running_mutex;
+  std::condition_variable finished;
+  int running = 0;
   for (int t = 1; t < n; ++t) {
-    // A thread the host cannot start is work the others take over.
-    try {
-      pool.emplace_back(worker, t);
-    } catch (const std::system_error&) {
+    {
+      const std::lock_guard<std::mutex> lock(running_mutex);
+      ++running;
+    }
+    // done() signals under the lock, so this frame outlives its last use by a helper.
+    const bool started = host_threads_start([&worker, t] { worker(t); },
+                                            [&running_mutex, &running, &finished] {
+                                              const std::lock_guard<std::mutex> lock(running_mutex);
+                                              --running;
+                                              finished.notify_all();
+                                            });
+    if (!started) {  // a thread the host cannot start is work the others take over
+      const std::lock_guard<std::mutex> lock(running_mutex);
+      --running;
       break;
     }
   }
   worker(0);
-  for (auto& t : pool) t.join();
+  {
+    std::unique_lock<std::mutex> lock(running_mutex);
+    finished.wait(lock, [&running] { return running == 0; });
+  }
   if (error) std::rethrow_exception(error);
 }
 

@@ -87,10 +87,10 @@ void Machine::record_timeline(bool on) {
 
 void execute_pixels(Machine& machine, int threads,
                     const std::function<BoardObserver*(int renderer)>& observe,
-                    const std::atomic<bool>* cancel) {
+                    const std::atomic<bool>* cancel, PixelBoards* boards) {
   std::vector<const std::vector<RegionWork>*> work;
   for (int k = 0; k < machine.renderer_count(); ++k) work.push_back(&machine.renderer(k).work());
-  execute_pixels(machine.plan(), machine.frame_buffer(), work, threads, observe, cancel);
+  execute_pixels(machine.plan(), machine.frame_buffer(), work, threads, observe, cancel, boards);
 }
 
 std::string Machine::fmt_name(const char* base, int k) {

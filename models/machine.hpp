@@ -49,6 +49,7 @@ class Ring;
 class FrameBuffer;
 class SetupMemo;
 class BoardObserver;
+class PixelBoards;
 
 class Machine : public sc_core::sc_module {
  public:
@@ -151,6 +152,6 @@ class Machine : public sc_core::sc_module {
 // pass recorded (models/renderer/execute_pixels.hpp).
 void execute_pixels(Machine& machine, int threads,
                     const std::function<BoardObserver*(int renderer)>& observe = {},
-                    const std::atomic<bool>* cancel = nullptr);
+                    const std::atomic<bool>* cancel = nullptr, PixelBoards* boards = nullptr);
 
 }  // namespace pp5

@@ -684,6 +684,8 @@ struct Session::Event {
   // run_frames': where a frame's pixels execute while the kernel goes on (the machine's frame
   // buffer receives the regions' arrivals meanwhile).
   std::unique_ptr<FrameBuffer> pixel_frame_buffer;
+  // The pixel boards, kept from frame to frame (execute_pixels restarts them).
+  PixelBoards boards;
 };
 
 Session::Session(const MachineConfig& config, std::shared_ptr<const Scene> scene,
@@ -797,7 +799,7 @@ FrameResult Session::frame(const std::function<BoardObserver*(int renderer)>& ob
   const double setup = frames_ == 0 ? setup_seconds_ : 0;
   const double timing_seconds = seconds_since(t0) + startup;
   const auto t1 = std::chrono::steady_clock::now();
-  if (pixels) execute_pixels(*machine, threads, observe, cancel_);
+  if (pixels) execute_pixels(*machine, threads, observe, cancel_, &event_->boards);
   if (cancel_ != nullptr && cancel_->load()) throw FrameCancelled();
   const double pixel_seconds = seconds_since(t1);
   const double host_seconds = seconds_since(t0) + startup;
@@ -1171,6 +1173,10 @@ const RunSummary& Session::run_frames(
     std::future<FramePixels> pixels;
   };
   std::deque<std::unique_ptr<Pending>> pending;  // before the worker, which refers to them
+  // Delivered frames' images that on_frame left, whose bytes the next frames' images reuse
+  // (FrameBuffer::begin_frame): taken on the helper thread, given back on this one.
+  std::mutex spare_mutex;
+  std::vector<FrameImage> spare_images;
   FramePixelsWorker worker;
 
   double kernel_seconds = startup_seconds_;  // host time in the kernel not yet handed over
@@ -1265,12 +1271,22 @@ const RunSummary& Session::run_frames(
     const bool executes = execute && (observed.frame < 0 || f == observed.frame);
     std::function<BoardObserver*(int)> observe =
         f == observed.frame ? observed.observe : std::function<BoardObserver*(int)>();
-    p->pixels = worker.submit([&pixel_fb, &plan, work, v, threads, cancel, executes, observe] {
+    PixelBoards* boards = &event_->boards;
+    p->pixels = worker.submit([&pixel_fb, &plan, work, v, threads, cancel, executes, observe,
+                               boards, &spare_mutex, &spare_images] {
       const auto t1 = std::chrono::steady_clock::now();
-      pixel_fb.begin_frame(sc_core::SC_ZERO_TIME);
+      FrameImage storage;
+      {
+        const std::lock_guard<std::mutex> lock(spare_mutex);
+        if (!spare_images.empty()) {
+          storage = std::move(spare_images.back());
+          spare_images.pop_back();
+        }
+      }
+      pixel_fb.begin_frame(sc_core::SC_ZERO_TIME, std::move(storage));
       if (executes)
-        execute_pixels(plan, v ? *v : plan.frame_values(), pixel_fb, work, threads, observe,
-                       cancel);
+        execute_pixels(plan, v ? *v : plan.frame_values(), pixel_fb, work, threads, observe, cancel,
+                       boards);
       FramePixels out;
       out.image = pixel_fb.take_image();
       out.seconds = seconds_since(t1);
@@ -1416,6 +1432,10 @@ const RunSummary& Session::run_frames(
     if (!on_frame) return;
     try {
       on_frame(f, result);
+      if (result.image.has_pixels()) {
+        const std::lock_guard<std::mutex> lock(spare_mutex);
+        if (spare_images.size() < 2) spare_images.push_back(std::move(result.image));
+      }
     } catch (...) {
       // The units finish the frames they are on and start none after them (at most two are in
       // flight: none beyond the frame after the one every Renderer is on), so that no unit's

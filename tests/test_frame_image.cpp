@@ -92,3 +92,24 @@ TEST_CASE("a frame image refuses what cannot be a region's pixels", "[frame]") {
   CHECK(timing.flat().rgb.empty());
   CHECK_THROWS_WITH(encode_png(timing, "frame.png"), Catch::Contains("holds no pixels"));
 }
+
+TEST_CASE("a frame image reuses the bytes of one done with, only when nothing else holds them",
+          "[frame]") {
+  FrameImage first(10, 3, 4, 2);
+  const std::uint8_t* bytes = first.own_bytes(0, 0);
+  first.set_region(0, 0, first.own(0, 0));
+  FrameImage second(10, 3, 4, 2, true, std::move(first));
+  CHECK(second.own_bytes(0, 0) == bytes);  // its regions were all the frame held
+  // What the new frame shows starts black: no region of it arrived, whatever the bytes hold.
+  CHECK(second.pixel(1, 1)[0] == 0);
+  CHECK(second.distinct_regions() == 0);
+  // A region of it given away (a caller keeping a frame's pixels) keeps the bytes its own.
+  const RegionPixels kept = second.own(4, 0);
+  FrameImage third(10, 3, 4, 2, true, std::move(second));
+  CHECK(third.own_bytes(0, 0) != bytes);
+  CHECK(kept.get() == bytes + 3 * 4 * 2);
+  // Bytes of another size are not taken.
+  FrameImage wider(12, 3, 4, 2, true, std::move(third));
+  CHECK(wider.width() == 12);
+  CHECK(wider.distinct_regions() == 0);
+}

@@ -238,6 +238,31 @@ TEST_CASE("parallel_for rethrows a worker thread's exception on the caller", "[m
   CHECK(overlaps.load() == 0);
 }
 
+TEST_CASE("parallel_for keeps its threads from call to call, and nests", "[machine]") {
+  // A run of frames calls it once a frame or more: its threads are kept, not made each time.
+  parallel_for(8, 3, [](int) {});
+  const int kept = host_threads_kept();
+  CHECK(kept >= 2);
+  std::atomic<int> sum{0};
+  for (int call = 0; call < 200; ++call) parallel_for(8, 3, [&sum](int i) { sum += i; });
+  CHECK(sum.load() == 200 * 28);
+  CHECK(host_threads_kept() == kept);
+  // A body that calls parallel_for itself (every kept thread busy) gets threads of its own
+  // rather than waiting for one: it finishes, with every index run once.
+  std::atomic<int> inner{0};
+  parallel_for(4, 4, [&inner](int) { parallel_for(5, 3, [&inner](int) { ++inner; }); });
+  CHECK(inner.load() == 20);
+  // An exception still reaches the caller from a kept thread, and the threads stay usable.
+  CHECK_THROWS_AS(parallel_for(16, 3,
+                               [](int i) {
+                                 if (i == 5) throw std::runtime_error("five");
+                               }),
+                  std::runtime_error);
+  std::atomic<int> after{0};
+  parallel_for(16, 3, [&after](int) { ++after; });
+  CHECK(after.load() == 16);
+}
+
 TEST_CASE("a board's exception during execute_pixels reaches the caller (issue 18)", "[machine]") {
   // The triangle procedure stores to backing-store block 3; the machine has one block. Only
   // regions with triangles run it, and those execute on the host's worker threads.

@@ -17,12 +17,13 @@ FrameBuffer::FrameBuffer(sc_core::sc_module_name name, int width, int height, in
       image_(width, height, region_width, region_height, image),
       arrival_(regions, sc_core::SC_ZERO_TIME) {}
 
-void FrameBuffer::begin_frame(sc_core::sc_time start) {
+void FrameBuffer::begin_frame(sc_core::sc_time start, FrameImage storage) {
   start_ = start;
   last_ = start;
   received_ = 0;
   std::fill(arrival_.begin(), arrival_.end(), start);
-  image_ = FrameImage(width_, height_, region_width_, region_height_, has_image_);
+  image_ =
+      FrameImage(width_, height_, region_width_, region_height_, has_image_, std::move(storage));
 }
 
 void FrameBuffer::receive_region(const RegionArrival& region) {

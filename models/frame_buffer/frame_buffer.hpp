@@ -34,8 +34,9 @@ class FrameBuffer : public sc_core::sc_module, public RingEndpoint {
 
   // Host side, between frames: a new frame begins at `start` (the times below are then
   // relative to it, except arrivals(), which keeps the run's time for the timeline), with
-  // no region received and a new image.
-  void begin_frame(sc_core::sc_time start);
+  // no region received and a new image (its bytes those of `storage`, an image done with,
+  // where they can be: FrameImage's constructor).
+  void begin_frame(sc_core::sc_time start, FrameImage storage = {});
 
   // Hands the assembled frame over; the frame buffer is empty afterwards.
   FrameImage take_image() { return std::move(image_); }

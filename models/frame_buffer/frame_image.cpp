@@ -37,6 +37,29 @@ FrameImage::FrameImage(int width, int height, int region_width, int region_heigh
   }
 }
 
+FrameImage::FrameImage(int width, int height, int region_width, int region_height, bool pixels,
+                       FrameImage&& storage)
+    : FrameImage(width, height, region_width, region_height, false) {
+  if (!pixels) return;
+  pixels_ = true;
+  regions_.resize(static_cast<std::size_t>(columns_) *
+                  ((height + region_height - 1) / region_height));
+  const std::size_t bytes =
+      regions_.size() * static_cast<std::size_t>(region_width) * region_height * 3;
+  std::shared_ptr<std::uint8_t> old = std::move(storage.own_);
+  const std::size_t old_bytes = storage.regions_.size() *
+                                static_cast<std::size_t>(storage.region_width_) *
+                                storage.region_height_ * 3;
+  storage = FrameImage();  // its regions hold references to its bytes: gone now
+  if (old && old.use_count() == 1 && old_bytes == bytes) {
+    own_ = std::move(old);
+  } else {
+    own_ = std::shared_ptr<std::uint8_t>(new std::uint8_t[bytes],
+                                         std::default_delete<std::uint8_t[]>());
+    advise_huge_pages(own_.get(), bytes);
+  }
+}
+
 RegionPixels region_pixels(std::vector<std::uint8_t> rgb) {
   auto owner = std::make_shared<std::vector<std::uint8_t>>(std::move(rgb));
   return RegionPixels(owner, owner->data());

@@ -37,6 +37,11 @@ class FrameImage {
   // A black frame of `width` x `height` pixels in regions of region_width x region_height.
   // `pixels` false: a timing-only frame, to which no region's pixels may be given.
   FrameImage(int width, int height, int region_width, int region_height, bool pixels = true);
+  // The same, its bytes taken from `storage` (an image done with) when they are the size
+  // needed and nothing else holds them (no region of it given away): a run of frames then
+  // allocates, and the host's kernel zeroes, an image's pages once rather than per frame.
+  FrameImage(int width, int height, int region_width, int region_height, bool pixels,
+             FrameImage&& storage);
 
   int width() const { return width_; }
   int height() const { return height_; }

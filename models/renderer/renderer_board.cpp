@@ -111,6 +111,10 @@ void RendererBoard::keep_state(std::shared_ptr<PixelBackend>& slot) const {
   // clones.
   if (slot && slot.use_count() == 1) {
     slot->copy_state_from(*array_);
+  } else if (!spare_states_.empty()) {  // a copy the board kept before restart
+    slot = std::move(spare_states_.back());
+    spare_states_.pop_back();
+    slot->copy_state_from(*array_);
   } else {
     slot = array_->clone();
   }
@@ -123,8 +127,11 @@ void RendererBoard::restart(const RendererBoard& fresh) {
   untouched_ = true;
   origin_free_for_ = nullptr;
   lazy_ = false;
-  empty_after_clear_.reset();
-  empty_after_shade_.reset();
+  // The kept states' copies that this board alone holds stay, as spares for the next keep.
+  for (std::shared_ptr<PixelBackend>* slot : {&empty_after_clear_, &empty_after_shade_}) {
+    if (*slot && slot->use_count() == 1) spare_states_.push_back(std::move(*slot));
+    slot->reset();
+  }
   empty_rgb_.reset();
   clear_restores_.reset();
   clear_from_fresh_ = false;

@@ -60,6 +60,18 @@ struct RendererBoardParams {
 
 // A board's parameters from the configuration (the array, the evaluator, the timing).
 RendererBoardParams board_params(const MachineConfig& config);
+// Every field the same (boards of equal parameters are interchangeable).
+inline bool operator==(const RendererBoardParams& a, const RendererBoardParams& b) {
+  const TimingParams& s = a.timing;
+  const TimingParams& t = b.timing;
+  return a.array == b.array && a.evaluator.coefficient_bits == b.evaluator.coefficient_bits &&
+         a.evaluator.result_bits == b.evaluator.result_bits && s.fraction_bits == t.fraction_bits &&
+         s.result_bits == t.result_bits && s.evaluator_latency == t.evaluator_latency &&
+         s.block_bits == t.block_bits &&
+         s.backing_store_cycles_per_block == t.backing_store_cycles_per_block &&
+         s.multiply_window == t.multiply_window && s.msb_first == t.msb_first &&
+         a.backend == b.backend;
+}
 
 class RendererBoard {
  public:
@@ -150,6 +162,9 @@ class RendererBoard {
   std::shared_ptr<PixelBackend> empty_after_clear_;
   std::shared_ptr<PixelBackend> empty_after_shade_;
   RegionPixels empty_rgb_;
+  // Copies of the array (kept states before a restart) that nothing holds, reused by
+  // keep_state rather than cloned: at most two.
+  mutable std::vector<std::shared_ptr<PixelBackend>> spare_states_;
   std::optional<bool> clear_restores_;  // clear(after shade) == after clear
   bool clear_from_fresh_ = false;       // clear(a new board's state) == after clear
   bool fresh_ = true;                   // the board's state is a new board's
