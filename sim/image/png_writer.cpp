@@ -441,6 +441,7 @@ const std::array<std::uint16_t, PngDeflate::kMaxMatch + 1> PngDeflate::kLengthSy
 // output, so that a run of frames allocates (and the kernel zeroes) them once, not per image.
 struct PngScratch {
   std::vector<std::uint8_t> filtered;
+  std::string stream;  // the zlib stream, before it is cut into IDAT chunks
   PngDeflate deflate;
 };
 
@@ -502,7 +503,8 @@ std::string encode_png(int width, int height,
       out[1 + i] = static_cast<std::uint8_t>(row[i] - above[i]);
     row.swap(above);
   }
-  std::string stream;
+  std::string& stream = scratch.stream;
+  stream.clear();
   scratch.deflate.compress(filtered.data(), filtered.size(), stream);
   const std::size_t written = stream.size();
   std::string png;
