@@ -193,6 +193,20 @@ TEST_CASE("gif: what encode_gif writes decodes to the palette colours of every p
   other.rgb.resize(12);
   CHECK_THROWS_WITH(writer.add(other), "GIF frame 3 is 2x2, frame 0 203x97");
   CHECK(writer.finish() == bytes);
+  // A frame buffer's frame, read by rows, gives the bytes of its flat image; a timing-only
+  // frame is refused.
+  FrameImage framed(203, 97, 128, 64);
+  for (int r = 0; r < 4; ++r) {
+    const int x0 = (r % 2) * 128, y0 = (r / 2) * 64;
+    std::uint8_t* own = framed.own_bytes(x0, y0);
+    for (int i = 0; i < 128 * 64 * 3; ++i) own[i] = static_cast<std::uint8_t>(i * 7 + r * 31);
+    framed.set_region(x0, y0, framed.own(x0, y0));
+  }
+  GifWriter by_rows(8), by_flat(8);
+  by_rows.add(framed);
+  by_flat.add(framed.flat());
+  CHECK(by_rows.finish() == by_flat.finish());
+  CHECK_THROWS_WITH(by_rows.add(FrameImage(4, 4, 4, 4, false)), "GIF frame 0 holds no pixels");
   // The palette is near: no channel more than half a level away.
   const std::uint8_t c[3] = {200, 13, 128};
   std::uint8_t back[3];

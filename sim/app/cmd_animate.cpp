@@ -127,7 +127,7 @@ int run_animate(AnimateOptions o) {
       std::string png = encode_png(r.image);
       if (o.report) report_in.frame_pngs.push_back(png);
       outputs.add((dir / fmt::format("frame-{:04d}.png", k)).string(), std::move(png));
-      gif.add(r.image.flat());
+      gif.add(r.image);  // by rows: no flat copy of the frame
     }
     AnimationFrameRow row;
     row.start_seconds = start;

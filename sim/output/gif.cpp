@@ -171,19 +171,40 @@ GifWriter::GifWriter(int delay_centiseconds) : delay_(delay_centiseconds) {}
 GifWriter::~GifWriter() = default;
 
 void GifWriter::add(const RgbImage& f) {
-  const int k = frames_;
-  if (k > 0 && (f.width != width_ || f.height != height_)) {
-    throw std::invalid_argument(
-        fmt::format("GIF frame {} is {}x{}, frame 0 {}x{}", k, f.width, f.height, width_, height_));
-  }
-  if (f.width < 1 || f.height < 1 || f.width > 65535 || f.height > 65535 ||
+  if (f.width >= 1 && f.height >= 1 && f.width <= 65535 && f.height <= 65535 &&
       f.rgb.size() != static_cast<std::size_t>(f.width) * f.height * 3) {
-    throw std::invalid_argument(fmt::format("GIF frame {} is {}x{} with {} bytes of pixels", k,
-                                            f.width, f.height, f.rgb.size()));
+    throw std::invalid_argument(fmt::format("GIF frame {} is {}x{} with {} bytes of pixels",
+                                            frames_, f.width, f.height, f.rgb.size()));
+  }
+  const std::size_t stride = static_cast<std::size_t>(std::max(f.width, 0)) * 3;
+  add_rows(f.width, f.height,
+           [&f, stride](int y) { return f.rgb.data() + stride * static_cast<std::size_t>(y); });
+}
+
+void GifWriter::add(const FrameImage& f) {
+  if (!f.has_pixels()) {
+    throw std::invalid_argument(fmt::format("GIF frame {} holds no pixels", frames_));
+  }
+  row_.resize(static_cast<std::size_t>(std::max(f.width(), 0)) * 3);
+  add_rows(f.width(), f.height(), [this, &f](int y) {
+    f.row(y, row_.data());
+    return row_.data();
+  });
+}
+
+template <class Rows>
+void GifWriter::add_rows(int width, int height, Rows rows) {
+  const int k = frames_;
+  if (k > 0 && (width != width_ || height != height_)) {
+    throw std::invalid_argument(
+        fmt::format("GIF frame {} is {}x{}, frame 0 {}x{}", k, width, height, width_, height_));
+  }
+  if (width < 1 || height < 1 || width > 65535 || height > 65535) {
+    throw std::invalid_argument(fmt::format("GIF frame {} is {}x{}", k, width, height));
   }
   if (k == 0) {
-    width_ = f.width;
-    height_ = f.height;
+    width_ = width;
+    height_ = height;
     out_ = "GIF89a";
     put16(out_, width_);
     put16(out_, height_);
@@ -198,12 +219,16 @@ void GifWriter::add(const RgbImage& f) {
     // Loop forever.
     out_ += std::string("\x21\xFF\x0B", 3) + "NETSCAPE2.0" + std::string("\x03\x01\x00\x00\x00", 5);
   }
-  std::vector<std::uint8_t> indices(static_cast<std::size_t>(width_) * height_);
+  // The frame's palette indices, a row at a time (kept from frame to frame).
+  indices_.resize(static_cast<std::size_t>(width_) * height_);
   const GifLevelTables& t = gif_level_tables();
-  const std::uint8_t* rgb = f.rgb.data();
-  for (std::size_t i = 0; i < indices.size(); ++i) {
-    indices[i] = static_cast<std::uint8_t>(t.red[rgb[3 * i]] + t.green[rgb[3 * i + 1]] +
-                                           t.blue[rgb[3 * i + 2]]);
+  for (int y = 0; y < height_; ++y) {
+    const std::uint8_t* rgb = rows(y);
+    std::uint8_t* out = indices_.data() + static_cast<std::size_t>(y) * width_;
+    for (int x = 0; x < width_; ++x) {
+      out[x] = static_cast<std::uint8_t>(t.red[rgb[3 * x]] + t.green[rgb[3 * x + 1]] +
+                                         t.blue[rgb[3 * x + 2]]);
+    }
   }
   // Graphic control: no disposal, the delay, no transparent colour.
   out_ += std::string("\x21\xF9\x04\x04", 4);
@@ -216,7 +241,7 @@ void GifWriter::add(const RgbImage& f) {
   put16(out_, height_);
   out_.push_back('\0');  // no local table, not interlaced
   if (!lzw_) lzw_ = std::make_unique<GifLzw>();
-  lzw_->encode(indices, out_);
+  lzw_->encode(indices_, out_);
   ++frames_;
 }
 

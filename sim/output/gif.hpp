@@ -33,6 +33,8 @@ class GifWriter {
   GifWriter(const GifWriter&) = delete;
   GifWriter& operator=(const GifWriter&) = delete;
   void add(const RgbImage& frame);
+  // A frame buffer's frame, read a row at a time (no flat copy of it is made).
+  void add(const FrameImage& frame);
   std::string finish();
   int frames() const { return frames_; }
 
@@ -40,8 +42,11 @@ class GifWriter {
   int delay_;
   int width_ = 0, height_ = 0;
   int frames_ = 0;
+  template <class Rows>
+  void add_rows(int width, int height, Rows rows);  // rows(y): row y's RGB bytes
   std::string out_;
-  std::unique_ptr<GifLzw> lzw_;  // its code table, kept from frame to frame
+  std::unique_ptr<GifLzw> lzw_;              // its code table, kept from frame to frame
+  std::vector<std::uint8_t> indices_, row_;  // a frame's palette indices, a row's RGB
 };
 
 // The fixed palette's colour nearest `rgb` (what encode_gif draws a pixel as).
