@@ -215,3 +215,52 @@ TEST_CASE("gif: what encode_gif writes decodes to the palette colours of every p
   CHECK(std::abs(back[1] - 13) <= 22);
   CHECK(std::abs(back[2] - 128) <= 26);
 }
+
+TEST_CASE("gif: runs of one colour, short and long, across the table's clears, decode exactly",
+          "[animation]") {
+  // The encoder takes runs of one index without a lookup per pixel (sim/output/gif.cpp): runs
+  // of every length from 1 to past what the table holds, at a frame's start and end, between
+  // single pixels, of several colours at once (each its own strings), and enough of them that
+  // the table fills and is cleared many times over.
+  std::uint32_t state = 99;
+  auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return state >> 8;
+  };
+  const std::uint8_t colours[4][3] = {{0, 0, 0}, {255, 255, 255}, {255, 0, 0}, {0, 102, 255}};
+  std::vector<RgbImage> frames;
+  for (int f = 0; f < 3; ++f) {
+    RgbImage image;
+    image.width = 311;
+    image.height = 173;
+    const std::size_t n = static_cast<std::size_t>(image.width) * image.height;
+    std::size_t at = 0;
+    while (at < n) {
+      const std::uint32_t pick = next();
+      const std::size_t length = f == 2          ? 1 + pick % 3
+                                 : pick % 7 == 0 ? 1 + pick % 900
+                                                 : 1 + pick % 40;
+      const std::uint8_t* c = colours[pick >> 20 & 3];
+      for (std::size_t k = 0; k < length && at < n; ++k, ++at)
+        image.rgb.insert(image.rgb.end(), c, c + 3);
+      if (pick % 5 == 0 && at < n) {  // a single pixel of another colour
+        const std::uint8_t one[3] = {static_cast<std::uint8_t>(next()),
+                                     static_cast<std::uint8_t>(next()), 17};
+        image.rgb.insert(image.rgb.end(), one, one + 3);
+        ++at;
+      }
+    }
+    frames.push_back(std::move(image));
+  }
+  std::vector<const RgbImage*> list;
+  for (const RgbImage& i : frames) list.push_back(&i);
+  const DecodedGif gif = decode_gif(encode_gif(list, 5));
+  REQUIRE(gif.frames.size() == frames.size());
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    std::size_t wrong = 0;
+    for (std::size_t p = 0; p < gif.frames[f].size(); ++p)
+      wrong += gif.frames[f][p] != gif_palette_index(&frames[f].rgb[3 * p]);
+    CAPTURE(f);
+    CHECK(wrong == 0);
+  }
+}

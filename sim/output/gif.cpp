@@ -72,9 +72,15 @@ class GifBitWriter {
 // of (prefix code, byte) -> code, 16384 entries of 4 bytes (at most 4096 codes: a quarter full
 // at most), so that it stays in the cache; a clear empties it. The codes are the table's,
 // not the hash's: the same frames give the same bytes as any other form of the table.
+//
+// Runs of one index (a frame's background) take a shortcut with the same result. The table's
+// strings that repeat one index c are c, cc, ..., c^K for some K (c^k enters only when c^(k-1)
+// was sent and c followed), so while the string matched so far is c^L and the next r pixels
+// are c, the greedy match goes on to c^min(L + r, K) with no lookup per pixel: those strings'
+// codes are kept per index (run_codes_), not in the hash table, which holds the others.
 class GifLzw {
  public:
-  GifLzw() : slots_(kSlots, 0) {}
+  GifLzw() : slots_(kSlots, 0), run_codes_(256) {}
   void encode(const std::vector<std::uint8_t>& pixels, std::string& out) {
     out.push_back(static_cast<char>(kGifMinCodeSize));
     GifBitWriter w(out);
@@ -83,9 +89,58 @@ class GifLzw {
     clear();
     w.code(kGifClear, size);
     int current = -1;
-    for (const std::uint8_t p : pixels) {
+    int run = -1;     // the index the string so far repeats, else -1
+    int run_len = 0;  // and how many times
+    // A new code for the string so far and p: sent, the table grows, the string restarts at p.
+    // (The writer is a parameter: a lambda holding a reference to a type of this file's
+    // anonymous namespace, in a class outside it, draws -Wsubobject-linkage.)
+    auto add = [&](GifBitWriter& writer, std::uint32_t slot, std::uint32_t key, int p,
+                   bool extends_run) {
+      writer.code(current, size);
+      ++max_code;
+      if (extends_run) {
+        run_codes_[static_cast<std::size_t>(p)].push_back(static_cast<std::uint16_t>(max_code));
+      } else {
+        slots_[slot] = key << 12 | static_cast<std::uint32_t>(max_code);
+      }
+      if (max_code >= (1 << size)) ++size;
+      if (max_code == kGifMaxCodes - 1) {
+        writer.code(kGifClear, size);
+        clear();
+        size = kGifMinCodeSize + 1;
+        max_code = kGifEnd;
+      }
+      current = p;
+      run = p;
+      run_len = 1;
+    };
+    const std::size_t n = pixels.size();
+    const std::uint8_t* px = pixels.data();
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint8_t p = px[i];
       if (current < 0) {
         current = p;
+        run = p;
+        run_len = 1;
+        continue;
+      }
+      if (run == p) {
+        // The pixels from i that repeat p, and the longest run of p the table holds.
+        std::size_t r = 1;
+        while (i + r < n && px[i + r] == p) ++r;
+        const std::vector<std::uint16_t>& codes = run_codes_[p];
+        const std::size_t longest = codes.size() + 1;  // c^k's code at codes[k - 2]
+        const std::size_t take = std::min(r, longest - static_cast<std::size_t>(run_len));
+        run_len += static_cast<int>(take);
+        current = run_len == 1 ? p : codes[static_cast<std::size_t>(run_len) - 2];
+        if (take < r) {
+          // The next p cannot extend c^K (c^(K+1) is not in the table): c^K is sent, and the
+          // string restarts at that p.
+          i += take;
+          add(w, 0, 0, p, true);
+        } else {
+          i += take - 1;
+        }
         continue;
       }
       // An entry: key (prefix code << 8 | byte, 20 bits) << 12 | code (12 bits); 0 is empty
@@ -103,18 +158,11 @@ class GifLzw {
         }
         at = (at + 1) & (kSlots - 1);
       }
-      if (found) continue;
-      w.code(current, size);
-      ++max_code;
-      slots_[at] = key << 12 | static_cast<std::uint32_t>(max_code);
-      if (max_code >= (1 << size)) ++size;
-      if (max_code == kGifMaxCodes - 1) {
-        w.code(kGifClear, size);
-        clear();
-        size = kGifMinCodeSize + 1;
-        max_code = kGifEnd;
+      if (found) {
+        run = -1;  // the string no longer repeats one index
+        continue;
       }
-      current = p;
+      add(w, at, key, p, false);
     }
     if (current >= 0) w.code(current, size);
     w.code(kGifEnd, size);
@@ -124,8 +172,13 @@ class GifLzw {
  private:
   static constexpr int kSlotBits = 14;
   static constexpr std::uint32_t kSlots = 1u << kSlotBits;
-  void clear() { std::fill(slots_.begin(), slots_.end(), 0u); }
+  void clear() {
+    std::fill(slots_.begin(), slots_.end(), 0u);
+    for (std::vector<std::uint16_t>& codes : run_codes_) codes.clear();
+  }
   std::vector<std::uint32_t> slots_;
+  // Per index c, the codes of cc, ccc, ... in the table.
+  std::vector<std::vector<std::uint16_t>> run_codes_;
 };
 
 namespace {
