@@ -12,7 +12,8 @@
 // animate` draws it (sim/animation.hpp: every frame's scene made first, as animate does,
 // outside the time), overlapped in one Session (Session::run_frames: a GP sets up frame n + 1
 // while the Renderers draw frame n; the run streams, the kernel simulating later frames while
-// a helper thread executes a frame's pixels), every frame's frame.png encoded in on_frame,
+// a helper thread executes a frame's pixels), every frame's frame.png encoded and the frame
+// added to the animated GIF in on_frame, as animate does,
 // 2 host threads, and reports
 //   host_over_period  host seconds per frame / the simulated sustained frame period
 //   target            the target for that ratio (real time: 1)
@@ -30,6 +31,7 @@
 #include "models/gp/machine_plan.hpp"
 #include "sim/animation.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/output/gif.hpp"
 #include "sim/scene/scene.hpp"
 #include "sim/simulation.hpp"
 
@@ -95,13 +97,17 @@ void BM_OverlappedFrames(benchmark::State& state) {
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
     pp5::Session run(config, scenes.front(), program, 2);
+    pp5::GifWriter gif(4);
     const pp5::RunSummary& s = run.run_frames(
         kOverlapped,
-        [](int, pp5::FrameResult& r) {
+        [&gif](int, pp5::FrameResult& r) {
           const std::string png = pp5::encode_png(r.image);
           benchmark::DoNotOptimize(png.data());
+          gif.add(r.image);
         },
         true, [&scenes](int k) { return scenes[static_cast<std::size_t>(k)]; });
+    const std::string animation = gif.finish();
+    benchmark::DoNotOptimize(animation.data());
     period = s.sustained_frame_seconds;
     host += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
