@@ -125,12 +125,14 @@ class GifLzw {
         continue;
       }
       if (run == p) {
-        // The pixels from i that repeat p, and the longest run of p the table holds.
-        std::size_t r = 1;
-        while (i + r < n && px[i + r] == p) ++r;
+        // The pixels from i that repeat p, counted only as far as the string can grow (the
+        // table holds runs of p up to `longest`) and one more, to see whether it stops there.
         const std::vector<std::uint16_t>& codes = run_codes_[p];
         const std::size_t longest = codes.size() + 1;  // c^k's code at codes[k - 2]
-        const std::size_t take = std::min(r, longest - static_cast<std::size_t>(run_len));
+        const std::size_t room = longest - static_cast<std::size_t>(run_len);
+        std::size_t r = 1;
+        while (r <= room && i + r < n && px[i + r] == p) ++r;
+        const std::size_t take = std::min(r, room);
         run_len += static_cast<int>(take);
         current = run_len == 1 ? p : codes[static_cast<std::size_t>(run_len) - 2];
         if (take < r) {
