@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <iterator>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -511,6 +512,7 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
 void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
   if (qtest_linear(expr, cond)) return;
   materialize();
+  if (qtest_quadratic(expr, cond)) return;
   prepare_columns(expr);
   u64* v = scratch().s0.data();
   // As for a linear test, the spans narrow to what the test leaves: on each row of a span,
@@ -562,22 +564,154 @@ int end_of_enabled(const std::uint8_t* e, int from, int to) {
 
 }  // namespace
 
-void WordBackend::narrow_spans() {
+void WordBackend::keep_enabled(std::vector<Range>& kept, int from, int to) const {
   const std::uint8_t* e = enable_.data();
+  const int a = first_enabled(e, from, to);
+  if (a == to) return;
+  const int b = end_of_enabled(e, a, to);
+  if (!kept.empty() && kept.back().end == a) {
+    kept.back().end = b;  // a row enabled to its end and the next from its start: one span
+  } else {
+    kept.push_back({a, b});
+  }
+}
+
+void WordBackend::narrow_spans() {
   std::vector<Range>& kept = spare_spans_;
   kept.clear();
   for_each_span_row([&](int, std::size_t row_start, int from, int to) {
     const int start = static_cast<int>(row_start);
-    const int a = first_enabled(e, start + from, start + to);
-    if (a == start + to) return;
-    const int b = end_of_enabled(e, a, start + to);
-    if (!kept.empty() && kept.back().end == a) {
-      kept.back().end = b;  // a row enabled to its end and the next from its start: one span
-    } else {
-      kept.push_back({a, b});
-    }
+    keep_enabled(kept, start + from, start + to);
   });
   spans_.swap(kept);
+}
+
+namespace {
+
+// One row part [first, last] of a quadratic qtest (qtest_quadratic): g(x) = (a x + b) x + k
+// in integers of type T (wide enough for every value formed), the condition `below` (g < 0,
+// or g <= 0 when not strict) or above (g > 0, g >= 0). The integer arg-extremum m (the
+// minimum when a > 0, the maximum when a < 0) is the floor or the ceiling of the vertex
+// -b / 2a, clamped; g is monotone on [first, m] and on [m, last] over the integers (linear,
+// a = 0: monotone throughout, m = first), and so is the condition on each side. Sets
+// `at_m`, whether it holds at m, `left`, the last column left of m where it does not hold as
+// at m (first - 1 if none), and `right`, the first right of m (last + 1 if none), each found
+// by binary search. False when g leaves [lo, hi] (the value wraps): g's extremes over the
+// integers of the part are at its ends and at m.
+template <class T>
+bool quadratic_row(T a, T b, T k, int first, int last, T lo, T hi, bool below, bool strict,
+                   bool& at_m, int& left, int& right) {
+  auto g = [a, b, k](int x) { return (a * x + b) * x + k; };
+  auto holds_at = [below, strict](T v) {
+    return below ? (strict ? v < 0 : v <= 0) : (strict ? v > 0 : v >= 0);
+  };
+  int m = first;
+  T gm = 0;
+  if (a != 0) {
+    T num = -b, den = 2 * a;
+    if (den < 0) num = -num, den = -den;
+    T vertex = num / den;
+    if (num % den != 0 && num < 0) --vertex;  // floor
+    auto clamp = [first, last](T v) {
+      return static_cast<int>(v < first ? T(first) : v > last ? T(last) : v);
+    };
+    const int m0 = clamp(vertex), m1 = clamp(vertex + 1);
+    const T g0 = g(m0), g1 = g(m1);
+    const bool second = a > 0 ? g1 < g0 : g1 > g0;
+    m = second ? m1 : m0;
+    gm = second ? g1 : g0;
+  } else {
+    gm = g(first);
+  }
+  const T gl = g(first), gr = g(last);
+  if (gl < lo || gl > hi || gr < lo || gr > hi || gm < lo || gm > hi) return false;
+  at_m = holds_at(gm);
+  // Right of m: [m, right) where the condition is as at m, [right, last] where it is not.
+  right = last + 1;
+  if (holds_at(gr) != at_m) {
+    int same = m, other = last;
+    while (other - same > 1) {
+      const int mid = same + (other - same) / 2;
+      (holds_at(g(mid)) == at_m ? same : other) = mid;
+    }
+    right = other;
+  }
+  // Left of m: [first, left] where it is not as at m, (left, m] where it is.
+  left = first - 1;
+  if (holds_at(gl) != at_m) {
+    int other = first, same = m;
+    while (same - other > 1) {
+      const int mid = other + (same - other) / 2;
+      (holds_at(g(mid)) == at_m ? same : other) = mid;
+    }
+    left = other;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool WordBackend::qtest_quadratic(const QuadraticCoefficients& c, Compare cond) {
+  using i128 = __int128;
+  if (!one_interval(cond)) return false;
+  if (spans_.empty()) return true;
+  const int width = geometry_.width;
+  if (width > (1 << 28)) return false;  // below: |a x^2| < 2^63 2^56, exact in 128 bits
+  const int R = evaluator_.result_bits;
+  const int s = 64 - R;
+  // v modulo 2^R, as the value in [-2^(R-1), 2^(R-1)) it is congruent to.
+  auto wrap = [s](u64 v) { return static_cast<i64>(v << s) >> s; };
+  const bool below = cond == Compare::lt || cond == Compare::le;
+  const bool strict = cond == Compare::lt || cond == Compare::gt;
+  // On row y, with X = x0 + x: A X^2 + (B Y + D) X + (C Y^2 + E Y + F) = a x^2 + b x + k with
+  // a = A, b = 2 A x0 + B Y + D, k = A x0^2 + (B Y + D) x0 + C Y^2 + E Y + F. Modulo 2^R (all
+  // the evaluator keeps) each of a, b, k may be replaced by its residue in [-2^(R-1),
+  // 2^(R-1)) (x^2, x and 1 are integers), formed modulo 2^64 as the evaluator forms the
+  // value. Where the exact value of g(x) = a x^2 + b x + k, so reduced, lies within
+  // result_bits at every column of a row part, it is the value the evaluator delivers there.
+  // In 64-bit integers when every value formed (|a| (w^2 + w) + |b| w + |k| < 2^(R-1) 4 w^2,
+  // the vertex's 2a) stays below 2^62, else in 128.
+  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), C = static_cast<u64>(c.C),
+            D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  const u64 X0 = static_cast<u64>(static_cast<i64>(x0_));
+  const i64 a = wrap(A);
+  int width_bits = 0;
+  while ((1 << width_bits) < width) ++width_bits;
+  const bool narrow = R - 1 + 2 + 2 * width_bits <= 62;
+  const i64 lo = R == 64 ? std::numeric_limits<i64>::min() : -(i64{1} << (R - 1)), hi = -(lo + 1);
+  std::vector<Range>& kept = spare_spans_;  // becomes spans_ (the old ones the spare)
+  kept.clear();
+  bool exact = true;
+  int row_y = -1;
+  i64 b = 0, k = 0;
+  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+    if (!exact) return;
+    if (y != row_y) {
+      const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
+      const u64 linear = B * Y + D;
+      b = wrap(2 * A * X0 + linear);
+      k = wrap((A * X0 + linear) * X0 + (C * Y + E) * Y + F);
+      row_y = y;
+    }
+    bool at_m = false;
+    int left = 0, right = 0;
+    const int first = from, last = to - 1;
+    exact =
+        narrow
+            ? quadratic_row<i64>(a, b, k, first, last, lo, hi, below, strict, at_m, left, right)
+            : quadratic_row<i128>(a, b, k, first, last, lo, hi, below, strict, at_m, left, right);
+    if (!exact) return;
+    const int start = static_cast<int>(row_start);
+    if (at_m) {
+      keep_enabled(kept, start + left + 1, start + right);
+    } else {
+      keep_enabled(kept, start + first, start + left + 1);
+      keep_enabled(kept, start + right, start + last + 1);
+    }
+  });
+  if (!exact) return false;
+  spans_.swap(kept);
+  return true;
 }
 
 void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {

@@ -13,12 +13,15 @@
 // both per level, the backing store lanes like pixel memory (allocated on first use). Every
 // operation runs only over the spans (after a triangle's edge tests, its own columns of each
 // of its rows), which is exact (E = 0 is never written) and makes its cost the pixels a
-// primitive's bounding rows and edges leave; an edge test only narrows the spans, any other
-// test (cmp, qcmp, a quadratic qtest) narrows each row's part to its first to last enabled
-// pixel, and saving or restoring E copies only them. E's bytes outside the spans are never
-// read. A run
-// of half-plane tests (a triangle's edges) is applied together when the next operation
-// needs E, over only the rows of the band where all of them can hold (materialize()).
+// primitive's bounding rows and edges leave; an edge test only narrows the spans, and so
+// does a quadratic qtest (a sphere's outline) wherever its value cannot wrap: each row's
+// part to the interval (or the two) where the condition holds, found by binary search on
+// exact values, then to its first to last enabled pixel; any other test (cmp, qcmp, a
+// quadratic qtest that could wrap, eq, ne) ANDs E pixel by pixel and narrows each row's part
+// to its first to last enabled pixel. Saving or restoring E copies only the spans. E's bytes
+// outside the spans are never read. A run of half-plane tests (a triangle's edges) is
+// applied together when the next operation needs E, over only the rows of the band where
+// all of them can hold (materialize()).
 //
 // Contract: implements PixelBackend (firmware/isa/backend.hpp), including its one bit-serial
 // corner: an ALU source field that overlaps its destination from below (src.lo < dst.lo)
@@ -96,6 +99,20 @@ class WordBackend final : public PixelBackend {
   // own fast path does, and spans_ narrowed to those intervals. False (nothing done) when
   // the expression is not such.
   bool qtest_linear(const QuadraticCoefficients& c, Compare cond);
+  // qtest (lt, le, gt, ge) of any expression whose value cannot wrap on the spans: on each
+  // row it is, modulo 2^result_bits, a quadratic (or linear) g(x) = a x^2 + b x + k of the
+  // column with a, b, k reduced to result_bits, monotone on each side of its integer
+  // arg-extremum, so the columns where the condition holds are one interval or the
+  // complement of one, found by binary search on exact (128-bit) values; spans_ narrowed to
+  // them (and to their first to last enabled pixel), E's bytes untouched. False (nothing
+  // done) when the condition is eq or ne or g leaves result_bits on some span's row part (at
+  // its ends or its arg-extremum, the extremes of g over its integers): the value wraps
+  // there, and the per-pixel evaluation decides.
+  bool qtest_quadratic(const QuadraticCoefficients& c, Compare cond);
+  // Pixels [from, to) with their E bytes as the test left them, appended to `kept` trimmed
+  // to their first to last enabled pixel (nothing when none is), joined to the span before
+  // when it ends where they begin.
+  void keep_enabled(std::vector<Range>& kept, int from, int to) const;
   // The evaluator's column terms for `c` (row_a_, row_b_), before evaluate.
   void prepare_columns(const QuadraticCoefficients& c) const;
   // The field's values at pixels [r.begin, r.end) into out[p], extended to 64 bits by the
