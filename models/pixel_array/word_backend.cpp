@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <stdexcept>
@@ -46,30 +47,38 @@ inline bool holds(Compare cond, T a, T b) {
   return false;
 }
 
+// E &= (a[p] cond b[p]) over [begin, end); returns the OR of the new E bytes (whether any
+// pixel is still enabled), formed in the same pass.
+template <class GetA, class GetB, class Cmp>
+std::uint8_t and_compare_loop(std::uint8_t* e, GetA a, GetB b, Cmp cmp, int begin, int end) {
+  std::uint8_t any = 0;
+  for (int p = begin; p < end; ++p) {
+    const std::uint8_t v = e[p] & static_cast<std::uint8_t>(cmp(a(p), b(p)));
+    e[p] = v;
+    any |= v;
+  }
+  return any;
+}
+
 // E &= (a[p] cond b[p]) as signed 64-bit values; one loop per condition so that each
-// vectorises.
+// vectorises. Whether any pixel of [begin, end) is still enabled.
 template <class GetA, class GetB>
-void and_compare_with(std::uint8_t* e, GetA a, GetB b, Compare cond, int begin, int end) {
+bool and_compare_with(std::uint8_t* e, GetA a, GetB b, Compare cond, int begin, int end) {
   switch (cond) {
     case Compare::lt:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) < b(p);
-      break;
+      return and_compare_loop(e, a, b, std::less<>(), begin, end) != 0;
     case Compare::le:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) <= b(p);
-      break;
+      return and_compare_loop(e, a, b, std::less_equal<>(), begin, end) != 0;
     case Compare::eq:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) == b(p);
-      break;
+      return and_compare_loop(e, a, b, std::equal_to<>(), begin, end) != 0;
     case Compare::ne:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) != b(p);
-      break;
+      return and_compare_loop(e, a, b, std::not_equal_to<>(), begin, end) != 0;
     case Compare::ge:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) >= b(p);
-      break;
+      return and_compare_loop(e, a, b, std::greater_equal<>(), begin, end) != 0;
     case Compare::gt:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) > b(p);
-      break;
+      return and_compare_loop(e, a, b, std::greater<>(), begin, end) != 0;
   }
+  return false;
 }
 
 template <class GetB>
@@ -100,6 +109,7 @@ WordBackend::WordBackend(const PixelBackendParams& params)
   enable_.assign(n, 1);
   spans_ = {Range{0, pixels_}};
   stack_spans_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
+  stack_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
   allocate_scratch();  // here, on the thread that makes the backend (see Scratch)
 }
 
@@ -278,9 +288,9 @@ void WordBackend::push_enable() {
   // E outside spans_ is 0 whatever its bytes hold: only the spans are copied.
   // Levels are allocated as the stack first reaches them (most programs use one or two of
   // the eight), so that a clone or kept state copies only those.
-  const auto end = static_cast<std::size_t>(stack_top_ + 1) * pixels_;
-  if (stack_.size() < end) stack_.resize(end);
-  std::uint8_t* level = &stack_[static_cast<std::size_t>(stack_top_) * pixels_];
+  std::vector<std::uint8_t>& saved = stack_[static_cast<std::size_t>(stack_top_)];
+  if (saved.empty()) saved.resize(static_cast<std::size_t>(pixels_));
+  std::uint8_t* level = saved.data();
   for (const Range& r : spans_)
     std::copy(enable_.begin() + r.begin, enable_.begin() + r.end, level + r.begin);
   stack_spans_[static_cast<std::size_t>(stack_top_)] = spans_;
@@ -291,16 +301,17 @@ void WordBackend::pop_enable() {
   materialize();
   if (stack_top_ == 0) throw std::underflow_error("enable stack underflow");
   --stack_top_;
-  const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_) * pixels_];
-  spans_ = stack_spans_[static_cast<std::size_t>(stack_top_)];
-  for (const Range& r : spans_)
-    std::copy(saved + r.begin, saved + r.end, enable_.begin() + r.begin);
+  // The saved level becomes E, bytes and spans, by a swap rather than a copy: what E held
+  // goes to the level, above the top now, which nothing reads before a push overwrites its
+  // spans.
+  enable_.swap(stack_[static_cast<std::size_t>(stack_top_)]);
+  spans_.swap(stack_spans_[static_cast<std::size_t>(stack_top_)]);
 }
 
 void WordBackend::else_enable() {
   materialize();
   if (stack_top_ == 0) throw std::underflow_error("else without a saved enable");
-  const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_ - 1) * pixels_];
+  const std::uint8_t* saved = stack_[static_cast<std::size_t>(stack_top_ - 1)].data();
   std::uint8_t* e = enable_.data();
   const std::vector<Range>& keep = stack_spans_[static_cast<std::size_t>(stack_top_ - 1)];
   // E <- saved & ~E over the saved level's spans (outside them the result is 0): where E's
@@ -830,10 +841,15 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
   const bool eq =
       cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
   const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
-  for_each_span_row([=](int y, std::size_t row_start, int from, int to) {
+  // Each row's part narrowed (as narrow_spans does) as soon as it is compared, skipped when
+  // the pass found no pixel left.
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
+  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
     const PixelValues::Row r = values.row(y);
     const u64* m = lane + row_start;
     std::uint8_t* en = e + row_start;
+    std::uint8_t any = 0;
     for (int x = from; x < to; ++x) {
       u64 v = values.at<kSquare>(r, x);
       u64 f = (m[x] >> off) & mask;
@@ -845,9 +861,14 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
       }
       const i64 a = static_cast<i64>(v), b = static_cast<i64>(f);
       const bool holds = (((a < b) & lt) | ((a == b) & eq)) ^ inv;
-      en[x] &= static_cast<std::uint8_t>(holds);
+      const std::uint8_t left = en[x] & static_cast<std::uint8_t>(holds);
+      en[x] = left;
+      any |= left;
     }
+    const int start = static_cast<int>(row_start);
+    if (any != 0) keep_enabled(kept, start + from, start + to);
   });
+  spans_.swap(kept);
 }
 
 void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) {
@@ -862,7 +883,6 @@ void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Co
       square ? qcmp_lane<true, false>(field, expr, cond)
              : qcmp_lane<false, false>(field, expr, cond);
     }
-    narrow_spans();
     return;
   }
   prepare_columns(expr);
@@ -896,11 +916,20 @@ void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
   materialize();
   check_field(a, "operand");
   if (b.is_field) check_field(b.field, "operand");
-  for (const Range& r : spans_) compare_range(a, b, cond, r);
-  narrow_spans();
+  // Row by row, each row's part narrowed (as narrow_spans does) as soon as it is compared,
+  // and skipped when the comparison's own pass found no pixel left.
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
+  for_each_span_row([&](int, std::size_t row_start, int from, int to) {
+    const int start = static_cast<int>(row_start);
+    if (compare_range(a, b, cond, Range{start + from, start + to})) {
+      keep_enabled(kept, start + from, start + to);
+    }
+  });
+  spans_.swap(kept);
 }
 
-void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {
+bool WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {
   const bool a_wide = !a.is_signed && a.width == 64;
   if (!b.is_field && !a_wide && a.lo % 64 + a.width <= 64) {
     // A field within one lane against a constant: read and compared in one pass.
@@ -911,20 +940,17 @@ void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, R
     auto constant = [k](int) { return k; };
     if (a.is_signed && a.width < 64) {
       const int sh = 64 - a.width;
-      and_compare_with(
+      return and_compare_with(
           enable_.data(),
           [lane, off, mask, sh](int p) {
             return static_cast<i64>(((lane[p] >> off) & mask) << sh) >> sh;
           },
           constant, cond, r.begin, r.end);
-    } else {
-      and_compare_with(
-          enable_.data(),
-          [lane, off, mask](int p) { return static_cast<i64>((lane[p] >> off) & mask); }, constant,
-          cond, r.begin, r.end);
     }
-    enable_changed();
-    return;
+    return and_compare_with(
+        enable_.data(),
+        [lane, off, mask](int p) { return static_cast<i64>((lane[p] >> off) & mask); }, constant,
+        cond, r.begin, r.end);
   }
   load(memory_.data(), a, r, scratch().s0.data(), true);
   if (b.is_field) {
@@ -941,6 +967,7 @@ void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, R
               static_cast<u64>(b.constant));
     compare_values(scratch().s0.data(), true, scratch().s1.data(), false, cond, r);
   }
+  return true;
 }
 
 void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
@@ -1358,10 +1385,9 @@ bool WordBackend::same_state(const PixelBackend& other) const {
     for (const Range& r : spans) std::copy(bytes + r.begin, bytes + r.end, out.begin() + r.begin);
   };
   for (int level = -1; level < stack_top_; ++level) {
-    const auto at = static_cast<std::size_t>(std::max(level, 0)) * pixels_;
     const auto k = static_cast<std::size_t>(std::max(level, 0));
-    value(level < 0 ? enable_.data() : &stack_[at], level < 0 ? spans_ : stack_spans_[k], a);
-    value(level < 0 ? o->enable_.data() : &o->stack_[at],
+    value(level < 0 ? enable_.data() : stack_[k].data(), level < 0 ? spans_ : stack_spans_[k], a);
+    value(level < 0 ? o->enable_.data() : o->stack_[k].data(),
           level < 0 ? o->spans_ : o->stack_spans_[k], b);
     if (a != b) return false;
   }

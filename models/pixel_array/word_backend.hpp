@@ -141,8 +141,9 @@ class WordBackend final : public PixelBackend {
   // (as for_each_value gives it, modulo 2^64 the same sum) computed per pixel as
   // ((A X + (D + B Y)) X + (C Y^2 + E Y + F), no column tables: a triangle's rows are
   // shorter than the region is wide), and merged under E, or compared with the field in
-  // place. Only a square term (kSquare: A != 0) and the field's signedness (kSigned) are
-  // compiled in; the condition is applied without a branch per pixel.
+  // place (then each row's part narrowed as narrow_spans does, in the same walk). Only a
+  // square term (kSquare: A != 0) and the field's signedness (kSigned) are compiled in; the
+  // condition is applied without a branch per pixel.
   struct PixelValues;  // their per-pixel arithmetic (word_backend.cpp)
   template <bool kSquare>
   void qload_lane(const Field& dst, const QuadraticCoefficients& c);
@@ -168,7 +169,9 @@ class WordBackend final : public PixelBackend {
   // under E over every span, in one pass (multiply's and multiply_accumulate's).
   template <class Value>
   void merge_lane(const Field& dst, Value value);
-  void compare_range(const Field& a, const Source& b, Compare cond, Range r);
+  // E &= (a cond b) over r; false when it found no pixel of r left enabled (true when it may
+  // have: its general path does not look).
+  bool compare_range(const Field& a, const Source& b, Compare cond, Range r);
   void alu_serial(const Field& dst, const Field& src, Alu op, Range r);
   // E &= (a cond b) over r, a and b extended values; wide when either is an unsigned 64-bit
   // field (a 65-bit comparison).
@@ -186,7 +189,9 @@ class WordBackend final : public PixelBackend {
   int y0_ = 0;
   std::vector<std::uint64_t> memory_;  // lanes_ x pixels_
   std::vector<std::uint8_t> enable_;   // pixels_, valid inside spans_
-  std::vector<std::uint8_t> stack_;    // pixels_ per level the stack has reached
+  // pixels_ bytes per level the stack has reached (empty above), E's at each push; a pop
+  // swaps its level with E.
+  std::vector<std::vector<std::uint8_t>> stack_;
   int stack_top_ = 0;
   std::vector<std::uint64_t> backing_;  // backing lanes x pixels_, allocated on first use
   // Disjoint pixel ranges, in order, outside which E is 0 (a superset of E's set pixels, at
