@@ -715,9 +715,9 @@ bool WordBackend::qtest_quadratic(const QuadraticCoefficients& c, Compare cond) 
     const int start = static_cast<int>(row_start);
     if (at_m) {
       keep_enabled(kept, start + left + 1, start + right);
-    } else {
-      keep_enabled(kept, start + first, start + left + 1);
-      keep_enabled(kept, start + right, start + last + 1);
+    } else {  // the row's ends, each when not empty (most rows outside a sphere's disc: both)
+      if (left >= first) keep_enabled(kept, start + first, start + left + 1);
+      if (right <= last) keep_enabled(kept, start + right, start + last + 1);
     }
   });
   if (!exact) return false;
