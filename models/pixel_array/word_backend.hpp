@@ -88,9 +88,11 @@ class WordBackend final : public PixelBackend {
   };
   // After E was ANDed with something: it is still 0 outside spans_, which stay as they are.
   void enable_changed() {}
-  // After an instruction that ANDed E with a test (cmp, qcmp, a quadratic qtest): each row's
-  // part of each span narrowed to its first to last pixel with E = 1 (a row with none
-  // leaves the spans; a row enabled to its end and the next from its start stay one span).
+  // After an instruction that ANDed E with a test pixel by pixel (qcmp of a field across
+  // two lanes, a quadratic qtest evaluated per pixel; cmp and qcmp within a lane do the same
+  // row by row as they compare, with keep_enabled): each row's part of each span narrowed
+  // to its first to last pixel with E = 1 (a row with none leaves the spans; a row enabled
+  // to its end and the next from its start stay one span).
   // Exact, as E = 0 outside; what follows walks only what the test left: shade only the
   // pixels a primitive reached, the attributes only where a triangle is in front.
   void narrow_spans();
