@@ -491,3 +491,145 @@ TEST_CASE("word and bit agree on runs of linear tests (both backends apply them 
   }
   CHECK(narrowed > 100);
 }
+
+TEST_CASE("word and bit agree on quadratic tests (word finds each row's interval exactly)",
+          "[word][backend]") {
+  // The word backend's qtest of a quadratic expression (lt, le, gt, ge) finds on each row of
+  // its spans the interval where the condition holds, or its complement, by binary search
+  // on exact values, and runs the per-pixel evaluation instead when the value could wrap on
+  // some row. Random discs and ellipses (convex and concave, with a cross term), rows linear
+  // in x (A = 0, B != 0) or constant (A = B = 0, C != 0), of every size from one pixel to
+  // more than the region, every condition; before the test E narrowed by edges (spans that
+  // start inside a row) and by a cmp on random memory (holes inside the spans); values
+  // shifted so that their extreme lies a few units either side of the wrap limit, so that
+  // both paths run; coefficients sent modulo 2^result_bits as a sphere's are. E and memory compared
+  // with bit after the test and after a write under E.
+  PixelBackendParams p;
+  p.array.width = 128;
+  p.array.height = 48;
+  p.array.memory_bits = 64;
+  p.array.enable_stack_depth = 2;
+  // 40 result bits: word's search in 64-bit integers; 56: in 128-bit ones.
+  const int result_bits = GENERATE(40, 56);
+  INFO("result_bits " << result_bits);
+  p.evaluator.coefficient_bits = 40;
+  p.evaluator.result_bits = result_bits;
+  p.fraction_bits = 8;
+  const int width = p.array.width, height = p.array.height;
+  auto word = make_pixel_backend("word", p);
+  auto bit = make_pixel_backend("bit", p);
+  std::mt19937_64 rng(20261127);
+  auto uniform = [&](std::int64_t lo, std::int64_t hi) {
+    return std::uniform_int_distribution<std::int64_t>(lo, hi)(rng);
+  };
+  for (int px = 0; px < width * height; ++px) {
+    const std::uint64_t v = rng();
+    word->write(px, Field{0, 64, false}, v);
+    bit->write(px, Field{0, 64, false}, v);
+  }
+  using i128 = __int128;
+  const i128 limit = i128(1) << (p.evaluator.result_bits - 1);
+  std::vector<std::uint64_t> bit_planes, word_planes;
+  auto same = [&](const char* when) {
+    INFO(when);
+    int differing = 0;
+    for (int px = 0; px < width * height; ++px) differing += word->enabled(px) != bit->enabled(px);
+    REQUIRE(differing == 0);
+    REQUIRE(word->count_enabled() == bit->count_enabled());
+    bit->read_memory_planes(bit_planes);
+    word->read_memory_planes(word_planes);
+    REQUIRE(word_planes == bit_planes);
+  };
+  int partial = 0, wrapped = 0, near = 0;
+  for (int trial = 0; trial < 1500; ++trial) {
+    INFO("trial " << trial);
+    // Sometimes far from the screen's origin: coefficients beyond result_bits (below).
+    const int far = uniform(0, 3) == 0 ? 4096 : 20;
+    const int x0 = static_cast<int>(uniform(-3, far)) * width;
+    const int y0 = static_cast<int>(uniform(-3, far)) * height;
+    for (auto* b : {word.get(), bit.get()}) b->set_origin(x0, y0);
+    for (auto* b : {word.get(), bit.get()}) b->enable_all();
+    const int before = static_cast<int>(uniform(0, 3));
+    if (before & 1) {  // an edge: spans that start inside rows
+      const std::int64_t d = uniform(-300, 300), e = uniform(-300, 300);
+      const QuadraticCoefficients edge = QuadraticCoefficients::linear(
+          d, e, -(d * (x0 + uniform(0, width)) + e * (y0 + uniform(0, height))));
+      const Compare side = uniform(0, 1) ? Compare::ge : Compare::lt;
+      for (auto* b : {word.get(), bit.get()}) b->qtest(edge, side);
+    }
+    if (before & 2) {  // E = 0 at random pixels inside the spans
+      const Field f{static_cast<int>(uniform(0, 56)), 3, false};
+      for (auto* b : {word.get(), bit.get()})
+        b->compare(f, Source::of(std::int64_t{1}), Compare::ne);
+    }
+    // g = A (X - cx)^2 + B (X - cx)(Y - cy) + C (Y - cy)^2 + G, expanded.
+    const std::int64_t cx = x0 + uniform(-40, width + 40), cy = y0 + uniform(-40, height + 40);
+    std::int64_t A = 0, B = 0, C = 0, G = 0;
+    const int kind = static_cast<int>(uniform(0, 5));
+    const std::int64_t sign = uniform(0, 1) ? 1 : -1;
+    if (kind <= 2) {  // an ellipse: convex (sign 1) or concave (-1), radius 0 to beyond the region
+      A = sign * uniform(1, 9);
+      C = sign * uniform(1, 9);
+      B = kind == 0 ? 0 : uniform(-1, 1) * std::min(std::abs(A), std::abs(C));
+      const std::int64_t r = uniform(0, 3) == 0 ? uniform(0, 2) : uniform(0, 160);
+      G = -sign * 4 * r * r + uniform(-3, 3);
+    } else if (kind == 3) {  // linear in x on each row
+      B = uniform(1, 50) * (uniform(0, 1) ? 1 : -1);
+      C = uniform(-3, 3);
+      G = uniform(-100000, 100000);
+    } else if (kind == 4) {  // constant on each row
+      C = uniform(1, 40) * sign;
+      G = uniform(-40000, 40000);
+    } else {  // a parabola in x: one to a few pixels where it changes sign
+      A = sign * uniform(1, 3000);
+      G = -sign * uniform(0, 20);
+    }
+    QuadraticCoefficients c;
+    c.A = A;
+    c.B = B;
+    c.C = C;
+    c.D = -2 * A * cx - B * cy;
+    c.E = -2 * C * cy - B * cx;
+    c.F = A * cx * cx + B * cx * cy + C * cy * cy + G;
+    if (uniform(0, 2) == 0) {
+      // The value's largest (or smallest) over the region a few units either side of the
+      // wrap limit: on that pixel's row the fast path must give way to the per-pixel one.
+      i128 most = std::numeric_limits<std::int64_t>::min(), least = -most;
+      for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+          const i128 X = x0 + x, Y = y0 + y;
+          const i128 v = i128(c.A) * X * X + i128(c.B) * X * Y + i128(c.C) * Y * Y + i128(c.D) * X +
+                         i128(c.E) * Y + c.F;
+          most = std::max(most, v);
+          least = std::min(least, v);
+        }
+      }
+      const i128 shift =
+          uniform(0, 1) ? limit - 1 - most + uniform(-2, 2) : -limit - least + uniform(-2, 2);
+      c.F += static_cast<std::int64_t>(shift);
+      ++near;
+      wrapped += most + shift >= limit || least + shift < -limit;
+    }
+    if (uniform(0, 2) == 0) {
+      // Each coefficient sent modulo 2^result_bits, as the GP sends a sphere's (the value
+      // is the same modulo 2^result_bits, but formed from coefficients far from it).
+      const int s = 64 - p.evaluator.result_bits;
+      for (std::int64_t* v : {&c.A, &c.B, &c.C, &c.D, &c.E, &c.F})
+        *v = static_cast<std::int64_t>(static_cast<std::uint64_t>(*v) << s) >> s;
+    }
+    const Compare cond = static_cast<Compare>(uniform(0, 5));
+    INFO("A " << c.A << " B " << c.B << " C " << c.C << " D " << c.D << " E " << c.E << " F " << c.F
+              << " cond " << static_cast<int>(cond) << " origin " << x0 << "," << y0);
+    for (auto* b : {word.get(), bit.get()}) b->qtest(c, cond);
+    same("after the quadratic test");
+    const int left = word->count_enabled();
+    partial += left > 0 && left < width * height / 2;
+    const Field dst{static_cast<int>(uniform(0, 48)), 16, false};
+    const std::int64_t k = uniform(0, 65535);
+    for (auto* b : {word.get(), bit.get()}) b->mov(dst, Source::of(k));
+    same("after a write under E");
+  }
+  CHECK(partial > 300);
+  CHECK(wrapped > 50);
+  CHECK(near - wrapped > 50);
+}

@@ -5,7 +5,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <iterator>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -45,30 +47,38 @@ inline bool holds(Compare cond, T a, T b) {
   return false;
 }
 
+// E &= (a[p] cond b[p]) over [begin, end); returns the OR of the new E bytes (whether any
+// pixel is still enabled), formed in the same pass.
+template <class GetA, class GetB, class Cmp>
+std::uint8_t and_compare_loop(std::uint8_t* e, GetA a, GetB b, Cmp cmp, int begin, int end) {
+  std::uint8_t any = 0;
+  for (int p = begin; p < end; ++p) {
+    const std::uint8_t v = e[p] & static_cast<std::uint8_t>(cmp(a(p), b(p)));
+    e[p] = v;
+    any |= v;
+  }
+  return any;
+}
+
 // E &= (a[p] cond b[p]) as signed 64-bit values; one loop per condition so that each
-// vectorises.
+// vectorises. Whether any pixel of [begin, end) is still enabled.
 template <class GetA, class GetB>
-void and_compare_with(std::uint8_t* e, GetA a, GetB b, Compare cond, int begin, int end) {
+bool and_compare_with(std::uint8_t* e, GetA a, GetB b, Compare cond, int begin, int end) {
   switch (cond) {
     case Compare::lt:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) < b(p);
-      break;
+      return and_compare_loop(e, a, b, std::less<>(), begin, end) != 0;
     case Compare::le:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) <= b(p);
-      break;
+      return and_compare_loop(e, a, b, std::less_equal<>(), begin, end) != 0;
     case Compare::eq:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) == b(p);
-      break;
+      return and_compare_loop(e, a, b, std::equal_to<>(), begin, end) != 0;
     case Compare::ne:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) != b(p);
-      break;
+      return and_compare_loop(e, a, b, std::not_equal_to<>(), begin, end) != 0;
     case Compare::ge:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) >= b(p);
-      break;
+      return and_compare_loop(e, a, b, std::greater_equal<>(), begin, end) != 0;
     case Compare::gt:
-      for (int p = begin; p < end; ++p) e[p] &= a(p) > b(p);
-      break;
+      return and_compare_loop(e, a, b, std::greater<>(), begin, end) != 0;
   }
+  return false;
 }
 
 template <class GetB>
@@ -99,6 +109,7 @@ WordBackend::WordBackend(const PixelBackendParams& params)
   enable_.assign(n, 1);
   spans_ = {Range{0, pixels_}};
   stack_spans_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
+  stack_.assign(static_cast<std::size_t>(geometry_.enable_stack_depth), {});
   allocate_scratch();  // here, on the thread that makes the backend (see Scratch)
 }
 
@@ -277,9 +288,9 @@ void WordBackend::push_enable() {
   // E outside spans_ is 0 whatever its bytes hold: only the spans are copied.
   // Levels are allocated as the stack first reaches them (most programs use one or two of
   // the eight), so that a clone or kept state copies only those.
-  const auto end = static_cast<std::size_t>(stack_top_ + 1) * pixels_;
-  if (stack_.size() < end) stack_.resize(end);
-  std::uint8_t* level = &stack_[static_cast<std::size_t>(stack_top_) * pixels_];
+  std::vector<std::uint8_t>& saved = stack_[static_cast<std::size_t>(stack_top_)];
+  if (saved.empty()) saved.resize(static_cast<std::size_t>(pixels_));
+  std::uint8_t* level = saved.data();
   for (const Range& r : spans_)
     std::copy(enable_.begin() + r.begin, enable_.begin() + r.end, level + r.begin);
   stack_spans_[static_cast<std::size_t>(stack_top_)] = spans_;
@@ -290,16 +301,17 @@ void WordBackend::pop_enable() {
   materialize();
   if (stack_top_ == 0) throw std::underflow_error("enable stack underflow");
   --stack_top_;
-  const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_) * pixels_];
-  spans_ = stack_spans_[static_cast<std::size_t>(stack_top_)];
-  for (const Range& r : spans_)
-    std::copy(saved + r.begin, saved + r.end, enable_.begin() + r.begin);
+  // The saved level becomes E, bytes and spans, by a swap rather than a copy: what E held
+  // goes to the level, above the top now, which nothing reads before a push overwrites its
+  // spans.
+  enable_.swap(stack_[static_cast<std::size_t>(stack_top_)]);
+  spans_.swap(stack_spans_[static_cast<std::size_t>(stack_top_)]);
 }
 
 void WordBackend::else_enable() {
   materialize();
   if (stack_top_ == 0) throw std::underflow_error("else without a saved enable");
-  const std::uint8_t* saved = &stack_[static_cast<std::size_t>(stack_top_ - 1) * pixels_];
+  const std::uint8_t* saved = stack_[static_cast<std::size_t>(stack_top_ - 1)].data();
   std::uint8_t* e = enable_.data();
   const std::vector<Range>& keep = stack_spans_[static_cast<std::size_t>(stack_top_ - 1)];
   // E <- saved & ~E over the saved level's spans (outside them the result is 0): where E's
@@ -511,6 +523,7 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
 void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
   if (qtest_linear(expr, cond)) return;
   materialize();
+  if (qtest_quadratic(expr, cond)) return;
   prepare_columns(expr);
   u64* v = scratch().s0.data();
   // As for a linear test, the spans narrow to what the test leaves: on each row of a span,
@@ -562,22 +575,154 @@ int end_of_enabled(const std::uint8_t* e, int from, int to) {
 
 }  // namespace
 
-void WordBackend::narrow_spans() {
+void WordBackend::keep_enabled(std::vector<Range>& kept, int from, int to) const {
   const std::uint8_t* e = enable_.data();
+  const int a = first_enabled(e, from, to);
+  if (a == to) return;
+  const int b = end_of_enabled(e, a, to);
+  if (!kept.empty() && kept.back().end == a) {
+    kept.back().end = b;  // a row enabled to its end and the next from its start: one span
+  } else {
+    kept.push_back({a, b});
+  }
+}
+
+void WordBackend::narrow_spans() {
   std::vector<Range>& kept = spare_spans_;
   kept.clear();
   for_each_span_row([&](int, std::size_t row_start, int from, int to) {
     const int start = static_cast<int>(row_start);
-    const int a = first_enabled(e, start + from, start + to);
-    if (a == start + to) return;
-    const int b = end_of_enabled(e, a, start + to);
-    if (!kept.empty() && kept.back().end == a) {
-      kept.back().end = b;  // a row enabled to its end and the next from its start: one span
-    } else {
-      kept.push_back({a, b});
-    }
+    keep_enabled(kept, start + from, start + to);
   });
   spans_.swap(kept);
+}
+
+namespace {
+
+// One row part [first, last] of a quadratic qtest (qtest_quadratic): g(x) = (a x + b) x + k
+// in integers of type T (wide enough for every value formed), the condition `below` (g < 0,
+// or g <= 0 when not strict) or above (g > 0, g >= 0). The integer arg-extremum m (the
+// minimum when a > 0, the maximum when a < 0) is the floor or the ceiling of the vertex
+// -b / 2a, clamped; g is monotone on [first, m] and on [m, last] over the integers (linear,
+// a = 0: monotone throughout, m = first), and so is the condition on each side. Sets
+// `at_m`, whether it holds at m, `left`, the last column left of m where it does not hold as
+// at m (first - 1 if none), and `right`, the first right of m (last + 1 if none), each found
+// by binary search. False when g leaves [lo, hi] (the value wraps): g's extremes over the
+// integers of the part are at its ends and at m.
+template <class T>
+bool quadratic_row(T a, T b, T k, int first, int last, T lo, T hi, bool below, bool strict,
+                   bool& at_m, int& left, int& right) {
+  auto g = [a, b, k](int x) { return (a * x + b) * x + k; };
+  auto holds_at = [below, strict](T v) {
+    return below ? (strict ? v < 0 : v <= 0) : (strict ? v > 0 : v >= 0);
+  };
+  int m = first;
+  T gm = 0;
+  if (a != 0) {
+    T num = -b, den = 2 * a;
+    if (den < 0) num = -num, den = -den;
+    T vertex = num / den;
+    if (num % den != 0 && num < 0) --vertex;  // floor
+    auto clamp = [first, last](T v) {
+      return static_cast<int>(v < first ? T(first) : v > last ? T(last) : v);
+    };
+    const int m0 = clamp(vertex), m1 = clamp(vertex + 1);
+    const T g0 = g(m0), g1 = g(m1);
+    const bool second = a > 0 ? g1 < g0 : g1 > g0;
+    m = second ? m1 : m0;
+    gm = second ? g1 : g0;
+  } else {
+    gm = g(first);
+  }
+  const T gl = g(first), gr = g(last);
+  if (gl < lo || gl > hi || gr < lo || gr > hi || gm < lo || gm > hi) return false;
+  at_m = holds_at(gm);
+  // Right of m: [m, right) where the condition is as at m, [right, last] where it is not.
+  right = last + 1;
+  if (holds_at(gr) != at_m) {
+    int same = m, other = last;
+    while (other - same > 1) {
+      const int mid = same + (other - same) / 2;
+      (holds_at(g(mid)) == at_m ? same : other) = mid;
+    }
+    right = other;
+  }
+  // Left of m: [first, left] where it is not as at m, (left, m] where it is.
+  left = first - 1;
+  if (holds_at(gl) != at_m) {
+    int other = first, same = m;
+    while (same - other > 1) {
+      const int mid = other + (same - other) / 2;
+      (holds_at(g(mid)) == at_m ? same : other) = mid;
+    }
+    left = other;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool WordBackend::qtest_quadratic(const QuadraticCoefficients& c, Compare cond) {
+  using i128 = __int128;
+  if (!one_interval(cond)) return false;
+  if (spans_.empty()) return true;
+  const int width = geometry_.width;
+  if (width > (1 << 28)) return false;  // below: |a x^2| < 2^63 2^56, exact in 128 bits
+  const int R = evaluator_.result_bits;
+  const int s = 64 - R;
+  // v modulo 2^R, as the value in [-2^(R-1), 2^(R-1)) it is congruent to.
+  auto wrap = [s](u64 v) { return static_cast<i64>(v << s) >> s; };
+  const bool below = cond == Compare::lt || cond == Compare::le;
+  const bool strict = cond == Compare::lt || cond == Compare::gt;
+  // On row y, with X = x0 + x: A X^2 + (B Y + D) X + (C Y^2 + E Y + F) = a x^2 + b x + k with
+  // a = A, b = 2 A x0 + B Y + D, k = A x0^2 + (B Y + D) x0 + C Y^2 + E Y + F. Modulo 2^R (all
+  // the evaluator keeps) each of a, b, k may be replaced by its residue in [-2^(R-1),
+  // 2^(R-1)) (x^2, x and 1 are integers), formed modulo 2^64 as the evaluator forms the
+  // value. Where the exact value of g(x) = a x^2 + b x + k, so reduced, lies within
+  // result_bits at every column of a row part, it is the value the evaluator delivers there.
+  // In 64-bit integers when every value formed (|a| (w^2 + w) + |b| w + |k| < 2^(R-1) 4 w^2,
+  // the vertex's 2a) stays below 2^62, else in 128.
+  const u64 A = static_cast<u64>(c.A), B = static_cast<u64>(c.B), C = static_cast<u64>(c.C),
+            D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  const u64 X0 = static_cast<u64>(static_cast<i64>(x0_));
+  const i64 a = wrap(A);
+  int width_bits = 0;
+  while ((1 << width_bits) < width) ++width_bits;
+  const bool narrow = R - 1 + 2 + 2 * width_bits <= 62;
+  const i64 lo = R == 64 ? std::numeric_limits<i64>::min() : -(i64{1} << (R - 1)), hi = -(lo + 1);
+  std::vector<Range>& kept = spare_spans_;  // becomes spans_ (the old ones the spare)
+  kept.clear();
+  bool exact = true;
+  int row_y = -1;
+  i64 b = 0, k = 0;
+  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+    if (!exact) return;
+    if (y != row_y) {
+      const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
+      const u64 linear = B * Y + D;
+      b = wrap(2 * A * X0 + linear);
+      k = wrap((A * X0 + linear) * X0 + (C * Y + E) * Y + F);
+      row_y = y;
+    }
+    bool at_m = false;
+    int left = 0, right = 0;
+    const int first = from, last = to - 1;
+    exact =
+        narrow
+            ? quadratic_row<i64>(a, b, k, first, last, lo, hi, below, strict, at_m, left, right)
+            : quadratic_row<i128>(a, b, k, first, last, lo, hi, below, strict, at_m, left, right);
+    if (!exact) return;
+    const int start = static_cast<int>(row_start);
+    if (at_m) {
+      keep_enabled(kept, start + left + 1, start + right);
+    } else {  // the row's ends, each when not empty (most rows outside a sphere's disc: both)
+      if (left >= first) keep_enabled(kept, start + first, start + left + 1);
+      if (right <= last) keep_enabled(kept, start + right, start + last + 1);
+    }
+  });
+  if (!exact) return false;
+  spans_.swap(kept);
+  return true;
 }
 
 void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
@@ -696,10 +841,15 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
   const bool eq =
       cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
   const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
-  for_each_span_row([=](int y, std::size_t row_start, int from, int to) {
+  // Each row's part narrowed (as narrow_spans does) as soon as it is compared, skipped when
+  // the pass found no pixel left.
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
+  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
     const PixelValues::Row r = values.row(y);
     const u64* m = lane + row_start;
     std::uint8_t* en = e + row_start;
+    std::uint8_t any = 0;
     for (int x = from; x < to; ++x) {
       u64 v = values.at<kSquare>(r, x);
       u64 f = (m[x] >> off) & mask;
@@ -711,9 +861,14 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
       }
       const i64 a = static_cast<i64>(v), b = static_cast<i64>(f);
       const bool holds = (((a < b) & lt) | ((a == b) & eq)) ^ inv;
-      en[x] &= static_cast<std::uint8_t>(holds);
+      const std::uint8_t left = en[x] & static_cast<std::uint8_t>(holds);
+      en[x] = left;
+      any |= left;
     }
+    const int start = static_cast<int>(row_start);
+    if (any != 0) keep_enabled(kept, start + from, start + to);
   });
+  spans_.swap(kept);
 }
 
 void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) {
@@ -728,7 +883,6 @@ void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Co
       square ? qcmp_lane<true, false>(field, expr, cond)
              : qcmp_lane<false, false>(field, expr, cond);
     }
-    narrow_spans();
     return;
   }
   prepare_columns(expr);
@@ -762,11 +916,20 @@ void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
   materialize();
   check_field(a, "operand");
   if (b.is_field) check_field(b.field, "operand");
-  for (const Range& r : spans_) compare_range(a, b, cond, r);
-  narrow_spans();
+  // Row by row, each row's part narrowed (as narrow_spans does) as soon as it is compared,
+  // and skipped when the comparison's own pass found no pixel left.
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
+  for_each_span_row([&](int, std::size_t row_start, int from, int to) {
+    const int start = static_cast<int>(row_start);
+    if (compare_range(a, b, cond, Range{start + from, start + to})) {
+      keep_enabled(kept, start + from, start + to);
+    }
+  });
+  spans_.swap(kept);
 }
 
-void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {
+bool WordBackend::compare_range(const Field& a, const Source& b, Compare cond, Range r) {
   const bool a_wide = !a.is_signed && a.width == 64;
   if (!b.is_field && !a_wide && a.lo % 64 + a.width <= 64) {
     // A field within one lane against a constant: read and compared in one pass.
@@ -777,20 +940,17 @@ void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, R
     auto constant = [k](int) { return k; };
     if (a.is_signed && a.width < 64) {
       const int sh = 64 - a.width;
-      and_compare_with(
+      return and_compare_with(
           enable_.data(),
           [lane, off, mask, sh](int p) {
             return static_cast<i64>(((lane[p] >> off) & mask) << sh) >> sh;
           },
           constant, cond, r.begin, r.end);
-    } else {
-      and_compare_with(
-          enable_.data(),
-          [lane, off, mask](int p) { return static_cast<i64>((lane[p] >> off) & mask); }, constant,
-          cond, r.begin, r.end);
     }
-    enable_changed();
-    return;
+    return and_compare_with(
+        enable_.data(),
+        [lane, off, mask](int p) { return static_cast<i64>((lane[p] >> off) & mask); }, constant,
+        cond, r.begin, r.end);
   }
   load(memory_.data(), a, r, scratch().s0.data(), true);
   if (b.is_field) {
@@ -807,6 +967,7 @@ void WordBackend::compare_range(const Field& a, const Source& b, Compare cond, R
               static_cast<u64>(b.constant));
     compare_values(scratch().s0.data(), true, scratch().s1.data(), false, cond, r);
   }
+  return true;
 }
 
 void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
@@ -1224,10 +1385,9 @@ bool WordBackend::same_state(const PixelBackend& other) const {
     for (const Range& r : spans) std::copy(bytes + r.begin, bytes + r.end, out.begin() + r.begin);
   };
   for (int level = -1; level < stack_top_; ++level) {
-    const auto at = static_cast<std::size_t>(std::max(level, 0)) * pixels_;
     const auto k = static_cast<std::size_t>(std::max(level, 0));
-    value(level < 0 ? enable_.data() : &stack_[at], level < 0 ? spans_ : stack_spans_[k], a);
-    value(level < 0 ? o->enable_.data() : &o->stack_[at],
+    value(level < 0 ? enable_.data() : stack_[k].data(), level < 0 ? spans_ : stack_spans_[k], a);
+    value(level < 0 ? o->enable_.data() : o->stack_[k].data(),
           level < 0 ? o->spans_ : o->stack_spans_[k], b);
     if (a != b) return false;
   }

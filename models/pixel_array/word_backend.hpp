@@ -13,12 +13,15 @@
 // both per level, the backing store lanes like pixel memory (allocated on first use). Every
 // operation runs only over the spans (after a triangle's edge tests, its own columns of each
 // of its rows), which is exact (E = 0 is never written) and makes its cost the pixels a
-// primitive's bounding rows and edges leave; an edge test only narrows the spans, any other
-// test (cmp, qcmp, a quadratic qtest) narrows each row's part to its first to last enabled
-// pixel, and saving or restoring E copies only them. E's bytes outside the spans are never
-// read. A run
-// of half-plane tests (a triangle's edges) is applied together when the next operation
-// needs E, over only the rows of the band where all of them can hold (materialize()).
+// primitive's bounding rows and edges leave; an edge test only narrows the spans, and so
+// does a quadratic qtest (a sphere's outline) wherever its value cannot wrap: each row's
+// part to the interval (or the two) where the condition holds, found by binary search on
+// exact values, then to its first to last enabled pixel; any other test (cmp, qcmp, a
+// quadratic qtest that could wrap, eq, ne) ANDs E pixel by pixel and narrows each row's part
+// to its first to last enabled pixel. Saving or restoring E copies only the spans. E's bytes
+// outside the spans are never read. A run of half-plane tests (a triangle's edges) is
+// applied together when the next operation needs E, over only the rows of the band where
+// all of them can hold (materialize()).
 //
 // Contract: implements PixelBackend (firmware/isa/backend.hpp), including its one bit-serial
 // corner: an ALU source field that overlaps its destination from below (src.lo < dst.lo)
@@ -85,9 +88,11 @@ class WordBackend final : public PixelBackend {
   };
   // After E was ANDed with something: it is still 0 outside spans_, which stay as they are.
   void enable_changed() {}
-  // After an instruction that ANDed E with a test (cmp, qcmp, a quadratic qtest): each row's
-  // part of each span narrowed to its first to last pixel with E = 1 (a row with none
-  // leaves the spans; a row enabled to its end and the next from its start stay one span).
+  // After an instruction that ANDed E with a test pixel by pixel (qcmp of a field across
+  // two lanes, a quadratic qtest evaluated per pixel; cmp and qcmp within a lane do the same
+  // row by row as they compare, with keep_enabled): each row's part of each span narrowed
+  // to its first to last pixel with E = 1 (a row with none leaves the spans; a row enabled
+  // to its end and the next from its start stay one span).
   // Exact, as E = 0 outside; what follows walks only what the test left: shade only the
   // pixels a primitive reached, the attributes only where a triangle is in front.
   void narrow_spans();
@@ -96,6 +101,20 @@ class WordBackend final : public PixelBackend {
   // own fast path does, and spans_ narrowed to those intervals. False (nothing done) when
   // the expression is not such.
   bool qtest_linear(const QuadraticCoefficients& c, Compare cond);
+  // qtest (lt, le, gt, ge) of any expression whose value cannot wrap on the spans: on each
+  // row it is, modulo 2^result_bits, a quadratic (or linear) g(x) = a x^2 + b x + k of the
+  // column with a, b, k reduced to result_bits, monotone on each side of its integer
+  // arg-extremum, so the columns where the condition holds are one interval or the
+  // complement of one, found by binary search on exact (128-bit) values; spans_ narrowed to
+  // them (and to their first to last enabled pixel), E's bytes untouched. False (nothing
+  // done) when the condition is eq or ne or g leaves result_bits on some span's row part (at
+  // its ends or its arg-extremum, the extremes of g over its integers): the value wraps
+  // there, and the per-pixel evaluation decides.
+  bool qtest_quadratic(const QuadraticCoefficients& c, Compare cond);
+  // Pixels [from, to) with their E bytes as the test left them, appended to `kept` trimmed
+  // to their first to last enabled pixel (nothing when none is), joined to the span before
+  // when it ends where they begin.
+  void keep_enabled(std::vector<Range>& kept, int from, int to) const;
   // The evaluator's column terms for `c` (row_a_, row_b_), before evaluate.
   void prepare_columns(const QuadraticCoefficients& c) const;
   // The field's values at pixels [r.begin, r.end) into out[p], extended to 64 bits by the
@@ -124,8 +143,9 @@ class WordBackend final : public PixelBackend {
   // (as for_each_value gives it, modulo 2^64 the same sum) computed per pixel as
   // ((A X + (D + B Y)) X + (C Y^2 + E Y + F), no column tables: a triangle's rows are
   // shorter than the region is wide), and merged under E, or compared with the field in
-  // place. Only a square term (kSquare: A != 0) and the field's signedness (kSigned) are
-  // compiled in; the condition is applied without a branch per pixel.
+  // place (then each row's part narrowed as narrow_spans does, in the same walk). Only a
+  // square term (kSquare: A != 0) and the field's signedness (kSigned) are compiled in; the
+  // condition is applied without a branch per pixel.
   struct PixelValues;  // their per-pixel arithmetic (word_backend.cpp)
   template <bool kSquare>
   void qload_lane(const Field& dst, const QuadraticCoefficients& c);
@@ -151,7 +171,9 @@ class WordBackend final : public PixelBackend {
   // under E over every span, in one pass (multiply's and multiply_accumulate's).
   template <class Value>
   void merge_lane(const Field& dst, Value value);
-  void compare_range(const Field& a, const Source& b, Compare cond, Range r);
+  // E &= (a cond b) over r; false when it found no pixel of r left enabled (true when it may
+  // have: its general path does not look).
+  bool compare_range(const Field& a, const Source& b, Compare cond, Range r);
   void alu_serial(const Field& dst, const Field& src, Alu op, Range r);
   // E &= (a cond b) over r, a and b extended values; wide when either is an unsigned 64-bit
   // field (a 65-bit comparison).
@@ -169,7 +191,9 @@ class WordBackend final : public PixelBackend {
   int y0_ = 0;
   std::vector<std::uint64_t> memory_;  // lanes_ x pixels_
   std::vector<std::uint8_t> enable_;   // pixels_, valid inside spans_
-  std::vector<std::uint8_t> stack_;    // pixels_ per level the stack has reached
+  // pixels_ bytes per level the stack has reached (empty above), E's at each push; a pop
+  // swaps its level with E.
+  std::vector<std::vector<std::uint8_t>> stack_;
   int stack_top_ = 0;
   std::vector<std::uint64_t> backing_;  // backing lanes x pixels_, allocated on first use
   // Disjoint pixel ranges, in order, outside which E is 0 (a superset of E's set pixels, at
