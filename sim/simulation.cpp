@@ -1112,7 +1112,7 @@ const RunSummary& Session::run_frames(
   // frame buffer of its own; once a frame's pixels are done, the calling thread builds its
   // statistics and result, calls on_frame and frees the frame. At most kFramesWaiting frames
   // are handed over and not yet delivered, so memory stays flat whatever the count.
-  constexpr std::size_t kFramesWaiting = 2;
+  constexpr std::size_t kFramesWaiting = 3;
   std::vector<const GraphicsProcessor*> gps;
   std::vector<int> gp_index;
   for (int k = 0; k < machine.gp_count(); ++k) {

@@ -180,7 +180,7 @@ class Session {
   // finished the next frame; that frame is then handed over (its records released from the
   // units), its pixels execute on a helper thread while the kernel simulates later frames, and
   // once they are done its statistics are built, on_frame is called (on the calling thread)
-  // and the frame is freed. At most two frames are handed over and not yet delivered, so
+  // and the frame is freed. At most three frames are handed over and not yet delivered, so
   // memory stays flat whatever `count`. The cancel flag is checked between kernel slices and
   // between frames; FrameCancelled or an error from `scenes` or `on_frame` ends the run (the
   // frames delivered before it stay delivered).
