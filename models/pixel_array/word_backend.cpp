@@ -690,13 +690,55 @@ bool WordBackend::qtest_quadratic(const QuadraticCoefficients& c, Compare cond) 
   while ((1 << width_bits) < width) ++width_bits;
   const bool narrow = R - 1 + 2 + 2 * width_bits <= 62;
   const i64 lo = R == 64 ? std::numeric_limits<i64>::min() : -(i64{1} << (R - 1)), hi = -(lo + 1);
+  // The band of rows that can hold the test at all (a sphere's outline: its disc's rows).
+  // Over the region, with local x, y, the value is, modulo 2^R, the polynomial
+  // a x^2 + B' x y + c y^2 + d x + e y + f whose coefficients are the residues of
+  // A, B, C, 2 A x0 + B y0 + D, 2 C y0 + B x0 + E and the value at (x0, y0). Where it stays
+  // within result_bits over the whole region (bounded term by term), it is the value the
+  // evaluator delivers at every pixel. If the form is definite (B'^2 < 4ac) and the test
+  // keeps the side of the rows' extremum (a < 0 with gt or ge, a > 0 with lt or le), a row
+  // can hold the test only where its real extremum is on that side: where the discriminant
+  // (B' y + d)^2 - 4a (c y^2 + e y + f) >= 0, a concave quadratic in y, so an interval of
+  // rows, found by quadratic_row. The other rows leave the spans without a look.
+  int band_lo = 0, band_hi = geometry_.height - 1;
+  {
+    const u64 Y0 = static_cast<u64>(static_cast<i64>(y0_));
+    const i128 ca = a, cb = wrap(B), cc = wrap(C), cd = wrap(2 * A * X0 + B * Y0 + D),
+               ce = wrap(2 * C * Y0 + B * X0 + E),
+               cf = wrap((A * X0 + B * Y0 + D) * X0 + (C * Y0 + E) * Y0 + F);
+    auto mag = [](i128 v) { return v < 0 ? -v : v; };
+    const i128 W = width - 1, H = geometry_.height - 1;
+    // Coefficients below 2^48 and at most 4096 rows keep every product below in 128 bits.
+    const i128 limit = i128{1} << 48;
+    const bool small = H < 4096 && mag(ca) < limit && mag(cb) < limit && mag(cc) < limit &&
+                       mag(cd) < limit && mag(ce) < limit && mag(cf) < limit;
+    const i128 bound = small ? mag(ca) * W * W + mag(cb) * W * H + mag(cc) * H * H + mag(cd) * W +
+                                   mag(ce) * H + mag(cf)
+                             : i128{hi} + 1;
+    const i128 disc = small ? cb * cb - 4 * ca * cc : 0;
+    if (bound <= i128{hi} && disc < 0 && (ca < 0) != below) {
+      // D(y) = disc y^2 + (2 B' d - 4 a e) y + (d^2 - 4 a f): coefficients below 2^99, values
+      // at y < 4096 below 2^124.
+      bool holds = false;
+      int left = 0, right = 0;
+      const i128 huge = i128{1} << 120;
+      quadratic_row<i128>(disc, 2 * cb * cd - 4 * ca * ce, cd * cd - 4 * ca * cf, 0,
+                          geometry_.height - 1, -huge, huge, false, false, holds, left, right);
+      if (!holds) {  // no row can hold it
+        spans_.clear();
+        return true;
+      }
+      band_lo = left + 1;
+      band_hi = right - 1;
+    }
+  }
   std::vector<Range>& kept = spare_spans_;  // becomes spans_ (the old ones the spare)
   kept.clear();
   bool exact = true;
   int row_y = -1;
   i64 b = 0, k = 0;
   for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
-    if (!exact) return;
+    if (!exact || y < band_lo || y > band_hi) return;
     if (y != row_y) {
       const u64 Y = static_cast<u64>(static_cast<i64>(y0_) + y);
       const u64 linear = B * Y + D;
