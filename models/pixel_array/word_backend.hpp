@@ -109,7 +109,10 @@ class WordBackend final : public PixelBackend {
   // them (and to their first to last enabled pixel), E's bytes untouched. False (nothing
   // done) when the condition is eq or ne or g leaves result_bits on some span's row part (at
   // its ends or its arg-extremum, the extremes of g over its integers): the value wraps
-  // there, and the per-pixel evaluation decides.
+  // there, and the per-pixel evaluation decides. When the value cannot wrap anywhere in the
+  // region and its form is definite (an ellipse's inside, a sphere's outline), only the band
+  // of rows whose real extremum lies on the condition's side is searched (the rows where the
+  // row's discriminant is >= 0, an interval); the others leave the spans.
   bool qtest_quadratic(const QuadraticCoefficients& c, Compare cond);
   // Pixels [from, to) with their E bytes as the test left them, appended to `kept` trimmed
   // to their first to last enabled pixel (nothing when none is), joined to the span before
