@@ -118,9 +118,10 @@ int run_animate(AnimateOptions o) {
   const Animation animation = load_animation(o.scene_name, ao);
   const int frames = animation.frames();
   // Every frame's scene, made and checked before anything runs: a bad frame stops the run
-  // before any output.
-  const std::vector<std::shared_ptr<const Scene>> scenes = animation_scenes(animation, config);
-  const Scene& first = *scenes.front();
+  // before any output. Only frame 0's is kept: each later frame's is made again as it runs,
+  // so that a long animation holds no more than the frames in flight.
+  const std::shared_ptr<const Scene> first_scene = check_animation_scenes(animation, config);
+  const Scene& first = *first_scene;
   auto program = std::make_shared<const Program>(
       assemble_file(firmware_for(o.firmware, first), assembler_options(config)));
   if (o.out_dir.empty()) o.out_dir = default_output_folder(animation.name() + "-animation");
@@ -136,7 +137,7 @@ int run_animate(AnimateOptions o) {
   // of this run's inside OUT), and all move into place at the end, or none: memory stays
   // flat however many frames.
   StagedOutputs outputs;
-  Session session(config, scenes.front(), program, o.threads);
+  Session session(config, first_scene, program, o.threads);
   const bool record_timeline = event && !o.no_timeline;
   std::optional<TimelineFile> timeline;
   if (record_timeline) timeline.emplace(outputs, (dir / "timeline.json").string());
@@ -194,7 +195,7 @@ int run_animate(AnimateOptions o) {
     last = std::move(r);
   };
   session.run_frames(frames, on_frame, pixels,
-                     [&scenes](int k) { return scenes[static_cast<std::size_t>(k)]; });
+                     [&](int k) { return k == 0 ? first_scene : animation_scene(animation, k); });
   csv.close();
   const RunSummary& summary = session.summary();
   nlohmann::json summary_json = summary.statistics().to_json();
