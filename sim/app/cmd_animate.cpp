@@ -163,7 +163,7 @@ int run_animate(AnimateOptions o) {
     csv.write(frames_csv_row(k, animation.fps(), r));
     const double start = r.stats.real("frame.start_seconds");
     const double end = r.stats.real("frame.end_seconds");
-    frame_spans.emplace_back(start, end);
+    if (record_timeline) frame_spans.emplace_back(start, end);  // 16 bytes a frame
     stats.write((k == 0 ? "\n  " : ",\n  ") + indented_json(r.stats_json, 2));
     if (pixels) {
       const std::string staged =
@@ -172,6 +172,7 @@ int run_animate(AnimateOptions o) {
       gif.add(r.image.flat());
       gif_file->write(gif.take());
     }
+    // The report's row (about 100 bytes a frame, kept for its table).
     AnimationFrameRow row;
     row.start_seconds = start;
     row.frame_seconds = r.frame_seconds;
@@ -181,7 +182,7 @@ int run_animate(AnimateOptions o) {
     row.renderer_utilisation_max = r.stats.real("timing.renderer_utilisation_max");
     row.ring_utilisation = r.stats.real("timing.ring_utilisation");
     for (const RegionLoad& l : r.regions) row.renderer_busy_cycles += l.busy_cycles;
-    report_in.frames.push_back(row);
+    if (o.report) report_in.frames.push_back(row);
     for (const RegionLoad& l : r.regions) {
       auto [it, added] = summed.try_emplace(l.region, l);
       if (!added) {

@@ -440,10 +440,8 @@ std::string StagedOutputs::stage(const std::string& path) {
   }
   const Target t = resolve_output_target(path);
   const std::string key = fs::weakly_canonical(t.path, ec).string();
-  for (const Staged& f : files_) {
-    if (!t.in_place && !f.in_place && f.target == (ec ? t.path : key))
-      throw OutputError(path + ": named twice among this run's outputs");
-  }
+  if (!t.in_place && targets_.count(ec ? t.path : key) != 0)
+    throw OutputError(path + ": named twice among this run's outputs");
   // A FIFO or a device is written in place at commit; its bytes wait in the system's
   // temporary folder (no staging folder can be made beside /dev/stdout).
   const std::string staging_dir =
@@ -461,6 +459,7 @@ std::string StagedOutputs::stage(const std::string& path) {
                  .string();
   if (f.staged.size() > PATH_MAX || fs::path(f.staged).filename().string().size() > NAME_MAX)
     f.staged = (fs::path(folder.staging) / std::to_string(files_.size())).string();
+  if (!f.in_place) targets_.insert(f.target);
   files_.push_back(f);
   return files_.back().staged;
 }
@@ -479,6 +478,7 @@ std::string StagedOutputs::add(const std::string& path, const std::string& bytes
 
 void StagedOutputs::discard() {
   files_.clear();
+  targets_.clear();
   for (Folder& f : folders_) {
     remove_staging_folder(f.staging.c_str());
     if (f.slot >= 0) g_staging_slots[f.slot].used.store(false);

@@ -21,6 +21,7 @@
 //    the folders prepare_output_folder created, removed on a signal if still empty, until a
 //    commit puts files in them.
 #include <cstddef>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -94,6 +95,7 @@ class StagedOutputs {
     int slot = -1;        // its signal-cleanup registration
   };
   std::vector<Staged> files_;
+  std::set<std::string> targets_;  // the files_' targets (not in place): no name twice
   std::vector<Folder> folders_;
   int scratches_ = 0;
   const Folder& folder_for(const std::string& dir);
