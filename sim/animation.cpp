@@ -408,4 +408,19 @@ std::vector<std::shared_ptr<const Scene>> animation_scenes(const Animation& anim
   return scenes;
 }
 
+std::shared_ptr<const Scene> check_animation_scenes(const Animation& animation,
+                                                    const MachineConfig& config) {
+  std::shared_ptr<const Scene> first;
+  for (int k = 0; k < animation.frames(); ++k) {
+    auto scene = animation_scene(animation, k);
+    GeometryEngine(geometry_params(config), *scene).frame_parameters();
+    if (k == 0) first = std::move(scene);
+  }
+  return first;
+}
+
+std::shared_ptr<const Scene> animation_scene(const Animation& animation, int frame) {
+  return std::make_shared<const Scene>(animation.scene(frame));
+}
+
 }  // namespace pp5

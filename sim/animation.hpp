@@ -104,6 +104,14 @@ Animation parse_animation_json(const std::string& text, const std::string& origi
 std::vector<std::shared_ptr<const Scene>> animation_scenes(const Animation& animation,
                                                            const MachineConfig& config);
 
+// The same checks, keeping no scene: each frame's scene is made, checked and dropped, so that
+// a long animation (pp5sim animate) holds one scene at a time and makes each again as its
+// frame runs (animation_scene). Returns frame 0's.
+std::shared_ptr<const Scene> check_animation_scenes(const Animation& animation,
+                                                    const MachineConfig& config);
+// Frame `frame`'s scene, as animation_scenes makes it (not checked again).
+std::shared_ptr<const Scene> animation_scene(const Animation& animation, int frame);
+
 // The camera of `keys` at `frame`, near and far planes from `base`.
 Camera camera_at(const std::vector<CameraKey>& keys, int frame, const Camera& base);
 // `track`'s transform at `frame` applied to `scene` (which holds the track's frame-0 geometry).

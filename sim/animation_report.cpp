@@ -120,7 +120,7 @@ Report animation_report(const AnimationReportInput& in) {
   Section& timeline = rep.add_section("timeline", "Timeline");
   if (in.timeline) {
     double end = 0;
-    const std::vector<Track> tracks = timeline_tracks(*in.timeline, &end);
+    const std::vector<Track> tracks = in.timeline->tracks(&end);
     timeline.blocks.push_back(animation_figure(
         "timeline-chart", "Timeline", "image/svg+xml",
         svg_timeline("Busy time of every unit over all frames", tracks, end),

@@ -9,6 +9,7 @@
 
 #include "models/config/machine_config.hpp"
 #include "sim/output/report.hpp"
+#include "sim/run_report.hpp"
 #include "sim/simulation.hpp"
 
 namespace pp5 {
@@ -34,7 +35,9 @@ struct AnimationReportInput {
   std::vector<std::string> frame_pngs;  // per frame (empty: no pixels)
   std::string gif;                      // animation.gif ("" for none)
   std::string regions_png;              // the summed heat map ("" for none)
-  const nlohmann::json* timeline = nullptr;
+  // The timeline's busy time per unit (its events as they were written: a long run's
+  // timeline is not held in memory), or null.
+  const TimelineBusy* timeline = nullptr;
 };
 
 report::Report animation_report(const AnimationReportInput& in);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <map>
 
 #include "sim/simulation.hpp"
@@ -101,47 +102,130 @@ Table configuration_table(const MachineConfig& config, std::vector<std::string>*
 }
 
 std::vector<Track> timeline_tracks(const nlohmann::json& timeline, double* end_seconds) {
-  std::map<std::pair<int, int>, std::string> names;
-  std::map<std::pair<int, int>, std::vector<std::pair<double, double>>> busy;
-  double end = 0;
   const auto events = timeline.find("traceEvents");
   if (events == timeline.end()) {
     if (end_seconds) *end_seconds = 0;
     return {};
   }
-  for (const auto& e : *events) {
-    const std::string ph = e.value("ph", "");
-    const std::pair<int, int> track{e.value("pid", 0), e.value("tid", 0)};
-    if (ph == "M" && e.value("name", "") == "thread_name") {
-      names[track] = e.at("args").value("name", "");
-    } else if (ph == "X") {
-      const double a = e.value("ts", 0.0) * 1e-6, b = a + e.value("dur", 0.0) * 1e-6;
-      busy[track].push_back({a, b});
-      end = std::max(end, b);
-    } else if (ph == "i") {
-      end = std::max(end, e.value("ts", 0.0) * 1e-6);
+  TimelineBusy busy(std::numeric_limits<std::size_t>::max());
+  for (const auto& e : *events) busy.add(e);
+  return busy.tracks(end_seconds);
+}
+
+TimelineBusy::TimelineBusy(std::size_t exact_limit) : exact_limit_(exact_limit) {}
+
+void TimelineBusy::add(const nlohmann::json& e) {
+  const std::string ph = e.value("ph", "");
+  const Key track{e.value("pid", 0), e.value("tid", 0)};
+  if (ph == "M" && e.value("name", "") == "thread_name") {
+    names_[track] = e.at("args").value("name", "");
+  } else if (ph == "X") {
+    const double a = e.value("ts", 0.0) * 1e-6, b = a + e.value("dur", 0.0) * 1e-6;
+    end_ = std::max(end_, b);
+    if (track.first < 1 || track.first > 3) return;  // only GPs, ring channels, Renderers
+    if (exact_) {
+      busy_[track].push_back({a, b});
+      if (++intervals_ > exact_limit_) to_bins();
+    } else {
+      grow_span(b);
+      window_add(binned_[track], a, b);
     }
+  } else if (ph == "i") {
+    end_ = std::max(end_, e.value("ts", 0.0) * 1e-6);
   }
+}
+
+void TimelineBusy::to_bins() {
+  exact_ = false;
+  span_ = 0;
+  grow_span(end_);
+  for (auto& [track, slices] : busy_) {
+    std::sort(slices.begin(), slices.end());
+    Binned& b = binned_[track];
+    b.bins.assign(kBins, 0.0);  // at once: memory stays flat from here on
+    for (const auto& [a, e] : slices) window_add(b, a, e);
+  }
+  busy_.clear();
+}
+
+void TimelineBusy::grow_span(double end) {
+  if (span_ <= 0) span_ = std::max(end, 1e-6);
+  while (end > span_) {
+    // Twice the span: bins 2i and 2i + 1 become bin i.
+    for (auto& [track, b] : binned_) {
+      if (b.bins.empty()) continue;
+      for (std::size_t i = 0; i < kBins / 2; ++i) b.bins[i] = b.bins[2 * i] + b.bins[2 * i + 1];
+      std::fill(b.bins.begin() + kBins / 2, b.bins.end(), 0.0);
+    }
+    span_ *= 2;
+  }
+}
+
+void TimelineBusy::window_add(Binned& b, double start, double end) {
+  // Merged with the intervals it overlaps or touches (slices of a track nest).
+  auto it = b.window.upper_bound(start);
+  if (it != b.window.begin() && std::prev(it)->second >= start) --it;
+  while (it != b.window.end() && it->first <= end) {
+    start = std::min(start, it->first);
+    end = std::max(end, it->second);
+    it = b.window.erase(it);
+  }
+  b.window.emplace(start, end);
+  while (b.window.size() > kWindow) {
+    bin_interval(b, b.window.begin()->first, b.window.begin()->second);
+    b.window.erase(b.window.begin());
+  }
+}
+
+void TimelineBusy::bin_interval(Binned& b, double start, double end) const {
+  if (b.bins.empty()) b.bins.assign(kBins, 0.0);
+  const double width = span_ / static_cast<double>(kBins);
+  const double s = std::clamp(start / width, 0.0, static_cast<double>(kBins));
+  const double e = std::clamp(end / width, 0.0, static_cast<double>(kBins));
+  for (auto c = static_cast<std::size_t>(s); c < kBins && static_cast<double>(c) < e; ++c) {
+    b.bins[c] += (std::min<double>(e, static_cast<double>(c) + 1) -
+                  std::max<double>(s, static_cast<double>(c))) *
+                 width;
+  }
+}
+
+std::vector<Track> TimelineBusy::tracks(double* end_seconds) const {
   static const char* groups[] = {"", "GP", "ring channel", "Renderer", "frame buffer"};
   std::vector<Track> tracks;
-  for (const auto& [track, name] : names) {
+  const double width = span_ / static_cast<double>(kBins);
+  for (const auto& [track, name] : names_) {
     if (track.first < 1 || track.first > 3) continue;  // the frame buffer has instants only
     Track t;
     t.group = groups[track.first];
     t.name = name;
-    // Slices of a track nest: their union is the time the unit was busy.
-    auto slices = busy[track];
-    std::sort(slices.begin(), slices.end());
-    for (const auto& s : slices) {
-      if (!t.intervals.empty() && s.first <= t.intervals.back().second) {
-        t.intervals.back().second = std::max(t.intervals.back().second, s.second);
-      } else {
-        t.intervals.push_back(s);
+    if (exact_) {
+      // Slices of a track nest: their union is the time the unit was busy.
+      auto found = busy_.find(track);
+      auto slices = found == busy_.end() ? std::vector<std::pair<double, double>>{} : found->second;
+      std::sort(slices.begin(), slices.end());
+      for (const auto& s : slices) {
+        if (!t.intervals.empty() && s.first <= t.intervals.back().second) {
+          t.intervals.back().second = std::max(t.intervals.back().second, s.second);
+        } else {
+          t.intervals.push_back(s);
+        }
+      }
+    } else if (auto found = binned_.find(track); found != binned_.end()) {
+      Binned b = found->second;
+      while (!b.window.empty()) {  // the intervals still in the window
+        bin_interval(b, b.window.begin()->first, b.window.begin()->second);
+        b.window.erase(b.window.begin());
+      }
+      for (std::size_t c = 0; c < b.bins.size(); ++c) {
+        const double busy = std::min(b.bins[c], width);  // a late nested slice counted twice
+        if (busy > 0)
+          t.intervals.push_back(
+              {static_cast<double>(c) * width, static_cast<double>(c) * width + busy});
       }
     }
     tracks.push_back(std::move(t));
   }
-  if (end_seconds) *end_seconds = end;
+  if (end_seconds) *end_seconds = end_;
   return tracks;
 }
 

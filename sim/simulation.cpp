@@ -40,26 +40,29 @@ namespace {
 
 // Chrome trace-event JSON: one process per kind of unit, one thread per unit, complete
 // ("X") slices in microseconds. Slices of one track are recorded in time order and nest.
-nlohmann::json timeline_document(Machine& machine) {
+// The document's parts, each handed to `out` event by event (TimelineStream::Part order).
+using TimelineOut = std::function<void(TimelineStream::Part, const nlohmann::json&)>;
+
+void timeline_units(Machine& machine, const TimelineOut& out) {
   using nlohmann::json;
-  json events = json::array();
+  constexpr auto part = TimelineStream::Part::units;
   const char* kinds[] = {"Graphics Processors", "Ring channels", "Renderers", "Frame buffer"};
   const int counts[] = {machine.gp_count(), machine.ring().params().channels,
                         machine.renderer_count(), 1};
   const char* names[] = {"gp", "channel ", "renderer", "frame buffer"};
   for (int k = 0; k < 4; ++k) {
-    events.push_back({{"ph", "M"},
-                      {"name", "process_name"},
-                      {"pid", k + 1},
-                      {"tid", 0},
-                      {"args", {{"name", kinds[k]}}}});
-    events.push_back({{"ph", "M"},
-                      {"name", "process_sort_index"},
-                      {"pid", k + 1},
-                      {"tid", 0},
-                      {"args", {{"sort_index", k}}}});
+    out(part, {{"ph", "M"},
+               {"name", "process_name"},
+               {"pid", k + 1},
+               {"tid", 0},
+               {"args", {{"name", kinds[k]}}}});
+    out(part, {{"ph", "M"},
+               {"name", "process_sort_index"},
+               {"pid", k + 1},
+               {"tid", 0},
+               {"args", {{"sort_index", k}}}});
     for (int i = 0; i < counts[k]; ++i) {
-      events.push_back(
+      out(part,
           {{"ph", "M"},
            {"name", "thread_name"},
            {"pid", k + 1},
@@ -67,14 +70,20 @@ nlohmann::json timeline_document(Machine& machine) {
            {"args", {{"name", k == 3 ? std::string(names[k]) : names[k] + std::to_string(i)}}}});
     }
   }
-  auto us = [](sc_core::sc_time t) { return t.to_seconds() * 1e6; };
+}
+
+double timeline_us(sc_core::sc_time t) { return t.to_seconds() * 1e6; }
+
+// The slices and ring messages recorded so far; with `drop`, they are then cleared from the
+// machine (a run of frames hands them out frame by frame).
+void timeline_records(Machine& machine, const TimelineOut& out, bool drop) {
   for (const TimelineSlice& sl : machine.slices()) {
-    events.push_back({{"ph", "X"},
-                      {"name", sl.name},
-                      {"pid", static_cast<int>(sl.unit) + 1},
-                      {"tid", sl.index},
-                      {"ts", us(sl.start)},
-                      {"dur", us(sl.end - sl.start)}});
+    out(TimelineStream::Part::slices, {{"ph", "X"},
+                                       {"name", sl.name},
+                                       {"pid", static_cast<int>(sl.unit) + 1},
+                                       {"tid", sl.index},
+                                       {"ts", timeline_us(sl.start)},
+                                       {"dur", timeline_us(sl.end - sl.start)}});
   }
   auto stop_name = [&](int stop) {
     if (stop < machine.gp_count()) return "gp" + std::to_string(stop);
@@ -83,23 +92,41 @@ nlohmann::json timeline_document(Machine& machine) {
     return std::string("frame buffer");
   };
   for (const RingMessage& m : machine.ring().messages_log()) {
-    events.push_back({{"ph", "X"},
-                      {"name", stop_name(m.from) + " -> " + stop_name(m.to)},
-                      {"pid", 2},
-                      {"tid", m.channel},
-                      {"ts", us(m.start)},
-                      {"dur", us(m.end - m.start)},
-                      {"args", {{"words", m.words}, {"arrival_us", us(m.arrival)}}}});
+    out(TimelineStream::Part::messages,
+        {{"ph", "X"},
+         {"name", stop_name(m.from) + " -> " + stop_name(m.to)},
+         {"pid", 2},
+         {"tid", m.channel},
+         {"ts", timeline_us(m.start)},
+         {"dur", timeline_us(m.end - m.start)},
+         {"args", {{"words", m.words}, {"arrival_us", timeline_us(m.arrival)}}}});
   }
+  if (drop) {
+    machine.timeline().clear();
+    machine.ring().clear_messages_log();
+  }
+}
+
+void timeline_arrivals(Machine& machine, const TimelineOut& out) {
   const auto& arrivals = machine.frame_buffer().arrivals();
   for (std::size_t r = 0; r < arrivals.size(); ++r) {
-    events.push_back({{"ph", "i"},
-                      {"s", "t"},
-                      {"name", "region " + std::to_string(r)},
-                      {"pid", 4},
-                      {"tid", 0},
-                      {"ts", us(arrivals[r])}});
+    out(TimelineStream::Part::arrivals, {{"ph", "i"},
+                                         {"s", "t"},
+                                         {"name", "region " + std::to_string(r)},
+                                         {"pid", 4},
+                                         {"tid", 0},
+                                         {"ts", timeline_us(arrivals[r])}});
   }
+}
+
+nlohmann::json timeline_document(Machine& machine) {
+  nlohmann::json events = nlohmann::json::array();
+  const TimelineOut into = [&events](TimelineStream::Part, const nlohmann::json& e) {
+    events.push_back(e);
+  };
+  timeline_units(machine, into);
+  timeline_records(machine, into, false);
+  timeline_arrivals(machine, into);
   return {{"traceEvents", events}, {"displayTimeUnit", "ns"}};
 }
 
@@ -1093,7 +1120,12 @@ const RunSummary& Session::run_frames(
       }
     };
   }
-  machine.record_timeline(timeline != nullptr);
+  machine.record_timeline(timeline != nullptr || timeline_stream_ != nullptr);
+  // A streamed timeline: the units' tracks now, each frame's records once it is handed over.
+  const TimelineOut stream_out = [this](TimelineStream::Part part, const nlohmann::json& e) {
+    timeline_stream_->add(part, e);
+  };
+  if (timeline_stream_ && !timeline) timeline_units(machine, stream_out);
   machine.overlap(count, plans);
   // With a cancel flag (Ctrl-C from Python), the GPs' set-up passes stop short too.
   machine.plan().set_cancel(cancel_);
@@ -1471,11 +1503,16 @@ const RunSummary& Session::run_frames(
             fmt::format("run_frames: the units did not finish frame {} of {} (no event was left)",
                         handed, count));
       hand_over(handed++);
+      if (timeline_stream_ && !timeline) timeline_records(machine, stream_out, true);
     } else if (!pending.empty()) {
       deliver();
     }
   }
   if (timeline) *timeline = timeline_document(machine);
+  if (timeline_stream_ && !timeline) {
+    timeline_records(machine, stream_out, true);  // none left, unless the last frame's
+    timeline_arrivals(machine, stream_out);
+  }
 
   {
     const Ring& r = machine.ring();
@@ -1506,12 +1543,14 @@ const RunSummary& Session::run_frames(
 RunSummary simulate_frames(const MachineConfig& config, std::shared_ptr<const Scene> scene,
                            std::shared_ptr<const Program> program, int threads, int count,
                            const std::function<void(int frame, FrameResult& result)>& on_frame,
-                           bool pixels, nlohmann::json* timeline, double setup_seconds) {
+                           bool pixels, nlohmann::json* timeline, double setup_seconds,
+                           TimelineStream* timeline_stream) {
   // The closed form first: its own SystemC context, freed before the session's is made.
   const double estimate =
       project_frame(config, *scene, *program).stats.real("frame.pipelined_frame_seconds");
   Session session(config, std::move(scene), std::move(program), threads);
   session.set_setup_seconds(setup_seconds);
+  session.stream_timeline(timeline_stream);
   RunSummary summary = session.run_frames(count, on_frame, pixels, {}, timeline);
   summary.estimate_frame_seconds = estimate;
   return summary;

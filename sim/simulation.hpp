@@ -73,6 +73,20 @@ class Machine;
 // order, before the frame is set up. The default gives the session's scene to every frame.
 using SceneSource = std::function<std::shared_ptr<const Scene>(int frame)>;
 
+// A run's timeline handed out as it is recorded, so that a long run keeps none of it
+// (Session::stream_timeline): Chrome trace events, each part in recording order. The units'
+// tracks (Part::units) come before any frame runs; once each frame is handed over, the
+// slices and ring messages recorded since the hand-over before (Part::slices,
+// Part::messages), which the machine then drops; after the last frame, the frame buffer's
+// region arrivals (Part::arrivals). The events of every part, in the order units, slices,
+// messages, arrivals, are the "traceEvents" of the document run_frames stores in `timeline`.
+class TimelineStream {
+ public:
+  enum class Part { units, slices, messages, arrivals };
+  virtual ~TimelineStream() = default;
+  virtual void add(Part part, const nlohmann::json& event) = 0;
+};
+
 // One frame of a run of frames looked at closely (Session::run_frames): its boards observed
 // (traces, snapshots); the run's other frames are then timing only.
 struct ObservedFrame {
@@ -191,6 +205,9 @@ class Session {
                                bool pixels = true, const SceneSource& scenes = {},
                                nlohmann::json* timeline = nullptr,
                                const ObservedFrame& observed = {});
+  // run_frames hands its timeline to `stream` as it records it (null: none), when it is given
+  // no `timeline` document to store; the stream must outlive the run.
+  void stream_timeline(TimelineStream* stream) { timeline_stream_ = stream; }
   // Frames simulated so far, and the run's summary over them.
   int frames() const { return frames_; }
   const RunSummary& summary() const { return summary_; }
@@ -223,6 +240,7 @@ class Session {
   int threads_;
   SetupMemo* memo_;
   const std::atomic<bool>* cancel_ = nullptr;
+  TimelineStream* timeline_stream_ = nullptr;
   std::unique_ptr<Event> event_;
   double startup_seconds_ = 0;
   double setup_seconds_ = 0;
@@ -233,12 +251,13 @@ class Session {
 
 // A run of `count` frames of `scene`, overlapped (Session::run_frames), with the closed-form
 // estimate of one frame alone (project_frame's frame.pipelined_frame_seconds) in the summary
-// to compare with the simulated period. `setup_seconds` as Session::set_setup_seconds.
+// to compare with the simulated period. `setup_seconds` as Session::set_setup_seconds;
+// `timeline_stream` as Session::stream_timeline.
 RunSummary simulate_frames(const MachineConfig& config, std::shared_ptr<const Scene> scene,
                            std::shared_ptr<const Program> program, int threads, int count,
                            const std::function<void(int frame, FrameResult& result)>& on_frame,
                            bool pixels = true, nlohmann::json* timeline = nullptr,
-                           double setup_seconds = 0);
+                           double setup_seconds = 0, TimelineStream* timeline_stream = nullptr);
 
 // The timing model alone, for projections over many configurations (pp5sim validate): the
 // frame time and the statistics of simulate_frame, without executing the firmware on the

@@ -147,6 +147,8 @@ class Ring : public sc_core::sc_module {
   // Keep every message for the timeline (off by default: it costs memory).
   void record_messages(bool on) { record_ = on; }
   const std::vector<RingMessage>& messages_log() const { return log_; }
+  // Drops the messages kept so far (a run that writes its timeline out frame by frame).
+  void clear_messages_log() { log_.clear(); }
 
   const RingParams& params() const { return params_; }
   int stops() const { return stops_; }

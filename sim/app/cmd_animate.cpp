@@ -5,9 +5,12 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/geometry.hpp"
@@ -22,6 +25,7 @@
 #include "sim/output/output_set.hpp"
 #include "sim/output/report_html.hpp"
 #include "sim/simulation.hpp"
+#include "sim/timeline_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -74,6 +78,32 @@ std::string frames_csv_row(int k, double fps, const FrameResult& r) {
       s.real("host.seconds") * 1e3);
 }
 
+// `j` as the value of a key at depth `depth` of a document nlohmann::json dumps with an
+// indent of 1: its lines after the first indented by `depth` more spaces (a string holds no
+// newline: dump escapes it).
+std::string indented_json(const nlohmann::json& j, int depth) {
+  const std::string text = j.dump(1);
+  const std::string indent = "\n" + std::string(static_cast<std::size_t>(depth), ' ');
+  std::string out;
+  out.reserve(text.size() + text.size() / 8);
+  for (char ch : text) {
+    if (ch == '\n') {
+      out += indent;
+    } else {
+      out.push_back(ch);
+    }
+  }
+  return out;
+}
+
+// A staged output's bytes, read back (the report embeds them).
+std::string read_staged(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw OutputError(path + ": cannot read back a staged output");
+  return bytes;
+}
+
 int run_animate(AnimateOptions o) {
   const MachineConfig config = load_config(o.config_path, o.sets);
   const bool pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
@@ -88,9 +118,10 @@ int run_animate(AnimateOptions o) {
   const Animation animation = load_animation(o.scene_name, ao);
   const int frames = animation.frames();
   // Every frame's scene, made and checked before anything runs: a bad frame stops the run
-  // before any output.
-  const std::vector<std::shared_ptr<const Scene>> scenes = animation_scenes(animation, config);
-  const Scene& first = *scenes.front();
+  // before any output. Only frame 0's is kept: each later frame's is made again as it runs,
+  // so that a long animation holds no more than the frames in flight.
+  const std::shared_ptr<const Scene> first_scene = check_animation_scenes(animation, config);
+  const Scene& first = *first_scene;
   auto program = std::make_shared<const Program>(
       assemble_file(firmware_for(o.firmware, first), assembler_options(config)));
   if (o.out_dir.empty()) o.out_dir = default_output_folder(animation.name() + "-animation");
@@ -102,33 +133,46 @@ int run_animate(AnimateOptions o) {
       "frames at {:g} frames/s, firmware {}\n",
       animation.name(), first.mesh.triangles.size(), first.spheres.size(), animation.motion(),
       frames, animation.fps(), program->name);
-  OutputSet outputs;
-  Session session(config, scenes.front(), program, o.threads);
-  nlohmann::json timeline;
+  // Every output is staged as a file as soon as it is made (StagedOutputs: a staging folder
+  // of this run's inside OUT), and all move into place at the end, or none: memory stays
+  // flat however many frames.
+  StagedOutputs outputs;
+  Session session(config, first_scene, program, o.threads);
   const bool record_timeline = event && !o.no_timeline;
-  std::string csv = kFramesCsvHeader;
-  nlohmann::json stats = {{"frames", nlohmann::json::array()}};
-  // The GIF is encoded a frame at a time: no frame's image is kept.
+  std::optional<TimelineFile> timeline;
+  if (record_timeline) timeline.emplace(outputs, (dir / "timeline.json").string());
+  session.stream_timeline(timeline ? &*timeline : nullptr);
+  StagedFile csv(outputs, (dir / "frames.csv").string());
+  csv.write(kFramesCsvHeader);
+  // stats.json, as nlohmann::json's dump(1) of {"frames": [...], "summary": {...}} writes it,
+  // a frame at a time.
+  StagedFile stats(outputs, (dir / "stats.json").string());
+  stats.write("{\n \"frames\": [");
+  // The GIF is encoded a frame at a time and written out as it goes: no frame's image is kept.
   GifWriter gif(std::max(2, static_cast<int>(std::lround(100.0 / animation.fps()))));
-  std::map<int, RegionLoad> summed;  // by region
+  std::optional<StagedFile> gif_file;
+  if (pixels) gif_file.emplace(outputs, (dir / "animation.gif").string());
+  std::vector<std::string> staged_pngs;  // for the report, read back at the end
+  std::map<int, RegionLoad> summed;      // by region
   FrameResult last;
   AnimationReportInput report_in;
   std::vector<std::pair<double, double>> frame_spans;  // per frame: start and end, seconds
   // The frames overlapped, as the machine ran them (Session::run_frames): each frame's GPs
   // set up its own scene while the Renderers still draw the frame before.
   auto on_frame = [&](int k, FrameResult& r) {
-    csv += frames_csv_row(k, animation.fps(), r);
+    csv.write(frames_csv_row(k, animation.fps(), r));
     const double start = r.stats.real("frame.start_seconds");
     const double end = r.stats.real("frame.end_seconds");
-    frame_spans.emplace_back(start, end);
-    nlohmann::json frame_stats = r.stats_json;
-    stats["frames"].push_back(std::move(frame_stats));
+    if (record_timeline) frame_spans.emplace_back(start, end);  // 16 bytes a frame
+    stats.write((k == 0 ? "\n  " : ",\n  ") + indented_json(r.stats_json, 2));
     if (pixels) {
-      std::string png = encode_png(r.image);
-      if (o.report) report_in.frame_pngs.push_back(png);
-      outputs.add((dir / fmt::format("frame-{:04d}.png", k)).string(), std::move(png));
+      const std::string staged =
+          outputs.add((dir / fmt::format("frame-{:04d}.png", k)).string(), encode_png(r.image));
+      if (o.report) staged_pngs.push_back(staged);
       gif.add(r.image);  // by rows: no flat copy of the frame
+      gif_file->write(gif.take());
     }
+    // The report's row (about 100 bytes a frame, kept for its table).
     AnimationFrameRow row;
     row.start_seconds = start;
     row.frame_seconds = r.frame_seconds;
@@ -138,7 +182,7 @@ int run_animate(AnimateOptions o) {
     row.renderer_utilisation_max = r.stats.real("timing.renderer_utilisation_max");
     row.ring_utilisation = r.stats.real("timing.ring_utilisation");
     for (const RegionLoad& l : r.regions) row.renderer_busy_cycles += l.busy_cycles;
-    report_in.frames.push_back(row);
+    if (o.report) report_in.frames.push_back(row);
     for (const RegionLoad& l : r.regions) {
       auto [it, added] = summed.try_emplace(l.region, l);
       if (!added) {
@@ -151,22 +195,24 @@ int run_animate(AnimateOptions o) {
                              r.stats.text("timing.bottleneck"));
     last = std::move(r);
   };
-  session.run_frames(
-      frames, on_frame, pixels, [&scenes](int k) { return scenes[static_cast<std::size_t>(k)]; },
-      record_timeline ? &timeline : nullptr);
+  session.run_frames(frames, on_frame, pixels,
+                     [&](int k) { return k == 0 ? first_scene : animation_scene(animation, k); });
+  csv.close();
   const RunSummary& summary = session.summary();
-  stats["summary"] = summary.statistics().to_json();
-  stats["summary"].update({{"frames", summary.frames},
-                           {"simulated_seconds", summary.simulated_seconds},
-                           {"mean_frame_seconds", summary.mean_frame_seconds()},
-                           {"shortest_frame_seconds", summary.shortest_frame_seconds},
-                           {"longest_frame_seconds", summary.longest_frame_seconds},
-                           {"fps", animation.fps()},
-                           {"motion", animation.motion()}});
+  nlohmann::json summary_json = summary.statistics().to_json();
+  summary_json.update({{"frames", summary.frames},
+                       {"simulated_seconds", summary.simulated_seconds},
+                       {"mean_frame_seconds", summary.mean_frame_seconds()},
+                       {"shortest_frame_seconds", summary.shortest_frame_seconds},
+                       {"longest_frame_seconds", summary.longest_frame_seconds},
+                       {"fps", animation.fps()},
+                       {"motion", animation.motion()}});
+  stats.write("\n ],\n \"summary\": " + indented_json(summary_json, 1) + "\n}\n");
+  stats.close();
   if (pixels) {
-    std::string bytes = gif.finish();
-    if (o.report) report_in.gif = bytes;
-    outputs.add((dir / "animation.gif").string(), std::move(bytes));
+    gif_file->write(gif.finish());
+    gif_file->close();
+    if (o.report) report_in.gif = read_staged(gif_file->staged_path());
   }
   std::vector<RegionLoad> loads;
   for (const auto& [region, load] : summed) loads.push_back(load);
@@ -175,44 +221,42 @@ int run_animate(AnimateOptions o) {
     std::string png = encode_png(map.width(), map.height(),
                                  [&map](int y, std::uint8_t* row) { map.row(y, row); });
     if (o.report) report_in.regions_png = png;
-    outputs.add((dir / "regions.png").string(), std::move(png));
+    outputs.add((dir / "regions.png").string(), png);
   }
-  outputs.add((dir / "frames.csv").string(), std::move(csv));
-  outputs.add((dir / "stats.json").string(), stats.dump(1) + "\n");
   outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
   if (record_timeline) {
     // One more track: the frames themselves, each a slice from its start to its end.
     constexpr int kFramesPid = 5;
-    auto& events = timeline["traceEvents"];
-    events.push_back({{"ph", "M"},
-                      {"name", "process_name"},
-                      {"pid", kFramesPid},
-                      {"tid", 0},
-                      {"args", {{"name", "Animation frames"}}}});
-    events.push_back({{"ph", "M"},
-                      {"name", "process_sort_index"},
-                      {"pid", kFramesPid},
-                      {"tid", 0},
-                      {"args", {{"sort_index", -1}}}});
+    constexpr auto after = TimelineStream::Part::arrivals;  // after the run's own events
+    timeline->add(after, {{"ph", "M"},
+                          {"name", "process_name"},
+                          {"pid", kFramesPid},
+                          {"tid", 0},
+                          {"args", {{"name", "Animation frames"}}}});
+    timeline->add(after, {{"ph", "M"},
+                          {"name", "process_sort_index"},
+                          {"pid", kFramesPid},
+                          {"tid", 0},
+                          {"args", {{"sort_index", -1}}}});
     // Two frames are in flight at once: even frames on one row, odd on the other, each from
     // its first set-up on a GP to its last region in the frame buffer.
     for (int row = 0; row < 2; ++row) {
-      events.push_back({{"ph", "M"},
-                        {"name", "thread_name"},
-                        {"pid", kFramesPid},
-                        {"tid", row},
-                        {"args", {{"name", row == 0 ? "even frames" : "odd frames"}}}});
+      timeline->add(after, {{"ph", "M"},
+                            {"name", "thread_name"},
+                            {"pid", kFramesPid},
+                            {"tid", row},
+                            {"args", {{"name", row == 0 ? "even frames" : "odd frames"}}}});
     }
     for (std::size_t k = 0; k < frame_spans.size(); ++k) {
-      events.push_back({{"ph", "X"},
-                        {"name", fmt::format("frame {}", k)},
-                        {"pid", kFramesPid},
-                        {"tid", static_cast<int>(k & 1)},
-                        {"ts", frame_spans[k].first * 1e6},
-                        {"dur", (frame_spans[k].second - frame_spans[k].first) * 1e6}});
+      timeline->add(after, {{"ph", "X"},
+                            {"name", fmt::format("frame {}", k)},
+                            {"pid", kFramesPid},
+                            {"tid", static_cast<int>(k & 1)},
+                            {"ts", frame_spans[k].first * 1e6},
+                            {"dur", (frame_spans[k].second - frame_spans[k].first) * 1e6}});
     }
+    timeline->finish();
   }
-  if (record_timeline) outputs.add((dir / "timeline.json").string(), timeline.dump() + "\n");
   if (o.report) {
     report_in.title = fmt::format("animation of scene '{}' ({} triangles, {} spheres), firmware {}",
                                   animation.name(), first.mesh.triangles.size(),
@@ -221,7 +265,11 @@ int run_animate(AnimateOptions o) {
     report_in.config = &config;
     report_in.summary = summary;
     report_in.fps = animation.fps();
-    report_in.timeline = record_timeline ? &timeline : nullptr;
+    report_in.timeline = timeline ? &timeline->busy() : nullptr;
+    // The report holds every frame's image (a self-contained page): read back from the
+    // staged files now, not kept during the run.
+    for (const std::string& staged : staged_pngs)
+      report_in.frame_pngs.push_back(read_staged(staged));
     outputs.add((dir / "report.html").string(), report::html(animation_report(report_in)));
   }
   outputs.commit();

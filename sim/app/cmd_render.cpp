@@ -7,6 +7,7 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "common/parallel_for.hpp"
 #include "firmware/assembler/assembler.hpp"
@@ -18,6 +19,7 @@
 #include "sim/scene/scene.hpp"
 #include "sim/scene/scene_loader.hpp"
 #include "sim/simulation.hpp"
+#include "sim/timeline_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -44,7 +46,11 @@ struct RenderOptions {
 int run_render_frames(const RenderOptions& o, const MachineConfig& config, const Scene& scene,
                       const Program& program, double setup_seconds) {
   const bool pixels = config.fidelity.pixels != MachineConfig::Fidelity::Pixels::none;
-  nlohmann::json timeline;
+  // The outputs are staged as files (StagedOutputs), the timeline written out as the frames
+  // run (TimelineFile): memory stays flat however many frames.
+  StagedOutputs outputs;
+  std::optional<TimelineFile> timeline;
+  if (!o.timeline.empty()) timeline.emplace(outputs, o.timeline);
   FrameResult last;
   const RunSummary run = simulate_frames(
       config, std::make_shared<const Scene>(scene), std::make_shared<const Program>(program),
@@ -52,9 +58,9 @@ int run_render_frames(const RenderOptions& o, const MachineConfig& config, const
       [&last, n = o.frames](int f, FrameResult& r) {
         if (f == n - 1) last = std::move(r);
       },
-      true, o.timeline.empty() ? nullptr : &timeline, setup_seconds);
+      true, nullptr, setup_seconds, timeline ? &*timeline : nullptr);
+  if (timeline) timeline->finish();
   const fs::path dir(o.out_dir);
-  OutputSet outputs;
   const bool heat_map = !last.regions.empty();
   std::string frame_png, regions_png;
   parallel_for(2, o.threads, [&](int image) {
@@ -65,12 +71,11 @@ int run_render_frames(const RenderOptions& o, const MachineConfig& config, const
                                [&map](int y, std::uint8_t* row) { map.row(y, row); });
     }
   });
-  if (pixels) outputs.add((dir / "frame.png").string(), std::move(frame_png));
-  if (heat_map) outputs.add((dir / "regions.png").string(), std::move(regions_png));
+  if (pixels) outputs.add((dir / "frame.png").string(), frame_png);
+  if (heat_map) outputs.add((dir / "regions.png").string(), regions_png);
   outputs.add((dir / "config.json").string(), config.to_json().dump(2) + "\n");
   outputs.add((dir / "stats.json").string(), last.stats_json.dump(2) + "\n");
   outputs.add((dir / "run.json").string(), run.statistics().to_json().dump(2) + "\n");
-  if (!o.timeline.empty()) outputs.add(o.timeline, timeline.dump() + "\n");
   outputs.commit();
   std::error_code ignored;
   if (!pixels) fs::remove(dir / "frame.png", ignored);

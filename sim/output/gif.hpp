@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "models/frame_buffer/image.hpp"
@@ -35,6 +36,11 @@ class GifWriter {
   void add(const RgbImage& frame);
   // A frame buffer's frame, read a row at a time (no flat copy of it is made).
   void add(const FrameImage& frame);
+  // The bytes encoded since the last take() (or the start), which then leave the writer: a
+  // long animation writes its GIF out frame by frame (take after each add, then finish's
+  // rest) and the writer holds one frame's bytes at most. Concatenated, the bytes of every
+  // take() and finish() are the file.
+  std::string take() { return std::exchange(out_, std::string()); }
   std::string finish();
   int frames() const { return frames_; }
 

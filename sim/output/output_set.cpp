@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include <array>
@@ -14,6 +15,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <set>
 #include <thread>
@@ -33,7 +36,8 @@ struct Slot {
   char path[PATH_MAX + 1] = {};
 };
 std::array<Slot, kSlots> g_slots;
-std::array<Slot, kSlots> g_folder_slots;  // outermost first
+std::array<Slot, kSlots> g_folder_slots;   // outermost first
+std::array<Slot, kSlots> g_staging_slots;  // staging folders, removed with what they hold
 // While a commit moves a run's files into place (or a temporary is created and registered),
 // a signal waits for it to finish (the handler records it and returns), so that a run's
 // files appear together or not at all and no temporary escapes the handler.
@@ -57,11 +61,42 @@ void release_temporary(int slot) {
   if (slot >= 0) g_slots[slot].used.store(false);
 }
 
-// Removes the registered temporaries, then the registered folders innermost first (rmdir
-// removes only an empty folder, so never one that holds another run's files).
+// Removes the files in the folder `path` (a staging folder holds files only), then the
+// folder: async-signal-safe calls only (open, the getdents64 system call, unlinkat, rmdir).
+void remove_staging_folder(const char* path) {
+  const int fd = ::open(path, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd >= 0) {
+    alignas(8) char buffer[4096];
+    for (bool removed = true; removed;) {  // until a pass removes nothing
+      removed = false;
+      const long n = ::syscall(SYS_getdents64, fd, buffer, sizeof buffer);
+      if (n <= 0) break;
+      for (long at = 0; at < n;) {
+        // struct linux_dirent64: d_ino (8), d_off (8), d_reclen (2), d_type (1), d_name.
+        unsigned short length;
+        std::memcpy(&length, buffer + at + 16, sizeof length);
+        const char* name = buffer + at + 19;
+        if (!(name[0] == '.' && (name[1] == '\0' || (name[1] == '.' && name[2] == '\0'))))
+          removed = ::unlinkat(fd, name, 0) == 0 || removed;
+        at += length;
+      }
+      // Entries removed while reading: read the folder again from its start.
+      ::lseek(fd, 0, SEEK_SET);
+    }
+    ::close(fd);
+  }
+  ::rmdir(path);
+}
+
+// Removes the registered temporaries and staging folders, then the registered folders
+// innermost first (rmdir removes only an empty folder, so never one that holds another run's
+// files).
 void remove_registered() {
   for (Slot& s : g_slots) {
     if (s.used.load()) ::unlink(s.path);
+  }
+  for (Slot& s : g_staging_slots) {
+    if (s.used.load()) remove_staging_folder(s.path);
   }
   for (int k = kSlots; k-- > 0;) {
     if (g_folder_slots[k].used.load()) ::rmdir(g_folder_slots[k].path);
@@ -340,6 +375,193 @@ void write_file_atomically(const std::string& path, const std::string& text) {
   OutputSet one;
   one.add(path, text);
   one.commit();
+}
+
+namespace {
+
+// Writes all of `data` to `fd`; false with errno set on failure.
+bool staged_write_all(int fd, const char* data, std::size_t size) {
+  std::size_t done = 0;
+  while (done < size) {
+    const ssize_t n = ::write(fd, data + done, size - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return false;
+    if (n == 0) {
+      errno = EIO;
+      return false;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+std::string staged_folder_of(const std::string& path) {
+  const fs::path dir = fs::path(path).parent_path();
+  return dir.empty() ? std::string(".") : dir.string();
+}
+
+}  // namespace
+
+StagedOutputs::~StagedOutputs() { discard(); }
+
+const StagedOutputs::Folder& StagedOutputs::folder_for(const std::string& dir) {
+  for (const Folder& f : folders_) {
+    if (f.dir == dir) return f;
+  }
+  Folder f;
+  f.dir = dir;
+  std::string tmpl =
+      (fs::path(dir) / (".pp5-staging-" + std::to_string(::getpid()) + "-XXXXXX")).string();
+  // Registered as it is made: a signal between mkdtemp and the registration waits for it.
+  g_committing.store(true);
+  const char* made = ::mkdtemp(tmpl.data());
+  const int err = errno;
+  if (made != nullptr) f.slot = register_path(g_staging_slots, tmpl);
+  end_commit();
+  if (made == nullptr) {
+    throw OutputError(dir + ": cannot create a staging folder for this run's outputs (" +
+                      reason(err) + ")");
+  }
+  f.staging = tmpl;
+  folders_.push_back(std::move(f));
+  return folders_.back();
+}
+
+std::string StagedOutputs::stage(const std::string& path) {
+  const fs::path dest(path);
+  if (dest.filename().empty()) throw OutputError(path + ": expected a file name, not a folder");
+  const std::string dir = staged_folder_of(path);
+  std::error_code ec;
+  const fs::file_status ds = fs::status(dir, ec);
+  if (!fs::exists(ds)) throw OutputError(path + ": the folder " + dir + " does not exist");
+  if (!fs::is_directory(ds)) throw OutputError(path + ": " + dir + " is not a folder");
+  if (fs::is_directory(fs::status(dest, ec))) {
+    throw OutputError(path + ": is a folder, expected a file to write");
+  }
+  const Target t = resolve_output_target(path);
+  const std::string key = fs::weakly_canonical(t.path, ec).string();
+  if (!t.in_place && targets_.count(ec ? t.path : key) != 0)
+    throw OutputError(path + ": named twice among this run's outputs");
+  // A FIFO or a device is written in place at commit; its bytes wait in the system's
+  // temporary folder (no staging folder can be made beside /dev/stdout).
+  const std::string staging_dir =
+      t.in_place ? fs::temp_directory_path(ec).string() : staged_folder_of(t.path);
+  if (!t.in_place && !fs::is_directory(staging_dir, ec))
+    throw OutputError(path + ": links to " + t.path + ", whose folder does not exist");
+  const Folder& folder = folder_for(staging_dir.empty() ? std::string("/tmp") : staging_dir);
+  Staged f;
+  f.path = path;
+  f.target = t.in_place ? t.path : (ec ? t.path : key);
+  f.in_place = t.in_place;
+  // The staged file's name: its destination's, numbered when two share a name.
+  f.staged = (fs::path(folder.staging) /
+              ("out-" + std::to_string(files_.size()) + "-" + fs::path(t.path).filename().string()))
+                 .string();
+  if (f.staged.size() > PATH_MAX || fs::path(f.staged).filename().string().size() > NAME_MAX)
+    f.staged = (fs::path(folder.staging) / std::to_string(files_.size())).string();
+  if (!f.in_place) targets_.insert(f.target);
+  files_.push_back(f);
+  return files_.back().staged;
+}
+
+std::string StagedOutputs::scratch(const std::string& staged, const std::string& name) {
+  return (fs::path(staged).parent_path() / ("scratch-" + std::to_string(scratches_++) + "-" + name))
+      .string();
+}
+
+std::string StagedOutputs::add(const std::string& path, const std::string& bytes) {
+  StagedFile file(*this, path);
+  file.write(bytes);
+  file.close();
+  return file.staged_path();
+}
+
+void StagedOutputs::discard() {
+  files_.clear();
+  targets_.clear();
+  for (Folder& f : folders_) {
+    remove_staging_folder(f.staging.c_str());
+    if (f.slot >= 0) g_staging_slots[f.slot].used.store(false);
+  }
+  folders_.clear();
+}
+
+void StagedOutputs::commit() {
+  try {
+    // FIFOs and devices first (as OutputSet: once every other output is ready).
+    for (const Staged& f : files_) {
+      if (!f.in_place) continue;
+      std::ifstream in(f.staged, std::ios::binary);
+      std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      if (!in.good() && !in.eof())
+        throw OutputError(f.path + ": cannot read back its staged bytes from " + f.staged);
+      write_in_place(f.path, f.target, bytes);
+    }
+  } catch (...) {
+    discard();
+    throw;
+  }
+  std::set<std::string> dirs;
+  for (const Staged& f : files_) {
+    if (f.in_place) continue;
+    std::error_code ec;
+    const fs::path dir = fs::path(f.target).parent_path();
+    const fs::path canonical = fs::weakly_canonical(dir.empty() ? fs::path(".") : dir, ec);
+    dirs.insert(ec ? dir.string() : canonical.string());
+  }
+  std::vector<std::unique_ptr<FolderLock>> locks;
+  for (const std::string& dir : dirs) locks.push_back(std::make_unique<FolderLock>(dir));
+  g_committing.store(true);
+  bool paused = false;
+  for (const Staged& f : files_) {
+    if (f.in_place) continue;
+    if (paused) test_pause_between_renames();
+    paused = true;
+    if (std::rename(f.staged.c_str(), f.target.c_str()) != 0) {
+      const int err = errno;
+      locks.clear();
+      discard();
+      end_commit();
+      throw OutputError(f.path + ": cannot move into place (" + reason(err) + ")");
+    }
+  }
+  locks.clear();
+  // The run's files are in place: the staging folders (now holding only the bytes of FIFOs
+  // and devices, already written) go, and the run's folders are no longer a signal's.
+  discard();
+  forget_created_folders();
+  end_commit();
+}
+
+StagedFile::StagedFile(StagedOutputs& outputs, const std::string& path)
+    : StagedFile(outputs.stage(path), path) {}
+
+StagedFile::StagedFile(const std::string& file, const std::string& path)
+    : path_(path), staged_(file) {
+  fd_ = ::open(staged_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+  if (fd_ < 0) throw OutputError(path_ + ": cannot create (" + reason(errno) + ")");
+}
+
+StagedFile::~StagedFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void StagedFile::write(const char* data, std::size_t size) {
+  if (fd_ < 0) throw OutputError(path_ + ": cannot write (the file is closed)");
+  if (!staged_write_all(fd_, data, size)) {
+    const int err = errno;
+    ::close(fd_);
+    fd_ = -1;
+    throw OutputError(path_ + ": cannot write (" + reason(err) + ")");
+  }
+}
+
+void StagedFile::close() {
+  if (fd_ < 0) return;
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0 && errno != EINTR)
+    throw OutputError(path_ + ": cannot write (" + reason(errno) + ")");
 }
 
 std::string default_output_folder(const std::string& name) {
