@@ -105,18 +105,7 @@ class PngDeflate {
     int count = count_;
     std::uint8_t* dst = dst_;
     auto emit = [&acc, &count, &dst](std::uint32_t value, int bits) {
-      acc |= static_cast<std::uint64_t>(value) << count;
-      count += bits;
-      if (count >= 32) {
-        const auto word = static_cast<std::uint32_t>(acc);
-        dst[0] = static_cast<std::uint8_t>(word);
-        dst[1] = static_cast<std::uint8_t>(word >> 8);
-        dst[2] = static_cast<std::uint8_t>(word >> 16);
-        dst[3] = static_cast<std::uint8_t>(word >> 24);
-        dst += 4;
-        acc >>= 32;
-        count -= 32;
-      }
+      put_bits(acc, count, dst, value, bits);
     };
     const std::uint8_t* p = in;
     for (const Segment seg : segments_) {
@@ -373,20 +362,23 @@ class PngDeflate {
     }
   }
 
-  void put(std::uint32_t value, int bits) {
-    acc_ |= static_cast<std::uint64_t>(value) << count_;
-    count_ += bits;
-    if (count_ >= 32) {
-      const auto word = static_cast<std::uint32_t>(acc_);
-      dst_[0] = static_cast<std::uint8_t>(word);
-      dst_[1] = static_cast<std::uint8_t>(word >> 8);
-      dst_[2] = static_cast<std::uint8_t>(word >> 16);
-      dst_[3] = static_cast<std::uint8_t>(word >> 24);
-      dst_ += 4;
-      acc_ >>= 32;
-      count_ -= 32;
+  // `bits` bits of `value` after the `count` in `acc`, LSB first; 32 at a time to dst.
+  static void put_bits(std::uint64_t& acc, int& count, std::uint8_t*& dst, std::uint32_t value,
+                       int bits) {
+    acc |= static_cast<std::uint64_t>(value) << count;
+    count += bits;
+    if (count >= 32) {
+      const auto word = static_cast<std::uint32_t>(acc);
+      dst[0] = static_cast<std::uint8_t>(word);
+      dst[1] = static_cast<std::uint8_t>(word >> 8);
+      dst[2] = static_cast<std::uint8_t>(word >> 16);
+      dst[3] = static_cast<std::uint8_t>(word >> 24);
+      dst += 4;
+      acc >>= 32;
+      count -= 32;
     }
   }
+  void put(std::uint32_t value, int bits) { put_bits(acc_, count_, dst_, value, bits); }
   void flush() {
     while (count_ > 0) {
       *dst_++ = static_cast<std::uint8_t>(acc_);
