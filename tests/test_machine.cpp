@@ -240,13 +240,13 @@ TEST_CASE("parallel_for rethrows a worker thread's exception on the caller", "[m
 
 TEST_CASE("parallel_for keeps its threads from call to call, and nests", "[machine]") {
   // A run of frames calls it once a frame or more: its threads are kept, not made each time.
-  parallel_for(8, 3, [](int) {});
-  const int kept = host_threads_kept();
-  CHECK(kept >= 2);
+  // Calls one after another need at most two other threads at once (a thread that finished
+  // its part may already serve the same call's next one), so no more than two are ever made.
   std::atomic<int> sum{0};
   for (int call = 0; call < 200; ++call) parallel_for(8, 3, [&sum](int i) { sum += i; });
   CHECK(sum.load() == 200 * 28);
-  CHECK(host_threads_kept() == kept);
+  CHECK(host_threads_kept() >= 1);
+  CHECK(host_threads_kept() <= 2);
   // A body that calls parallel_for itself (every kept thread busy) gets threads of its own
   // rather than waiting for one: it finishes, with every index run once.
   std::atomic<int> inner{0};
