@@ -149,9 +149,11 @@ TEST_CASE("session: resident memory stays flat over many overlapped frames", "[s
   // run_frames streams: each frame is handed over as soon as every unit has finished it, its
   // pixels execute while the kernel simulates later frames, and its records (the Renderers'
   // regions with their packets, the GPs' statistics) go once on_frame has had it. Frames
-  // 20..300 of a 256 x 256 torus, pixels executed (word level). Measured: -0.77 MB (it
-  // shrank); with every frame's records kept to the end instead (the mutation tried), 177 MB,
-  // about 630 KB a frame.
+  // 20..300 of a 256 x 256 torus, pixels executed (word level): the end against the highest
+  // over frames 20..49 (by then as many frames have been in flight at once as ever will,
+  // up to three, whose number at any one frame depends on the threads' timing). Measured:
+  // -0.77 MB (it shrank); with every frame's records kept to the end instead (the mutation
+  // tried), 177 MB, about 630 KB a frame.
   MachineConfig c = MachineConfig::defaults();
   c.set({"screen.width=256", "screen.height=256", "gp.count=4", "renderer.count=2",
          "fidelity.pixels=word"});
@@ -163,7 +165,7 @@ TEST_CASE("session: resident memory stays flat over many overlapped frames", "[s
   std::uint64_t hashes = 0;
   session.run_frames(kFrames, [&](int f, FrameResult& r) {
     hashes += r.image.flat().rgb.size();
-    if (f == 20) after_few = resident_bytes();
+    if (f >= 20 && f < 50) after_few = std::max(after_few, resident_bytes());
     if (f == kFrames - 1) at_end = resident_bytes();
   });
   CHECK(hashes == std::uint64_t{kFrames} * 256 * 256 * 3);
