@@ -17,8 +17,9 @@
 //    a run. It stops, the machine holding half a frame is freed, and KeyboardInterrupt is
 //    raised; the session's next frame is the same frame again, on a machine made again.
 //  - An animated session (animation=True) draws frame k of the scene's animation at its frame
-//    k, the scenes `pp5sim animate` draws (animation_scenes); a machine made again mid-run is
-//    made for the scene of the frame it runs next.
+//    k, the scenes `pp5sim animate` draws (check_animation_scenes, then animation_scene as each
+//    frame comes: one scene kept at a time); a machine made again mid-run is made for the
+//    scene of the frame it runs next.
 #include <dlfcn.h>
 #include <fmt/format.h>
 #include <pybind11/numpy.h>
@@ -539,10 +540,24 @@ bool watched(Body&& body) {
 
 // An animated session's frames (sim/animation.hpp): every frame's scene, made and checked when
 // the session is made, as `pp5sim animate` makes them.
+// An animated session's frames: every frame's scene made and checked when the session is
+// made (check_animation_scenes), then kept one at a time, made again as its frame comes
+// (a long animation stepped frame by frame holds one scene, as pp5sim animate does).
 struct PyAnimation {
   std::string name, motion;
   double fps = 0;
-  std::vector<std::shared_ptr<const Scene>> scenes;
+  std::shared_ptr<const Animation> source;
+  int frames = 0;
+  // Frame k's scene; the last one made is kept.
+  std::shared_ptr<const Scene> scene(int k) const {
+    if (k != kept_frame) {
+      kept = animation_scene(*source, k);
+      kept_frame = k;
+    }
+    return kept;
+  }
+  mutable std::shared_ptr<const Scene> kept;
+  mutable int kept_frame = -1;
 };
 
 class PySession {
@@ -621,15 +636,14 @@ class PySession {
     {
       KernelLock kernel;
       done = watched([&](const std::atomic<bool>* cancel) {
-        session_ = std::make_unique<Session>(config_, animation_->scenes.front(), program_,
-                                             threads_, nullptr, cancel);
+        session_ = std::make_unique<Session>(config_, animation_->scene(0), program_, threads_,
+                                             nullptr, cancel);
         session_->set_setup_seconds(setup_seconds_);
         session_->set_cancel(cancel);
-        const auto& scenes = animation_->scenes;
+        const PyAnimation& a = *animation_;
         overlapped_ = session_->run_frames(
-            static_cast<int>(scenes.size()),
-            [&results](int, FrameResult& r) { results.push_back(std::move(r)); }, pixels,
-            [&scenes](int k) { return scenes[static_cast<std::size_t>(k)]; });
+            a.frames, [&results](int, FrameResult& r) { results.push_back(std::move(r)); }, pixels,
+            [&a](int k) { return a.scene(k); });
         session_->set_cancel(nullptr);
       });
     }
@@ -675,9 +689,7 @@ class PySession {
   // The scene of the next frame (an animation's last once it has ended).
   std::shared_ptr<const Scene> scene_ptr() const {
     if (!animation_) return scene_;
-    const std::size_t k =
-        std::min<std::size_t>(static_cast<std::size_t>(frames_), animation_->scenes.size() - 1);
-    return animation_->scenes[k];
+    return animation_->scene(std::min(frames_, animation_->frames - 1));
   }
   const std::optional<PyAnimation>& animation() const { return animation_; }
   std::shared_ptr<const Program> program() const { return program_; }
@@ -727,14 +739,14 @@ class PySession {
   // The scene of frame frames_: the session's, or the animation's frame (refused past its end).
   std::shared_ptr<const Scene> frame_scene() const {
     if (!animation_) return scene_;
-    const auto count = static_cast<int>(animation_->scenes.size());
+    const int count = animation_->frames;
     if (frames_ >= count) {
       throw std::invalid_argument(fmt::format(
           "the animation of '{}' has {} frames, all simulated; make the session with frames=N "
           "for more",
           animation_->name, count));
     }
-    return animation_->scenes[static_cast<std::size_t>(frames_)];
+    return animation_->scene(frames_);
   }
   PyFrame finish(PyFrame f, int index) const {
     f.index = index;
@@ -1046,67 +1058,66 @@ PYBIND11_MODULE(_pp5sim, m) {
       });
 
   py::class_<PySession>(m, "Session")
-      .def(
-          py::init([](const std::string& scene, const py::object& vertices,
-                      const py::object& triangles, const py::object& colors,
-                      const py::object& centers, const py::object& radii,
-                      const py::object& sphere_colors, const std::vector<int>& tessellation,
-                      const std::string& firmware, const std::string& config_file,
-                      const std::string& fidelity,
-                      const std::vector<std::pair<std::string, std::string>>& sets, int threads,
-                      bool animate, int frames, double fps) {
-            MachineConfig config = make_config(config_file, fidelity, sets);
-            // host.setup_seconds: from here to the assembled program (pp5sim render's span).
-            const auto setup_start = std::chrono::steady_clock::now();
-            std::shared_ptr<const Scene> s;
-            std::optional<PyAnimation> animation;
-            const bool arrays = !vertices.is_none() || !centers.is_none() || !triangles.is_none() ||
-                                !radii.is_none();
-            if (!animate && (frames != 0 || fps != 0))
-              throw std::invalid_argument("frames, fps: given without animation=True");
-            if (animate && arrays) {
-              throw std::invalid_argument(
-                  "animation: a scene given as arrays does not move; give a built-in name or "
-                  "a scene file");
-            }
-            if (frames < 0) throw std::invalid_argument("frames: expected a count >= 1");
-            if (fps < 0) throw std::invalid_argument("fps: expected frames per second > 0");
-            if (arrays) {
-              s = std::make_shared<const Scene>(scene_from_arrays(
-                  vertices, triangles, colors, centers, radii, sphere_colors, ""));
-            } else {
-              SceneOptions o;
-              if (!tessellation.empty()) {
-                if (tessellation.size() != 2)
-                  throw std::invalid_argument("tessellation: expected (u, v)");
-                o.tessellation_u = tessellation[0];
-                o.tessellation_v = tessellation[1];
-              }
-              if (animate) {
-                // The frames pp5sim animate draws for the same arguments.
-                AnimationOptions ao;
-                ao.scene = o;
-                ao.frames = frames;
-                ao.fps = fps;
-                const Animation a = load_animation(scene, ao);
-                animation = PyAnimation{a.name(), a.motion(), a.fps(), animation_scenes(a, config)};
-                s = animation->scenes.front();
-              } else {
-                s = std::make_shared<const Scene>(load_scene(scene, o));
-              }
-            }
-            auto program = std::make_shared<const Program>(load_program(firmware, *s, config));
-            const double setup_seconds =
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start)
-                    .count();
-            return std::make_unique<PySession>(config, s, program, threads_or_default(threads),
-                                               std::move(animation), setup_seconds);
-          }),
-          py::arg("scene"), py::arg("vertices"), py::arg("triangles"), py::arg("colors"),
-          py::arg("sphere_centers"), py::arg("sphere_radii"), py::arg("sphere_colors"),
-          py::arg("tessellation"), py::arg("firmware"), py::arg("config_file"), py::arg("fidelity"),
-          py::arg("sets"), py::arg("threads"), py::arg("animate") = false, py::arg("frames") = 0,
-          py::arg("fps") = 0.0)
+      .def(py::init([](const std::string& scene, const py::object& vertices,
+                       const py::object& triangles, const py::object& colors,
+                       const py::object& centers, const py::object& radii,
+                       const py::object& sphere_colors, const std::vector<int>& tessellation,
+                       const std::string& firmware, const std::string& config_file,
+                       const std::string& fidelity,
+                       const std::vector<std::pair<std::string, std::string>>& sets, int threads,
+                       bool animate, int frames, double fps) {
+             MachineConfig config = make_config(config_file, fidelity, sets);
+             // host.setup_seconds: from here to the assembled program (pp5sim render's span).
+             const auto setup_start = std::chrono::steady_clock::now();
+             std::shared_ptr<const Scene> s;
+             std::optional<PyAnimation> animation;
+             const bool arrays = !vertices.is_none() || !centers.is_none() ||
+                                 !triangles.is_none() || !radii.is_none();
+             if (!animate && (frames != 0 || fps != 0))
+               throw std::invalid_argument("frames, fps: given without animation=True");
+             if (animate && arrays) {
+               throw std::invalid_argument(
+                   "animation: a scene given as arrays does not move; give a built-in name or "
+                   "a scene file");
+             }
+             if (frames < 0) throw std::invalid_argument("frames: expected a count >= 1");
+             if (fps < 0) throw std::invalid_argument("fps: expected frames per second > 0");
+             if (arrays) {
+               s = std::make_shared<const Scene>(scene_from_arrays(
+                   vertices, triangles, colors, centers, radii, sphere_colors, ""));
+             } else {
+               SceneOptions o;
+               if (!tessellation.empty()) {
+                 if (tessellation.size() != 2)
+                   throw std::invalid_argument("tessellation: expected (u, v)");
+                 o.tessellation_u = tessellation[0];
+                 o.tessellation_v = tessellation[1];
+               }
+               if (animate) {
+                 // The frames pp5sim animate draws for the same arguments.
+                 AnimationOptions ao;
+                 ao.scene = o;
+                 ao.frames = frames;
+                 ao.fps = fps;
+                 auto a = std::make_shared<const Animation>(load_animation(scene, ao));
+                 s = check_animation_scenes(*a, config);  // every frame's, checked; frame 0's
+                 animation = PyAnimation{a->name(), a->motion(), a->fps(), a, a->frames(), s, 0};
+               } else {
+                 s = std::make_shared<const Scene>(load_scene(scene, o));
+               }
+             }
+             auto program = std::make_shared<const Program>(load_program(firmware, *s, config));
+             const double setup_seconds =
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start)
+                     .count();
+             return std::make_unique<PySession>(config, s, program, threads_or_default(threads),
+                                                std::move(animation), setup_seconds);
+           }),
+           py::arg("scene"), py::arg("vertices"), py::arg("triangles"), py::arg("colors"),
+           py::arg("sphere_centers"), py::arg("sphere_radii"), py::arg("sphere_colors"),
+           py::arg("tessellation"), py::arg("firmware"), py::arg("config_file"),
+           py::arg("fidelity"), py::arg("sets"), py::arg("threads"), py::arg("animate") = false,
+           py::arg("frames") = 0, py::arg("fps") = 0.0)
       .def("frame", &PySession::frame, py::arg("fields") = std::vector<std::string>{},
            py::arg("pixels") = true)
       .def("why", &PySession::why, py::arg("x"), py::arg("y"))
@@ -1121,7 +1132,7 @@ PYBIND11_MODULE(_pp5sim, m) {
                                py::dict d;
                                d["name"] = a.name;
                                d["motion"] = a.motion;
-                               d["frames"] = a.scenes.size();
+                               d["frames"] = a.frames;
                                d["fps"] = a.fps;
                                return std::move(d);
                              })
