@@ -5,9 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <iterator>
 #include <map>
 #include <memory>
 #include <optional>
@@ -94,14 +92,6 @@ std::string indented_json(const nlohmann::json& j, int depth) {
     }
   }
   return out;
-}
-
-// A staged output's bytes, read back (the report embeds them).
-std::string read_staged(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw OutputError(path + ": cannot read back a staged output");
-  return bytes;
 }
 
 int run_animate(AnimateOptions o) {
@@ -212,7 +202,8 @@ int run_animate(AnimateOptions o) {
   if (pixels) {
     gif_file->write(gif.finish());
     gif_file->close();
-    if (o.report) report_in.gif = read_staged(gif_file->staged_path());
+    if (o.report)
+      report_in.gif = read_staged(gif_file->staged_path(), (dir / "animation.gif").string());
   }
   std::vector<RegionLoad> loads;
   for (const auto& [region, load] : summed) loads.push_back(load);
@@ -268,8 +259,10 @@ int run_animate(AnimateOptions o) {
     report_in.timeline = timeline ? &timeline->busy() : nullptr;
     // The report holds every frame's image (a self-contained page): read back from the
     // staged files now, not kept during the run.
-    for (const std::string& staged : staged_pngs)
-      report_in.frame_pngs.push_back(read_staged(staged));
+    for (std::size_t k = 0; k < staged_pngs.size(); ++k) {
+      report_in.frame_pngs.push_back(
+          read_staged(staged_pngs[k], (dir / fmt::format("frame-{:04d}.png", k)).string()));
+    }
     outputs.add((dir / "report.html").string(), report::html(animation_report(report_in)));
   }
   outputs.commit();

@@ -15,11 +15,12 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
+#include <limits>
 #include <memory>
 #include <set>
 #include <thread>
+
+#include "common/read_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -491,11 +492,7 @@ void StagedOutputs::commit() {
     // FIFOs and devices first (as OutputSet: once every other output is ready).
     for (const Staged& f : files_) {
       if (!f.in_place) continue;
-      std::ifstream in(f.staged, std::ios::binary);
-      std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      if (!in.good() && !in.eof())
-        throw OutputError(f.path + ": cannot read back its staged bytes from " + f.staged);
-      write_in_place(f.path, f.target, bytes);
+      write_in_place(f.path, f.target, read_staged(f.staged, f.path));
     }
   } catch (...) {
     discard();
@@ -531,6 +528,14 @@ void StagedOutputs::commit() {
   discard();
   forget_created_folders();
   end_commit();
+}
+
+std::string read_staged(const std::string& staged, const std::string& path) {
+  try {
+    return read_regular_file(staged, std::numeric_limits<std::uint64_t>::max(), "a staged output");
+  } catch (const FileError& e) {
+    throw OutputError(path + ": cannot read back its staged bytes (" + e.what() + ")");
+  }
 }
 
 StagedFile::StagedFile(StagedOutputs& outputs, const std::string& path)

@@ -101,6 +101,10 @@ class StagedOutputs {
   const Folder& folder_for(const std::string& dir);
 };
 
+// The bytes of a staged file `staged` (a name stage() or add() gave), read back before the
+// commit (a report embedding them, a FIFO written at commit); errors name `path`.
+std::string read_staged(const std::string& staged, const std::string& path);
+
 // A staged file written piece by piece (StagedOutputs::stage); errors name `path`, the
 // destination. close() (or the destructor) closes it; writing after an error throws again.
 class StagedFile {
