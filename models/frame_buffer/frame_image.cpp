@@ -27,14 +27,20 @@ FrameImage::FrameImage(int width, int height, int region_width, int region_heigh
   const int rows = (height + region_height - 1) / region_height;
   if (pixels) {
     regions_.resize(static_cast<std::size_t>(columns_) * rows);
-    // Not initialised: a region's bytes are written before they are given, and the pages of
-    // regions that share pixels instead are never touched.
-    const std::size_t bytes =
-        regions_.size() * static_cast<std::size_t>(region_width) * region_height * 3;
-    own_ = std::shared_ptr<std::uint8_t>(new std::uint8_t[bytes],
-                                         std::default_delete<std::uint8_t[]>());
-    advise_huge_pages(own_.get(), bytes);
+    own_ = new_own_bytes(own_size());
   }
+}
+
+std::size_t FrameImage::own_size() const {
+  return regions_.size() * static_cast<std::size_t>(region_width_) * region_height_ * 3;
+}
+
+// Not initialised: a region's bytes are written before they are given, and the pages of
+// regions that share pixels instead are never touched.
+std::shared_ptr<std::uint8_t> FrameImage::new_own_bytes(std::size_t bytes) {
+  std::shared_ptr<std::uint8_t> own(new std::uint8_t[bytes], std::default_delete<std::uint8_t[]>());
+  advise_huge_pages(own.get(), bytes);
+  return own;
 }
 
 FrameImage::FrameImage(int width, int height, int region_width, int region_height, bool pixels,
@@ -44,20 +50,11 @@ FrameImage::FrameImage(int width, int height, int region_width, int region_heigh
   pixels_ = true;
   regions_.resize(static_cast<std::size_t>(columns_) *
                   ((height + region_height - 1) / region_height));
-  const std::size_t bytes =
-      regions_.size() * static_cast<std::size_t>(region_width) * region_height * 3;
   std::shared_ptr<std::uint8_t> old = std::move(storage.own_);
-  const std::size_t old_bytes = storage.regions_.size() *
-                                static_cast<std::size_t>(storage.region_width_) *
-                                storage.region_height_ * 3;
+  const std::size_t old_bytes = storage.own_size();
   storage = FrameImage();  // its regions hold references to its bytes: gone now
-  if (old && old.use_count() == 1 && old_bytes == bytes) {
-    own_ = std::move(old);
-  } else {
-    own_ = std::shared_ptr<std::uint8_t>(new std::uint8_t[bytes],
-                                         std::default_delete<std::uint8_t[]>());
-    advise_huge_pages(own_.get(), bytes);
-  }
+  own_ = old && old.use_count() == 1 && old_bytes == own_size() ? std::move(old)
+                                                                : new_own_bytes(own_size());
 }
 
 RegionPixels region_pixels(std::vector<std::uint8_t> rgb) {

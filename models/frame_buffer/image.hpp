@@ -75,8 +75,10 @@ class FrameImage {
   int columns_ = 0;
   bool pixels_ = false;
   std::size_t index(int x0, int y0) const;  // checked
-  std::vector<RegionPixels> regions_;       // row-major, null: black
-  std::shared_ptr<std::uint8_t> own_;       // a region's bytes for each region, row-major
+  std::size_t own_size() const;             // own_'s bytes: every region's
+  static std::shared_ptr<std::uint8_t> new_own_bytes(std::size_t bytes);
+  std::vector<RegionPixels> regions_;  // row-major, null: black
+  std::shared_ptr<std::uint8_t> own_;  // a region's bytes for each region, row-major
   mutable std::shared_ptr<const RgbImage> flat_;
 };
 
