@@ -440,20 +440,121 @@ class LinearRows {
 
 }  // namespace
 
+namespace {
+
+// A pending half-plane test (lt, le, gt, ge) with D != 0 as a bound on each row's columns:
+// on row y the test holds exactly for x >= L (a lower bound) or for x < U (an upper one),
+// with the bound floor(n(y) / d) + 1 clamped to [0, width], d = |D| and n(y) = s h(y) + c0,
+// h(y) = D x0 + E (y0 + y) + F the value at the row's column 0:
+//   D > 0:  g < 0: U, n = -h - 1    g <= 0: U, n = -h    g >= 0: L, n = -h - 1    g > 0: L, n = -h
+//   D < 0:  g < 0: L, n = h         g <= 0: L, n = h - 1  g > 0: U, n = h - 1     g >= 0: U, n = h
+// (with g(x) = D x + h: for D > 0, g < 0 iff x < ceil(-h / d) = floor((-h - 1) / d) + 1, and
+// so on). From row y to y + 1, n changes by s E: the quotient and remainder follow by an add
+// and a carry, with no division (one per jump to a row that does not follow the last). In
+// 64-bit integers: fits_64 keeps |h| below 2^61.
+class RowBound {
+ public:
+  using T = std::int64_t;
+  RowBound() = default;
+  RowBound(const QuadraticCoefficients& c, Compare cond, int x0, int y0, int width)
+      : d_(c.D > 0 ? T(c.D) : -T(c.D)), width_(width), y0_(y0) {
+    const bool up = c.D > 0;
+    const bool below = cond == Compare::lt || cond == Compare::le;
+    upper = up == below;
+    s_ = up ? -1 : 1;
+    // The -1: D > 0 with lt or ge, D < 0 with le or gt.
+    c0_ = (up ? (cond == Compare::lt || cond == Compare::ge)
+              : (cond == Compare::le || cond == Compare::gt))
+              ? -1
+              : 0;
+    e_ = T(c.E);
+    f_ = T(c.F) + T(c.D) * x0;
+    floor_div(s_ * e_, d_, qe_, re_);
+  }
+  bool upper = false;
+  int at(int y) {
+    if (y == y_ + 1 && y_ >= 0) {
+      q_ += qe_;
+      r_ += re_;
+      const bool carry = r_ >= d_;
+      r_ -= carry ? d_ : 0;
+      q_ += carry;
+    } else if (y != y_) {
+      floor_div(s_ * (e_ * (y0_ + y) + f_) + c0_, d_, q_, r_);
+    }
+    y_ = y;
+    const T b = q_ + 1;
+    return static_cast<int>(b < 0 ? T(0) : (b > T(width_) ? T(width_) : b));
+  }
+
+ private:
+  static void floor_div(T n, T d, T& quo, T& rem) {
+    quo = n / d;
+    rem = n % d;
+    if (rem < 0) rem += d, --quo;
+  }
+  T d_ = 1, s_ = 1, c0_ = 0, e_ = 0, f_ = 0;
+  T q_ = 0, r_ = 0, qe_ = 0, re_ = 0;
+  int width_ = 0, y0_ = 0;
+  int y_ = -1;
+};
+
+}  // namespace
+
 void WordBackend::materialize() const {
   if (pending_.empty()) return;
   const int width = geometry_.width;
   int lo = 0, hi = geometry_.height - 1;
-  std::array<LinearRows, kMaxPending> tests;
   const std::size_t n = pending_.size();
   linear_row_band(pending_.data(), n, x0_, y0_, width, geometry_.height, lo, hi);
+  bool sloped = true;  // every test has D != 0 (a row bound)
+  for (std::size_t k = 0; k < n; ++k) sloped = sloped && pending_[k].c.D != 0;
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
+  if (sloped) {
+    // The bounds, lower ones first: each row's part is [max of L, min of U) within the span.
+    std::array<RowBound, kMaxPending> bounds;
+    std::size_t lower = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const RowBound b(pending_[k].c, pending_[k].cond, x0_, y0_, width);
+      if (!b.upper) bounds[lower++] = b;
+    }
+    std::size_t m = lower;
+    for (std::size_t k = 0; k < n; ++k) {
+      const RowBound b(pending_[k].c, pending_[k].cond, x0_, y0_, width);
+      if (b.upper) bounds[m++] = b;
+    }
+    pending_.clear();
+    // At most one part per row of each span within the band: written through a pointer (no
+    // push_back per row), the vector cut to what was written.
+    std::size_t most = 0;
+    for (const Range& sp : spans_) {
+      const int first = std::max(sp.begin / width, lo);
+      const int last = std::min((sp.end - 1) / width, hi);
+      if (last >= first) most += static_cast<std::size_t>(last - first + 1);
+    }
+    kept.resize(most);
+    Range* out = kept.data();
+    for (const Range& sp : spans_) {
+      const int first = std::max(sp.begin / width, lo);
+      for (int y = first; y * width < sp.end && y <= hi; ++y) {
+        const int start = y * width;
+        int from = std::max(sp.begin - start, 0), to = std::min(sp.end - start, width);
+        for (std::size_t k = 0; k < lower; ++k) from = std::max(from, bounds[k].at(y));
+        for (std::size_t k = lower; k < n; ++k) to = std::min(to, bounds[k].at(y));
+        if (to > from) *out++ = Range{start + from, start + to};
+      }
+    }
+    kept.resize(static_cast<std::size_t>(out - kept.data()));
+    spans_.swap(kept);
+    return;
+  }
+  std::array<LinearRows, kMaxPending> tests;
   for (std::size_t k = 0; k < n; ++k) {
     const LinearTest& t = pending_[k];
     tests[k] = LinearRows(t.c, t.cond, x0_, y0_, width);
   }
   pending_.clear();
-  std::vector<Range>& kept = spare_spans_;
-  kept.clear();
   for (const Range& sp : spans_) {
     const int first = std::max(sp.begin / width, lo);
     for (int y = first; y * width < sp.end && y <= hi; ++y) {
