@@ -12,6 +12,10 @@
 #include <string>
 #include <utility>
 
+#ifdef __AVX512F__
+#include <immintrin.h>
+#endif
+
 namespace pp5 {
 
 namespace {
@@ -20,6 +24,62 @@ using u64 = std::uint64_t;
 using i64 = std::int64_t;
 
 u64 low_mask(int width) { return width >= 64 ? ~u64{0} : (u64{1} << width) - 1; }
+
+// Eight pixels at a time: GCC vector types (AVX-512 registers where the host has them, two or
+// four narrower ones where not; each operation is the scalar one lane by lane, so the result
+// is the same on any host). A row's part is short after a triangle's edge tests (six pixels
+// on average on the default torus), too short for a compiler's vector loop, which runs its
+// scalar remainder instead.
+using V8 = u64 __attribute__((vector_size(64)));
+using V8s = i64 __attribute__((vector_size(64)));
+using B8 = std::uint8_t __attribute__((vector_size(8)));
+
+// for_chunks(begin, end, limit, f): pixels [begin, end) of an array of `limit` >= 8 as chunks
+// of eight, f(base, live): the chunk is pixels [base, base + 8), live (-1 or 0 per lane) the
+// ones of them to process. Chunk k covers [begin + 8k, begin + 8k + 8) cut to end, moved back
+// to end by `limit` if it would pass it (its lanes before begin + 8k then not live): every
+// pixel is processed once, and nothing outside the array is read or written. The lanes not
+// live are read and written back unchanged.
+template <class F>
+inline void for_chunks(int begin, int end, int limit, F f) {
+  const V8s iota = {0, 1, 2, 3, 4, 5, 6, 7};
+  for (int c = begin; c < end; c += 8) {
+    const int base = std::min(c, limit - 8);
+    const V8s x = iota + base;
+    f(base, reinterpret_cast<V8>((x >= c) & (x < end)));
+  }
+}
+
+inline V8 load8(const u64* p) {
+  V8 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+inline void store8(u64* p, const V8& v) { std::memcpy(p, &v, sizeof v); }
+
+// Eight E bytes, one per lane (zero-extended), and back: the lanes' low bytes. One
+// instruction each with AVX-512 (GCC's generic conversion goes byte by byte).
+inline V8 load_enable8(const std::uint8_t* p) {
+#ifdef __AVX512F__
+  return reinterpret_cast<V8>(
+      _mm512_maskz_cvtepu8_epi64(0xFF, _mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+#else
+  B8 b;
+  std::memcpy(&b, p, sizeof b);
+  return __builtin_convertvector(b, V8);
+#endif
+}
+
+inline void store_enable8(std::uint8_t* p, const V8& v) {
+#ifdef __AVX512F__
+  _mm_storel_epi64(reinterpret_cast<__m128i*>(p),
+                   _mm512_maskz_cvtepi64_epi8(0xFF, reinterpret_cast<__m512i>(v)));
+#else
+  const B8 b = __builtin_convertvector(v, B8);
+  std::memcpy(p, &b, sizeof b);
+#endif
+}
 
 // v's low `width` bits read as two's complement, extended to 64 bits.
 inline u64 sign_extend(u64 v, int width) {
@@ -935,12 +995,14 @@ struct WordBackend::PixelValues {
     const u64 Y = static_cast<u64>(static_cast<i64>(y0) + y);
     return {C * Y * Y + E * Y + F, D + B * Y};
   }
+  // The value at the eight pixels base + [0, 8) of the row, lane by lane.
   template <bool kSquare>
-  u64 at(const Row& r, int x) const {
-    const u64 X = X0 + static_cast<u64>(x);
-    u64 v = kSquare ? (A * X + r.linear) * X + r.row : r.linear * X + r.row;
-    v = static_cast<u64>(static_cast<i64>(v << s) >> s);
-    return static_cast<u64>(static_cast<i64>(v) >> shift);
+  V8 at8(const Row& r, int base) const {
+    const V8s iota = {0, 1, 2, 3, 4, 5, 6, 7};
+    const V8 X = X0 + static_cast<u64>(base) + reinterpret_cast<V8>(iota);
+    V8 v = kSquare ? (A * X + r.linear) * X + r.row : r.linear * X + r.row;
+    v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << s) >> s);
+    return reinterpret_cast<V8>(reinterpret_cast<V8s>(v) >> shift);
   }
   u64 A, B, C, D, E, F, X0;
   int y0, s, shift;
@@ -956,15 +1018,17 @@ void WordBackend::qload_lane(const Field& dst, const QuadraticCoefficients& c) {
   const u64 bits = low_mask(dst.width) << off;
   u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
   const std::uint8_t* e = enable_.data();
+  const int width = geometry_.width;
   for_each_span_row([=](int y, std::size_t row_start, int from, int to) {
     const PixelValues::Row r = values.row(y);
     u64* m = lane + row_start;
     const std::uint8_t* en = e + row_start;
-    for (int x = from; x < to; ++x) {
-      const u64 v = values.at<kSquare>(r, x);
-      const u64 k = bits & (u64{0} - en[x]);
-      m[x] = (m[x] & ~k) | ((v << off) & k);
-    }
+    for_chunks(from, to, width, [&](int base, const V8& live) {
+      const V8 v = values.at8<kSquare>(r, base);
+      const V8 k = bits & (V8{} - load_enable8(en + base)) & live;
+      const V8 old = load8(m + base);
+      store8(m + base, (old & ~k) | ((v << off) & k));
+    });
   });
 }
 
@@ -984,6 +1048,9 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
   const bool eq =
       cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
   const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
+  const V8s lt_mask = V8s{} - static_cast<i64>(lt), eq_mask = V8s{} - static_cast<i64>(eq);
+  const V8 inv_mask = V8{} - static_cast<u64>(inv);
+  const int width = geometry_.width;
   // Each row's part narrowed (as narrow_spans does) as soon as it is compared, skipped when
   // the pass found no pixel left.
   std::vector<Range>& kept = spare_spans_;
@@ -992,24 +1059,28 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
     const PixelValues::Row r = values.row(y);
     const u64* m = lane + row_start;
     std::uint8_t* en = e + row_start;
-    std::uint8_t any = 0;
-    for (int x = from; x < to; ++x) {
-      u64 v = values.at<kSquare>(r, x);
-      u64 f = (m[x] >> off) & mask;
+    V8 any{};
+    for_chunks(from, to, width, [&](int base, const V8& live) {
+      V8 v = values.at8<kSquare>(r, base);
+      V8 f = (load8(m + base) >> off) & mask;
       if constexpr (kSigned) {
-        v = static_cast<u64>(static_cast<i64>(v << sw) >> sw);
-        f = static_cast<u64>(static_cast<i64>(f << sw) >> sw);
+        v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << sw) >> sw);
+        f = reinterpret_cast<V8>(reinterpret_cast<V8s>(f << sw) >> sw);
       } else {
         v &= mask;
       }
-      const i64 a = static_cast<i64>(v), b = static_cast<i64>(f);
-      const bool holds = (((a < b) & lt) | ((a == b) & eq)) ^ inv;
-      const std::uint8_t left = en[x] & static_cast<std::uint8_t>(holds);
-      en[x] = left;
+      const V8s a = reinterpret_cast<V8s>(v), b = reinterpret_cast<V8s>(f);
+      // -1 where the condition holds, per lane.
+      const V8 holds = reinterpret_cast<V8>(((a < b) & lt_mask) | ((a == b) & eq_mask)) ^ inv_mask;
+      const V8 old = load_enable8(en + base);
+      const V8 left = old & holds & live;
       any |= left;
-    }
+      store_enable8(en + base, left | (old & ~live));
+    });
     const int start = static_cast<int>(row_start);
-    if (any != 0) keep_enabled(kept, start + from, start + to);
+    bool some = false;
+    for (int i = 0; i < 8; ++i) some = some || any[i] != 0;
+    if (some) keep_enabled(kept, start + from, start + to);
   });
   spans_.swap(kept);
 }
