@@ -308,17 +308,30 @@ void ExpressionEvaluator::planes(const QuadraticCoefficients& c, int first_bit, 
 // and the planes of j D are the same for every word: transposed once, each word's planes are
 // then a bit-serial addition of the broadcast constant v to them, LSB first, as the hardware's
 // adder tree would do it, over only the planes up to the highest one asked for (carries run
-// upwards only). Modulo 2^64 throughout, so the bits below result_bits are exact; the planes
-// above the result's sign bit repeat it. Eight words at a time, whose carry chains are
-// independent (the compiler turns each step into one vector operation).
+// upwards only). Below first_bit only the carry is kept (a majority per plane, the sum is not
+// needed). Modulo 2^64 throughout, so the bits below result_bits are exact; the planes above
+// the result's sign bit repeat it. Eight words at a time, whose carry chains are independent
+// (the compiler turns each step into one vector operation); v steps by 64 D along a row and
+// by E from row to row, so no word's coordinates are divided out.
 void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int first_bit, int count,
                                         WordRange range, Word* out, const Word* live) const {
   alignas(32) Word lane[kWordBits];
   word_planes(RowSeed{0, static_cast<u64>(c.D), 0}, 64, lane);
   const int sign_bit = params_.result_bits - 1;
-  const int last = first_bit + count - 1;    // the highest plane asked for
-  const int top = std::min(last, sign_bit);  // the highest plane computed
+  const int last = first_bit + count - 1;     // the highest plane asked for
+  const int top = std::min(last, sign_bit);   // the highest plane computed
+  const int full = std::min(first_bit, top);  // the first plane whose sum is needed
   const u64 D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
+  const u64 word_step = D * static_cast<u64>(kWordBits);
+  // The walk's position: column `col` of the row whose first word's v is row_v.
+  int col = range.begin % words_per_row_;
+  u64 row_v = D * static_cast<u64>(x0_) + E * static_cast<u64>(word_y(range.begin)) + F;
+  auto advance = [&] {
+    if (++col == words_per_row_) {
+      col = 0;
+      row_v += E;
+    }
+  };
   constexpr int kBatch = 8;
   for (int w0 = range.begin; w0 < range.end; w0 += kBatch) {
     const int n = std::min(kBatch, range.end - w0);
@@ -328,16 +341,18 @@ void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int firs
       if (any == 0) {
         for (int k = 0; k < count; ++k)
           std::fill_n(out + static_cast<std::size_t>(k) * words_ + w0, n, Word{0});
+        for (int l = 0; l < n; ++l) advance();
         continue;
       }
     }
     u64 base[kBatch];
     Word carry[kBatch] = {};
     Word sum[kBatch] = {};
-    for (int l = 0; l < kBatch; ++l) {
-      const int w = w0 + std::min(l, n - 1);
-      base[l] = D * static_cast<u64>(word_x(w)) + E * static_cast<u64>(word_y(w)) + F;
+    for (int l = 0; l < n; ++l) {
+      base[l] = row_v + static_cast<u64>(col) * word_step;
+      advance();
     }
+    for (int l = n; l < kBatch; ++l) base[l] = base[n - 1];
     auto store = [&](int plane) {
       Word* o = out + static_cast<std::size_t>(plane - first_bit) * words_ + w0;
       if (n == kBatch) {
@@ -346,13 +361,19 @@ void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int firs
         for (int l = 0; l < n; ++l) o[l] = sum[l];
       }
     };
-    for (int k = 0; k <= top; ++k) {
+    for (int k = 0; k < full; ++k) {
       const Word p = lane[k];
       for (int l = 0; l < kBatch; ++l) {
         const Word kb = Word{0} - ((base[l] >> k) & 1);
-        const Word x = p ^ kb;
-        sum[l] = x ^ carry[l];
-        carry[l] = (p & kb) | (carry[l] & x);
+        carry[l] = (p & kb) | (carry[l] & (p | kb));
+      }
+    }
+    for (int k = full; k <= top; ++k) {
+      const Word p = lane[k];
+      for (int l = 0; l < kBatch; ++l) {
+        const Word kb = Word{0} - ((base[l] >> k) & 1);
+        sum[l] = p ^ kb ^ carry[l];
+        carry[l] = (p & kb) | (carry[l] & (p | kb));
       }
       if (k >= first_bit) store(k);
     }
