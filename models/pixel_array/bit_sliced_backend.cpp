@@ -21,8 +21,11 @@ Bits BitSlicedBackend::expression_bits(const QuadraticCoefficients& expr, const 
   settle();
   // Disabled pixels' values are never used (assign keeps them, compare clears their E
   // anyway), so words whose E is zero are not evaluated.
-  evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data(),
-                    array_.enable());
+  if (!(held_.valid && held_.width == as.width && held_.expr == expr)) {
+    evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data(),
+                      array_.enable());
+    held_ = {true, expr, as.width};
+  }
   return array_.bits_of_planes(scratch_.data(), as.width, as.is_signed);
 }
 
@@ -44,6 +47,7 @@ void BitSlicedBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
 void BitSlicedBackend::and_test(const QuadraticCoefficients& expr, Compare cond) {
   const WordRange r = array_.active_words();
   if (r.empty()) return;
+  held_.valid = false;
   evaluator_.test_plane(expr, cond, r, scratch_.data(), array_.enable());
   array_.and_enable(scratch_.data());
 }
@@ -174,6 +178,7 @@ void BitSlicedBackend::copy_state_from(const PixelBackend& other) {
   o->settle();
   array_ = o->array_;
   pending_count_ = 0;
+  held_.valid = false;
 }
 
 }  // namespace pp5
