@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#if defined(__AVX2__)
+#if defined(__AVX2__) || defined(__AVX512F__)
 #include <immintrin.h>
 #endif
 
@@ -238,6 +238,90 @@ void word_sign_zero(const RowSeed& s, int result_bits, Word* lt, Word* eq) {
 
 #endif
 
+// The bit-serial additions of linear_planes for a run of kLinearBatch words: base[l] is the
+// value at the first pixel of word l, lane[k] the plane k of j D (j = 0..63). Planes first_bit
+// .. last of words 0..n-1 go to out[(plane - first_bit) * stride + l]; planes are computed up
+// to top (the sign bit, or last if lower) and repeated above it. Below first_bit only the carry
+// is kept (a majority per plane: the sum is not needed).
+constexpr int kLinearBatch = 8;
+
+#if defined(__AVX512F__)
+
+// One 512-bit vector holds the batch: per plane, the broadcast value's bit k as a lane mask
+// (shifted to bit 63 and spread by an arithmetic shift), a majority and a three-way XOR.
+// The masked forms with every lane kept: the unmasked shifts' headers (GCC 12) warn of an
+// undefined source they never read.
+constexpr __mmask8 kAll8 = 0xFF;
+
+// All ones in the 64-bit lanes whose bit 0 is set, zero in the others.
+inline __m512i lane_mask_of_bit0(__m512i v) {
+  const __m512i top = _mm512_mask_slli_epi64(v, kAll8, v, 63);
+  return _mm512_mask_srai_epi64(top, kAll8, top, 63);
+}
+
+void linear_batch(const Word* lane, const u64* base, int n, int first_bit, int top, int last,
+                  Word* out, std::size_t stride) {
+  __m512i b = _mm512_loadu_si512(base);  // shifted right by one per plane: bit k in bit 0
+  const __mmask8 keep = static_cast<__mmask8>((1u << n) - 1);
+  __m512i carry = _mm512_setzero_si512();
+  __m512i sum = _mm512_setzero_si512();
+  const int full = std::min(first_bit, top);
+  for (int k = 0; k < full; ++k) {
+    const __m512i p = _mm512_set1_epi64(static_cast<long long>(lane[k]));
+    const __m512i kb = lane_mask_of_bit0(b);
+    b = _mm512_mask_srli_epi64(b, kAll8, b, 1);
+    carry = _mm512_ternarylogic_epi64(p, kb, carry, 0xE8);  // majority
+  }
+  for (int k = full; k <= top; ++k) {
+    const __m512i p = _mm512_set1_epi64(static_cast<long long>(lane[k]));
+    const __m512i kb = lane_mask_of_bit0(b);
+    b = _mm512_mask_srli_epi64(b, kAll8, b, 1);
+    sum = _mm512_ternarylogic_epi64(p, kb, carry, 0x96);    // p ^ kb ^ carry
+    carry = _mm512_ternarylogic_epi64(p, kb, carry, 0xE8);  // majority
+    if (k >= first_bit)
+      _mm512_mask_storeu_epi64(out + static_cast<std::size_t>(k - first_bit) * stride, keep, sum);
+  }
+  for (int k = std::max(first_bit, top + 1); k <= last; ++k)
+    _mm512_mask_storeu_epi64(out + static_cast<std::size_t>(k - first_bit) * stride, keep, sum);
+}
+
+#else
+
+// Eight independent carry chains, which the compiler turns into vector operations.
+void linear_batch(const Word* lane, const u64* base, int n, int first_bit, int top, int last,
+                  Word* out, std::size_t stride) {
+  Word carry[kLinearBatch] = {};
+  Word sum[kLinearBatch] = {};
+  auto store = [&](int plane) {
+    Word* o = out + static_cast<std::size_t>(plane - first_bit) * stride;
+    if (n == kLinearBatch) {
+      for (int l = 0; l < kLinearBatch; ++l) o[l] = sum[l];
+    } else {
+      for (int l = 0; l < n; ++l) o[l] = sum[l];
+    }
+  };
+  const int full = std::min(first_bit, top);
+  for (int k = 0; k < full; ++k) {
+    const Word p = lane[k];
+    for (int l = 0; l < kLinearBatch; ++l) {
+      const Word kb = Word{0} - ((base[l] >> k) & 1);
+      carry[l] = (p & kb) | (carry[l] & (p | kb));
+    }
+  }
+  for (int k = full; k <= top; ++k) {
+    const Word p = lane[k];
+    for (int l = 0; l < kLinearBatch; ++l) {
+      const Word kb = Word{0} - ((base[l] >> k) & 1);
+      sum[l] = p ^ kb ^ carry[l];
+      carry[l] = (p & kb) | (carry[l] & (p | kb));
+    }
+    if (k >= first_bit) store(k);
+  }
+  for (int b = std::max(first_bit, top + 1); b <= last; ++b) store(b);
+}
+
+#endif
+
 }  // namespace
 
 ExpressionEvaluator::ExpressionEvaluator(EvaluatorParams params, int region_width,
@@ -310,17 +394,16 @@ void ExpressionEvaluator::planes(const QuadraticCoefficients& c, int first_bit, 
 // adder tree would do it, over only the planes up to the highest one asked for (carries run
 // upwards only). Below first_bit only the carry is kept (a majority per plane, the sum is not
 // needed). Modulo 2^64 throughout, so the bits below result_bits are exact; the planes above
-// the result's sign bit repeat it. Eight words at a time, whose carry chains are independent
-// (the compiler turns each step into one vector operation); v steps by 64 D along a row and
-// by E from row to row, so no word's coordinates are divided out.
+// the result's sign bit repeat it. Eight words at a time (linear_batch), whose carry chains are
+// independent; v steps by 64 D along a row and by E from row to row, so no word's coordinates
+// are divided out.
 void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int first_bit, int count,
                                         WordRange range, Word* out, const Word* live) const {
   alignas(32) Word lane[kWordBits];
   word_planes(RowSeed{0, static_cast<u64>(c.D), 0}, 64, lane);
   const int sign_bit = params_.result_bits - 1;
-  const int last = first_bit + count - 1;     // the highest plane asked for
-  const int top = std::min(last, sign_bit);   // the highest plane computed
-  const int full = std::min(first_bit, top);  // the first plane whose sum is needed
+  const int last = first_bit + count - 1;    // the highest plane asked for
+  const int top = std::min(last, sign_bit);  // the highest plane computed
   const u64 D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
   const u64 word_step = D * static_cast<u64>(kWordBits);
   // The walk's position: column `col` of the row whose first word's v is row_v.
@@ -332,7 +415,7 @@ void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int firs
       row_v += E;
     }
   };
-  constexpr int kBatch = 8;
+  constexpr int kBatch = kLinearBatch;
   for (int w0 = range.begin; w0 < range.end; w0 += kBatch) {
     const int n = std::min(kBatch, range.end - w0);
     if (live != nullptr) {
@@ -346,38 +429,12 @@ void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int firs
       }
     }
     u64 base[kBatch];
-    Word carry[kBatch] = {};
-    Word sum[kBatch] = {};
     for (int l = 0; l < n; ++l) {
       base[l] = row_v + static_cast<u64>(col) * word_step;
       advance();
     }
     for (int l = n; l < kBatch; ++l) base[l] = base[n - 1];
-    auto store = [&](int plane) {
-      Word* o = out + static_cast<std::size_t>(plane - first_bit) * words_ + w0;
-      if (n == kBatch) {
-        for (int l = 0; l < kBatch; ++l) o[l] = sum[l];
-      } else {
-        for (int l = 0; l < n; ++l) o[l] = sum[l];
-      }
-    };
-    for (int k = 0; k < full; ++k) {
-      const Word p = lane[k];
-      for (int l = 0; l < kBatch; ++l) {
-        const Word kb = Word{0} - ((base[l] >> k) & 1);
-        carry[l] = (p & kb) | (carry[l] & (p | kb));
-      }
-    }
-    for (int k = full; k <= top; ++k) {
-      const Word p = lane[k];
-      for (int l = 0; l < kBatch; ++l) {
-        const Word kb = Word{0} - ((base[l] >> k) & 1);
-        sum[l] = p ^ kb ^ carry[l];
-        carry[l] = (p & kb) | (carry[l] & (p | kb));
-      }
-      if (k >= first_bit) store(k);
-    }
-    for (int b = std::max(first_bit, top + 1); b <= last; ++b) store(b);
+    linear_batch(lane, base, n, first_bit, top, last, out + w0, static_cast<std::size_t>(words_));
   }
 }
 
