@@ -112,11 +112,12 @@ struct Lanes {
   }
 };
 
-// A transpose stage between registers: rows k and k + J live in registers J / 4 apart.
+// A transpose stage between registers: rows k and k + J live in registers J / 4 apart. Only
+// registers below `regs` are transformed (a stage with J < 32 keeps rows within their half).
 template <int J>
-inline void stage_across(__m256i* r, __m256i mask) {
+inline void stage_across(__m256i* r, __m256i mask, int regs = 16) {
   constexpr int kApart = J / 4;
-  for (int g = 0; g < 16; ++g) {
+  for (int g = 0; g < regs; ++g) {
     if (g & kApart) continue;
     const __m256i t =
         _mm256_and_si256(_mm256_xor_si256(_mm256_srli_epi64(r[g], J), r[g + kApart]), mask);
@@ -134,15 +135,17 @@ inline void stage_pair(__m256i& lo, __m256i& hi, __m256i mask) {
 
 // In-place 64x64 bit transpose of r[16], row 4q + l being lane l of r[q]. The stages for
 // J = 2 and J = 1 pair lanes of one register, so they regroup two registers so that partners
-// share a lane, apply the stage, and regroup back.
-void transpose64(__m256i* r) {
+// share a lane, apply the stage, and regroup back. With low_half, only rows 0..31 of the
+// result (r[0..7]) are formed: after the first stage the two halves no longer mix.
+void transpose64(__m256i* r, bool low_half = false) {
+  const int regs = low_half ? 8 : 16;
   stage_across<32>(r, _mm256_set1_epi64x(0x00000000FFFFFFFFll));
-  stage_across<16>(r, _mm256_set1_epi64x(0x0000FFFF0000FFFFll));
-  stage_across<8>(r, _mm256_set1_epi64x(0x00FF00FF00FF00FFll));
-  stage_across<4>(r, _mm256_set1_epi64x(0x0F0F0F0F0F0F0F0Fll));
+  stage_across<16>(r, _mm256_set1_epi64x(0x0000FFFF0000FFFFll), regs);
+  stage_across<8>(r, _mm256_set1_epi64x(0x00FF00FF00FF00FFll), regs);
+  stage_across<4>(r, _mm256_set1_epi64x(0x0F0F0F0F0F0F0F0Fll), regs);
   const __m256i m2 = _mm256_set1_epi64x(0x3333333333333333ll);
   const __m256i m1 = _mm256_set1_epi64x(0x5555555555555555ll);
-  for (int g = 0; g < 16; g += 2) {
+  for (int g = 0; g < regs; g += 2) {
     __m256i lo = _mm256_permute2x128_si256(r[g], r[g + 1], 0x20);  // rows 0 1 4 5 of the pair
     __m256i hi = _mm256_permute2x128_si256(r[g], r[g + 1], 0x31);  // rows 2 3 6 7
     stage_pair<2>(lo, hi, m2);
@@ -157,8 +160,8 @@ void transpose64(__m256i* r) {
 }
 
 // Sign-extended values of the 64 pixels of a word, as the rows of a bit matrix, transposed so
-// that t[b] is the plane of bit b.
-void word_planes(const RowSeed& s, int result_bits, Word* t) {
+// that t[b] is the plane of bit b: for b < planes_needed at least (all 64 by default).
+void word_planes(const RowSeed& s, int result_bits, Word* t, int planes_needed = 64) {
   const u64 field = result_bits == 64 ? kAllOnes : (u64{1} << result_bits) - 1;
   const __m256i mask = _mm256_set1_epi64x(static_cast<long long>(field));
   const __m256i sign = _mm256_set1_epi64x(static_cast<long long>(u64{1} << (result_bits - 1)));
@@ -166,8 +169,10 @@ void word_planes(const RowSeed& s, int result_bits, Word* t) {
   __m256i r[16];
   for (auto& v : r)
     v = _mm256_sub_epi64(_mm256_xor_si256(_mm256_and_si256(lanes.next(), mask), sign), sign);
-  transpose64(r);
-  for (int q = 0; q < 16; ++q) _mm256_storeu_si256(reinterpret_cast<__m256i*>(t + 4 * q), r[q]);
+  const bool low_half = planes_needed <= 32;
+  transpose64(r, low_half);
+  for (int q = 0; q < (low_half ? 8 : 16); ++q)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(t + 4 * q), r[q]);
 }
 
 // Planes "wrapped value < 0" and "wrapped value == 0" of one word. Shifting the result field to
@@ -203,7 +208,7 @@ inline void transpose_stage(Word* a, Word mask) {
   }
 }
 
-void word_planes(const RowSeed& s, int result_bits, Word* t) {
+void word_planes(const RowSeed& s, int result_bits, Word* t, int /*planes_needed*/ = 64) {
   const int shift = 64 - result_bits;
   u64 f = s.f, d = s.d;
   const u64 d2 = 2 * s.A;
@@ -399,11 +404,11 @@ void ExpressionEvaluator::planes(const QuadraticCoefficients& c, int first_bit, 
 // are divided out.
 void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int first_bit, int count,
                                         WordRange range, Word* out, const Word* live) const {
-  alignas(32) Word lane[kWordBits];
-  word_planes(RowSeed{0, static_cast<u64>(c.D), 0}, 64, lane);
   const int sign_bit = params_.result_bits - 1;
   const int last = first_bit + count - 1;    // the highest plane asked for
   const int top = std::min(last, sign_bit);  // the highest plane computed
+  alignas(32) Word lane[kWordBits];
+  word_planes(RowSeed{0, static_cast<u64>(c.D), 0}, 64, lane, top + 1);
   const u64 D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
   const u64 word_step = D * static_cast<u64>(kWordBits);
   // The walk's position: column `col` of the row whose first word's v is row_v.
