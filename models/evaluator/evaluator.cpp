@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#if defined(__AVX2__) || defined(__AVX512F__)
+#if defined(__AVX2__) || defined(__AVX512F__) || defined(__GFNI__)
 #include <immintrin.h>
 #endif
 
@@ -243,6 +243,67 @@ void word_sign_zero(const RowSeed& s, int result_bits, Word* lt, Word* eq) {
 
 #endif
 
+// The planes of j D (j = 0..63): plane k's bit j is bit k of j D, for k < planes_needed at
+// least.
+#if defined(__GFNI__) && defined(__AVX512VBMI__)
+
+// The 64 x 64 bit transpose as an 8 x 8 grid of 8 x 8 blocks. Register R holds rows 8R..8R+7;
+// a byte permutation puts byte C of its eight rows in qword C (row 8R + i in byte 7 - i) and a
+// GF(2) affine transform with the identity as data transposes each block, so that qword C's byte
+// c is byte R of plane 8C + c. A transpose of the 8 x 8 qwords across the registers and a byte
+// transpose within each then leave planes 8C..8C+7 in register C.
+void lane_planes(u64 D, Word* t, int /*planes_needed*/) {
+  alignas(64) std::uint8_t to_blocks[64], to_planes[64];
+  for (int a = 0; a < 8; ++a) {
+    for (int b = 0; b < 8; ++b) {
+      to_blocks[8 * a + 7 - b] = static_cast<std::uint8_t>(8 * b + a);
+      to_planes[8 * a + b] = static_cast<std::uint8_t>(8 * b + a);
+    }
+  }
+  const __m512i blocks = _mm512_load_si512(to_blocks);
+  const __m512i planes = _mm512_load_si512(to_planes);
+  const __m512i identity = _mm512_set1_epi64(static_cast<long long>(0x8040201008040201ull));
+  const __mmask64 all = ~__mmask64{0};
+  alignas(64) u64 first[8];
+  for (int i = 0; i < 8; ++i) first[i] = static_cast<u64>(i) * D;
+  __m512i v = _mm512_load_si512(first);
+  const __m512i step = _mm512_set1_epi64(static_cast<long long>(8 * D));
+  __m512i z[8];
+  for (int R = 0; R < 8; ++R) {
+    z[R] =
+        _mm512_gf2p8affine_epi64_epi8(identity, _mm512_maskz_permutexvar_epi8(all, blocks, v), 0);
+    v = _mm512_add_epi64(v, step);
+  }
+  // z[R] qword C -> z[C] qword R, in three stages of pairs 1, 2 and 4 registers apart.
+  __m512i y[8];
+  for (int k = 0; k < 8; k += 2) {
+    y[k] = _mm512_maskz_unpacklo_epi64(0xFF, z[k], z[k + 1]);
+    y[k + 1] = _mm512_maskz_unpackhi_epi64(0xFF, z[k], z[k + 1]);
+  }
+  const __m512i lo2 = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0);
+  const __m512i hi2 = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+  for (int k : {0, 1, 4, 5}) {
+    z[k] = _mm512_permutex2var_epi64(y[k], lo2, y[k + 2]);
+    z[k + 2] = _mm512_permutex2var_epi64(y[k], hi2, y[k + 2]);
+  }
+  const __m512i lo4 = _mm512_set_epi64(11, 10, 9, 8, 3, 2, 1, 0);
+  const __m512i hi4 = _mm512_set_epi64(15, 14, 13, 12, 7, 6, 5, 4);
+  for (int k = 0; k < 4; ++k) {
+    y[k] = _mm512_permutex2var_epi64(z[k], lo4, z[k + 4]);
+    y[k + 4] = _mm512_permutex2var_epi64(z[k], hi4, z[k + 4]);
+  }
+  for (int C = 0; C < 8; ++C)
+    _mm512_storeu_si512(t + 8 * C, _mm512_maskz_permutexvar_epi8(all, planes, y[C]));
+}
+
+#else
+
+void lane_planes(u64 D, Word* t, int planes_needed) {
+  word_planes(RowSeed{0, D, 0}, 64, t, planes_needed);
+}
+
+#endif
+
 // The bit-serial additions of linear_planes for a run of kLinearBatch words: base[l] is the
 // value at the first pixel of word l, lane[k] the plane k of j D (j = 0..63). Planes first_bit
 // .. last of words 0..n-1 go to out[(plane - first_bit) * stride + l]; planes are computed up
@@ -407,8 +468,8 @@ void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int firs
   const int sign_bit = params_.result_bits - 1;
   const int last = first_bit + count - 1;    // the highest plane asked for
   const int top = std::min(last, sign_bit);  // the highest plane computed
-  alignas(32) Word lane[kWordBits];
-  word_planes(RowSeed{0, static_cast<u64>(c.D), 0}, 64, lane, top + 1);
+  alignas(64) Word lane[kWordBits];
+  lane_planes(static_cast<u64>(c.D), lane, top + 1);
   const u64 D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
   const u64 word_step = D * static_cast<u64>(kWordBits);
   // The walk's position: column `col` of the row whose first word's v is row_v.
