@@ -327,7 +327,11 @@ inline __m512i lane_mask_of_bit0(__m512i v) {
 
 void linear_batch(const Word* lane, const u64* base, int n, int first_bit, int top, int last,
                   Word* out, std::size_t stride) {
-  __m512i b = _mm512_loadu_si512(base);  // shifted right by one per plane: bit k in bit 0
+  // Shifted right by one per plane: bit k in bit 0. Built lane by lane from the scalars (a
+  // vector load of eight just-stored words would wait for the stores to retire).
+  __m512i b = _mm512_setzero_si512();
+  for (int l = 0; l < kLinearBatch; ++l)
+    b = _mm512_mask_set1_epi64(b, static_cast<__mmask8>(1u << l), static_cast<long long>(base[l]));
   const __mmask8 keep = static_cast<__mmask8>((1u << n) - 1);
   __m512i carry = _mm512_setzero_si512();
   __m512i sum = _mm512_setzero_si512();
