@@ -28,7 +28,9 @@ Bits BitSlicedBackend::expression_bits(const QuadraticCoefficients& expr, const 
   if (!(held_.valid && held_.width == as.width && held_.expr == expr)) {
     evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data(),
                       array_.enable());
-    held_ = {true, expr, as.width};
+    held_.valid = true;  // (member by member: a temporary copied whole stalls on its stores)
+    held_.expr = expr;
+    held_.width = as.width;
   }
   return array_.bits_of_planes(scratch_.data(), as.width, as.is_signed);
 }
