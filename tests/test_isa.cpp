@@ -18,6 +18,7 @@
 #include "firmware/isa/isa.hpp"
 #include "models/evaluator/evaluator.hpp"
 #include "models/pixel_array/backends.hpp"
+#include "models/pixel_array/bit_sliced_backend.hpp"
 #include "models/pixel_array/pixel_array.hpp"
 #include "models/renderer/renderer_board.hpp"
 #include "support.hpp"
@@ -710,6 +711,169 @@ TEST_CASE("every registered backend runs the instruction table as the bit-sliced
       backend->read_field(Field{10, 33, false}, values.data());
       for (int p = 0; p < ref.array.pixels(); ++p) {
         REQUIRE(values[static_cast<std::size_t>(p)] == ref.array.read(p, Field{10, 33, false}));
+      }
+    }
+  }
+}
+
+TEST_CASE("an expression evaluated by qcmp is reused by qload only while E only loses bits",
+          "[isa][backend]") {
+  // The bit backend keeps an expression's planes between a qcmp and a qload of the same
+  // expression and width. Each step below puts between them one thing after which the planes
+  // must be evaluated again (a wider field, E gaining bits, another origin, scratch used by a
+  // test, a state taken from elsewhere); every backend must match the reference, which
+  // evaluates every expression afresh. The region is tall enough that a run of eight dead
+  // words is skipped by the evaluator, so planes kept from a narrower E would be wrong there.
+  PixelBackendParams params = small_backend_params();
+  params.array.height = 32;
+  const Field z{0, 24, false}, red{24, 8, false};
+  for (const PixelBackendInfo& info : pixel_backends()) {
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+      INFO("backend " << info.name << " seed " << seed);
+      auto b = make_pixel_backend(info.name, params);
+      Reference ref(params);
+      const int x0 = 64 * static_cast<int>(seed), y0 = 100 * static_cast<int>(seed);
+      b->set_origin(x0, y0);
+      ref.evaluator.set_origin(x0, y0);
+      std::mt19937_64 rng(seed);
+      for (int p = 0; p < ref.array.pixels(); ++p) {
+        const std::uint64_t v = rng();
+        b->write(p, Field{0, 60, false}, v);
+        ref.array.write(p, Field{0, 60, false}, v);
+      }
+      auto coef = [&rng] {
+        return static_cast<std::int64_t>(rng() % (std::uint64_t{1} << 31)) -
+               (std::int64_t{1} << 30);
+      };
+      // A plane through the region's middle at a random slope: qcmp splits E.
+      auto expression = [&] {
+        const std::int64_t d = coef(), e = coef();
+        return QuadraticCoefficients::linear(d, e, -d * (x0 + 64) - e * (y0 + 16) + (coef() >> 8));
+      };
+      auto qtest = [&](const QuadraticCoefficients& c, Compare cond) {
+        b->qtest(c, cond);
+        ref.evaluator.test_plane(c, cond, ref.array.active_words(), ref.scratch.data());
+        ref.array.and_enable(ref.scratch.data());
+      };
+      auto first_rows = [&] { qtest(QuadraticCoefficients::linear(0, -1, y0 + 3), Compare::ge); };
+      auto qcmp = [&](const Field& f, const QuadraticCoefficients& c, Compare cond) {
+        b->qcmp(f, c, cond);
+        ref.evaluator.planes(c, params.fraction_bits, f.width, ref.array.active_words(),
+                             ref.scratch.data());
+        ref.array.compare(ref.array.bits_of_planes(ref.scratch.data(), f.width, f.is_signed),
+                          ref.array.bits_of(f), cond);
+      };
+      auto qload = [&](const Field& f, const QuadraticCoefficients& c) {
+        b->qload(f, c);
+        ref.evaluator.planes(c, params.fraction_bits, f.width, ref.array.active_words(),
+                             ref.scratch.data());
+        ref.array.assign(f, ref.array.bits_of_planes(ref.scratch.data(), f.width, f.is_signed));
+      };
+      auto eall = [&] {
+        b->enable_all();
+        ref.array.enable_all();
+      };
+      {
+        INFO("qcmp then qload: the planes kept");
+        eall();
+        const auto c = expression();
+        qcmp(z, c, Compare::lt);
+        qload(z, c);
+        check_same(*b, ref);
+        qload(z, c);  // and kept again
+        check_same(*b, ref);
+      }
+      {
+        INFO("a wider field");
+        eall();
+        first_rows();
+        const auto c = expression();
+        qcmp(red, c, Compare::lt);
+        qload(z, c);
+        check_same(*b, ref);
+      }
+      {
+        INFO("else");
+        eall();
+        b->push_enable();
+        ref.array.push_enable();
+        first_rows();
+        const auto c = expression();
+        qcmp(z, c, Compare::ge);
+        b->else_enable();
+        ref.array.else_enable();
+        qload(z, c);
+        check_same(*b, ref);
+        b->pop_enable();
+        ref.array.pop_enable();
+      }
+      {
+        INFO("eall");
+        eall();
+        first_rows();
+        const auto c = expression();
+        qcmp(z, c, Compare::lt);
+        eall();
+        qload(z, c);
+        check_same(*b, ref);
+      }
+      {
+        INFO("pop");
+        eall();
+        b->push_enable();
+        ref.array.push_enable();
+        first_rows();
+        const auto c = expression();
+        qcmp(z, c, Compare::lt);
+        b->pop_enable();
+        ref.array.pop_enable();
+        qload(z, c);
+        check_same(*b, ref);
+      }
+      {
+        INFO("another origin");
+        eall();
+        const auto c = expression();
+        qcmp(z, c, Compare::lt);
+        b->set_origin(x0 + 128, y0 + 32);
+        ref.evaluator.set_origin(x0 + 128, y0 + 32);
+        qload(z, c);
+        check_same(*b, ref);
+        b->set_origin(x0, y0);
+        ref.evaluator.set_origin(x0, y0);
+      }
+      {
+        INFO("a test between");
+        eall();
+        const auto c = expression();
+        qcmp(z, c, Compare::lt);
+        qtest(QuadraticCoefficients::linear(1, 0, -(x0 + 5)), Compare::ge);
+        qload(z, c);
+        check_same(*b, ref);
+      }
+      {
+        INFO("a state taken from another backend");
+        eall();
+        const auto all_on = b->clone();
+        const PixelArray kept = ref.array;
+        first_rows();
+        const auto c = expression();
+        qcmp(z, c, Compare::lt);
+        b->copy_state_from(*all_on);
+        ref.array = kept;
+        qload(z, c);
+        check_same(*b, ref);
+      }
+      if (auto* bit = dynamic_cast<BitSlicedBackend*>(b.get())) {
+        INFO("E changed through array()");
+        eall();
+        first_rows();
+        const auto c = expression();
+        qcmp(z, c, Compare::lt);
+        bit->array().enable_all();
+        ref.array.enable_all();
+        qload(z, c);
+        check_same(*b, ref);
       }
     }
   }

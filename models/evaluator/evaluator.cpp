@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#if defined(__AVX2__)
+#if defined(__AVX2__) || defined(__AVX512F__) || defined(__GFNI__)
 #include <immintrin.h>
 #endif
 
@@ -112,11 +112,12 @@ struct Lanes {
   }
 };
 
-// A transpose stage between registers: rows k and k + J live in registers J / 4 apart.
+// A transpose stage between registers: rows k and k + J live in registers J / 4 apart. Only
+// registers below `regs` are transformed (a stage with J < 32 keeps rows within their half).
 template <int J>
-inline void stage_across(__m256i* r, __m256i mask) {
+inline void stage_across(__m256i* r, __m256i mask, int regs = 16) {
   constexpr int kApart = J / 4;
-  for (int g = 0; g < 16; ++g) {
+  for (int g = 0; g < regs; ++g) {
     if (g & kApart) continue;
     const __m256i t =
         _mm256_and_si256(_mm256_xor_si256(_mm256_srli_epi64(r[g], J), r[g + kApart]), mask);
@@ -134,15 +135,17 @@ inline void stage_pair(__m256i& lo, __m256i& hi, __m256i mask) {
 
 // In-place 64x64 bit transpose of r[16], row 4q + l being lane l of r[q]. The stages for
 // J = 2 and J = 1 pair lanes of one register, so they regroup two registers so that partners
-// share a lane, apply the stage, and regroup back.
-void transpose64(__m256i* r) {
+// share a lane, apply the stage, and regroup back. With low_half, only rows 0..31 of the
+// result (r[0..7]) are formed: after the first stage the two halves no longer mix.
+void transpose64(__m256i* r, bool low_half = false) {
+  const int regs = low_half ? 8 : 16;
   stage_across<32>(r, _mm256_set1_epi64x(0x00000000FFFFFFFFll));
-  stage_across<16>(r, _mm256_set1_epi64x(0x0000FFFF0000FFFFll));
-  stage_across<8>(r, _mm256_set1_epi64x(0x00FF00FF00FF00FFll));
-  stage_across<4>(r, _mm256_set1_epi64x(0x0F0F0F0F0F0F0F0Fll));
+  stage_across<16>(r, _mm256_set1_epi64x(0x0000FFFF0000FFFFll), regs);
+  stage_across<8>(r, _mm256_set1_epi64x(0x00FF00FF00FF00FFll), regs);
+  stage_across<4>(r, _mm256_set1_epi64x(0x0F0F0F0F0F0F0F0Fll), regs);
   const __m256i m2 = _mm256_set1_epi64x(0x3333333333333333ll);
   const __m256i m1 = _mm256_set1_epi64x(0x5555555555555555ll);
-  for (int g = 0; g < 16; g += 2) {
+  for (int g = 0; g < regs; g += 2) {
     __m256i lo = _mm256_permute2x128_si256(r[g], r[g + 1], 0x20);  // rows 0 1 4 5 of the pair
     __m256i hi = _mm256_permute2x128_si256(r[g], r[g + 1], 0x31);  // rows 2 3 6 7
     stage_pair<2>(lo, hi, m2);
@@ -157,8 +160,8 @@ void transpose64(__m256i* r) {
 }
 
 // Sign-extended values of the 64 pixels of a word, as the rows of a bit matrix, transposed so
-// that t[b] is the plane of bit b.
-void word_planes(const RowSeed& s, int result_bits, Word* t) {
+// that t[b] is the plane of bit b: for b < planes_needed at least (all 64 by default).
+void word_planes(const RowSeed& s, int result_bits, Word* t, int planes_needed = 64) {
   const u64 field = result_bits == 64 ? kAllOnes : (u64{1} << result_bits) - 1;
   const __m256i mask = _mm256_set1_epi64x(static_cast<long long>(field));
   const __m256i sign = _mm256_set1_epi64x(static_cast<long long>(u64{1} << (result_bits - 1)));
@@ -166,8 +169,10 @@ void word_planes(const RowSeed& s, int result_bits, Word* t) {
   __m256i r[16];
   for (auto& v : r)
     v = _mm256_sub_epi64(_mm256_xor_si256(_mm256_and_si256(lanes.next(), mask), sign), sign);
-  transpose64(r);
-  for (int q = 0; q < 16; ++q) _mm256_storeu_si256(reinterpret_cast<__m256i*>(t + 4 * q), r[q]);
+  const bool low_half = planes_needed <= 32;
+  transpose64(r, low_half);
+  for (int q = 0; q < (low_half ? 8 : 16); ++q)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(t + 4 * q), r[q]);
 }
 
 // Planes "wrapped value < 0" and "wrapped value == 0" of one word. Shifting the result field to
@@ -203,7 +208,7 @@ inline void transpose_stage(Word* a, Word mask) {
   }
 }
 
-void word_planes(const RowSeed& s, int result_bits, Word* t) {
+void word_planes(const RowSeed& s, int result_bits, Word* t, int /*planes_needed*/ = 64) {
   const int shift = 64 - result_bits;
   u64 f = s.f, d = s.d;
   const u64 d2 = 2 * s.A;
@@ -234,6 +239,155 @@ void word_sign_zero(const RowSeed& s, int result_bits, Word* lt, Word* eq) {
   }
   *lt = neg;
   *eq = nil;
+}
+
+#endif
+
+// The planes of j D (j = 0..63): plane k's bit j is bit k of j D, for k < planes_needed at
+// least.
+#if defined(__GFNI__) && defined(__AVX512VBMI__)
+
+// The 64 x 64 bit transpose as an 8 x 8 grid of 8 x 8 blocks. Register R holds rows 8R..8R+7;
+// a byte permutation puts byte C of its eight rows in qword C (row 8R + i in byte 7 - i) and a
+// GF(2) affine transform with the identity as data transposes each block, so that qword C's byte
+// c is byte R of plane 8C + c. A transpose of the 8 x 8 qwords across the registers and a byte
+// transpose within each then leave planes 8C..8C+7 in register C.
+void lane_planes(u64 D, Word* t, int /*planes_needed*/) {
+  alignas(64) std::uint8_t to_blocks[64], to_planes[64];
+  for (int a = 0; a < 8; ++a) {
+    for (int b = 0; b < 8; ++b) {
+      to_blocks[8 * a + 7 - b] = static_cast<std::uint8_t>(8 * b + a);
+      to_planes[8 * a + b] = static_cast<std::uint8_t>(8 * b + a);
+    }
+  }
+  const __m512i blocks = _mm512_load_si512(to_blocks);
+  const __m512i planes = _mm512_load_si512(to_planes);
+  const __m512i identity = _mm512_set1_epi64(static_cast<long long>(0x8040201008040201ull));
+  const __mmask64 all = ~__mmask64{0};
+  alignas(64) u64 first[8];
+  for (int i = 0; i < 8; ++i) first[i] = static_cast<u64>(i) * D;
+  __m512i v = _mm512_load_si512(first);
+  const __m512i step = _mm512_set1_epi64(static_cast<long long>(8 * D));
+  __m512i z[8];
+  for (int R = 0; R < 8; ++R) {
+    z[R] =
+        _mm512_gf2p8affine_epi64_epi8(identity, _mm512_maskz_permutexvar_epi8(all, blocks, v), 0);
+    v = _mm512_add_epi64(v, step);
+  }
+  // z[R] qword C -> z[C] qword R, in three stages of pairs 1, 2 and 4 registers apart.
+  __m512i y[8];
+  for (int k = 0; k < 8; k += 2) {
+    y[k] = _mm512_maskz_unpacklo_epi64(0xFF, z[k], z[k + 1]);
+    y[k + 1] = _mm512_maskz_unpackhi_epi64(0xFF, z[k], z[k + 1]);
+  }
+  const __m512i lo2 = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0);
+  const __m512i hi2 = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+  for (int k : {0, 1, 4, 5}) {
+    z[k] = _mm512_permutex2var_epi64(y[k], lo2, y[k + 2]);
+    z[k + 2] = _mm512_permutex2var_epi64(y[k], hi2, y[k + 2]);
+  }
+  const __m512i lo4 = _mm512_set_epi64(11, 10, 9, 8, 3, 2, 1, 0);
+  const __m512i hi4 = _mm512_set_epi64(15, 14, 13, 12, 7, 6, 5, 4);
+  for (int k = 0; k < 4; ++k) {
+    y[k] = _mm512_permutex2var_epi64(z[k], lo4, z[k + 4]);
+    y[k + 4] = _mm512_permutex2var_epi64(z[k], hi4, z[k + 4]);
+  }
+  for (int C = 0; C < 8; ++C)
+    _mm512_storeu_si512(t + 8 * C, _mm512_maskz_permutexvar_epi8(all, planes, y[C]));
+}
+
+#else
+
+void lane_planes(u64 D, Word* t, int planes_needed) {
+  word_planes(RowSeed{0, D, 0}, 64, t, planes_needed);
+}
+
+#endif
+
+// The bit-serial additions of linear_planes for a run of kLinearBatch words: base[l] is the
+// value at the first pixel of word l, lane[k] the plane k of j D (j = 0..63). Planes first_bit
+// .. last of words 0..n-1 go to out[(plane - first_bit) * stride + l]; planes are computed up
+// to top (the sign bit, or last if lower) and repeated above it. Below first_bit only the carry
+// is kept (a majority per plane: the sum is not needed).
+constexpr int kLinearBatch = 8;
+
+#if defined(__AVX512F__)
+
+// One 512-bit vector holds the batch: per plane, the broadcast value's bit k as a lane mask
+// (shifted to bit 63 and spread by an arithmetic shift), a majority and a three-way XOR.
+// The masked forms with every lane kept: the unmasked shifts' headers (GCC 12) warn of an
+// undefined source they never read.
+constexpr __mmask8 kAll8 = 0xFF;
+
+// All ones in the 64-bit lanes whose bit 0 is set, zero in the others.
+inline __m512i lane_mask_of_bit0(__m512i v) {
+  const __m512i top = _mm512_mask_slli_epi64(v, kAll8, v, 63);
+  return _mm512_mask_srai_epi64(top, kAll8, top, 63);
+}
+
+void linear_batch(const Word* lane, const u64* base, int n, int first_bit, int top, int last,
+                  Word* out, std::size_t stride) {
+  // Shifted right by one per plane: bit k in bit 0. Built lane by lane from the scalars (a
+  // vector load of eight just-stored words would wait for the stores to retire).
+  __m512i b = _mm512_setzero_si512();
+  for (int l = 0; l < kLinearBatch; ++l)
+    b = _mm512_mask_set1_epi64(b, static_cast<__mmask8>(1u << l), static_cast<long long>(base[l]));
+  const __mmask8 keep = static_cast<__mmask8>((1u << n) - 1);
+  __m512i carry = _mm512_setzero_si512();
+  __m512i sum = _mm512_setzero_si512();
+  const int full = std::min(first_bit, top);
+  for (int k = 0; k < full; ++k) {
+    const __m512i p = _mm512_set1_epi64(static_cast<long long>(lane[k]));
+    const __m512i kb = lane_mask_of_bit0(b);
+    b = _mm512_mask_srli_epi64(b, kAll8, b, 1);
+    carry = _mm512_ternarylogic_epi64(p, kb, carry, 0xE8);  // majority
+  }
+  for (int k = full; k <= top; ++k) {
+    const __m512i p = _mm512_set1_epi64(static_cast<long long>(lane[k]));
+    const __m512i kb = lane_mask_of_bit0(b);
+    b = _mm512_mask_srli_epi64(b, kAll8, b, 1);
+    sum = _mm512_ternarylogic_epi64(p, kb, carry, 0x96);    // p ^ kb ^ carry
+    carry = _mm512_ternarylogic_epi64(p, kb, carry, 0xE8);  // majority
+    if (k >= first_bit)
+      _mm512_mask_storeu_epi64(out + static_cast<std::size_t>(k - first_bit) * stride, keep, sum);
+  }
+  for (int k = std::max(first_bit, top + 1); k <= last; ++k)
+    _mm512_mask_storeu_epi64(out + static_cast<std::size_t>(k - first_bit) * stride, keep, sum);
+}
+
+#else
+
+// Eight independent carry chains, which the compiler turns into vector operations.
+void linear_batch(const Word* lane, const u64* base, int n, int first_bit, int top, int last,
+                  Word* out, std::size_t stride) {
+  Word carry[kLinearBatch] = {};
+  Word sum[kLinearBatch] = {};
+  auto store = [&](int plane) {
+    Word* o = out + static_cast<std::size_t>(plane - first_bit) * stride;
+    if (n == kLinearBatch) {
+      for (int l = 0; l < kLinearBatch; ++l) o[l] = sum[l];
+    } else {
+      for (int l = 0; l < n; ++l) o[l] = sum[l];
+    }
+  };
+  const int full = std::min(first_bit, top);
+  for (int k = 0; k < full; ++k) {
+    const Word p = lane[k];
+    for (int l = 0; l < kLinearBatch; ++l) {
+      const Word kb = Word{0} - ((base[l] >> k) & 1);
+      carry[l] = (p & kb) | (carry[l] & (p | kb));
+    }
+  }
+  for (int k = full; k <= top; ++k) {
+    const Word p = lane[k];
+    for (int l = 0; l < kLinearBatch; ++l) {
+      const Word kb = Word{0} - ((base[l] >> k) & 1);
+      sum[l] = p ^ kb ^ carry[l];
+      carry[l] = (p & kb) | (carry[l] & (p | kb));
+    }
+    if (k >= first_bit) store(k);
+  }
+  for (int b = std::max(first_bit, top + 1); b <= last; ++b) store(b);
 }
 
 #endif
@@ -308,18 +462,30 @@ void ExpressionEvaluator::planes(const QuadraticCoefficients& c, int first_bit, 
 // and the planes of j D are the same for every word: transposed once, each word's planes are
 // then a bit-serial addition of the broadcast constant v to them, LSB first, as the hardware's
 // adder tree would do it, over only the planes up to the highest one asked for (carries run
-// upwards only). Modulo 2^64 throughout, so the bits below result_bits are exact; the planes
-// above the result's sign bit repeat it. Eight words at a time, whose carry chains are
-// independent (the compiler turns each step into one vector operation).
+// upwards only). Below first_bit only the carry is kept (a majority per plane, the sum is not
+// needed). Modulo 2^64 throughout, so the bits below result_bits are exact; the planes above
+// the result's sign bit repeat it. Eight words at a time (linear_batch), whose carry chains are
+// independent; v steps by 64 D along a row and by E from row to row, so no word's coordinates
+// are divided out.
 void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int first_bit, int count,
                                         WordRange range, Word* out, const Word* live) const {
-  alignas(32) Word lane[kWordBits];
-  word_planes(RowSeed{0, static_cast<u64>(c.D), 0}, 64, lane);
   const int sign_bit = params_.result_bits - 1;
   const int last = first_bit + count - 1;    // the highest plane asked for
   const int top = std::min(last, sign_bit);  // the highest plane computed
+  alignas(64) Word lane[kWordBits];
+  lane_planes(static_cast<u64>(c.D), lane, top + 1);
   const u64 D = static_cast<u64>(c.D), E = static_cast<u64>(c.E), F = static_cast<u64>(c.F);
-  constexpr int kBatch = 8;
+  const u64 word_step = D * static_cast<u64>(kWordBits);
+  // The walk's position: column `col` of the row whose first word's v is row_v.
+  int col = range.begin % words_per_row_;
+  u64 row_v = D * static_cast<u64>(x0_) + E * static_cast<u64>(word_y(range.begin)) + F;
+  auto advance = [&] {
+    if (++col == words_per_row_) {
+      col = 0;
+      row_v += E;
+    }
+  };
+  constexpr int kBatch = kLinearBatch;
   for (int w0 = range.begin; w0 < range.end; w0 += kBatch) {
     const int n = std::min(kBatch, range.end - w0);
     if (live != nullptr) {
@@ -328,35 +494,17 @@ void ExpressionEvaluator::linear_planes(const QuadraticCoefficients& c, int firs
       if (any == 0) {
         for (int k = 0; k < count; ++k)
           std::fill_n(out + static_cast<std::size_t>(k) * words_ + w0, n, Word{0});
+        for (int l = 0; l < n; ++l) advance();
         continue;
       }
     }
     u64 base[kBatch];
-    Word carry[kBatch] = {};
-    Word sum[kBatch] = {};
-    for (int l = 0; l < kBatch; ++l) {
-      const int w = w0 + std::min(l, n - 1);
-      base[l] = D * static_cast<u64>(word_x(w)) + E * static_cast<u64>(word_y(w)) + F;
+    for (int l = 0; l < n; ++l) {
+      base[l] = row_v + static_cast<u64>(col) * word_step;
+      advance();
     }
-    auto store = [&](int plane) {
-      Word* o = out + static_cast<std::size_t>(plane - first_bit) * words_ + w0;
-      if (n == kBatch) {
-        for (int l = 0; l < kBatch; ++l) o[l] = sum[l];
-      } else {
-        for (int l = 0; l < n; ++l) o[l] = sum[l];
-      }
-    };
-    for (int k = 0; k <= top; ++k) {
-      const Word p = lane[k];
-      for (int l = 0; l < kBatch; ++l) {
-        const Word kb = Word{0} - ((base[l] >> k) & 1);
-        const Word x = p ^ kb;
-        sum[l] = x ^ carry[l];
-        carry[l] = (p & kb) | (carry[l] & x);
-      }
-      if (k >= first_bit) store(k);
-    }
-    for (int b = std::max(first_bit, top + 1); b <= last; ++b) store(b);
+    for (int l = n; l < kBatch; ++l) base[l] = base[n - 1];
+    linear_batch(lane, base, n, first_bit, top, last, out + w0, static_cast<std::size_t>(words_));
   }
 }
 

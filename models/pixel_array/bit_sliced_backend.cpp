@@ -5,6 +5,10 @@
 #include <stdexcept>
 #include <string>
 
+#if defined(__GFNI__) && defined(__AVX512VBMI__) && defined(__AVX512BW__)
+#include <immintrin.h>
+#endif
+
 namespace pp5 {
 
 BitSlicedBackend::BitSlicedBackend(const PixelBackendParams& params)
@@ -21,8 +25,13 @@ Bits BitSlicedBackend::expression_bits(const QuadraticCoefficients& expr, const 
   settle();
   // Disabled pixels' values are never used (assign keeps them, compare clears their E
   // anyway), so words whose E is zero are not evaluated.
-  evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data(),
-                    array_.enable());
+  if (!(held_.valid && held_.width == as.width && held_.expr == expr)) {
+    evaluator_.planes(expr, fraction_bits_, as.width, array_.active_words(), scratch_.data(),
+                      array_.enable());
+    held_.valid = true;  // (member by member: a temporary copied whole stalls on its stores)
+    held_.expr = expr;
+    held_.width = as.width;
+  }
   return array_.bits_of_planes(scratch_.data(), as.width, as.is_signed);
 }
 
@@ -44,6 +53,7 @@ void BitSlicedBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
 void BitSlicedBackend::and_test(const QuadraticCoefficients& expr, Compare cond) {
   const WordRange r = array_.active_words();
   if (r.empty()) return;
+  held_.valid = false;
   evaluator_.test_plane(expr, cond, r, scratch_.data(), array_.enable());
   array_.and_enable(scratch_.data());
 }
@@ -108,6 +118,7 @@ void BitSlicedBackend::multiply_accumulate(const Field& dst, const Field& a, std
   array_.multiply_accumulate(dst, array_.bits_of(a), k);
 }
 
+#if !(defined(__GFNI__) && defined(__AVX512VBMI__) && defined(__AVX512BW__))
 namespace {
 
 // spread[b] has bit k of b at bit 8k: one plane's byte becomes one bit in each of 8 byte lanes.
@@ -123,14 +134,56 @@ const std::array<std::uint64_t, 256>& spread_table() {
 }
 
 }  // namespace
+#endif
 
 void BitSlicedBackend::read_field(const Field& field, std::uint64_t* out) const {
   // The same bits PixelArray::read gives pixel by pixel (pixel p is bit p % 64 of word
-  // p / 64), eight planes at a time: a table lookup per byte of a plane puts that plane's bit
-  // of 8 pixels into 8 byte lanes, so 8 pixels' bytes are assembled in one register.
-  const auto& spread = spread_table();
+  // p / 64), eight planes at a time.
   const int words = array_.words();
   std::fill(out, out + array_.pixels(), std::uint64_t{0});
+#if defined(__GFNI__) && defined(__AVX512VBMI__) && defined(__AVX512BW__)
+  // One word of eight planes is an 8 x 64 bit matrix. A byte permutation gathers, for each
+  // group of 8 pixels b, byte b of every plane into one qword (plane i in byte 7 - i); an
+  // affine transform with the identity as the data and that qword as the matrix transposes
+  // each 8 x 8 block, leaving pixel 8b + j's bits of the eight planes in byte 8b + j.
+  alignas(64) std::uint8_t gather[64];
+  for (int b = 0; b < 8; ++b)
+    for (int i = 0; i < 8; ++i) gather[8 * b + 7 - i] = static_cast<std::uint8_t>(8 * i + b);
+  const __m512i index = _mm512_load_si512(gather);
+  const __m512i identity = _mm512_set1_epi64(static_cast<long long>(0x8040201008040201ull));
+  alignas(64) std::uint8_t pixel_bytes[64];
+  for (int g = 0; g < field.width; g += 8) {
+    const int n = std::min(8, field.width - g);
+    const __m128i shift = _mm_cvtsi32_si128(g);
+    const __mmask8 planes_in = static_cast<__mmask8>((1u << n) - 1);
+    const std::uint64_t* first = array_.plane(field.lo + g);
+    const std::size_t stride = static_cast<std::size_t>(words);
+    const __m512i strides =
+        _mm512_set_epi64(7 * static_cast<long long>(stride), 6 * static_cast<long long>(stride),
+                         5 * static_cast<long long>(stride), 4 * static_cast<long long>(stride),
+                         3 * static_cast<long long>(stride), 2 * static_cast<long long>(stride),
+                         static_cast<long long>(stride), 0);
+    for (int w = 0; w < words; ++w) {
+      const __m512i planes =
+          _mm512_mask_i64gather_epi64(_mm512_setzero_si512(), planes_in, strides, first + w, 8);
+      // (The zero-masking forms with every lane kept: GCC 12's plain forms warn of an
+      // undefined source they never read.)
+      const __m512i blocks = _mm512_maskz_permutexvar_epi8(~__mmask64{0}, index, planes);
+      _mm512_store_si512(pixel_bytes, _mm512_gf2p8affine_epi64_epi8(identity, blocks, 0));
+      std::uint64_t* o = out + static_cast<std::size_t>(w) * 64;
+      for (int q = 0; q < 8; ++q) {
+        const __m512i wide = _mm512_maskz_cvtepu8_epi64(
+            0xFF, _mm_loadl_epi64(reinterpret_cast<const __m128i*>(pixel_bytes + 8 * q)));
+        __m512i* dst = reinterpret_cast<__m512i*>(o + 8 * q);
+        _mm512_storeu_si512(dst, _mm512_or_si512(_mm512_loadu_si512(dst),
+                                                 _mm512_maskz_sll_epi64(0xFF, wide, shift)));
+      }
+    }
+  }
+#else
+  // A table lookup per byte of a plane puts that plane's bit of 8 pixels into 8 byte lanes, so
+  // 8 pixels' bytes are assembled in one register.
+  const auto& spread = spread_table();
   for (int g = 0; g < field.width; g += 8) {
     const int n = std::min(8, field.width - g);
     for (int w = 0; w < words; ++w) {
@@ -145,6 +198,7 @@ void BitSlicedBackend::read_field(const Field& field, std::uint64_t* out) const 
       }
     }
   }
+#endif
 }
 
 void BitSlicedBackend::read_memory_planes(std::vector<std::uint64_t>& planes) const {
@@ -174,6 +228,7 @@ void BitSlicedBackend::copy_state_from(const PixelBackend& other) {
   o->settle();
   array_ = o->array_;
   pending_count_ = 0;
+  held_.valid = false;
 }
 
 }  // namespace pp5

@@ -10,8 +10,11 @@
 // half-plane qtests (a triangle's edges) is held back and applied together when anything
 // else is asked of the backend, over only the rows where all of them can hold
 // (models/evaluator/linear_band.hpp); E is then what the tests one by one would leave, and
-// every accessor, including array(), sees it applied. Beyond the interface, array() and evaluator()
-// give the concrete models to code that is about them (their tests and benchmarks).
+// every accessor, including array(), sees it applied. An expression's planes stay in scratch
+// while E only loses bits, so a qload of the expression a qcmp (or qload) has just evaluated, at
+// the same width, takes them from there: they are the evaluator's planes for every word E still
+// enables, exactly what evaluating again would give there. Beyond the interface, array() and
+// evaluator() give the concrete models to code that is about them (their tests and benchmarks).
 #include <array>
 #include <cstddef>
 #include <memory>
@@ -32,11 +35,13 @@ class BitSlicedBackend final : public PixelBackend {
   const PixelArrayGeometry& geometry() const override { return array_.geometry(); }
   void set_origin(int x0, int y0) override {
     settle();
+    held_.valid = false;
     evaluator_.set_origin(x0, y0);
   }
 
   void enable_all() override {
     pending_count_ = 0;  // E becomes all 1: no test held back matters
+    held_.valid = false;
     array_.enable_all();
   }
   void push_enable() override {
@@ -45,10 +50,12 @@ class BitSlicedBackend final : public PixelBackend {
   }
   void pop_enable() override {
     settle();
+    held_.valid = false;
     array_.pop_enable();
   }
   void else_enable() override {
     settle();
+    held_.valid = false;
     array_.else_enable();
   }
 
@@ -100,6 +107,7 @@ class BitSlicedBackend final : public PixelBackend {
 
   PixelArray& array() {
     settle();
+    held_.valid = false;  // the caller may change E
     return array_;
   }
   const PixelArray& array() const {
@@ -129,6 +137,15 @@ class BitSlicedBackend final : public PixelBackend {
   ExpressionEvaluator evaluator_;
   int fraction_bits_;
   std::vector<Word> scratch_;  // Bits::kMaxBits planes: the evaluator's output
+  // What scratch_ holds when valid: the planes of `expr` for a field of `width` bits, at every
+  // word where E has a set bit. Cleared by whatever overwrites scratch_, moves the origin or may
+  // set a bit of E (enable_all, pop_enable, else_enable, copy_state_from, array()).
+  struct HeldPlanes {
+    bool valid = false;
+    QuadraticCoefficients expr;
+    int width = 0;
+  };
+  HeldPlanes held_;
 };
 
 }  // namespace pp5

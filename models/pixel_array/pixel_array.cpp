@@ -31,6 +31,8 @@ PixelArray::PixelArray(const PixelArrayGeometry& geometry) : geometry_(geometry)
   words_ = geometry.width * geometry.height / kWordBits;
   memory_.assign(static_cast<std::size_t>(geometry.memory_bits) * words_, 0);
   enable_.assign(words_, kAllOnes);
+  bound_ = {0, words_};
+  stack_bound_.assign(static_cast<std::size_t>(geometry.enable_stack_depth), WordRange{});
   carry_.assign(words_, 0);
   stack_.assign(static_cast<std::size_t>(geometry.enable_stack_depth) * words_, 0);
   zeros_.assign(words_, 0);
@@ -70,20 +72,22 @@ Bits PixelArray::bits_of_planes(const Word* planes, int count, bool is_signed) c
 
 void PixelArray::enable_all() {
   std::fill(enable_.begin(), enable_.end(), kAllOnes);
-  mark_enable_changed();
+  active_ = bound_ = {0, words_};
+  active_valid_ = true;
 }
 
 void PixelArray::clear_enable_outside(WordRange keep) {
   const WordRange r = active_words();
   for (int w = r.begin; w < std::min(keep.begin, r.end); ++w) enable_[w] = 0;
   for (int w = std::max(keep.end, r.begin); w < r.end; ++w) enable_[w] = 0;
-  mark_enable_changed();
+  bound_ = {std::max(r.begin, keep.begin), std::min(r.end, keep.end)};
+  mark_enable_shrunk();
 }
 
 void PixelArray::and_enable(const Word* mask) {
   const WordRange r = active_words();
   for (int w = r.begin; w < r.end; ++w) enable_[w] &= mask[w];
-  mark_enable_changed();
+  mark_enable_shrunk();
 }
 
 void PixelArray::push_enable() {
@@ -93,6 +97,7 @@ void PixelArray::push_enable() {
   }
   std::copy(enable_.begin(), enable_.end(),
             stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * words_);
+  stack_bound_[static_cast<std::size_t>(stack_top_)] = active_valid_ ? active_ : bound_;
   ++stack_top_;
 }
 
@@ -101,14 +106,16 @@ void PixelArray::pop_enable() {
   --stack_top_;
   auto saved = stack_.begin() + static_cast<std::ptrdiff_t>(stack_top_) * words_;
   std::copy(saved, saved + words_, enable_.begin());
-  mark_enable_changed();
+  bound_ = stack_bound_[static_cast<std::size_t>(stack_top_)];
+  mark_enable_shrunk();
 }
 
 void PixelArray::else_enable() {
   if (stack_top_ == 0) throw std::underflow_error("else without a saved enable");
   const Word* saved = &stack_[static_cast<std::size_t>(stack_top_ - 1) * words_];
   for (int w = 0; w < words_; ++w) enable_[w] = saved[w] & ~enable_[w];
-  mark_enable_changed();
+  bound_ = stack_bound_[static_cast<std::size_t>(stack_top_ - 1)];  // E is within the saved E
+  mark_enable_shrunk();
 }
 
 int PixelArray::count_enabled() const {
@@ -119,11 +126,12 @@ int PixelArray::count_enabled() const {
 
 WordRange PixelArray::active_words() const {
   if (!active_valid_) {
-    int b = 0;
-    while (b < words_ && enable_[b] == 0) ++b;
-    int e = words_;
+    int b = bound_.begin;
+    while (b < bound_.end && enable_[b] == 0) ++b;
+    int e = bound_.end;
     while (e > b && enable_[e - 1] == 0) --e;
-    active_ = {b, e};
+    active_ = b < e ? WordRange{b, e} : WordRange{words_, words_};
+    bound_ = active_;
     active_valid_ = true;
   }
   return active_;
@@ -321,7 +329,7 @@ void PixelArray::compare(const Bits& a, const Bits& b, Compare cmp) {
     }
     enable_[w] &= result;
   }
-  mark_enable_changed();
+  mark_enable_shrunk();
 }
 
 Word* PixelArray::backing_plane(int bit) {

@@ -107,7 +107,8 @@ class PixelArray {
   bool same_state(const PixelArray& other) const;
 
  private:
-  void mark_enable_changed() { active_valid_ = false; }
+  // E changed to a subset of what it was: its set bits still lie within bound_.
+  void mark_enable_shrunk() { active_valid_ = false; }
   void check_no_overlap(const Field& dst, const Bits& src, const char* what) const;
   // `src`, with its extension plane copied aside if it lies inside `dst` (slot 0 or 1).
   Bits stable(const Bits& src, const Field& dst, int slot);
@@ -128,8 +129,13 @@ class PixelArray {
   std::vector<Word> ones_;
   std::vector<Word> sign_copy_;  // two planes: saved extension planes, or compare's state
   std::vector<Word> backing_;    // allocated on first use: only programs that spill pay for it
+  // active_ is exact when active_valid_; otherwise every set bit of E lies in bound_, and
+  // active_words() scans only that (operations that clear bits of E keep the old range as
+  // the bound, so a primitive's tests rescan its rows, not the whole region).
   mutable WordRange active_{};
+  mutable WordRange bound_{};
   mutable bool active_valid_ = false;
+  std::vector<WordRange> stack_bound_;  // bound_ of each saved Enable
 };
 
 }  // namespace pp5
