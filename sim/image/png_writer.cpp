@@ -109,8 +109,18 @@ class PngDeflate {
     };
     const std::uint8_t* p = in;
     for (const Segment seg : segments_) {
-      for (const std::uint8_t* end = p + (seg & kMaxLiterals); p < end; ++p)
+      const std::uint8_t* end = p + (seg & kMaxLiterals);
+      // Two literals (at most 15 bits each) as one put: the writer's state is a chain of
+      // dependent operations, half as long this way.
+      for (; p + 2 <= end; p += 2) {
+        const std::uint32_t a = lit[p[0]], b = lit[p[1]];
+        const int la = static_cast<int>(a >> 16);
+        emit((a & 0xffff) | (b & 0xffff) << la, la + static_cast<int>(b >> 16));
+      }
+      if (p < end) {
         emit(lit[*p] & 0xffff, static_cast<int>(lit[*p] >> 16));
+        ++p;
+      }
       const int length = static_cast<int>(seg >> 40 & 0x1ff);
       if (length == 0) continue;
       const int sym = kLengthSymbol[static_cast<std::size_t>(length)];
