@@ -454,34 +454,23 @@ PngScratch& png_scratch() {
 
 }  // namespace
 
-std::string encode_png(const RgbImage& image, const std::string& what) {
-  // Computed in size_t, where the product of two positive ints cannot overflow.
-  const auto expected = static_cast<std::size_t>(std::max(image.width, 0)) *
-                        static_cast<std::size_t>(std::max(image.height, 0)) * 3u;
-  if (image.width > 0 && image.height > 0 && image.rgb.size() != expected) {
-    fail("cannot write PNG", what,
-         fmt::format("pixel buffer holds {} bytes, a {}x{} RGB image needs {}", image.rgb.size(),
-                     image.width, image.height, expected));
+namespace {
+
+// Up-filtered bytes: each byte of `row` less the byte above it (`above` null: the first row,
+// whose bytes are its own).
+void png_up(const std::uint8_t* row, const std::uint8_t* above, std::size_t n, std::uint8_t* out) {
+  if (above == nullptr) {
+    std::memcpy(out, row, n);
+    return;
   }
-  const std::size_t stride = static_cast<std::size_t>(std::max(image.width, 0)) * 3u;
-  return encode_png(
-      image.width, image.height,
-      [&](int y, std::uint8_t* row) {
-        std::memcpy(row, image.rgb.data() + stride * static_cast<std::size_t>(y), stride);
-      },
-      what);
+  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<std::uint8_t>(row[i] - above[i]);
 }
 
-std::string encode_png(const FrameImage& frame, const std::string& what) {
-  if (!frame.has_pixels()) fail("cannot write PNG", what, "the frame holds no pixels");
-  return encode_png(
-      frame.width(), frame.height(), [&frame](int y, std::uint8_t* row) { frame.row(y, row); },
-      what);
-}
-
-std::string encode_png(int width, int height,
-                       const std::function<void(int y, std::uint8_t* row)>& rows,
-                       const std::string& what) {
+// The PNG of a width x height image whose rows filter(y, out) writes Up-filtered (width * 3
+// bytes, after the filter byte), for y = 0 .. height - 1 in order: the rows are filtered where
+// they lie, not copied first.
+template <class Filter>
+std::string encode_filtered_png(int width, int height, const std::string& what, Filter&& filter) {
   constexpr const char* kWhat = "cannot write PNG";
   if (width <= 0 || height <= 0) {
     fail(kWhat, what, fmt::format("invalid size {}x{}", width, height));
@@ -496,14 +485,10 @@ std::string encode_png(int width, int height,
   PngScratch& scratch = png_scratch();
   std::vector<std::uint8_t>& filtered = scratch.filtered;
   filtered.resize(line * static_cast<std::size_t>(height));
-  std::vector<std::uint8_t> row(stride), above(stride, 0);  // row 0's Up is its bytes
   for (int y = 0; y < height; ++y) {
-    rows(y, row.data());
     std::uint8_t* out = filtered.data() + line * static_cast<std::size_t>(y);
     out[0] = 2;  // the Up filter: each byte less the byte above it
-    for (std::size_t i = 0; i < stride; ++i)
-      out[1 + i] = static_cast<std::uint8_t>(row[i] - above[i]);
-    row.swap(above);
+    filter(y, out + 1);
   }
   std::string& stream = scratch.stream;
   stream.clear();
@@ -522,6 +507,63 @@ std::string encode_png(int width, int height,
   }
   put_chunk(png, "IEND", "", 0);
   return png;
+}
+
+}  // namespace
+
+std::string encode_png(const RgbImage& image, const std::string& what) {
+  // Computed in size_t, where the product of two positive ints cannot overflow.
+  const auto expected = static_cast<std::size_t>(std::max(image.width, 0)) *
+                        static_cast<std::size_t>(std::max(image.height, 0)) * 3u;
+  if (image.width > 0 && image.height > 0 && image.rgb.size() != expected) {
+    fail("cannot write PNG", what,
+         fmt::format("pixel buffer holds {} bytes, a {}x{} RGB image needs {}", image.rgb.size(),
+                     image.width, image.height, expected));
+  }
+  const std::size_t stride = static_cast<std::size_t>(std::max(image.width, 0)) * 3u;
+  return encode_filtered_png(image.width, image.height, what, [&](int y, std::uint8_t* out) {
+    const std::uint8_t* row = image.rgb.data() + stride * static_cast<std::size_t>(y);
+    png_up(row, y > 0 ? row - stride : nullptr, stride, out);
+  });
+}
+
+std::string encode_png(const FrameImage& frame, const std::string& what) {
+  if (!frame.has_pixels()) fail("cannot write PNG", what, "the frame holds no pixels");
+  // Region by region along the row: a black region's part of a row is 0s.
+  const int width = frame.width();
+  const int region_width = frame.region_width();
+  return encode_filtered_png(width, frame.height(), what, [&](int y, std::uint8_t* out) {
+    for (int c = 0; c < frame.columns(); ++c) {
+      const int x0 = c * region_width;
+      const std::size_t bytes = static_cast<std::size_t>(std::min(region_width, width - x0)) * 3;
+      std::uint8_t* to = out + static_cast<std::size_t>(x0) * 3;
+      const std::uint8_t* row = frame.region_row(c, y);
+      const std::uint8_t* above = y > 0 ? frame.region_row(c, y - 1) : nullptr;
+      if (row != nullptr) {
+        png_up(row, above, bytes, to);
+      } else if (above != nullptr) {
+        for (std::size_t i = 0; i < bytes; ++i) to[i] = static_cast<std::uint8_t>(0 - above[i]);
+      } else {
+        std::memset(to, 0, bytes);
+      }
+    }
+  });
+}
+
+std::string encode_png(int width, int height,
+                       const std::function<void(int y, std::uint8_t* row)>& rows,
+                       const std::string& what) {
+  const std::size_t stride = static_cast<std::size_t>(std::max(width, 0)) * 3u;
+  std::vector<std::uint8_t> row, above;
+  return encode_filtered_png(width, height, what, [&](int y, std::uint8_t* out) {
+    if (y == 0) {
+      row.resize(stride);
+      above.resize(stride);
+    }
+    rows(y, row.data());
+    png_up(row.data(), y > 0 ? above.data() : nullptr, stride, out);
+    row.swap(above);
+  });
 }
 
 void write_png(const std::string& path, const RgbImage& image) {
