@@ -296,37 +296,40 @@ class PngDeflate {
   // over frequencies halved (a used symbol keeps at least 1) until it fits. Unused symbols
   // get 0; a lone used symbol gets 1.
   static void huffman_lengths(const std::uint32_t* freq, int n, int limit, std::uint8_t* len) {
-    std::vector<std::uint32_t> f(freq, freq + n);
+    // On the stack: n is at most kLitSymbols (a frame's encoding makes no allocation here).
+    std::array<std::uint32_t, kLitSymbols> f{};
+    std::copy(freq, freq + n, f.begin());
+    std::array<std::pair<std::uint64_t, int>, kLitSymbols> heap_store;  // (weight, node)
+    std::array<int, 2 * kLitSymbols> parent;
     for (;;) {
       std::fill(len, len + n, std::uint8_t{0});
-      // Nodes: leaves 0..n-1, inner nodes after; parent links give the depths.
-      std::vector<std::pair<std::uint64_t, int>> heap;  // (weight, node), min-heap
-      std::vector<int> parent(static_cast<std::size_t>(2 * n), -1);
+      // Nodes: leaves 0..n-1, inner nodes after; parent links give the depths. A min-heap
+      // of (weight, node) in heap_store[0, size).
+      std::fill(parent.begin(), parent.begin() + 2 * n, -1);
+      const auto heap = heap_store.begin();
+      std::ptrdiff_t size = 0;
       for (int s = 0; s < n; ++s) {
-        if (f[static_cast<std::size_t>(s)] != 0)
-          heap.emplace_back(f[static_cast<std::size_t>(s)], s);
+        if (f[static_cast<std::size_t>(s)] != 0) heap[size++] = {f[static_cast<std::size_t>(s)], s};
       }
-      if (heap.empty()) return;
-      if (heap.size() == 1) {
+      if (size == 0) return;
+      if (size == 1) {
         len[heap[0].second] = 1;
         return;
       }
       auto greater = [](const auto& a, const auto& b) {
         return a.first != b.first ? a.first > b.first : a.second > b.second;
       };
-      std::make_heap(heap.begin(), heap.end(), greater);
+      std::make_heap(heap, heap + size, greater);
       int next = n;
-      while (heap.size() > 1) {
-        std::pop_heap(heap.begin(), heap.end(), greater);
-        const auto a = heap.back();
-        heap.pop_back();
-        std::pop_heap(heap.begin(), heap.end(), greater);
-        const auto b = heap.back();
-        heap.pop_back();
+      while (size > 1) {
+        std::pop_heap(heap, heap + size, greater);
+        const auto a = heap[--size];
+        std::pop_heap(heap, heap + size, greater);
+        const auto b = heap[--size];
         parent[static_cast<std::size_t>(a.second)] = next;
         parent[static_cast<std::size_t>(b.second)] = next;
-        heap.emplace_back(a.first + b.first, next);
-        std::push_heap(heap.begin(), heap.end(), greater);
+        heap[size++] = {a.first + b.first, next};
+        std::push_heap(heap, heap + size, greater);
         ++next;
       }
       int longest = 0;
