@@ -21,18 +21,25 @@ bool is_index(std::string_view component) {
   return true;
 }
 
-// A name's components, as views into it (this runs for every statistic of every frame).
-std::vector<std::string_view> components(std::string_view name) {
-  std::vector<std::string_view> out;
-  out.reserve(8);
+// A name's components, as views into it, into `out` (this runs for every statistic of every
+// frame).
+void components_into(std::string_view name, std::vector<std::string_view>& out) {
+  out.clear();
   std::size_t start = 0;
   for (;;) {
     const std::size_t dot = name.find('.', start);
     out.push_back(
         name.substr(start, dot == std::string_view::npos ? std::string_view::npos : dot - start));
-    if (dot == std::string_view::npos) return out;
+    if (dot == std::string_view::npos) return;
     start = dot + 1;
   }
+}
+
+std::vector<std::string_view> components(std::string_view name) {
+  std::vector<std::string_view> out;
+  out.reserve(8);
+  components_into(name, out);
+  return out;
 }
 
 // An index component's value (is_index holds); SIZE_MAX when it does not fit.
@@ -88,8 +95,8 @@ const char* stat_kind_name(StatKind kind) {
 
 namespace {
 
-std::string pattern_of(const std::vector<std::string_view>& parts) {
-  std::string out;
+void pattern_into(const std::vector<std::string_view>& parts, std::string& out) {
+  out.clear();
   for (std::string_view c : parts) {
     if (!out.empty()) out += '.';
     if (is_index(c)) {
@@ -98,6 +105,11 @@ std::string pattern_of(const std::vector<std::string_view>& parts) {
       out += c;
     }
   }
+}
+
+std::string pattern_of(const std::vector<std::string_view>& parts) {
+  std::string out;
+  pattern_into(parts, out);
   return out;
 }
 
@@ -107,25 +119,41 @@ std::string stat_pattern(const std::string& name) { return pattern_of(components
 
 void Statistics::add_integer(const std::string& name, const char* unit, const char* description,
                              std::function<std::int64_t()> get) {
-  add({name, StatKind::integer, unit, description},
-      [get = std::move(get)]() -> StatValue { return get(); });
+  add({name, StatKind::integer, unit, description}, std::move(get));
 }
 
 void Statistics::add_real(const std::string& name, const char* unit, const char* description,
                           std::function<double()> get) {
-  add({name, StatKind::real, unit, description},
-      [get = std::move(get)]() -> StatValue { return get(); });
+  add({name, StatKind::real, unit, description}, std::move(get));
 }
 
 void Statistics::add_text(const std::string& name, const char* unit, const char* description,
                           std::function<std::string()> get) {
-  add({name, StatKind::text, unit, description},
-      [get = std::move(get)]() -> StatValue { return get(); });
+  add({name, StatKind::text, unit, description}, std::move(get));
 }
 
-void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
+StatValue Statistics::call(const Getter& get) {
+  switch (get.index()) {
+    case 1:
+      return std::get<1>(get)();
+    case 2:
+      return std::get<2>(get)();
+    case 3:
+      return std::get<3>(get)();
+    default:
+      break;
+  }
+  throw std::logic_error("statistic read without a getter");
+}
+
+void Statistics::add(StatisticInfo info, Getter get) {
   const std::string& name = info.name;
-  const std::vector<std::string_view> parts = components(name);
+  // A frame registers about a thousand statistics: the name's components and pattern go in
+  // scratch kept by the thread rather than new allocations each time.
+  thread_local std::vector<std::string_view> parts_scratch;
+  thread_local std::string pattern_scratch;
+  std::vector<std::string_view>& parts = parts_scratch;
+  components_into(name, parts);
   check_name(name, parts);
   if (index_.count(name)) throw std::invalid_argument("statistic '" + name + "' registered twice");
   if (parents_.count(name)) {
@@ -155,7 +183,8 @@ void Statistics::add(StatisticInfo info, std::function<StatValue()> get) {
                                   "' must be registered from 0 without gaps");
     }
   }
-  const std::string pattern = pattern_of(parts);
+  std::string& pattern = pattern_scratch;
+  pattern_into(parts, pattern);
   const auto first = patterns_.find(pattern);
   if (first != patterns_.end()) {
     const StatisticInfo& e = entries_[first->second].info;
@@ -226,17 +255,19 @@ std::size_t Statistics::elements(const std::string& name) const {
 void Statistics::freeze() {
   for (Entry& e : entries_) {
     if (e.frozen) continue;
-    e.value = e.get();
+    e.value = call(e.get);
     e.frozen = true;
-    e.get = nullptr;
+    e.get = std::monostate{};
   }
 }
 
 nlohmann::json Statistics::to_json() const {
   nlohmann::json doc = nlohmann::json::object();
+  std::vector<std::string_view> parts;
   for (const Entry& e : entries_) {
     nlohmann::json* at = &doc;
-    for (std::string_view c : components(e.info.name)) {
+    components_into(e.info.name, parts);
+    for (std::string_view c : parts) {
       // Dense registration (checked by add) means an index is at most the array's size.
       at = is_index(c) ? &(*at)[index_value(c)] : &(*at)[c];
     }
@@ -276,7 +307,7 @@ Statistics Statistics::from_json(const nlohmann::json& document) {
           throw std::invalid_argument("statistic '" + escape_for_message(name) +
                                       "': not a number or text");
         }
-        s.add({name, kind_of(value), "", ""}, nullptr);
+        s.add({name, kind_of(value), "", ""}, std::monostate{});
         Entry& e = s.entries_.back();
         e.value = std::move(value);
         e.frozen = true;

@@ -95,15 +95,20 @@ class Statistics {
   std::vector<StatisticInfo> infos() const;
 
  private:
+  // The getter as registered, of the statistic's kind (none once frozen, or for a statistic
+  // read from a file).
+  using Getter = std::variant<std::monostate, std::function<std::int64_t()>,
+                              std::function<double()>, std::function<std::string()>>;
   struct Entry {
     StatisticInfo info;
-    std::function<StatValue()> get;
+    Getter get;
     StatValue value;
     bool frozen = false;
   };
-  void add(StatisticInfo info, std::function<StatValue()> get);
+  void add(StatisticInfo info, Getter get);
   const Entry& entry(const std::string& name) const;
-  StatValue read(const Entry& e) const { return e.frozen ? e.value : e.get(); }
+  static StatValue call(const Getter& get);
+  StatValue read(const Entry& e) const { return e.frozen ? e.value : call(e.get); }
 
   std::vector<Entry> entries_;
   std::unordered_map<std::string, std::size_t> index_;

@@ -62,6 +62,17 @@ class FrameImage {
 
   // Row y's width() * 3 bytes (RGB) into out.
   void row(int y, std::uint8_t* out) const;
+  // Row y's part in region column `column` where it is held, without a copy: the bytes of
+  // pixels column * region_width() .. min(width(), (column + 1) * region_width()) - 1; null
+  // where that region is black (no pixels given, or a timing-only frame).
+  const std::uint8_t* region_row(int column, int y) const {
+    if (!pixels_) return nullptr;
+    const RegionPixels& r =
+        regions_[static_cast<std::size_t>(y / region_height_) * columns_ + column];
+    return r ? r.get() + static_cast<std::size_t>(y % region_height_) * region_width_ * 3 : nullptr;
+  }
+  int region_width() const { return region_width_; }
+  int columns() const { return columns_; }
   // The RGB of pixel (x, y), inside the frame.
   const std::uint8_t* pixel(int x, int y) const;
   // The whole frame as one image (no bytes for a timing-only frame).

@@ -334,9 +334,15 @@ bool SetupContext::plane(const std::array<double, 3>& f, QuadraticCoefficients& 
   const double B = std::nearbyint(b * f_scale);
   const double limit = std::ldexp(1.0, cb - 1);
   if (!(std::fabs(A) < limit && std::fabs(B) < limit)) return false;
-  // The GP's arithmetic keeps params.significand_bits of each coefficient (gp_round).
-  const auto Ai = static_cast<std::int64_t>(gp_round(static_cast<__int128>(A), params));
-  const auto Bi = static_cast<std::int64_t>(gp_round(static_cast<__int128>(B), params));
+  // The GP's arithmetic keeps params.significand_bits of each coefficient (gp_round). A and B
+  // are whole and below 2^(cb - 1): with cb <= 64 (the configuration allows 62) converted
+  // through 64 bits, exactly, rather than by the library's double to 128-bit conversion.
+  const auto whole = [cb](double v) {
+    return cb <= 64 ? static_cast<__int128>(static_cast<std::int64_t>(v))
+                    : static_cast<__int128>(v);
+  };
+  const auto Ai = static_cast<std::int64_t>(gp_round(whole(A), params));
+  const auto Bi = static_cast<std::int64_t>(gp_round(whole(B), params));
   if (!fits(Ai, cb) || !fits(Bi, cb)) return false;
   // C makes the value exact (to rounding) at the first vertex: C = f0 - A u0 - B v0, with
   // the products formed exactly in integers.
@@ -423,25 +429,34 @@ const std::array<ExpressionEntry, static_cast<int>(Expression::count)>& expressi
   return kRegistry;
 }
 
+namespace {
+
+// The expressions whose registry entry has a flag, as a set: asked of every triangle's set-up,
+// so one AND rather than a walk of the registry.
+template <bool ExpressionEntry::*flag>
+const ExpressionSet& expressions_with() {
+  static const ExpressionSet set = [] {
+    ExpressionSet s;
+    for (const ExpressionEntry& e : kRegistry) {
+      if (e.*flag) s.set(static_cast<std::size_t>(e.id));
+    }
+    return s;
+  }();
+  return set;
+}
+
+}  // namespace
+
 bool needs_adjacency(const ExpressionSet& set) {
-  for (const ExpressionEntry& e : kRegistry) {
-    if (e.needs_adjacency && set.test(static_cast<int>(e.id))) return true;
-  }
-  return false;
+  return (set & expressions_with<&ExpressionEntry::needs_adjacency>()).any();
 }
 
 bool needs_frame_parameters(const ExpressionSet& set) {
-  for (const ExpressionEntry& e : kRegistry) {
-    if (e.reads_frame && set.test(static_cast<int>(e.id))) return true;
-  }
-  return false;
+  return (set & expressions_with<&ExpressionEntry::reads_frame>()).any();
 }
 
 bool widens_bounds(const ExpressionSet& set) {
-  for (const ExpressionEntry& e : kRegistry) {
-    if (e.widens && set.test(static_cast<int>(e.id))) return true;
-  }
-  return false;
+  return (set & expressions_with<&ExpressionEntry::widens>()).any();
 }
 
 int coefficient_words(int coefficient_bits, int word_bits) {

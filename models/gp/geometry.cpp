@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
@@ -170,32 +171,40 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
   const glm::dvec3 flat = light_vertex(centroid_base, face);
   for (int k = 0; k < 3; ++k) v[k].lit = back ? views[tri[k]].lit_back : views[tri[k]].lit_front;
 
-  std::vector<ClipVertex> poly(v.begin(), v.end());
+  // The polygon in two buffers on the stack: clipping a convex polygon against a plane adds
+  // at most one vertex, so 3 + 6 hold any result.
+  constexpr std::size_t kMaxClipped = 3 + 6;
+  std::array<ClipVertex, kMaxClipped> poly_a, poly_b;
+  ClipVertex* poly = poly_a.data();
+  std::size_t size = v.size();
+  std::copy(v.begin(), v.end(), poly_a.begin());
   bool inside = true;
   for (const auto& x : v) {
     for (int k = 0; k < 6; ++k) inside = inside && plane_distance(x.clip, k) >= 0;
   }
   if (!inside) {
-    for (int k = 0; k < 6 && !poly.empty(); ++k) {
-      std::vector<ClipVertex> next;
-      for (std::size_t i = 0; i < poly.size(); ++i) {
+    ClipVertex* next = poly_b.data();
+    for (int k = 0; k < 6 && size != 0; ++k) {
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < size; ++i) {
         const ClipVertex& a = poly[i];
-        const ClipVertex& b = poly[(i + 1) % poly.size()];
+        const ClipVertex& b = poly[(i + 1) % size];
         const double da = plane_distance(a.clip, k);
         const double db = plane_distance(b.clip, k);
-        if (da >= 0) next.push_back(a);
-        if ((da >= 0) != (db >= 0)) next.push_back(mix(a, b, da / (da - db)));
+        if (da >= 0) next[kept++] = a;
+        if ((da >= 0) != (db >= 0)) next[kept++] = mix(a, b, da / (da - db));
       }
-      poly.swap(next);
+      std::swap(poly, next);
+      size = kept;
     }
-    if (poly.size() < 3) {
+    if (size < 3) {
       ++counts.clipped_away;
       return;
     }
-    counts.clip_splits += poly.size() - 3;
+    counts.clip_splits += size - 3;
   }
-  std::vector<ScreenVertex> screen(poly.size());
-  for (std::size_t i = 0; i < poly.size(); ++i) {
+  std::array<ScreenVertex, kMaxClipped> screen;
+  for (std::size_t i = 0; i < size; ++i) {
     const glm::dvec3 ndc = glm::dvec3(poly[i].clip) / poly[i].clip.w;
     ScreenVertex& s = screen[i];
     s.position = {(ndc.x * 0.5 + 0.5) * params_.screen_width,
@@ -208,7 +217,7 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
     const double n = glm::length(poly[i].normal);
     s.normal = n > 0 ? poly[i].normal / n : face;
   }
-  for (std::size_t i = 1; i + 1 < screen.size(); ++i) {
+  for (std::size_t i = 1; i + 1 < size; ++i) {
     out.push_back({{screen[0], screen[i], screen[i + 1]}, flat, index, back});
   }
 }

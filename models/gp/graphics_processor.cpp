@@ -168,10 +168,17 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
         regions.clear();
         k.worker->bin(result, regions);
         packet->values = std::move(result.values);
-        for (int r : regions) {
-          if (bins != nullptr) bins->add(r, packet);
-          ++stats.packets;
-          ++tally.regions;
+        stats.packets += regions.size();
+        tally.regions += static_cast<int>(regions.size());
+        if (bins != nullptr) {
+          // The last region takes the set-up's reference when nothing else keeps the packet.
+          for (std::size_t r = 0; r < regions.size(); ++r) {
+            if (r + 1 == regions.size() && memo == nullptr) {
+              bins->add(regions[r], std::move(packet));
+            } else {
+              bins->add(regions[r], packet);
+            }
+          }
         }
         if (memo != nullptr) memo->place(std::move(packet), regions);
       }

@@ -27,17 +27,19 @@ class RegionBins {
 
   explicit RegionBins(int regions = 0) { reset(regions); }
 
+  // The bins emptied keep their storage for the next frame's packets (a GP's bin buffers
+  // persist across the frames of a run).
   void reset(int regions) {
     slot_.assign(static_cast<std::size_t>(regions), -1);
+    for (std::size_t k = 0; k < regions_.size(); ++k) bins_[k].clear();
     regions_.clear();
-    bins_.clear();
   }
 
   void add(int region, std::shared_ptr<const Packet> packet) {
     int& s = slot_[static_cast<std::size_t>(region)];
     if (s < 0) {
-      s = static_cast<int>(bins_.size());
-      bins_.emplace_back();
+      s = static_cast<int>(regions_.size());
+      if (regions_.size() == bins_.size()) bins_.emplace_back();
       regions_.push_back(region);
     }
     bins_[static_cast<std::size_t>(s)].push_back(std::move(packet));
@@ -45,19 +47,20 @@ class RegionBins {
 
   void finish() {
     if (std::is_sorted(regions_.begin(), regions_.end())) return;
-    std::vector<std::size_t> order(regions_.size());
+    const std::size_t n = regions_.size();
+    std::vector<std::size_t> order(n);
     std::iota(order.begin(), order.end(), std::size_t{0});
     std::sort(order.begin(), order.end(),
               [this](std::size_t a, std::size_t b) { return regions_[a] < regions_[b]; });
-    std::vector<int> regions(order.size());
-    std::vector<Bin> bins(order.size());
-    for (std::size_t k = 0; k < order.size(); ++k) {
+    std::vector<int> regions(n);
+    std::vector<Bin> bins(n);
+    for (std::size_t k = 0; k < n; ++k) {
       regions[k] = regions_[order[k]];
       bins[k] = std::move(bins_[order[k]]);
       slot_[static_cast<std::size_t>(regions[k])] = static_cast<int>(k);
     }
     regions_ = std::move(regions);
-    bins_ = std::move(bins);
+    for (std::size_t k = 0; k < n; ++k) bins_[k] = std::move(bins[k]);
   }
 
   const std::vector<int>& regions() const { return regions_; }
@@ -70,7 +73,7 @@ class RegionBins {
  private:
   std::vector<int> slot_;     // region -> index in regions_ and bins_, -1 for none
   std::vector<int> regions_;  // regions with a packet
-  std::vector<Bin> bins_;
+  std::vector<Bin> bins_;     // the first regions_.size() in use, the rest empty, kept
   Bin empty_;
 };
 

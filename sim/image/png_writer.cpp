@@ -7,6 +7,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 #include <algorithm>
 #include <array>
@@ -104,21 +107,49 @@ class PngDeflate {
     std::uint64_t acc = acc_;
     int count = count_;
     std::uint8_t* dst = dst_;
+    // At most 7 bits wait in acc between puts, and a put is at most 30 bits: on a
+    // little-endian host the whole word is stored and the pointer advanced by the whole bytes,
+    // with no branch (the stream has 1024 bytes of slack past its longest).
     auto emit = [&acc, &count, &dst](std::uint32_t value, int bits) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+      acc |= static_cast<std::uint64_t>(value) << count;
+      count += bits;
+      std::memcpy(dst, &acc, 8);
+      dst += count >> 3;
+      acc >>= count & ~7;
+      count &= 7;
+#else
       put_bits(acc, count, dst, value, bits);
+#endif
     };
     const std::uint8_t* p = in;
     for (const Segment seg : segments_) {
-      for (const std::uint8_t* end = p + (seg & kMaxLiterals); p < end; ++p)
+      const std::uint8_t* end = p + (seg & kMaxLiterals);
+      // Two literals (at most 15 bits each) as one put: the writer's state is a chain of
+      // dependent operations, half as long this way.
+      for (; p + 2 <= end; p += 2) {
+        const std::uint32_t a = lit[p[0]], b = lit[p[1]];
+        const int la = static_cast<int>(a >> 16);
+        emit((a & 0xffff) | (b & 0xffff) << la, la + static_cast<int>(b >> 16));
+      }
+      if (p < end) {
         emit(lit[*p] & 0xffff, static_cast<int>(lit[*p] >> 16));
+        ++p;
+      }
       const int length = static_cast<int>(seg >> 40 & 0x1ff);
       if (length == 0) continue;
+      // The run as one put: its length code (at most 15 bits), extra bits (at most 5) and
+      // distance code (1 bit).
       const int sym = kLengthSymbol[static_cast<std::size_t>(length)];
-      emit(lit[sym] & 0xffff, static_cast<int>(lit[sym] >> 16));
+      std::uint32_t value = lit[sym] & 0xffff;
+      int bits = static_cast<int>(lit[sym] >> 16);
       const int extra = kLengthExtra[sym - 257];
-      if (extra > 0) emit(static_cast<std::uint32_t>(length - kLengthBase[sym - 257]), extra);
+      value |= static_cast<std::uint32_t>(length - kLengthBase[sym - 257]) << bits;
+      bits += extra;
       const int d = (seg >> 49 & 1) != 0 ? 2 : 0;  // distance codes 0 (1) and 2 (3), no extra bits
-      emit(dist_code_[static_cast<std::size_t>(d)], dist_len_[static_cast<std::size_t>(d)]);
+      value |= static_cast<std::uint32_t>(dist_code_[static_cast<std::size_t>(d)]) << bits;
+      bits += dist_len_[static_cast<std::size_t>(d)];
+      emit(value, bits);
       p += length;
     }
     acc_ = acc;
@@ -147,6 +178,16 @@ class PngDeflate {
   static std::size_t run_length(const std::uint8_t* in, std::size_t at, std::size_t distance,
                                 std::size_t limit) {
     std::size_t k = 0;
+#if defined(__AVX2__)
+    // 32 bytes compared at a time (a run of 258 bytes is 8 steps, not 32).
+    for (; k + 32 <= limit; k += 32) {
+      const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + at + k));
+      const __m256i b =
+          _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in + at + k - distance));
+      const auto equal = static_cast<std::uint32_t>(_mm256_movemask_epi8(_mm256_cmpeq_epi8(a, b)));
+      if (equal != 0xffffffffu) return k + static_cast<std::size_t>(__builtin_ctz(~equal));
+    }
+#endif
     while (k + 8 <= limit) {
       std::uint64_t a, b;
       std::memcpy(&a, in + at + k, 8);
@@ -255,37 +296,40 @@ class PngDeflate {
   // over frequencies halved (a used symbol keeps at least 1) until it fits. Unused symbols
   // get 0; a lone used symbol gets 1.
   static void huffman_lengths(const std::uint32_t* freq, int n, int limit, std::uint8_t* len) {
-    std::vector<std::uint32_t> f(freq, freq + n);
+    // On the stack: n is at most kLitSymbols (a frame's encoding makes no allocation here).
+    std::array<std::uint32_t, kLitSymbols> f{};
+    std::copy(freq, freq + n, f.begin());
+    std::array<std::pair<std::uint64_t, int>, kLitSymbols> heap_store;  // (weight, node)
+    std::array<int, 2 * kLitSymbols> parent;
     for (;;) {
       std::fill(len, len + n, std::uint8_t{0});
-      // Nodes: leaves 0..n-1, inner nodes after; parent links give the depths.
-      std::vector<std::pair<std::uint64_t, int>> heap;  // (weight, node), min-heap
-      std::vector<int> parent(static_cast<std::size_t>(2 * n), -1);
+      // Nodes: leaves 0..n-1, inner nodes after; parent links give the depths. A min-heap
+      // of (weight, node) in heap_store[0, size).
+      std::fill(parent.begin(), parent.begin() + 2 * n, -1);
+      const auto heap = heap_store.begin();
+      std::ptrdiff_t size = 0;
       for (int s = 0; s < n; ++s) {
-        if (f[static_cast<std::size_t>(s)] != 0)
-          heap.emplace_back(f[static_cast<std::size_t>(s)], s);
+        if (f[static_cast<std::size_t>(s)] != 0) heap[size++] = {f[static_cast<std::size_t>(s)], s};
       }
-      if (heap.empty()) return;
-      if (heap.size() == 1) {
+      if (size == 0) return;
+      if (size == 1) {
         len[heap[0].second] = 1;
         return;
       }
       auto greater = [](const auto& a, const auto& b) {
         return a.first != b.first ? a.first > b.first : a.second > b.second;
       };
-      std::make_heap(heap.begin(), heap.end(), greater);
+      std::make_heap(heap, heap + size, greater);
       int next = n;
-      while (heap.size() > 1) {
-        std::pop_heap(heap.begin(), heap.end(), greater);
-        const auto a = heap.back();
-        heap.pop_back();
-        std::pop_heap(heap.begin(), heap.end(), greater);
-        const auto b = heap.back();
-        heap.pop_back();
+      while (size > 1) {
+        std::pop_heap(heap, heap + size, greater);
+        const auto a = heap[--size];
+        std::pop_heap(heap, heap + size, greater);
+        const auto b = heap[--size];
         parent[static_cast<std::size_t>(a.second)] = next;
         parent[static_cast<std::size_t>(b.second)] = next;
-        heap.emplace_back(a.first + b.first, next);
-        std::push_heap(heap.begin(), heap.end(), greater);
+        heap[size++] = {a.first + b.first, next};
+        std::push_heap(heap, heap + size, greater);
         ++next;
       }
       int longest = 0;
@@ -444,34 +488,23 @@ PngScratch& png_scratch() {
 
 }  // namespace
 
-std::string encode_png(const RgbImage& image, const std::string& what) {
-  // Computed in size_t, where the product of two positive ints cannot overflow.
-  const auto expected = static_cast<std::size_t>(std::max(image.width, 0)) *
-                        static_cast<std::size_t>(std::max(image.height, 0)) * 3u;
-  if (image.width > 0 && image.height > 0 && image.rgb.size() != expected) {
-    fail("cannot write PNG", what,
-         fmt::format("pixel buffer holds {} bytes, a {}x{} RGB image needs {}", image.rgb.size(),
-                     image.width, image.height, expected));
+namespace {
+
+// Up-filtered bytes: each byte of `row` less the byte above it (`above` null: the first row,
+// whose bytes are its own).
+void png_up(const std::uint8_t* row, const std::uint8_t* above, std::size_t n, std::uint8_t* out) {
+  if (above == nullptr) {
+    std::memcpy(out, row, n);
+    return;
   }
-  const std::size_t stride = static_cast<std::size_t>(std::max(image.width, 0)) * 3u;
-  return encode_png(
-      image.width, image.height,
-      [&](int y, std::uint8_t* row) {
-        std::memcpy(row, image.rgb.data() + stride * static_cast<std::size_t>(y), stride);
-      },
-      what);
+  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<std::uint8_t>(row[i] - above[i]);
 }
 
-std::string encode_png(const FrameImage& frame, const std::string& what) {
-  if (!frame.has_pixels()) fail("cannot write PNG", what, "the frame holds no pixels");
-  return encode_png(
-      frame.width(), frame.height(), [&frame](int y, std::uint8_t* row) { frame.row(y, row); },
-      what);
-}
-
-std::string encode_png(int width, int height,
-                       const std::function<void(int y, std::uint8_t* row)>& rows,
-                       const std::string& what) {
+// The PNG of a width x height image whose rows filter(y, out) writes Up-filtered (width * 3
+// bytes, after the filter byte), for y = 0 .. height - 1 in order: the rows are filtered where
+// they lie, not copied first.
+template <class Filter>
+std::string encode_filtered_png(int width, int height, const std::string& what, Filter&& filter) {
   constexpr const char* kWhat = "cannot write PNG";
   if (width <= 0 || height <= 0) {
     fail(kWhat, what, fmt::format("invalid size {}x{}", width, height));
@@ -486,14 +519,10 @@ std::string encode_png(int width, int height,
   PngScratch& scratch = png_scratch();
   std::vector<std::uint8_t>& filtered = scratch.filtered;
   filtered.resize(line * static_cast<std::size_t>(height));
-  std::vector<std::uint8_t> row(stride), above(stride, 0);  // row 0's Up is its bytes
   for (int y = 0; y < height; ++y) {
-    rows(y, row.data());
     std::uint8_t* out = filtered.data() + line * static_cast<std::size_t>(y);
     out[0] = 2;  // the Up filter: each byte less the byte above it
-    for (std::size_t i = 0; i < stride; ++i)
-      out[1 + i] = static_cast<std::uint8_t>(row[i] - above[i]);
-    row.swap(above);
+    filter(y, out + 1);
   }
   std::string& stream = scratch.stream;
   stream.clear();
@@ -512,6 +541,63 @@ std::string encode_png(int width, int height,
   }
   put_chunk(png, "IEND", "", 0);
   return png;
+}
+
+}  // namespace
+
+std::string encode_png(const RgbImage& image, const std::string& what) {
+  // Computed in size_t, where the product of two positive ints cannot overflow.
+  const auto expected = static_cast<std::size_t>(std::max(image.width, 0)) *
+                        static_cast<std::size_t>(std::max(image.height, 0)) * 3u;
+  if (image.width > 0 && image.height > 0 && image.rgb.size() != expected) {
+    fail("cannot write PNG", what,
+         fmt::format("pixel buffer holds {} bytes, a {}x{} RGB image needs {}", image.rgb.size(),
+                     image.width, image.height, expected));
+  }
+  const std::size_t stride = static_cast<std::size_t>(std::max(image.width, 0)) * 3u;
+  return encode_filtered_png(image.width, image.height, what, [&](int y, std::uint8_t* out) {
+    const std::uint8_t* row = image.rgb.data() + stride * static_cast<std::size_t>(y);
+    png_up(row, y > 0 ? row - stride : nullptr, stride, out);
+  });
+}
+
+std::string encode_png(const FrameImage& frame, const std::string& what) {
+  if (!frame.has_pixels()) fail("cannot write PNG", what, "the frame holds no pixels");
+  // Region by region along the row: a black region's part of a row is 0s.
+  const int width = frame.width();
+  const int region_width = frame.region_width();
+  return encode_filtered_png(width, frame.height(), what, [&](int y, std::uint8_t* out) {
+    for (int c = 0; c < frame.columns(); ++c) {
+      const int x0 = c * region_width;
+      const std::size_t bytes = static_cast<std::size_t>(std::min(region_width, width - x0)) * 3;
+      std::uint8_t* to = out + static_cast<std::size_t>(x0) * 3;
+      const std::uint8_t* row = frame.region_row(c, y);
+      const std::uint8_t* above = y > 0 ? frame.region_row(c, y - 1) : nullptr;
+      if (row != nullptr) {
+        png_up(row, above, bytes, to);
+      } else if (above != nullptr) {
+        for (std::size_t i = 0; i < bytes; ++i) to[i] = static_cast<std::uint8_t>(0 - above[i]);
+      } else {
+        std::memset(to, 0, bytes);
+      }
+    }
+  });
+}
+
+std::string encode_png(int width, int height,
+                       const std::function<void(int y, std::uint8_t* row)>& rows,
+                       const std::string& what) {
+  const std::size_t stride = static_cast<std::size_t>(std::max(width, 0)) * 3u;
+  std::vector<std::uint8_t> row, above;
+  return encode_filtered_png(width, height, what, [&](int y, std::uint8_t* out) {
+    if (y == 0) {
+      row.resize(stride);
+      above.resize(stride);
+    }
+    rows(y, row.data());
+    png_up(row.data(), y > 0 ? above.data() : nullptr, stride, out);
+    row.swap(above);
+  });
 }
 
 void write_png(const std::string& path, const RgbImage& image) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstring>
 #include <stdexcept>
 
 namespace pp5 {
@@ -205,6 +206,15 @@ const GifLevelTables& gif_level_tables() {
   return tables;
 }
 
+// n pixels of RGB as palette indices.
+void gif_quantise(const std::uint8_t* rgb, int n, std::uint8_t* out) {
+  const GifLevelTables& t = gif_level_tables();
+  for (int x = 0; x < n; ++x) {
+    out[x] = static_cast<std::uint8_t>(t.red[rgb[3 * x]] + t.green[rgb[3 * x + 1]] +
+                                       t.blue[rgb[3 * x + 2]]);
+  }
+}
+
 }  // namespace
 
 std::uint8_t gif_palette_index(const std::uint8_t rgb[3]) {
@@ -232,18 +242,30 @@ void GifWriter::add(const RgbImage& f) {
                                             frames_, f.width, f.height, f.rgb.size()));
   }
   const std::size_t stride = static_cast<std::size_t>(std::max(f.width, 0)) * 3;
-  add_rows(f.width, f.height,
-           [&f, stride](int y) { return f.rgb.data() + stride * static_cast<std::size_t>(y); });
+  add_rows(f.width, f.height, [&f, stride](int y, std::uint8_t* out) {
+    gif_quantise(f.rgb.data() + stride * static_cast<std::size_t>(y), f.width, out);
+  });
 }
 
 void GifWriter::add(const FrameImage& f) {
   if (!f.has_pixels()) {
     throw std::invalid_argument(fmt::format("GIF frame {} holds no pixels", frames_));
   }
-  row_.resize(static_cast<std::size_t>(std::max(f.width(), 0)) * 3);
-  add_rows(f.width(), f.height(), [this, &f](int y) {
-    f.row(y, row_.data());
-    return row_.data();
+  // Region by region along the row, where the pixels lie (a black region's part is index 0's
+  // colour, black).
+  const int width = f.width();
+  const int region_width = f.region_width();
+  add_rows(width, f.height(), [&f, width, region_width](int y, std::uint8_t* out) {
+    for (int c = 0; c < f.columns(); ++c) {
+      const int x0 = c * region_width;
+      const int n = std::min(region_width, width - x0);
+      if (const std::uint8_t* rgb = f.region_row(c, y)) {
+        gif_quantise(rgb, n, out + x0);
+      } else {
+        const std::uint8_t black[3] = {0, 0, 0};
+        std::memset(out + x0, gif_palette_index(black), static_cast<std::size_t>(n));
+      }
+    }
   });
 }
 
@@ -276,15 +298,7 @@ void GifWriter::add_rows(int width, int height, Rows rows) {
   }
   // The frame's palette indices, a row at a time (kept from frame to frame).
   indices_.resize(static_cast<std::size_t>(width_) * height_);
-  const GifLevelTables& t = gif_level_tables();
-  for (int y = 0; y < height_; ++y) {
-    const std::uint8_t* rgb = rows(y);
-    std::uint8_t* out = indices_.data() + static_cast<std::size_t>(y) * width_;
-    for (int x = 0; x < width_; ++x) {
-      out[x] = static_cast<std::uint8_t>(t.red[rgb[3 * x]] + t.green[rgb[3 * x + 1]] +
-                                         t.blue[rgb[3 * x + 2]]);
-    }
-  }
+  for (int y = 0; y < height_; ++y) rows(y, indices_.data() + static_cast<std::size_t>(y) * width_);
   // Graphic control: no disposal, the delay, no transparent colour.
   out_ += std::string("\x21\xF9\x04\x04", 4);
   put16(out_, delay_);

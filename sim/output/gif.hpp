@@ -49,10 +49,10 @@ class GifWriter {
   int width_ = 0, height_ = 0;
   int frames_ = 0;
   template <class Rows>
-  void add_rows(int width, int height, Rows rows);  // rows(y): row y's RGB bytes
+  void add_rows(int width, int height, Rows rows);  // rows(y, out): row y's palette indices
   std::string out_;
-  std::unique_ptr<GifLzw> lzw_;              // its code table, kept from frame to frame
-  std::vector<std::uint8_t> indices_, row_;  // a frame's palette indices, a row's RGB
+  std::unique_ptr<GifLzw> lzw_;        // its code table, kept from frame to frame
+  std::vector<std::uint8_t> indices_;  // a frame's palette indices
 };
 
 // The fixed palette's colour nearest `rgb` (what encode_gif draws a pixel as).
