@@ -160,13 +160,15 @@ class WordBackend final : public PixelBackend {
   void alu(const Field& dst, const Source& src, Alu op);
   void alu_range(const Field& dst, const Source& src, Alu op, Range r);
   // alu_range's single pass for a destination (and a field source) within one lane each.
-  // Over every span: the operation chosen once per instruction, not once per span.
+  // Over every span, eight pixels at a time (for_chunks in word_backend.cpp; `limit` is the
+  // pixel count): the operation chosen once per instruction, not once per span.
   template <Alu kOp, class Read>
   static void alu_lane(std::uint64_t* dst_lane, int off, std::uint64_t mask, const std::uint8_t* e,
-                       const std::vector<Range>& spans, Read source);
+                       const std::vector<Range>& spans, int limit, Read source);
   template <class Read>
   static void alu_lane_op(Alu op, std::uint64_t* dst_lane, int off, std::uint64_t mask,
-                          const std::uint8_t* e, const std::vector<Range>& spans, Read source);
+                          const std::uint8_t* e, const std::vector<Range>& spans, int limit,
+                          Read source);
   // alu's path for a destination (and a field source) within one lane each; false when the
   // operands are not such.
   bool alu_in_lane(const Field& dst, const Source& src, Alu op);
