@@ -415,6 +415,13 @@ int WordBackend::count_enabled() const {
 
 namespace {
 
+// quo = floor(n / d), rem = n - d quo (0 <= rem < d), for d > 0.
+void floor_div_rem(std::int64_t n, std::int64_t d, std::int64_t& quo, std::int64_t& rem) {
+  quo = n / d;
+  rem = n % d;
+  if (rem < 0) rem += d, --quo;
+}
+
 // A linear test's columns row by row: row y's columns where the condition holds are up to
 // two intervals [a0, a1), [b0, b1). In an increasing coordinate u (u = x when D >= 0,
 // u = width - 1 - x otherwise) the value is g(u) = g0 + s u with s >= 0: "< 0" holds for
@@ -428,7 +435,7 @@ class LinearRows {
   LinearRows() = default;
   LinearRows(const QuadraticCoefficients& c, Compare cond, int x0, int y0, int width)
       : c_(c), cond_(cond), x0_(x0), y0_(y0), width_(width), sl_(c.D >= 0 ? T(c.D) : -T(c.D)) {
-    if (sl_ != 0) floor_div(T(c.E), sl_, qe_, me_);
+    if (sl_ != 0) floor_div_rem(T(c.E), sl_, qe_, me_);
   }
   int a0 = 0, a1 = 0, b0 = 0, b1 = 0;
   void at(int y) {
@@ -446,7 +453,7 @@ class LinearRows {
       } else {
         const T f0 = T(c_.E) * (y0_ + y) + T(c_.F) + T(c_.D) * x0_;  // column 0
         const T g0 = c_.D >= 0 ? f0 : f0 + T(c_.D) * (width_ - 1);
-        floor_div(-g0, sl_, q_, m_);
+        floor_div_rem(-g0, sl_, q_, m_);
       }
       lt = clamp_width(m_ != 0 ? q_ + 1 : q_);
       le = clamp_width(q_ + 1);
@@ -482,11 +489,6 @@ class LinearRows {
   }
 
  private:
-  static void floor_div(T n, T d, T& quo, T& rem) {
-    quo = n / d;
-    rem = n % d;
-    if (rem < 0) rem += d, --quo;
-  }
   int clamp_width(T v) const {
     return static_cast<int>(v < 0 ? T(0) : (v > T(width_) ? T(width_) : v));
   }
@@ -497,10 +499,6 @@ class LinearRows {
   T q_ = 0, m_ = 0, qe_ = 0, me_ = 0;
   int row_y_ = -1;
 };
-
-}  // namespace
-
-namespace {
 
 // A pending half-plane test (lt, le, gt, ge) with D != 0 as a bound on each row's columns:
 // on row y the test holds exactly for x >= L (a lower bound) or for x < U (an upper one),
@@ -529,7 +527,7 @@ class RowBound {
               : 0;
     e_ = T(c.E);
     f_ = T(c.F) + T(c.D) * x0;
-    floor_div(s_ * e_, d_, qe_, re_);
+    floor_div_rem(s_ * e_, d_, qe_, re_);
   }
   bool upper = false;
   int at(int y) {
@@ -540,7 +538,7 @@ class RowBound {
       r_ -= carry ? d_ : 0;
       q_ += carry;
     } else if (y != y_) {
-      floor_div(s_ * (e_ * (y0_ + y) + f_) + c0_, d_, q_, r_);
+      floor_div_rem(s_ * (e_ * (y0_ + y) + f_) + c0_, d_, q_, r_);
     }
     y_ = y;
     const T b = q_ + 1;
@@ -548,11 +546,6 @@ class RowBound {
   }
 
  private:
-  static void floor_div(T n, T d, T& quo, T& rem) {
-    quo = n / d;
-    rem = n % d;
-    if (rem < 0) rem += d, --quo;
-  }
   T d_ = 1, s_ = 1, c0_ = 0, e_ = 0, f_ = 0;
   T q_ = 0, r_ = 0, qe_ = 0, re_ = 0;
   int width_ = 0, y0_ = 0;
