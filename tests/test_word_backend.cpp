@@ -405,6 +405,16 @@ TEST_CASE("the word backend's state: empty-region reuse and a bad geometry", "[w
   CHECK_FALSE(a->same_state(*b));
   b->copy_state_from(*a);
   CHECK(a->same_state(*b));
+  // After eall, E's bytes are filled only when something reads E; a state taken from another
+  // in the meantime is that state's E, not all 1.
+  for (int px = 0; px < 128; ++px) b->write(px, Field{90, 1, false}, px % 2);
+  b->enable_all();
+  b->compare(Field{90, 1, false}, Source::of(1), Compare::eq);  // the odd pixels
+  CHECK(b->count_enabled() == 64);
+  a->enable_all();
+  a->copy_state_from(*b);
+  CHECK(a->count_enabled() == 64);
+  CHECK(a->same_state(*b));
   // Not the state of a bit backend, even an equal one.
   auto bit = make_pixel_backend("bit", p);
   CHECK_FALSE(a->same_state(*bit));

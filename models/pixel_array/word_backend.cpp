@@ -335,8 +335,8 @@ void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& 
 
 void WordBackend::enable_all() {
   pending_.clear();  // E becomes all 1: no earlier test matters
-  std::fill(enable_.begin(), enable_.end(), std::uint8_t{1});
-  spans_ = {Range{0, pixels_}};
+  ones_ = true;      // filled by materialize(), over the spans the next tests leave
+  spans_.assign(1, Range{0, pixels_});
 }
 
 void WordBackend::push_enable() {
@@ -555,7 +555,14 @@ class RowBound {
 }  // namespace
 
 void WordBackend::materialize() const {
-  if (pending_.empty()) return;
+  if (!pending_.empty()) apply_pending();
+  if (ones_) {  // after the tests: only the spans they left are filled
+    for (const Range& r : spans_) std::fill(enable_.begin() + r.begin, enable_.begin() + r.end, 1);
+    ones_ = false;
+  }
+}
+
+void WordBackend::apply_pending() const {
   const int width = geometry_.width;
   int lo = 0, hi = geometry_.height - 1;
   const std::size_t n = pending_.size();
@@ -1617,6 +1624,7 @@ void WordBackend::copy_state_from(const PixelBackend& other) {
   }
   o->materialize();
   pending_.clear();
+  ones_ = false;
   memory_ = o->memory_;
   enable_ = o->enable_;
   stack_ = o->stack_;

@@ -195,7 +195,8 @@ class WordBackend final : public PixelBackend {
   int x0_ = 0;
   int y0_ = 0;
   std::vector<std::uint64_t> memory_;  // lanes_ x pixels_
-  std::vector<std::uint8_t> enable_;   // pixels_, valid inside spans_
+  // pixels_, valid inside spans_ (mutable: materialize() fills it after eall)
+  mutable std::vector<std::uint8_t> enable_;
   // pixels_ bytes per level the stack has reached (empty above), E's at each push; a pop
   // swaps its level with E.
   std::vector<std::vector<std::uint8_t>> stack_;
@@ -217,7 +218,14 @@ class WordBackend final : public PixelBackend {
   // (models/evaluator/linear_band.hpp).
   static constexpr std::size_t kMaxPending = kMaxBandTests;
   mutable std::vector<LinearTest> pending_;
+  // Set by eall: E's bytes within the spans are 1, whatever they hold. eall is followed by a
+  // triangle's edge tests, so the bytes are filled (materialize()) only over what the tests
+  // leave, not the whole array.
+  mutable bool ones_ = false;
+  // Applies the pending tests, then fills E's bytes where ones_ says: every operation that
+  // reads or writes E calls it first.
   void materialize() const;
+  void apply_pending() const;
   // Scratch of pixels_ values each: operands, results, the evaluator's row tables (width
   // entries each). Not state: a new backend allocates it, on the thread that makes it (a
   // host thread's first allocations cost page faults in its own malloc arena); a copy
