@@ -171,51 +171,54 @@ void GeometryEngine::transform(int index, std::vector<ScreenTriangle>& out,
   const glm::dvec3 flat = light_vertex(centroid_base, face);
   for (int k = 0; k < 3; ++k) v[k].lit = back ? views[tri[k]].lit_back : views[tri[k]].lit_front;
 
-  // The polygon in two buffers on the stack: clipping a convex polygon against a plane adds
-  // at most one vertex, so 3 + 6 hold any result.
-  constexpr std::size_t kMaxClipped = 3 + 6;
-  std::array<ClipVertex, kMaxClipped> poly_a, poly_b;
-  ClipVertex* poly = poly_a.data();
-  std::size_t size = v.size();
-  std::copy(v.begin(), v.end(), poly_a.begin());
+  // The polygon in two buffers kept by the thread (no allocation per triangle once they have
+  // grown). Clipping a convex polygon against a plane adds at most one vertex in exact
+  // arithmetic, but vertices that rounding leaves on both sides of a plane they lie on can
+  // add more, so the buffers grow as needed rather than being bounded.
+  thread_local std::vector<ClipVertex> poly_a, poly_b;
+  std::vector<ClipVertex>* poly = &poly_a;
+  poly->assign(v.begin(), v.end());
   bool inside = true;
   for (const auto& x : v) {
     for (int k = 0; k < 6; ++k) inside = inside && plane_distance(x.clip, k) >= 0;
   }
   if (!inside) {
-    ClipVertex* next = poly_b.data();
-    for (int k = 0; k < 6 && size != 0; ++k) {
-      std::size_t kept = 0;
+    std::vector<ClipVertex>* next = &poly_b;
+    for (int k = 0; k < 6 && !poly->empty(); ++k) {
+      next->clear();
+      const std::size_t size = poly->size();
       for (std::size_t i = 0; i < size; ++i) {
-        const ClipVertex& a = poly[i];
-        const ClipVertex& b = poly[(i + 1) % size];
+        const ClipVertex& a = (*poly)[i];
+        const ClipVertex& b = (*poly)[(i + 1) % size];
         const double da = plane_distance(a.clip, k);
         const double db = plane_distance(b.clip, k);
-        if (da >= 0) next[kept++] = a;
-        if ((da >= 0) != (db >= 0)) next[kept++] = mix(a, b, da / (da - db));
+        if (da >= 0) next->push_back(a);
+        if ((da >= 0) != (db >= 0)) next->push_back(mix(a, b, da / (da - db)));
       }
       std::swap(poly, next);
-      size = kept;
     }
-    if (size < 3) {
+    if (poly->size() < 3) {
       ++counts.clipped_away;
       return;
     }
-    counts.clip_splits += size - 3;
+    counts.clip_splits += poly->size() - 3;
   }
-  std::array<ScreenVertex, kMaxClipped> screen;
+  const std::size_t size = poly->size();
+  thread_local std::vector<ScreenVertex> screen;
+  screen.resize(size);
   for (std::size_t i = 0; i < size; ++i) {
-    const glm::dvec3 ndc = glm::dvec3(poly[i].clip) / poly[i].clip.w;
+    const ClipVertex& p = (*poly)[i];
+    const glm::dvec3 ndc = glm::dvec3(p.clip) / p.clip.w;
     ScreenVertex& s = screen[i];
     s.position = {(ndc.x * 0.5 + 0.5) * params_.screen_width,
                   (0.5 - ndc.y * 0.5) * params_.screen_height};
     s.depth = std::clamp(ndc.z * 0.5 + 0.5, 0.0, 1.0);
-    s.eye_depth = poly[i].clip.w;
-    s.lit_color = poly[i].lit;
-    s.base_color = poly[i].base;
-    s.opacity = poly[i].opacity;
-    const double n = glm::length(poly[i].normal);
-    s.normal = n > 0 ? poly[i].normal / n : face;
+    s.eye_depth = p.clip.w;
+    s.lit_color = p.lit;
+    s.base_color = p.base;
+    s.opacity = p.opacity;
+    const double n = glm::length(p.normal);
+    s.normal = n > 0 ? p.normal / n : face;
   }
   for (std::size_t i = 1; i + 1 < size; ++i) {
     out.push_back({{screen[0], screen[i], screen[i + 1]}, flat, index, back});

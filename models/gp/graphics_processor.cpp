@@ -171,14 +171,7 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
         stats.packets += regions.size();
         tally.regions += static_cast<int>(regions.size());
         if (bins != nullptr) {
-          // The last region takes the set-up's reference when nothing else keeps the packet.
-          for (std::size_t r = 0; r < regions.size(); ++r) {
-            if (r + 1 == regions.size() && memo == nullptr) {
-              bins->add(regions[r], std::move(packet));
-            } else {
-              bins->add(regions[r], packet);
-            }
-          }
+          for (int r : regions) bins->add(r, packet);
         }
         if (memo != nullptr) memo->place(std::move(packet), regions);
       }
