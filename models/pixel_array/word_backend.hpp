@@ -21,7 +21,9 @@
 // to its first to last enabled pixel. Saving or restoring E copies only the spans. E's bytes
 // outside the spans are never read. A run of half-plane tests (a triangle's edges) is
 // applied together when the next operation needs E, over only the rows of the band where
-// all of them can hold (materialize()).
+// all of them can hold (materialize()); so are E's bytes after eall, set only over what those
+// tests leave. A field within one lane is read and written eight pixels at a time
+// (word_backend.cpp: for_chunks), since a triangle's rows are a few pixels long.
 //
 // Contract: implements PixelBackend (firmware/isa/backend.hpp), including its one bit-serial
 // corner: an ALU source field that overlaps its destination from below (src.lo < dst.lo)

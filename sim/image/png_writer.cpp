@@ -90,7 +90,7 @@ class PngDeflate {
     tokenize(in, n);
     build_codes();
     // At most 15 bits a literal, 5 + 5 + 1 + 15 a run of at least 3 bytes, the header's 300
-    // symbols of at most 7 + 7 bits, and 4 bytes of slack for the last 32-bit store.
+    // symbols of at most 7 + 7 bits, and slack for the bit writer's 8-byte stores.
     bits_.resize(n * 2 + 1024);
     dst_ = bits_.data();
     acc_ = 0;
