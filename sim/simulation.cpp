@@ -22,6 +22,7 @@
 #include <systemc>
 #include <thread>
 
+#include "common/serial_worker.hpp"
 #include "firmware/assembler/program_statistics.hpp"
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/gp/graphics_processor.hpp"
@@ -143,63 +144,9 @@ struct FramePixels {
 // The pixels of a run's frames, executed on one helper thread, job after job in the order
 // submitted, while the caller goes on (the kernel simulating later frames): each job's result
 // (or exception) through its future. Jobs run one at a time (they share one frame buffer).
-// The destructor lets the job running finish and drops those not started (the caller has
-// stopped waiting for them: on_frame threw, or the run was cancelled), so nothing a job uses
-// goes before it. Without a helper thread (none could be made), submit runs the job itself.
-class FramePixelsWorker {
- public:
-  FramePixelsWorker() {
-    try {
-      thread_ = std::thread([this] { loop(); });
-    } catch (const std::system_error&) {
-      // No helper thread: submit executes each frame itself.
-    }
-  }
-  FramePixelsWorker(const FramePixelsWorker&) = delete;
-  FramePixelsWorker& operator=(const FramePixelsWorker&) = delete;
-  ~FramePixelsWorker() {
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      stop_ = true;
-    }
-    wake_.notify_all();
-    if (thread_.joinable()) thread_.join();
-  }
-  std::future<FramePixels> submit(std::function<FramePixels()> job) {
-    std::packaged_task<FramePixels()> task(std::move(job));
-    std::future<FramePixels> out = task.get_future();
-    if (!thread_.joinable()) {
-      task();
-      return out;
-    }
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      jobs_.push_back(std::move(task));
-    }
-    wake_.notify_one();
-    return out;
-  }
-
- private:
-  void loop() {
-    for (;;) {
-      std::packaged_task<FramePixels()> task;
-      {
-        std::unique_lock<std::mutex> lock(mutex_);
-        wake_.wait(lock, [this] { return stop_ || !jobs_.empty(); });
-        if (stop_) return;
-        task = std::move(jobs_.front());
-        jobs_.pop_front();
-      }
-      task();
-    }
-  }
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::deque<std::packaged_task<FramePixels()>> jobs_;
-  bool stop_ = false;
-  std::thread thread_;  // last: it starts once the rest exists
-};
+// Dropping the worker drops the jobs not started (the caller has stopped waiting for them:
+// on_frame threw, or the run was cancelled), so nothing a job uses goes before it.
+using FramePixelsWorker = SerialWorker<FramePixels>;
 
 }  // namespace
 

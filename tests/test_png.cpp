@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "sim/frame_encoder.hpp"
 #include "sim/image/png_writer.hpp"
+#include "sim/output/gif.hpp"
 
 namespace fs = std::filesystem;
 using pp5::read_png;
@@ -183,4 +185,70 @@ TEST_CASE("read_png names the path when the file is missing or not a PNG", "[png
   std::ofstream(text) << "this is not a PNG file\n";
   CHECK_THROWS_AS(read_png(text), std::runtime_error);
   CHECK_THROWS_WITH(read_png(text), Catch::Contains(text));
+}
+
+namespace {
+// A frame of 2 x 2 regions of 4 x 3 pixels, its bytes a pattern that `seed` changes.
+FrameImage encoder_frame(int seed) {
+  FrameImage frame(8, 6, 4, 3);
+  for (int y0 = 0; y0 < 6; y0 += 3) {
+    for (int x0 = 0; x0 < 8; x0 += 4) {
+      std::uint8_t* b = frame.own_bytes(x0, y0);
+      for (int i = 0; i < 4 * 3 * 3; ++i)
+        b[i] = static_cast<std::uint8_t>(seed * 37 + x0 + y0 * 5 + i * 11);
+      frame.set_region(x0, y0, frame.own(x0, y0));
+    }
+  }
+  return frame;
+}
+}  // namespace
+
+TEST_CASE("FrameEncoder gives, in frame order, the bytes the encoders give on the calling thread",
+          "[png]") {
+  GifWriter gif(5);
+  std::vector<std::string> pngs;
+  std::string gif_bytes;
+  for (int k = 0; k < 7; ++k) {
+    const FrameImage frame = encoder_frame(k);
+    pngs.push_back(encode_png(frame));
+    gif.add(frame);
+  }
+  gif_bytes = gif.finish();
+  for (int waiting : {0, 2, 10}) {
+    std::vector<int> order;
+    std::string got_gif;
+    int added = 0;
+    bool finishing = false;
+    FrameEncoder encoder(
+        5,
+        [&](EncodedFrame& e) {
+          order.push_back(e.frame);
+          REQUIRE(e.frame < static_cast<int>(pngs.size()));
+          CHECK(e.png == pngs[static_cast<std::size_t>(e.frame)]);
+          got_gif += e.gif;
+          // Sunk from add() only once more than `waiting` frames are queued behind it.
+          if (!finishing) CHECK(added - e.frame > waiting);
+        },
+        static_cast<std::size_t>(waiting));
+    for (int k = 0; k < 7; ++k) {
+      ++added;
+      encoder.add(k, encoder_frame(k));
+    }
+    CHECK(static_cast<int>(order.size()) == std::max(0, 7 - waiting));
+    finishing = true;
+    got_gif += encoder.finish();
+    CHECK(order == std::vector<int>{0, 1, 2, 3, 4, 5, 6});
+    CHECK(got_gif == gif_bytes);
+  }
+}
+
+TEST_CASE("FrameEncoder: an encoding error reaches the caller, and no frame after it is sunk",
+          "[png]") {
+  std::vector<int> order;
+  FrameEncoder encoder(
+      5, [&](EncodedFrame& e) { order.push_back(e.frame); }, 1);
+  encoder.add(0, encoder_frame(0));
+  encoder.add(1, FrameImage(8, 6, 4, 3, false));  // a timing-only frame: no pixels to encode
+  CHECK_THROWS_WITH(encoder.add(2, encoder_frame(2)), Catch::Contains("holds no pixels"));
+  CHECK(order == std::vector<int>{0});
 }

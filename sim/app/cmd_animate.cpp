@@ -19,7 +19,7 @@
 #include "sim/app/commands.hpp"
 #include "sim/image/png_writer.hpp"
 #include "sim/image/region_map.hpp"
-#include "sim/output/gif.hpp"
+#include "sim/frame_encoder.hpp"
 #include "sim/output/output_set.hpp"
 #include "sim/output/report_html.hpp"
 #include "sim/simulation.hpp"
@@ -138,12 +138,20 @@ int run_animate(AnimateOptions o) {
   // a frame at a time.
   StagedFile stats(outputs, (dir / "stats.json").string());
   stats.write("{\n \"frames\": [");
-  // The GIF is encoded a frame at a time and written out as it goes: no frame's image is kept.
-  GifWriter gif(std::max(2, static_cast<int>(std::lround(100.0 / animation.fps()))));
   std::optional<StagedFile> gif_file;
   if (pixels) gif_file.emplace(outputs, (dir / "animation.gif").string());
   std::vector<std::string> staged_pngs;  // for the report, read back at the end
-  std::map<int, RegionLoad> summed;      // by region
+  // Each frame's PNG and its part of the GIF are encoded on a helper thread while the
+  // simulation goes on (FrameEncoder), and staged here, in frame order, as they come back:
+  // the GIF is written out as it goes, and at most a few frames' images are held.
+  FrameEncoder encoder(
+      std::max(2, static_cast<int>(std::lround(100.0 / animation.fps()))), [&](EncodedFrame& e) {
+        const std::string staged =
+            outputs.add((dir / fmt::format("frame-{:04d}.png", e.frame)).string(), e.png);
+        if (o.report) staged_pngs.push_back(staged);
+        gif_file->write(e.gif);
+      });
+  std::map<int, RegionLoad> summed;  // by region
   FrameResult last;
   AnimationReportInput report_in;
   std::vector<std::pair<double, double>> frame_spans;  // per frame: start and end, seconds
@@ -155,13 +163,7 @@ int run_animate(AnimateOptions o) {
     const double end = r.stats.real("frame.end_seconds");
     if (record_timeline) frame_spans.emplace_back(start, end);  // 16 bytes a frame
     stats.write((k == 0 ? "\n  " : ",\n  ") + indented_json(r.stats_json, 2));
-    if (pixels) {
-      const std::string staged =
-          outputs.add((dir / fmt::format("frame-{:04d}.png", k)).string(), encode_png(r.image));
-      if (o.report) staged_pngs.push_back(staged);
-      gif.add(r.image);  // by rows: no flat copy of the frame
-      gif_file->write(gif.take());
-    }
+    if (pixels) encoder.add(k, r.image);  // the last frame's image is kept below (last)
     // The report's row (about 100 bytes a frame, kept for its table).
     AnimationFrameRow row;
     row.start_seconds = start;
@@ -200,7 +202,7 @@ int run_animate(AnimateOptions o) {
   stats.write("\n ],\n \"summary\": " + indented_json(summary_json, 1) + "\n}\n");
   stats.close();
   if (pixels) {
-    gif_file->write(gif.finish());
+    gif_file->write(encoder.finish());
     gif_file->close();
     if (o.report)
       report_in.gif = read_staged(gif_file->staged_path(), (dir / "animation.gif").string());
