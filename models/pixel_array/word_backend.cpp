@@ -81,6 +81,42 @@ inline void store_enable8(std::uint8_t* p, const V8& v) {
 #endif
 }
 
+// The first and last pixels of a row's part that a compare left enabled, gathered chunk by
+// chunk as it compares (its chunks come in increasing order, and a chunk's lanes that are not
+// live are 0 in `left`): the span keep_enabled would find by reading E back, without the read.
+struct RowEnabled {
+  int first = -1, last = -1;  // -1: none yet
+  // left: 1 or 0 per lane, the chunk's new E bytes where live, else 0.
+  void add(int base, const V8& left) {
+#ifdef __AVX512F__
+    const unsigned m =
+        _mm512_test_epi64_mask(reinterpret_cast<__m512i>(left), reinterpret_cast<__m512i>(left));
+    if (m == 0) return;
+    if (first < 0) first = base + __builtin_ctz(m);
+    last = base + 31 - __builtin_clz(m);
+#else
+    const B8 b = __builtin_convertvector(left, B8);
+    std::uint64_t w;
+    std::memcpy(&w, &b, sizeof w);
+    if (w == 0) return;
+    if (first < 0) first = base + __builtin_ctzll(w) / 8;  // little-endian: lane 0 lowest
+    last = base + 7 - __builtin_clzll(w) / 8;
+#endif
+  }
+  // Its span joined to the spans kept, as keep_enabled does: a row enabled to its end and
+  // the next from its start stay one span. `start`: the row's first pixel.
+  template <class Spans>
+  void keep(Spans& kept, int start) const {
+    if (first < 0) return;
+    const int a = start + first, b = start + last + 1;
+    if (!kept.empty() && kept.back().end == a) {
+      kept.back().end = b;
+    } else {
+      kept.push_back({a, b});
+    }
+  }
+};
+
 // v's low `width` bits read as two's complement, extended to 64 bits.
 inline u64 sign_extend(u64 v, int width) {
   if (width >= 64) return v;
@@ -1059,7 +1095,7 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
     const PixelValues::Row r = values.row(y);
     const u64* m = lane + row_start;
     std::uint8_t* en = e + row_start;
-    V8 any{};
+    RowEnabled row;
     for_chunks(from, to, width, [&](int base, const V8& live) {
       V8 v = values.at8<kSquare>(r, base);
       V8 f = (load8(m + base) >> off) & mask;
@@ -1074,13 +1110,10 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
       const V8 holds = reinterpret_cast<V8>(((a < b) & lt_mask) | ((a == b) & eq_mask)) ^ inv_mask;
       const V8 old = load_enable8(en + base);
       const V8 left = old & holds & live;
-      any |= left;
+      row.add(base, left);
       store_enable8(en + base, left | (old & ~live));
     });
-    const int start = static_cast<int>(row_start);
-    bool some = false;
-    for (int i = 0; i < 8; ++i) some = some || any[i] != 0;
-    if (some) keep_enabled(kept, start + from, start + to);
+    row.keep(kept, static_cast<int>(row_start));
   });
   spans_.swap(kept);
 }
@@ -1126,10 +1159,76 @@ void WordBackend::compare_values(const u64* a, bool a_unsigned64, const u64* b, 
   enable_changed();
 }
 
+// E &= (a cond b) for a field a within one lane and b a constant or a field within one lane,
+// each read as load gives it (sign-extended when signed; neither is a 64-bit unsigned field,
+// so a signed 64-bit comparison is exact), eight pixels at a time; each row's part narrowed
+// as soon as it is compared (RowEnabled). read_b(base) gives b at the eight pixels.
+template <class ReadB>
+void WordBackend::compare_lane(const Field& a, Compare cond, ReadB read_b) {
+  const int off = a.lo % 64;
+  const int sw = 64 - a.width;
+  const u64 mask = low_mask(a.width);
+  const bool is_signed = a.is_signed;
+  const u64* lane = memory_.data() + static_cast<std::size_t>(a.lo / 64) * pixels_;
+  std::uint8_t* e = enable_.data();
+  const bool lt =
+      cond == Compare::lt || cond == Compare::le || cond == Compare::ge || cond == Compare::gt;
+  const bool eq =
+      cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
+  const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
+  const V8s lt_mask = V8s{} - static_cast<i64>(lt), eq_mask = V8s{} - static_cast<i64>(eq);
+  const V8 inv_mask = V8{} - static_cast<u64>(inv);
+  const int width = geometry_.width;
+  std::vector<Range>& kept = spare_spans_;
+  kept.clear();
+  for_each_span_row([&](int, std::size_t row_start, int from, int to) {
+    std::uint8_t* en = e + row_start;
+    const int start = static_cast<int>(row_start);
+    RowEnabled row;
+    for_chunks(from, to, width, [&](int base, const V8& live) {
+      const int p = start + base;
+      V8 f = (load8(lane + p) >> off) & mask;
+      if (is_signed) f = reinterpret_cast<V8>(reinterpret_cast<V8s>(f << sw) >> sw);
+      const V8s x = reinterpret_cast<V8s>(f), y = reinterpret_cast<V8s>(read_b(p));
+      const V8 holds = reinterpret_cast<V8>(((x < y) & lt_mask) | ((x == y) & eq_mask)) ^ inv_mask;
+      const V8 old = load_enable8(en + base);
+      const V8 left = old & holds & live;
+      row.add(base, left);
+      store_enable8(en + base, left | (old & ~live));
+    });
+    row.keep(kept, start);
+  });
+  spans_.swap(kept);
+}
+
 void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
   materialize();
   check_field(a, "operand");
   if (b.is_field) check_field(b.field, "operand");
+  auto in_lane = [](const Field& f) {
+    return f.lo % 64 + f.width <= 64 && (f.is_signed || f.width < 64);
+  };
+  if (in_lane(a) && (!b.is_field || in_lane(b.field))) {
+    if (!b.is_field) {
+      const V8 k = V8{} + static_cast<u64>(b.constant);
+      compare_lane(a, cond, [k](int) { return k; });
+      return;
+    }
+    const Field& f = b.field;
+    const u64* s = memory_.data() + static_cast<std::size_t>(f.lo / 64) * pixels_;
+    const int soff = f.lo % 64;
+    const u64 smask = low_mask(f.width);
+    const int ssw = 64 - f.width;
+    if (f.is_signed) {
+      compare_lane(a, cond, [s, soff, smask, ssw](int p) {
+        return reinterpret_cast<V8>(
+            reinterpret_cast<V8s>(((load8(s + p) >> soff) & smask) << ssw) >> ssw);
+      });
+    } else {
+      compare_lane(a, cond, [s, soff, smask](int p) { return (load8(s + p) >> soff) & smask; });
+    }
+    return;
+  }
   // Row by row, each row's part narrowed (as narrow_spans does) as soon as it is compared,
   // and skipped when the comparison's own pass found no pixel left.
   std::vector<Range>& kept = spare_spans_;

@@ -156,6 +156,8 @@ class WordBackend final : public PixelBackend {
   void qload_lane(const Field& dst, const QuadraticCoefficients& c);
   template <bool kSquare, bool kSigned>
   void qcmp_lane(const Field& field, const QuadraticCoefficients& c, Compare cond);
+  template <class ReadB>
+  void compare_lane(const Field& a, Compare cond, ReadB read_b);
   // qload and qcmp's operand: bits [fraction_bits, fraction_bits + width) of the value.
   void expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
                         std::uint64_t* out) const;
