@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "common/parallel_for.hpp"
 #include "models/frame_buffer/frame_buffer.hpp"
@@ -72,7 +73,21 @@ void execute_pixels(const MachinePlan& plan, const FrameValues& frame_values,
   std::vector<std::unique_ptr<RendererBoard>>& boards = kept.kept_->boards;
   while (static_cast<int>(boards.size()) < workers)
     boards.push_back(std::make_unique<RendererBoard>(params));
-  parallel_for(count, threads, [&](int k, int worker) {
+  // The Renderers with the most packets first, so that the last one a host thread takes is a
+  // short one and the threads finish together (host speed only: each Renderer's board
+  // restarts as a new one, whichever thread runs it and whenever).
+  std::vector<int> order(static_cast<std::size_t>(count));
+  std::vector<std::size_t> packets(static_cast<std::size_t>(count), 0);
+  for (int k = 0; k < count; ++k) {
+    order[static_cast<std::size_t>(k)] = k;
+    for (const RegionWork& w : *work[static_cast<std::size_t>(k)])
+      packets[static_cast<std::size_t>(k)] += w.triangles.size() + 1;
+  }
+  std::stable_sort(order.begin(), order.end(), [&packets](int a, int b) {
+    return packets[static_cast<std::size_t>(a)] > packets[static_cast<std::size_t>(b)];
+  });
+  parallel_for(count, threads, [&](int i, int worker) {
+    const int k = order[static_cast<std::size_t>(i)];
     const std::vector<RegionWork>& regions = *work[static_cast<std::size_t>(k)];
     if (regions.empty()) return;  // a Renderer the frame did not use
     RendererBoard& board = *boards[static_cast<std::size_t>(worker)];
