@@ -796,6 +796,49 @@ void WordBackend::narrow_spans() {
 
 namespace {
 
+// Where a condition that holds as at `same` and not at `other` switches between them, the
+// condition switching once on the way (monotone): the point nearest `same` where it no longer
+// holds as there. is_same(x) tells whether it holds at x as at `same`. With a hint strictly
+// between the two (the switch point of the row before, which a disc's edge leaves near),
+// the search starts there and steps away from it by 1, 2, 4, ... until the switch is
+// bracketed, then halves the bracket: a point that moves by a few columns from row to row
+// is found in a few evaluations instead of log2 of the row's length. The point found is the
+// same with or without the hint (there is one switch).
+template <class IsSame>
+int switch_point(int same, int other, int hint, IsSame is_same) {
+  const int dir = other > same ? 1 : -1;
+  if ((hint - same) * dir > 0 && (other - hint) * dir > 0) {
+    if (is_same(hint)) {
+      same = hint;
+      for (int step = 1;; step *= 2) {
+        const int probe = same + dir * step;
+        if ((other - probe) * dir <= 0) break;
+        if (!is_same(probe)) {
+          other = probe;
+          break;
+        }
+        same = probe;
+      }
+    } else {
+      other = hint;
+      for (int step = 1;; step *= 2) {
+        const int probe = other - dir * step;
+        if ((probe - same) * dir <= 0) break;
+        if (is_same(probe)) {
+          same = probe;
+          break;
+        }
+        other = probe;
+      }
+    }
+  }
+  while ((other - same) * dir > 1) {
+    const int mid = same + (other - same) / 2;
+    (is_same(mid) ? same : other) = mid;
+  }
+  return other;
+}
+
 // One row part [first, last] of a quadratic qtest (qtest_quadratic): g(x) = (a x + b) x + k
 // in integers of type T (wide enough for every value formed), the condition `below` (g < 0,
 // or g <= 0 when not strict) or above (g > 0, g >= 0). The integer arg-extremum m (the
@@ -804,11 +847,12 @@ namespace {
 // a = 0: monotone throughout, m = first), and so is the condition on each side. Sets
 // `at_m`, whether it holds at m, `left`, the last column left of m where it does not hold as
 // at m (first - 1 if none), and `right`, the first right of m (last + 1 if none), each found
-// by binary search. False when g leaves [lo, hi] (the value wraps): g's extremes over the
-// integers of the part are at its ends and at m.
+// by switch_point from the hints (the row before's left and right; any value without one).
+// False when g leaves [lo, hi] (the value wraps): g's extremes over the integers of the part
+// are at its ends and at m.
 template <class T>
 bool quadratic_row(T a, T b, T k, int first, int last, T lo, T hi, bool below, bool strict,
-                   bool& at_m, int& left, int& right) {
+                   bool& at_m, int& left, int& right, int hint_left = -1, int hint_right = -1) {
   auto g = [a, b, k](int x) { return (a * x + b) * x + k; };
   auto holds_at = [below, strict](T v) {
     return below ? (strict ? v < 0 : v <= 0) : (strict ? v > 0 : v >= 0);
@@ -835,25 +879,12 @@ bool quadratic_row(T a, T b, T k, int first, int last, T lo, T hi, bool below, b
   if (gl < lo || gl > hi || gr < lo || gr > hi || gm < lo || gm > hi) return false;
   at_m = holds_at(gm);
   // Right of m: [m, right) where the condition is as at m, [right, last] where it is not.
+  auto as_at_m = [&](int x) { return holds_at(g(x)) == at_m; };
   right = last + 1;
-  if (holds_at(gr) != at_m) {
-    int same = m, other = last;
-    while (other - same > 1) {
-      const int mid = same + (other - same) / 2;
-      (holds_at(g(mid)) == at_m ? same : other) = mid;
-    }
-    right = other;
-  }
+  if (holds_at(gr) != at_m) right = switch_point(m, last, hint_right, as_at_m);
   // Left of m: [first, left] where it is not as at m, (left, m] where it is.
   left = first - 1;
-  if (holds_at(gl) != at_m) {
-    int other = first, same = m;
-    while (same - other > 1) {
-      const int mid = other + (same - other) / 2;
-      (holds_at(g(mid)) == at_m ? same : other) = mid;
-    }
-    left = other;
-  }
+  if (holds_at(gl) != at_m) left = switch_point(m, first, hint_left, as_at_m);
   return true;
 }
 
@@ -934,6 +965,7 @@ bool WordBackend::qtest_quadratic(const QuadraticCoefficients& c, Compare cond) 
   bool exact = true;
   int row_y = -1;
   i64 b = 0, k = 0;
+  int left_before = -1, right_before = -1;
   for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
     if (!exact || y < band_lo || y > band_hi) return;
     if (y != row_y) {
@@ -946,11 +978,15 @@ bool WordBackend::qtest_quadratic(const QuadraticCoefficients& c, Compare cond) 
     bool at_m = false;
     int left = 0, right = 0;
     const int first = from, last = to - 1;
-    exact =
-        narrow
-            ? quadratic_row<i64>(a, b, k, first, last, lo, hi, below, strict, at_m, left, right)
-            : quadratic_row<i128>(a, b, k, first, last, lo, hi, below, strict, at_m, left, right);
+    // The row before's switch points as hints (same results, found sooner).
+    const int hint_left = left_before, hint_right = right_before;
+    exact = narrow ? quadratic_row<i64>(a, b, k, first, last, lo, hi, below, strict, at_m, left,
+                                        right, hint_left, hint_right)
+                   : quadratic_row<i128>(a, b, k, first, last, lo, hi, below, strict, at_m, left,
+                                         right, hint_left, hint_right);
     if (!exact) return;
+    left_before = left;
+    right_before = right;
     const int start = static_cast<int>(row_start);
     if (at_m) {
       keep_enabled(kept, start + left + 1, start + right);
