@@ -81,42 +81,6 @@ inline void store_enable8(std::uint8_t* p, const V8& v) {
 #endif
 }
 
-// The first and last pixels of a row's part that a compare left enabled, gathered chunk by
-// chunk as it compares (its chunks come in increasing order, and a chunk's lanes that are not
-// live are 0 in `left`): the span keep_enabled would find by reading E back, without the read.
-struct RowEnabled {
-  int first = -1, last = -1;  // -1: none yet
-  // left: 1 or 0 per lane, the chunk's new E bytes where live, else 0.
-  void add(int base, const V8& left) {
-#ifdef __AVX512F__
-    const unsigned m =
-        _mm512_test_epi64_mask(reinterpret_cast<__m512i>(left), reinterpret_cast<__m512i>(left));
-    if (m == 0) return;
-    if (first < 0) first = base + __builtin_ctz(m);
-    last = base + 31 - __builtin_clz(m);
-#else
-    const B8 b = __builtin_convertvector(left, B8);
-    std::uint64_t w;
-    std::memcpy(&w, &b, sizeof w);
-    if (w == 0) return;
-    if (first < 0) first = base + __builtin_ctzll(w) / 8;  // little-endian: lane 0 lowest
-    last = base + 7 - __builtin_clzll(w) / 8;
-#endif
-  }
-  // Its span joined to the spans kept, as keep_enabled does: a row enabled to its end and
-  // the next from its start stay one span. `start`: the row's first pixel.
-  template <class Spans>
-  void keep(Spans& kept, int start) const {
-    if (first < 0) return;
-    const int a = start + first, b = start + last + 1;
-    if (!kept.empty() && kept.back().end == a) {
-      kept.back().end = b;
-    } else {
-      kept.push_back({a, b});
-    }
-  }
-};
-
 // v's low `width` bits read as two's complement, extended to 64 bits.
 inline u64 sign_extend(u64 v, int width) {
   if (width >= 64) return v;
@@ -183,6 +147,49 @@ void and_compare(std::uint8_t* e, const u64* a, GetB b, Compare cond, int begin,
       e, [a](int p) { return static_cast<i64>(a[p]); }, b, cond, begin, end);
 }
 }  // namespace
+
+// Named (not anonymous): the compare passes' lambdas, members of WordBackend's functions,
+// capture it.
+namespace word_rows {
+
+// The first and last pixels of a row's part that a compare left enabled, gathered chunk by
+// chunk as it compares (its chunks come in increasing order, and a chunk's lanes that are not
+// live are 0 in `left`): the span keep_enabled would find by reading E back, without the read.
+struct RowEnabled {
+  int first = -1, last = -1;  // -1: none yet
+  // left: 1 or 0 per lane, the chunk's new E bytes where live, else 0.
+  void add(int base, const V8& left) {
+#ifdef __AVX512F__
+    const unsigned m =
+        _mm512_test_epi64_mask(reinterpret_cast<__m512i>(left), reinterpret_cast<__m512i>(left));
+    if (m == 0) return;
+    if (first < 0) first = base + __builtin_ctz(m);
+    last = base + 31 - __builtin_clz(m);
+#else
+    const B8 b = __builtin_convertvector(left, B8);
+    std::uint64_t w;
+    std::memcpy(&w, &b, sizeof w);
+    if (w == 0) return;
+    if (first < 0) first = base + __builtin_ctzll(w) / 8;  // little-endian: lane 0 lowest
+    last = base + 7 - __builtin_clzll(w) / 8;
+#endif
+  }
+  // Its span joined to the spans kept, as keep_enabled does: a row enabled to its end and
+  // the next from its start stay one span. `start`: the row's first pixel.
+  template <class Spans>
+  void keep(Spans& kept, int start) const {
+    if (first < 0) return;
+    const int a = start + first, b = start + last + 1;
+    if (!kept.empty() && kept.back().end == a) {
+      kept.back().end = b;
+    } else {
+      kept.push_back({a, b});
+    }
+  }
+};
+
+}  // namespace word_rows
+using word_rows::RowEnabled;
 
 WordBackend::WordBackend(const PixelBackendParams& params)
     : geometry_(params.array),
@@ -1546,11 +1553,13 @@ struct WordFieldReader {
   int off, up, sign_shift;
   u64 mask;
   bool is_signed;
-  u64 operator()(int p) const {
-    u64 v = lo[p] >> off;
-    if (up != 0) v |= hi[p] << up;
+  // The field at the eight pixels p .. p + 7, sign-extended when signed.
+  V8 at8(int p) const {
+    V8 v = load8(lo + p) >> off;
+    if (up != 0) v |= load8(hi + p) << up;
     v &= mask;
-    return is_signed ? static_cast<u64>(static_cast<i64>(v << sign_shift) >> sign_shift) : v;
+    if (is_signed) v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << sign_shift) >> sign_shift);
+    return v;
   }
 };
 
@@ -1570,20 +1579,38 @@ WordFieldReader word_field_reader(const u64* memory, int pixels, const Field& f)
 
 }  // namespace
 
-// value(old, p) merged into dst, a field within one lane, under E, modulo 2^width, over every
-// span, in one pass: `old` is dst's value at p (its bits above the width are whatever lies
-// there; the merge cuts the result to the width).
+// value(old, base) merged into dst under E, modulo 2^width, over every span, in one pass,
+// eight pixels at a time: `old` is dst's value at pixels base .. base + 7, and value gives the
+// eight new ones (only their low width bits are kept). A destination across two lanes is
+// read from and written to both.
 template <class Value>
 void WordBackend::merge_lane(const Field& dst, Value value) {
-  u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
+  u64* lo = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
   const int off = dst.lo % 64;
-  const u64 bits = low_mask(dst.width) << off;
+  const bool split = off + dst.width > 64;
+  u64* hi = split ? lo + pixels_ : lo;
+  const int up = split ? 64 - off : 0;  // dst's bits in the low lane
+  const u64 mask = low_mask(dst.width);
+  const u64 bits_lo = mask << off, bits_hi = split ? mask >> up : 0;
   const std::uint8_t* e = enable_.data();
   for (const Range& r : spans_) {
-    for (int p = r.begin; p < r.end; ++p) {
-      const u64 m = bits & (u64{0} - e[p]);
-      lane[p] = (lane[p] & ~m) | ((value(lane[p] >> off, p) << off) & m);
-    }
+    for_chunks(r.begin, r.end, pixels_, [&](int base, const V8& live) {
+      const V8 en = (V8{} - load_enable8(e + base)) & live;
+      const V8 old_lo = load8(lo + base);
+      V8 old = old_lo >> off;
+      V8 old_hi{};
+      if (split) {
+        old_hi = load8(hi + base);
+        old |= old_hi << up;
+      }
+      const V8 v = value(old & mask, base);
+      const V8 m_lo = bits_lo & en;
+      store8(lo + base, (old_lo & ~m_lo) | ((v << off) & m_lo));
+      if (split) {
+        const V8 m_hi = bits_hi & en;
+        store8(hi + base, (old_hi & ~m_hi) | ((v >> up) & m_hi));
+      }
+    });
   }
 }
 
@@ -1601,22 +1628,9 @@ void WordBackend::multiply(const Field& dst, const Field& a, const Field& b, boo
   // is below 2^(j + w + 1), inside the window, and no carry is ever dropped. The result is
   // the plain product modulo 2^width either way.
   (void)window;
-  if (dst.lo % 64 + dst.width <= 64) {
-    const WordFieldReader x = word_field_reader(memory_.data(), pixels_, a),
-                          y = word_field_reader(memory_.data(), pixels_, b);
-    merge_lane(dst, [x, y](u64, int p) { return x(p) * y(p); });
-    return;
-  }
-  // A destination across two lanes: the operands loaded, multiplied and stored in three
-  // passes, each of which vectorises (quicker than one scalar pass merging two lanes).
-  u64* x = scratch().s0.data();
-  u64* y = scratch().s1.data();
-  for (const Range& r : spans_) {
-    load(memory_.data(), a, r, x, true);
-    load(memory_.data(), b, r, y, true);
-    for (int p = r.begin; p < r.end; ++p) x[p] *= y[p];
-    store(memory_.data(), dst, r, x, true);
-  }
+  const WordFieldReader x = word_field_reader(memory_.data(), pixels_, a),
+                        y = word_field_reader(memory_.data(), pixels_, b);
+  merge_lane(dst, [x, y](const V8&, int base) { return x.at8(base) * y.at8(base); });
 }
 
 void WordBackend::multiply_accumulate(const Field& dst, const Field& a, i64 k) {
@@ -1625,19 +1639,8 @@ void WordBackend::multiply_accumulate(const Field& dst, const Field& a, i64 k) {
   check_field(dst, "mac");
   if (overlaps(dst, a)) throw std::invalid_argument("mac: destination overlaps a source");
   const u64 m = static_cast<u64>(k);
-  if (dst.lo % 64 + dst.width <= 64) {
-    const WordFieldReader x = word_field_reader(memory_.data(), pixels_, a);
-    merge_lane(dst, [x, m](u64 old, int p) { return old + x(p) * m; });
-    return;
-  }
-  u64* x = scratch().s0.data();
-  u64* d = scratch().s1.data();
-  for (const Range& r : spans_) {
-    load(memory_.data(), a, r, x, true);
-    load(memory_.data(), dst, r, d, false);
-    for (int p = r.begin; p < r.end; ++p) d[p] += x[p] * m;
-    store(memory_.data(), dst, r, d, true);
-  }
+  const WordFieldReader x = word_field_reader(memory_.data(), pixels_, a);
+  merge_lane(dst, [x, m](const V8& old, int base) { return old + x.at8(base) * m; });
 }
 
 u64* WordBackend::backing() {

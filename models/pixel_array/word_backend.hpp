@@ -176,8 +176,8 @@ class WordBackend final : public PixelBackend {
   // alu's path for a destination (and a field source) within one lane each; false when the
   // operands are not such.
   bool alu_in_lane(const Field& dst, const Source& src, Alu op);
-  // value(old, p) (old: dst's value at pixel p) merged into dst, a field within one lane,
-  // under E over every span, in one pass (multiply's and multiply_accumulate's).
+  // value(old, base) merged into dst (within one lane or across two) under E over every
+  // span, eight pixels at a time, in one pass (multiply's and multiply_accumulate's).
   template <class Value>
   void merge_lane(const Field& dst, Value value);
   // E &= (a cond b) over r; false when it found no pixel of r left enabled (true when it may
