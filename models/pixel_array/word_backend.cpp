@@ -1335,141 +1335,109 @@ void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
                                     : "logic");
   const bool serial =
       src.is_field && src.field.lo < dst.lo && src.field.lo + src.field.width > dst.lo;
-  if (!serial && alu_in_lane(dst, src, op)) return;
-  for (const Range& r : spans_) {
-    if (serial) {
-      alu_serial(dst, src.field, op, r);
-    } else {
-      alu_range(dst, src, op, r);
-    }
+  if (!serial) {
+    alu_merged(dst, src, op);
+    return;
   }
+  for (const Range& r : spans_) alu_serial(dst, src.field, op, r);
 }
 
-// One ALU operation on one span where the destination (and a field source) lie within one
-// 64-bit lane each: read, operate and merge under E in a single pass, as alu_range's general
-// path does in three (load, operate, store) with the same result: the destination read
-// unsigned, a field source sign-extended when signed, the result cut to the destination.
+namespace {
+
+// A field read at pixel p, extended to 64 bits by its signedness: within one 64-bit lane
+// (hi == lo, up == 0: the second read adds nothing), or straddling two.
+struct WordFieldReader {
+  const u64* lo;
+  const u64* hi;
+  int off, up, sign_shift;
+  u64 mask;
+  bool is_signed;
+  // The field at the eight pixels p .. p + 7, sign-extended when signed.
+  V8 at8(int p) const {
+    V8 v = load8(lo + p) >> off;
+    if (up != 0) v |= load8(hi + p) << up;
+    v &= mask;
+    if (is_signed) v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << sign_shift) >> sign_shift);
+    return v;
+  }
+};
+
+// The reader of field f in pixel memory `memory` (lane-major, `pixels` per lane).
+WordFieldReader word_field_reader(const u64* memory, int pixels, const Field& f) {
+  const u64* lo = memory + static_cast<std::size_t>(f.lo / 64) * pixels;
+  const int off = f.lo % 64;
+  const bool split = off + f.width > 64;
+  return WordFieldReader{lo,
+                         split ? lo + pixels : lo,
+                         off,
+                         split ? 64 - off : 0,
+                         64 - f.width,
+                         low_mask(f.width),
+                         f.is_signed && f.width < 64};
+}
+
+}  // namespace
+
+// One ALU operation merged into dst under E (merge_lane: eight pixels at a time, in one
+// pass, a destination across two lanes too), with the same result as the bit-serial walk:
+// the destination read unsigned, a field source sign-extended when signed, the result cut to
+// the destination. source(base) reads the source at pixels base .. base + 7.
 template <WordBackend::Alu kOp, class Read>
-void WordBackend::alu_lane(u64* dst_lane, int off, u64 mask, const std::uint8_t* e,
-                           const std::vector<Range>& spans, int limit, Read source) {
-  const u64 bits = mask << off;
-  for (const Range& r : spans) {
-    // Eight pixels at a time (a sphere's rows are short); source(base) reads the eight.
-    for_chunks(r.begin, r.end, limit, [&](int base, const V8& live) {
-      const V8 m = bits & (V8{} - load_enable8(e + base)) & live;
-      const V8 old = load8(dst_lane + base);
-      const V8 a = (old >> off) & mask;
-      const V8 b = source(base);
-      V8 v{};
-      if constexpr (kOp == Alu::mov) v = b;
-      if constexpr (kOp == Alu::add) v = a + b;
-      if constexpr (kOp == Alu::sub) v = a - b;
-      if constexpr (kOp == Alu::and_) v = a & b;
-      if constexpr (kOp == Alu::or_) v = a | b;
-      if constexpr (kOp == Alu::xor_) v = a ^ b;
-      store8(dst_lane + base, (old & ~m) | ((v << off) & m));
-    });
-  }
+void WordBackend::alu_merge(const Field& dst, Read source) {
+  merge_lane(dst, [source](const V8& a, int base) {
+    const V8 b = source(base);
+    if constexpr (kOp == Alu::mov) return b;
+    if constexpr (kOp == Alu::add) return a + b;
+    if constexpr (kOp == Alu::sub) return a - b;
+    if constexpr (kOp == Alu::and_) return a & b;
+    if constexpr (kOp == Alu::or_) return a | b;
+    if constexpr (kOp == Alu::xor_) return a ^ b;
+  });
 }
 
+// The operation chosen once per instruction, not per chunk.
 template <class Read>
-void WordBackend::alu_lane_op(Alu op, u64* dst_lane, int off, u64 mask, const std::uint8_t* e,
-                              const std::vector<Range>& spans, int limit, Read source) {
+void WordBackend::alu_merge_op(Alu op, const Field& dst, Read source) {
   switch (op) {
     case Alu::mov:
-      return alu_lane<Alu::mov>(dst_lane, off, mask, e, spans, limit, source);
+      return alu_merge<Alu::mov>(dst, source);
     case Alu::add:
-      return alu_lane<Alu::add>(dst_lane, off, mask, e, spans, limit, source);
+      return alu_merge<Alu::add>(dst, source);
     case Alu::sub:
-      return alu_lane<Alu::sub>(dst_lane, off, mask, e, spans, limit, source);
+      return alu_merge<Alu::sub>(dst, source);
     case Alu::and_:
-      return alu_lane<Alu::and_>(dst_lane, off, mask, e, spans, limit, source);
+      return alu_merge<Alu::and_>(dst, source);
     case Alu::or_:
-      return alu_lane<Alu::or_>(dst_lane, off, mask, e, spans, limit, source);
+      return alu_merge<Alu::or_>(dst, source);
     case Alu::xor_:
-      return alu_lane<Alu::xor_>(dst_lane, off, mask, e, spans, limit, source);
+      return alu_merge<Alu::xor_>(dst, source);
   }
 }
 
-bool WordBackend::alu_in_lane(const Field& dst, const Source& src, Alu op) {
-  const int off = dst.lo % 64;
-  if (off + dst.width > 64 || (src.is_field && src.field.lo % 64 + src.field.width > 64)) {
-    return false;
-  }
-  u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
-  const u64 mask = low_mask(dst.width);
-  const std::uint8_t* e = enable_.data();
+void WordBackend::alu_merged(const Field& dst, const Source& src, Alu op) {
   if (!src.is_field) {
-    const u64 k = static_cast<u64>(src.constant);
-    alu_lane_op(op, lane, off, mask, e, spans_, pixels_, [k](int) { return V8{} + k; });
-    return true;
+    const V8 k = V8{} + static_cast<u64>(src.constant);
+    alu_merge_op(op, dst, [k](int) { return k; });
+    return;
   }
-  const u64* s = memory_.data() + static_cast<std::size_t>(src.field.lo / 64) * pixels_;
-  const int soff = src.field.lo % 64;
-  const u64 smask = low_mask(src.field.width);
-  if (src.field.is_signed && src.field.width < 64) {
-    const int sh = 64 - src.field.width;
-    alu_lane_op(op, lane, off, mask, e, spans_, pixels_, [s, soff, smask, sh](int base) {
+  const Field& f = src.field;
+  if (f.lo % 64 + f.width > 64) {  // a source across two lanes
+    const WordFieldReader r = word_field_reader(memory_.data(), pixels_, f);
+    alu_merge_op(op, dst, [r](int base) { return r.at8(base); });
+    return;
+  }
+  const u64* s = memory_.data() + static_cast<std::size_t>(f.lo / 64) * pixels_;
+  const int soff = f.lo % 64;
+  const u64 smask = low_mask(f.width);
+  if (f.is_signed && f.width < 64) {
+    const int sh = 64 - f.width;
+    alu_merge_op(op, dst, [s, soff, smask, sh](int base) {
       return reinterpret_cast<V8>(
           reinterpret_cast<V8s>(((load8(s + base) >> soff) & smask) << sh) >> sh);
     });
-    return true;
+    return;
   }
-  alu_lane_op(op, lane, off, mask, e, spans_, pixels_,
-              [s, soff, smask](int base) { return (load8(s + base) >> soff) & smask; });
-  return true;
-}
-
-void WordBackend::alu_range(const Field& dst, const Source& src, Alu op, Range r) {
-  u64* a = scratch().s0.data();
-  u64* out = scratch().s2.data();
-  if (op != Alu::mov) load(memory_.data(), dst, r, a, false);
-  if (src.is_field) {
-    u64* b = scratch().s1.data();
-    load(memory_.data(), src.field, r, b, true);
-    switch (op) {
-      case Alu::mov:
-        return store(memory_.data(), dst, r, b, true);
-      case Alu::add:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] + b[p];
-        break;
-      case Alu::sub:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] - b[p];
-        break;
-      case Alu::and_:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] & b[p];
-        break;
-      case Alu::or_:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] | b[p];
-        break;
-      case Alu::xor_:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] ^ b[p];
-        break;
-    }
-  } else {
-    const u64 k = static_cast<u64>(src.constant);
-    switch (op) {
-      case Alu::mov:
-        std::fill(out + r.begin, out + r.end, k);
-        break;
-      case Alu::add:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] + k;
-        break;
-      case Alu::sub:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] - k;
-        break;
-      case Alu::and_:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] & k;
-        break;
-      case Alu::or_:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] | k;
-        break;
-      case Alu::xor_:
-        for (int p = r.begin; p < r.end; ++p) out[p] = a[p] ^ k;
-        break;
-    }
-  }
-  store(memory_.data(), dst, r, out, true);
+  alu_merge_op(op, dst, [s, soff, smask](int base) { return (load8(s + base) >> soff) & smask; });
 }
 
 // The bit-serial walk itself, for a source that overlaps its destination from below: at bit
@@ -1541,42 +1509,6 @@ namespace {
 bool overlaps(const Field& a, const Field& b) {
   return a.lo < b.lo + b.width && b.lo < a.lo + a.width;
 }
-}  // namespace
-
-namespace {
-
-// A field read at pixel p, extended to 64 bits by its signedness: within one 64-bit lane
-// (hi == lo, up == 0: the second read adds nothing), or straddling two.
-struct WordFieldReader {
-  const u64* lo;
-  const u64* hi;
-  int off, up, sign_shift;
-  u64 mask;
-  bool is_signed;
-  // The field at the eight pixels p .. p + 7, sign-extended when signed.
-  V8 at8(int p) const {
-    V8 v = load8(lo + p) >> off;
-    if (up != 0) v |= load8(hi + p) << up;
-    v &= mask;
-    if (is_signed) v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << sign_shift) >> sign_shift);
-    return v;
-  }
-};
-
-// The reader of field f in pixel memory `memory` (lane-major, `pixels` per lane).
-WordFieldReader word_field_reader(const u64* memory, int pixels, const Field& f) {
-  const u64* lo = memory + static_cast<std::size_t>(f.lo / 64) * pixels;
-  const int off = f.lo % 64;
-  const bool split = off + f.width > 64;
-  return WordFieldReader{lo,
-                         split ? lo + pixels : lo,
-                         off,
-                         split ? 64 - off : 0,
-                         64 - f.width,
-                         low_mask(f.width),
-                         f.is_signed && f.width < 64};
-}
-
 }  // namespace
 
 // value(old, base) merged into dst under E, modulo 2^width, over every span, in one pass,

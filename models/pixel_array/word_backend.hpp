@@ -162,20 +162,13 @@ class WordBackend final : public PixelBackend {
   void expression_field(const QuadraticCoefficients& c, const Field& as, Range r,
                         std::uint64_t* out) const;
   void alu(const Field& dst, const Source& src, Alu op);
-  void alu_range(const Field& dst, const Source& src, Alu op, Range r);
-  // alu_range's single pass for a destination (and a field source) within one lane each.
-  // Over every span, eight pixels at a time (for_chunks in word_backend.cpp; `limit` is the
-  // pixel count): the operation chosen once per instruction, not once per span.
+  // alu's path except for a source overlapping its destination from below: merge_lane with
+  // the operation, chosen once per instruction (word_backend.cpp).
+  void alu_merged(const Field& dst, const Source& src, Alu op);
   template <Alu kOp, class Read>
-  static void alu_lane(std::uint64_t* dst_lane, int off, std::uint64_t mask, const std::uint8_t* e,
-                       const std::vector<Range>& spans, int limit, Read source);
+  void alu_merge(const Field& dst, Read source);
   template <class Read>
-  static void alu_lane_op(Alu op, std::uint64_t* dst_lane, int off, std::uint64_t mask,
-                          const std::uint8_t* e, const std::vector<Range>& spans, int limit,
-                          Read source);
-  // alu's path for a destination (and a field source) within one lane each; false when the
-  // operands are not such.
-  bool alu_in_lane(const Field& dst, const Source& src, Alu op);
+  void alu_merge_op(Alu op, const Field& dst, Read source);
   // value(old, base) merged into dst (within one lane or across two) under E over every
   // span, eight pixels at a time, in one pass (multiply's and multiply_accumulate's).
   template <class Value>
