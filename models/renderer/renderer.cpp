@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "models/frame_buffer/frame_buffer.hpp"
 #include "models/ring/ring.hpp"
@@ -435,8 +437,13 @@ void Renderer::run_frame() {
     w.region = stage.region;
     w.x0 = config.region_x0(stage.region);
     w.y0 = config.region_y0(stage.region);
-    for (auto& v : by_gp) w.triangles.insert(w.triangles.end(), v.begin(), v.end());
-    w.step_start = step_start;
+    // Moved, not copied (each copy of a packet's pointer is an atomic count): by_gp and
+    // step_start are cleared before the next region's first pass.
+    for (auto& v : by_gp) {
+      w.triangles.insert(w.triangles.end(), std::make_move_iterator(v.begin()),
+                         std::make_move_iterator(v.end()));
+    }
+    w.step_start = std::move(step_start);
     for (const auto& pass : starts)
       for (const auto& v : pass) w.packet_start.insert(w.packet_start.end(), v.begin(), v.end());
     ship(stage.region);
