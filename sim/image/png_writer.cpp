@@ -238,8 +238,11 @@ class PngDeflate {
   // form, so that the long runs of 0 cost nothing per byte.
   void tokenize(const std::uint8_t* in, std::size_t n) {
     segments_.clear();
-    lit_freq_.fill(0);
     dist_freq_.fill(0);
+    // Counted in two tables on the stack, alternate literals in each: a store to a member
+    // (or to the thread's scratch) could alias `in` and would force every byte to be loaded
+    // again, and a byte repeating the one before it would wait on its own count's store.
+    std::uint32_t freq[2][kLitSymbols] = {};
     constexpr std::uint64_t kBase = 65521;
     std::uint64_t s1 = 1, s2 = 0;
     std::size_t i = 0, literals_from = 0;
@@ -256,9 +259,19 @@ class PngDeflate {
       for (std::size_t k = i; k < at;) {
         const std::size_t end = std::min(at, k + (4096 - since));
         since += end - k;
-        for (; k < end; ++k) {
-          ++lit_freq_[in[k]];
-          s1 += in[k];
+        for (; k + 2 <= end; k += 2) {
+          const std::uint8_t a = in[k], b = in[k + 1];
+          ++freq[0][a];
+          ++freq[1][b];
+          s1 += a;
+          s2 += s1;
+          s1 += b;
+          s2 += s1;
+        }
+        if (k < end) {
+          const std::uint8_t a = in[k++];
+          ++freq[0][a];
+          s1 += a;
           s2 += s1;
         }
         if (since == 4096) reduce();
@@ -270,7 +283,7 @@ class PngDeflate {
       const std::size_t best = r3 > r1 ? r3 : r1;
       const int distance = r3 > r1 ? 3 : 1;
       add_segments(at - literals_from, best, distance);
-      ++lit_freq_[kLengthSymbol[best]];
+      ++freq[0][kLengthSymbol[best]];
       ++dist_freq_[distance == 1 ? 0 : 2];
       // A run of at most 258 bytes: reduced before when it could take the count past 4096.
       if (since + best > 4096) reduce();
@@ -288,6 +301,7 @@ class PngDeflate {
       i = literals_from = at + best;
     }
     if (literals_from < n) add_segments(n - literals_from, 0, 1);
+    for (int k = 0; k < kLitSymbols; ++k) lit_freq_[k] = freq[0][k] + freq[1][k];
     lit_freq_[256] = 1;
     adler_ = static_cast<std::uint32_t>((s2 % kBase) << 16 | (s1 % kBase));
   }
