@@ -144,3 +144,21 @@ void BM_PngEncode(benchmark::State& state) {
 BENCHMARK(BM_PngEncode)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(20);
 
 }  // namespace
+
+namespace {
+
+// The encoder alone on the frame buffer's frame, as `pp5sim animate` encodes each frame (for
+// perf record): `pp5_bench --benchmark_filter=PngOnly`.
+void BM_PngOnly(benchmark::State& state) {
+  pp5::MachineConfig config = pp5::MachineConfig::defaults();
+  config.set(std::vector<std::string>{"fidelity.pixels=word"});
+  const pp5::Scene scene = pp5::make_builtin_scene("torus");
+  const pp5::Program program = pp5::assemble_file(
+      std::string(PP5_SOURCE_DIR) + "/firmware/programs/phong.pp5", pp5::assembler_options(config));
+  const pp5::FrameImage frame = pp5::simulate_frame(config, scene, program, 2).image;
+  for (auto _ : state) benchmark::DoNotOptimize(pp5::encode_png(frame).data());
+}
+
+BENCHMARK(BM_PngOnly)->Unit(benchmark::kMillisecond)->Iterations(200);
+
+}  // namespace

@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -98,59 +99,62 @@ class PngDeflate {
     put(1, 1);  // BFINAL
     put(2, 2);  // BTYPE = dynamic Huffman
     write_header();
-    std::uint32_t lit[kLitSymbols];
-    for (int k = 0; k < kLitSymbols; ++k)
-      lit[k] = static_cast<std::uint32_t>(lit_len_[static_cast<std::size_t>(k)]) << 16 |
-               lit_code_[static_cast<std::size_t>(k)];
+    // Per symbol: its code (bits 0..15), code length (16..23), extra bits (24..27) and
+    // distance code bits after them (28..31: a run's, 0 for a literal).
+    std::uint32_t sym_bits[kLitSymbols];
+    for (int k = 0; k < kLitSymbols; ++k) {
+      const bool run = k >= 257;
+      sym_bits[k] = static_cast<std::uint32_t>(lit_code_[static_cast<std::size_t>(k)]) |
+                    static_cast<std::uint32_t>(lit_len_[static_cast<std::size_t>(k)]) << 16 |
+                    static_cast<std::uint32_t>(run ? kLengthExtra[k - 257] : 0) << 24 |
+                    static_cast<std::uint32_t>(run ? dist_len_[0] : 0) << 28;
+    }
+    // Distance codes 0 (1) and 2 (3), each 1 bit (build_codes), no extra bits; a literal's
+    // token has flag 0 and no distance bits, so what its shift brings in is 0.
+    const std::uint64_t dist_code[2] = {dist_code_[0], dist_code_[2]};
+    // A token's bits, LSB first: the symbol's code, a run's extra bits and its distance code.
+    auto token_bits = [&sym_bits, &dist_code](std::uint16_t t, int& bits) {
+      const std::uint32_t e = sym_bits[t & 0x1ff];
+      const int len = static_cast<int>(e >> 16 & 0xff);
+      const int extra = static_cast<int>(e >> 24 & 0xf);
+      const std::uint64_t value = (e & 0xffff) | static_cast<std::uint64_t>(t >> 9 & 0x1f) << len |
+                                  dist_code[t >> 14 & 1] << (len + extra);
+      bits = len + extra + static_cast<int>(e >> 28);
+      return value;
+    };
     // The body's bits in locals (the member writer's state, stored through the byte pointer,
     // would be reloaded after every store).
     std::uint64_t acc = acc_;
     int count = count_;
     std::uint8_t* dst = dst_;
-    // At most 7 bits wait in acc between puts, and a put is at most 30 bits: on a
+    // Two tokens (at most 15 + 5 + 1 bits each) as one put, one loop with no branch per
+    // token: the writer's state is a chain of dependent operations, half as long this way.
+    // At most 7 bits wait in acc between puts, and a put is at most 42 bits: on a
     // little-endian host the whole word is stored and the pointer advanced by the whole bytes,
     // with no branch (the stream has 1024 bytes of slack past its longest).
-    auto emit = [&acc, &count, &dst](std::uint32_t value, int bits) {
+    const std::uint16_t* tok = tokens_.get();
+    const std::size_t tokens = token_count_;
+    std::size_t k = 0;
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-      acc |= static_cast<std::uint64_t>(value) << count;
+    auto emit = [&acc, &count, &dst](std::uint64_t value, int bits) {
+      acc |= value << count;
       count += bits;
       std::memcpy(dst, &acc, 8);
       dst += count >> 3;
       acc >>= count & ~7;
       count &= 7;
-#else
-      put_bits(acc, count, dst, value, bits);
-#endif
     };
-    const std::uint8_t* p = in;
-    for (const Segment seg : segments_) {
-      const std::uint8_t* end = p + (seg & kMaxLiterals);
-      // Two literals (at most 15 bits each) as one put: the writer's state is a chain of
-      // dependent operations, half as long this way.
-      for (; p + 2 <= end; p += 2) {
-        const std::uint32_t a = lit[p[0]], b = lit[p[1]];
-        const int la = static_cast<int>(a >> 16);
-        emit((a & 0xffff) | (b & 0xffff) << la, la + static_cast<int>(b >> 16));
-      }
-      if (p < end) {
-        emit(lit[*p] & 0xffff, static_cast<int>(lit[*p] >> 16));
-        ++p;
-      }
-      const int length = static_cast<int>(seg >> 40 & 0x1ff);
-      if (length == 0) continue;
-      // The run as one put: its length code (at most 15 bits), extra bits (at most 5) and
-      // distance code (1 bit).
-      const int sym = kLengthSymbol[static_cast<std::size_t>(length)];
-      std::uint32_t value = lit[sym] & 0xffff;
-      int bits = static_cast<int>(lit[sym] >> 16);
-      const int extra = kLengthExtra[sym - 257];
-      value |= static_cast<std::uint32_t>(length - kLengthBase[sym - 257]) << bits;
-      bits += extra;
-      const int d = (seg >> 49 & 1) != 0 ? 2 : 0;  // distance codes 0 (1) and 2 (3), no extra bits
-      value |= static_cast<std::uint32_t>(dist_code_[static_cast<std::size_t>(d)]) << bits;
-      bits += dist_len_[static_cast<std::size_t>(d)];
-      emit(value, bits);
-      p += length;
+    for (; k + 2 <= tokens; k += 2) {
+      int la, lb;
+      const std::uint64_t a = token_bits(tok[k], la);
+      const std::uint64_t b = token_bits(tok[k + 1], lb);
+      emit(a | b << la, la + lb);
+    }
+#endif
+    for (; k < tokens; ++k) {
+      int bits;
+      const std::uint64_t value = token_bits(tok[k], bits);
+      put_bits(acc, count, dst, static_cast<std::uint32_t>(value), bits);
     }
     acc_ = acc;
     count_ = count;
@@ -237,12 +241,22 @@ class PngDeflate {
   // (next_run). The zlib stream's Adler-32 is summed as it goes: a run of one byte in closed
   // form, so that the long runs of 0 cost nothing per byte.
   void tokenize(const std::uint8_t* in, std::size_t n) {
-    segments_.clear();
-    lit_freq_.fill(0);
+    // At most one token a byte; kept from image to image, and not zeroed (only the tokens
+    // written are read).
+    if (token_capacity_ < n) {
+      tokens_.reset(new std::uint16_t[n]);
+      token_capacity_ = n;
+    }
+    std::uint16_t* tok = tokens_.get();
+    std::size_t t = 0;
     dist_freq_.fill(0);
+    // Counted in two tables on the stack, alternate literals in each: a store to a member
+    // (or to the thread's scratch) could alias `in` and would force every byte to be loaded
+    // again, and a byte repeating the one before it would wait on its own count's store.
+    std::uint32_t freq[2][kLitSymbols] = {};
     constexpr std::uint64_t kBase = 65521;
     std::uint64_t s1 = 1, s2 = 0;
-    std::size_t i = 0, literals_from = 0;
+    std::size_t i = 0;
     // Bytes summed since the last reduction, at most 4096: s1 stays below 2^21, s2 below 2^33.
     std::size_t since = 0;
     auto reduce = [&] {
@@ -256,9 +270,23 @@ class PngDeflate {
       for (std::size_t k = i; k < at;) {
         const std::size_t end = std::min(at, k + (4096 - since));
         since += end - k;
-        for (; k < end; ++k) {
-          ++lit_freq_[in[k]];
-          s1 += in[k];
+        for (; k + 2 <= end; k += 2) {
+          const std::uint8_t a = in[k], b = in[k + 1];
+          tok[t] = a;
+          tok[t + 1] = b;
+          t += 2;
+          ++freq[0][a];
+          ++freq[1][b];
+          s1 += a;
+          s2 += s1;
+          s1 += b;
+          s2 += s1;
+        }
+        if (k < end) {
+          const std::uint8_t a = in[k++];
+          tok[t++] = a;
+          ++freq[0][a];
+          s1 += a;
           s2 += s1;
         }
         if (since == 4096) reduce();
@@ -269,8 +297,11 @@ class PngDeflate {
       const std::size_t r3 = at >= 3 && r1 < limit ? run_length(in, at, 3, limit) : 0;
       const std::size_t best = r3 > r1 ? r3 : r1;
       const int distance = r3 > r1 ? 3 : 1;
-      add_segments(at - literals_from, best, distance);
-      ++lit_freq_[kLengthSymbol[best]];
+      const int sym = kLengthSymbol[best];
+      tok[t++] = static_cast<std::uint16_t>(
+          sym | static_cast<int>(best - static_cast<std::size_t>(kLengthBase[sym - 257])) << 9 |
+          (distance == 3) << 14);
+      ++freq[0][sym];
       ++dist_freq_[distance == 1 ? 0 : 2];
       // A run of at most 258 bytes: reduced before when it could take the count past 4096.
       if (since + best > 4096) reduce();
@@ -285,9 +316,10 @@ class PngDeflate {
           s2 += s1;
         }
       }
-      i = literals_from = at + best;
+      i = at + best;
     }
-    if (literals_from < n) add_segments(n - literals_from, 0, 1);
+    token_count_ = t;
+    for (int k = 0; k < kLitSymbols; ++k) lit_freq_[k] = freq[0][k] + freq[1][k];
     lit_freq_[256] = 1;
     adler_ = static_cast<std::uint32_t>((s2 % kBase) << 16 | (s1 % kBase));
   }
@@ -432,22 +464,11 @@ class PngDeflate {
     count_ = 0;
   }
 
-  // A segment, one word (a store of a few fields, read back whole, stalls the store buffer):
-  // bits 0..39 a count of literals, then bits 40..48 the length of a run after them (0: none)
-  // and bit 49 its distance (set: 3, else 1).
-  using Segment = std::uint64_t;
-  static constexpr std::uint64_t kMaxLiterals = (std::uint64_t{1} << 40) - 1;
-  static Segment segment(std::size_t literals, std::size_t length, int distance) {
-    return static_cast<std::uint64_t>(literals) | static_cast<std::uint64_t>(length) << 40 |
-           static_cast<std::uint64_t>(distance == 3) << 49;
-  }
-  // `literals` literals (a segment each 2^40 - 1 of them) and the run after them.
-  void add_segments(std::size_t literals, std::size_t length, int distance) {
-    for (; literals > kMaxLiterals; literals -= kMaxLiterals)
-      segments_.push_back(segment(kMaxLiterals, 0, 1));
-    segments_.push_back(segment(literals, length, distance));
-  }
-  std::vector<Segment> segments_;
+  // The tokens in order: a literal byte (0..255), or a run: its length symbol (bits 0..8),
+  // the length less the symbol's base (9..13) and whether its distance is 3 (bit 14).
+  std::unique_ptr<std::uint16_t[]> tokens_;
+  std::size_t token_capacity_ = 0;
+  std::size_t token_count_ = 0;
   std::array<std::uint32_t, kLitSymbols> lit_freq_{};
   std::array<std::uint32_t, 3> dist_freq_{};
   std::array<std::uint8_t, kLitSymbols> lit_len_{};

@@ -7,6 +7,10 @@
 #include <cstring>
 #include <stdexcept>
 
+#if defined(__AVX512BW__) || defined(__AVX512VBMI__)
+#include <immintrin.h>
+#endif
+
 namespace pp5 {
 
 namespace {
@@ -66,6 +70,29 @@ class GifBitWriter {
   std::uint8_t block_[255] = {};
   std::size_t block_size_ = 0;
 };
+
+// How many of the bytes from `px` on, at most `limit`, equal `value`: a frame's background
+// is long runs of one index, compared 64 (AVX-512) or 8 bytes at a time.
+std::size_t gif_run_length(const std::uint8_t* px, std::uint8_t value, std::size_t limit) {
+  std::size_t k = 0;
+#if defined(__AVX512BW__)
+  const __m512i v = _mm512_set1_epi8(static_cast<char>(value));
+  for (; k + 64 <= limit; k += 64) {
+    const __mmask64 equal = _mm512_cmpeq_epi8_mask(_mm512_loadu_si512(px + k), v);
+    if (~equal != 0) return k + static_cast<std::size_t>(__builtin_ctzll(~equal));
+  }
+#endif
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  const std::uint64_t word = value * 0x0101010101010101ull;
+  for (; k + 8 <= limit; k += 8) {
+    std::uint64_t w;
+    std::memcpy(&w, px + k, 8);
+    if (w != word) return k + static_cast<std::size_t>(__builtin_ctzll(w ^ word)) / 8;
+  }
+#endif
+  while (k < limit && px[k] == value) ++k;
+  return k;
+}
 
 }  // namespace
 
@@ -131,8 +158,7 @@ class GifLzw {
         const std::vector<std::uint16_t>& codes = run_codes_[p];
         const std::size_t longest = codes.size() + 1;  // c^k's code at codes[k - 2]
         const std::size_t room = longest - static_cast<std::size_t>(run_len);
-        std::size_t r = 1;
-        while (r <= room && i + r < n && px[i + r] == p) ++r;
+        const std::size_t r = 1 + gif_run_length(px + i + 1, p, std::min(room, n - 1 - i));
         const std::size_t take = std::min(r, room);
         run_len += static_cast<int>(take);
         current = run_len == 1 ? p : codes[static_cast<std::size_t>(run_len) - 2];
@@ -206,13 +232,63 @@ const GifLevelTables& gif_level_tables() {
   return tables;
 }
 
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+// 32 pixels (96 bytes, `mask` the bytes to read, pixels the bytes to write) at a time: each
+// channel's bytes gathered into 16-bit lanes (one two-source byte permute each), the nearest
+// level as gif_level's (v (L - 1) + 127) / 255 by a multiply: (v (L - 1) + 128) 257 >> 16,
+// which equals it for every byte v and L - 1 = 5 or 6 (tests/test_animation.cpp checks all
+// 256 values of each channel against the tables).
+void gif_quantise_32(const std::uint8_t* rgb, std::uint8_t* out, __mmask64 bytes_lo,
+                     __mmask64 bytes_hi, __mmask32 pixels) {
+  // Byte 3k + c of the 128 loaded is pixel k's channel c; odd bytes of each lane are 0.
+  alignas(64) static constexpr struct Index {
+    std::uint8_t at[3][64];
+    constexpr Index() : at() {
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 32; ++k) at[c][2 * k] = static_cast<std::uint8_t>(3 * k + c);
+    }
+  } kIndex{};
+  const __m512i lo = _mm512_maskz_loadu_epi8(bytes_lo, rgb);
+  const __m512i hi = _mm512_maskz_loadu_epi8(bytes_hi, rgb + 64);
+  constexpr __mmask64 kEven = 0x5555555555555555ull;
+  auto channel = [&](int c) {
+    return _mm512_maskz_permutex2var_epi8(kEven, lo, _mm512_load_si512(kIndex.at[c]), hi);
+  };
+  const __m512i k128 = _mm512_set1_epi16(128), k257 = _mm512_set1_epi16(257);
+  auto level = [&](__m512i v, int steps) {
+    return _mm512_mulhi_epu16(
+        _mm512_add_epi16(_mm512_mullo_epi16(v, _mm512_set1_epi16(static_cast<short>(steps))), k128),
+        k257);
+  };
+  const __m512i r = level(channel(0), kGifRed - 1);
+  const __m512i g = level(channel(1), kGifGreen - 1);
+  const __m512i b = level(channel(2), kGifBlue - 1);
+  const __m512i index = _mm512_add_epi16(
+      _mm512_add_epi16(_mm512_mullo_epi16(r, _mm512_set1_epi16(kGifGreen * kGifBlue)),
+                       _mm512_mullo_epi16(g, _mm512_set1_epi16(kGifBlue))),
+      b);
+  _mm512_mask_cvtepi16_storeu_epi8(out, pixels, index);
+}
+#endif
+
 // n pixels of RGB as palette indices.
 void gif_quantise(const std::uint8_t* rgb, int n, std::uint8_t* out) {
+#if defined(__AVX512VBMI__) && defined(__AVX512BW__)
+  int x = 0;
+  for (; x + 32 <= n; x += 32) gif_quantise_32(rgb + 3 * x, out + x, ~0ull, ~0ull >> 32, ~0u);
+  if (x < n) {
+    const int bytes = 3 * (n - x);  // 3 to 93
+    const __mmask64 lo = bytes >= 64 ? ~0ull : (1ull << bytes) - 1;
+    const __mmask64 hi = bytes > 64 ? (1ull << (bytes - 64)) - 1 : 0;
+    gif_quantise_32(rgb + 3 * x, out + x, lo, hi, (1u << (n - x)) - 1);
+  }
+#else
   const GifLevelTables& t = gif_level_tables();
   for (int x = 0; x < n; ++x) {
     out[x] = static_cast<std::uint8_t>(t.red[rgb[3 * x]] + t.green[rgb[3 * x + 1]] +
                                        t.blue[rgb[3 * x + 2]]);
   }
+#endif
 }
 
 }  // namespace
