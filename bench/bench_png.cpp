@@ -1,5 +1,5 @@
 // PNG encoding of a rendered frame (the default torus at `word`, 1280 x 1024): the encoder
-// pp5sim uses (sim/image/png_writer.cpp, libdeflate) against a reference kept here, the zlib
+// pp5sim uses (sim/image/png_writer.cpp, its own deflate) against a reference kept here, the zlib
 // encoder it replaced (level 1, run-length matches only, the Up filter a 256 KB strip at a
 // time), timed alternately in one run. BM_PngEncode reports
 //   new_ms, zlib_ms      mean milliseconds of processor time per image

@@ -249,7 +249,6 @@ class PngDeflate {
     }
     std::uint16_t* tok = tokens_.get();
     std::size_t t = 0;
-    dist_freq_.fill(0);
     // Counted in two tables on the stack, alternate literals in each: a store to a member
     // (or to the thread's scratch) could alias `in` and would force every byte to be loaded
     // again, and a byte repeating the one before it would wait on its own count's store.
@@ -302,7 +301,6 @@ class PngDeflate {
           sym | static_cast<int>(best - static_cast<std::size_t>(kLengthBase[sym - 257])) << 9 |
           (distance == 3) << 14);
       ++freq[0][sym];
-      ++dist_freq_[distance == 1 ? 0 : 2];
       // A run of at most 258 bytes: reduced before when it could take the count past 4096.
       if (since + best > 4096) reduce();
       since += best;
@@ -470,7 +468,6 @@ class PngDeflate {
   std::size_t token_capacity_ = 0;
   std::size_t token_count_ = 0;
   std::array<std::uint32_t, kLitSymbols> lit_freq_{};
-  std::array<std::uint32_t, 3> dist_freq_{};
   std::array<std::uint8_t, kLitSymbols> lit_len_{};
   std::array<std::uint16_t, kLitSymbols> lit_code_{};
   std::array<std::uint8_t, 3> dist_len_{};
