@@ -41,10 +41,14 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
     const RegionStream stream(program, values);
     const std::vector<Packet> none;
     REQUIRE_FALSE(packets.empty());
-    // Regions: empty ones before and after one with triangles, and at other origins.
-    const std::vector<std::pair<int, bool>> regions = {{0, false},   {128, false}, {0, true},
-                                                       {128, false}, {0, false},   {128, true},
-                                                       {0, false},   {128, false}};
+    // Regions: empty ones before and after one with triangles, and at other origins; then
+    // drawn and empty ones alternating, as on a board that draws every other region (its
+    // empty regions after a drawn one are executed unchecked after two misses, and checked
+    // again at every eighth).
+    std::vector<std::pair<int, bool>> regions = {{0, false},   {128, false}, {0, true},
+                                                 {128, false}, {0, false},   {128, true},
+                                                 {0, false},   {128, false}};
+    for (int k = 0; k < 24; ++k) regions.emplace_back(k % 3 == 0 ? 128 : 0, k % 2 == 0);
     RendererBoard reusing(board_params(config)), executing(board_params(config));
     RendererBoard donor(board_params(config));
     donor.run_empty_region(0, 0, program, values);
@@ -58,6 +62,7 @@ TEST_CASE("reused empty regions equal executed ones, on any board history", "[re
       if (busy) {
         reusing.begin_region(x0, 0);
         stream.for_each(packets, [&](const RegionStep& step) { reusing.run_step(step); });
+        reusing.end_region(x0 / 128);
         reusing.read_outputs(program, a);
       } else {
         const RegionPixels pixels = reusing.run_empty_region(x0, 0, program, values);

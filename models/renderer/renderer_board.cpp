@@ -63,6 +63,12 @@ RegionPixels RendererBoard::run_empty_region(int x0, int y0, const Program& prog
     origin_free_for_ = &frame_values;
   }
   const bool origin_free = origin_free_;
+  const bool after_drawn = std::exchange(after_drawn_, false);
+  if (after_drawn && misses_after_drawn_ >= 2 && ++unchecked_after_drawn_ % 8 != 0) {
+    begin_region(x0, y0);
+    clear();
+    return executed();
+  }
   if (origin_free && ((lazy_ && clear_restores_.value_or(false)) ||
                       (fresh_ && clear_from_fresh_ && empty_after_clear_))) {
     fresh_ = false;
@@ -80,7 +86,15 @@ RegionPixels RendererBoard::run_empty_region(int x0, int y0, const Program& prog
     if (was_fresh) clear_from_fresh_ = true;
     lazy_ = true;
     ++empty_reused_;
+    if (after_drawn) misses_after_drawn_ = 0;
     return empty_rgb_;
+  }
+  if (after_drawn) {
+    // What the drawn region left in the fields clear does not set makes this state unlike
+    // any a later empty region starts from, unless it follows this one: keeping it (two
+    // copies of the array) would serve only that case, which the next miss keeps instead.
+    ++misses_after_drawn_;
+    return executed();
   }
   // Nothing kept, or a different state (fields the clear procedure leaves alone hold what an
   // earlier region put there): execute, and keep this region's states instead, since the
@@ -137,6 +151,7 @@ void RendererBoard::restart(const RendererBoard& fresh) {
   clear_from_fresh_ = false;
   fresh_ = true;
   empty_reused_ = 0;
+  after_drawn_ = false;  // what a drawn region left goes now (misses_after_drawn_ stays)
   observer_ = nullptr;
   packet_ = PacketContext{};
   instructions_ = 0;

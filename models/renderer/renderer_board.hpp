@@ -92,6 +92,7 @@ class RendererBoard {
   bool observed() const { return observer_ != nullptr; }
   void begin_packet(const PacketContext& packet) { packet_ = packet; }
   void end_region(int region) {
+    after_drawn_ = true;
     if (observer_) observer_->end_region(region, *this);
   }
   // Reads the program's output fields of every pixel as 8-bit RGB, row-major.
@@ -174,6 +175,15 @@ class RendererBoard {
   const FrameValues* origin_free_for_ = nullptr;
   bool origin_free_ = false;
   std::uint64_t empty_reused_ = 0;
+  // Empty regions right after a drawn one (after_drawn_) start from what the drawn region
+  // left in the fields clear does not set: they match no kept state unless clear sets every
+  // field, and their own states are not kept. After two such misses in a row (counted
+  // across restarts: a program's clear either sets every field or not), the board executes
+  // those regions without comparing states (each comparison reads two whole arrays),
+  // looking again at every eighth. The results are the same either way: host speed only.
+  bool after_drawn_ = false;
+  int misses_after_drawn_ = 0;
+  int unchecked_after_drawn_ = 0;
   mutable std::vector<std::uint64_t> field_values_;  // read_outputs' buffer
   BoardObserver* observer_ = nullptr;
   PacketContext packet_;
