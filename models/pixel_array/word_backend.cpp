@@ -393,9 +393,14 @@ void WordBackend::push_enable() {
   // the eight), so that a clone or kept state copies only those.
   std::vector<std::uint8_t>& saved = stack_[static_cast<std::size_t>(stack_top_)];
   if (saved.empty()) saved.resize(static_cast<std::size_t>(pixels_));
+  // Whole 8-byte words, the spans rounded out to them (the array's size is a multiple of 64):
+  // a short row is a word or two, not a library call; the bytes outside the spans are
+  // copied too, and mean nothing there either.
   std::uint8_t* level = saved.data();
-  for (const Range& r : spans_)
-    std::copy(enable_.begin() + r.begin, enable_.begin() + r.end, level + r.begin);
+  const std::uint8_t* e = enable_.data();
+  for (const Range& r : spans_) {
+    for (int p = r.begin & ~7; p < r.end; p += 8) std::memcpy(level + p, e + p, 8);
+  }
   stack_spans_[static_cast<std::size_t>(stack_top_)] = spans_;
   ++stack_top_;
 }
