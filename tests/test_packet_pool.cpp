@@ -91,7 +91,14 @@ TEST_CASE("packet pool: an arena is reused only after its last packet, and gives
   held.reset();
   CHECK(pool.idle() == 1);
   second.reset();
-  CHECK(pool.idle() == 1);  // one kept idle at most: the other is freed
+  CHECK(pool.idle() == 2);
+  {
+    std::shared_ptr<PacketArena> extra = pool.take();  // a third one made, and freed: two kept
+    std::shared_ptr<PacketArena> extra2 = pool.take();
+    std::shared_ptr<PacketArena> extra3 = pool.take();
+    CHECK(pool.idle() == 0);
+  }
+  CHECK(pool.idle() == 2);
 
   // A reused arena: its slots again, each a default packet.
   std::shared_ptr<PacketArena> third = pool.take();
@@ -105,8 +112,22 @@ TEST_CASE("packet pool: an arena is reused only after its last packet, and gives
     CHECK(p->values.expressions.size() == 0);
     again.insert(p.get());
   }
-  CHECK(pool.idle() == 0);
+  CHECK(pool.idle() == 1);
   CHECK(again.size() == 300);
+
+  // One left waiting while others are taken and given back is freed: memory follows the
+  // arenas needed lately.
+  {
+    PacketPool lately;
+    std::shared_ptr<PacketArena> x = lately.take(), y = lately.take();
+    x.reset();
+    y.reset();
+    CHECK(lately.idle() == 2);
+    for (int k = 0; k < 8; ++k) lately.take();  // taken and given back at once
+    CHECK(lately.idle() == 2);
+    lately.take();
+    CHECK(lately.idle() == 1);
+  }
 
   // A packet may outlive its pool and arena.
   std::shared_ptr<const Packet> last;

@@ -15,6 +15,7 @@
 //    packet lives, and is not handed out again, while any shared_ptr to it or to another
 //    packet of the same take() lives.
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -52,12 +53,19 @@ class PacketPool {
   PacketPool() : state_(std::make_shared<State>()) {}
 
   std::shared_ptr<PacketArena> take() {
-    std::unique_ptr<PacketArena> arena;
+    std::unique_ptr<PacketArena> arena, stale;
     {
       const std::lock_guard<std::mutex> lock(state_->mutex);
-      if (!state_->free.empty()) {
-        arena = std::move(state_->free.back());
+      ++state_->takes;
+      if (!state_->free.empty()) {  // the one back last
+        arena = std::move(state_->free.back().arena);
         state_->free.pop_back();
+      }
+      // One idle since long ago is no longer needed (more were in flight once than are now):
+      // it goes, outside the lock.
+      if (!state_->free.empty() && state_->free.front().back_at + kStale < state_->takes) {
+        stale = std::move(state_->free.front().arena);
+        state_->free.erase(state_->free.begin());
       }
     }
     if (!arena) arena = std::make_unique<PacketArena>();
@@ -71,19 +79,27 @@ class PacketPool {
   }
 
  private:
-  static constexpr std::size_t kIdle = 1;
+  // A run's memory follows the frames in flight lately, not the most there ever were: at most
+  // two arenas wait (a bin buffer's frame may still be held by the ring, the Renderers and a
+  // helper thread two frames on), and one that has waited kStale takes is freed.
+  static constexpr std::size_t kIdle = 2;
+  static constexpr std::uint64_t kStale = 8;
+  struct Idle {
+    std::unique_ptr<PacketArena> arena;
+    std::uint64_t back_at = 0;  // `takes` when it came back
+  };
   struct State {
     mutable std::mutex mutex;
-    std::vector<std::unique_ptr<PacketArena>> free;
+    std::vector<Idle> free;  // oldest first
+    std::uint64_t takes = 0;
   };
   struct GiveBack {
     std::shared_ptr<State> state;
     void operator()(PacketArena* arena) const {
       std::unique_ptr<PacketArena> a(arena);
       const std::lock_guard<std::mutex> lock(state->mutex);
-      // One arena kept idle at most: a run's memory follows the frames in flight now, not
-      // the most there ever were (the one beyond is freed, outside the lock).
-      if (state->free.size() < kIdle) state->free.push_back(std::move(a));
+      // Beyond kIdle, freed (outside the lock).
+      if (state->free.size() < kIdle) state->free.push_back({std::move(a), state->takes});
     }
   };
   std::shared_ptr<State> state_;
