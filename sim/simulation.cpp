@@ -1184,6 +1184,7 @@ const RunSummary& Session::run_frames(
     // buffer.
     double start = -1;
     std::vector<GpFrameRecord> grec;
+    grec.reserve(gps.size());
     for (std::size_t i = 0; i < gps.size(); ++i) {
       grec.push_back(machine.gp(gp_index[i]).release_frame(f, renderers_began));
       const GpStats& st = grec.back().stats;
@@ -1194,6 +1195,9 @@ const RunSummary& Session::run_frames(
       sum.gp_busy_clocks += st.busy.count;
     }
     double end = 0, computed = 0;
+    // Reserved: a record's move may throw (sc_time's), so growing would copy each record's
+    // regions and packet pointers.
+    p->renderers.reserve(static_cast<std::size_t>(machine.renderer_count()));
     for (int k = 0; k < machine.renderer_count(); ++k) {
       p->renderers.push_back(machine.renderer(k).release_frame(f));
       const Renderer::FrameRecord& rec = p->renderers.back();
