@@ -117,19 +117,65 @@ std::string pattern_of(const std::vector<std::string_view>& parts) {
 
 std::string stat_pattern(const std::string& name) { return pattern_of(components(name)); }
 
+struct Statistics::Layout {
+  std::vector<StatisticInfo> infos;  // in registration order
+  std::unordered_map<std::string, std::size_t> index;
+  // Every proper prefix of a registered name (its parents): an array (its children are
+  // indices, `elements` of them) or a group of names, to refuse a value that is also a parent
+  // or a parent that would be both, and to answer elements().
+  struct Group {
+    bool array = false;
+    std::size_t elements = 0;
+  };
+  std::map<std::string, Group, std::less<>> parents;  // looked up by prefix (string_view)
+  // The first statistic of each pattern.
+  std::unordered_map<std::string, std::size_t> patterns;
+};
+
+std::shared_ptr<const Statistics::Layout> Statistics::layout() const {
+  settle();
+  return layout_;
+}
+
+void Statistics::follow(std::shared_ptr<const Layout> layout) {
+  if (!values_.empty()) throw std::logic_error("statistics: follow() on a registry with values");
+  // Shared, never changed through this registry: own_layout() copies it first.
+  layout_ = std::const_pointer_cast<Layout>(std::move(layout));
+}
+
+void Statistics::settle() const {
+  if (!layout_ || layout_->infos.size() == values_.size()) return;
+  // Followed part of the way: that part again, as a registry that never followed makes it.
+  Statistics part;
+  for (std::size_t k = 0; k < values_.size(); ++k) {
+    const StatisticInfo& i = layout_->infos[k];
+    part.add(i.name, i.kind, i.unit.c_str(), i.description.c_str(), std::monostate{});
+  }
+  layout_ = std::move(part.layout_);
+}
+
+void Statistics::own_layout() {
+  settle();
+  if (!layout_) {
+    layout_ = std::make_shared<Layout>();
+  } else if (layout_.use_count() > 1) {
+    layout_ = std::make_shared<Layout>(*layout_);
+  }
+}
+
 void Statistics::add_integer(const std::string& name, const char* unit, const char* description,
                              std::function<std::int64_t()> get) {
-  add({name, StatKind::integer, unit, description}, std::move(get));
+  add(name, StatKind::integer, unit, description, std::move(get));
 }
 
 void Statistics::add_real(const std::string& name, const char* unit, const char* description,
                           std::function<double()> get) {
-  add({name, StatKind::real, unit, description}, std::move(get));
+  add(name, StatKind::real, unit, description, std::move(get));
 }
 
 void Statistics::add_text(const std::string& name, const char* unit, const char* description,
                           std::function<std::string()> get) {
-  add({name, StatKind::text, unit, description}, std::move(get));
+  add(name, StatKind::text, unit, description, std::move(get));
 }
 
 StatValue Statistics::call(const Getter& get) {
@@ -146,8 +192,25 @@ StatValue Statistics::call(const Getter& get) {
   throw std::logic_error("statistic read without a getter");
 }
 
-void Statistics::add(StatisticInfo info, Getter get) {
-  const std::string& name = info.name;
+void Statistics::add(const std::string& name, StatKind kind, const char* unit,
+                     const char* description, Getter get) {
+  // Following a layout: the statistic it has next, as registered there (the same name after
+  // the same ones: the same checks passed), takes its getter only.
+  const std::size_t n = values_.size();
+  if (layout_ && n < layout_->infos.size()) {
+    const StatisticInfo& next = layout_->infos[n];
+    if (next.name == name && next.kind == kind && next.unit == unit &&
+        next.description == description) {
+      values_.push_back({std::move(get), {}, false});
+      return;
+    }
+  }
+  own_layout();
+  Layout& layout = *layout_;
+  auto& index_ = layout.index;
+  auto& parents_ = layout.parents;
+  auto& patterns_ = layout.patterns;
+  using Group = Layout::Group;
   // A frame registers about a thousand statistics: the name's components and pattern go in
   // scratch kept by the thread rather than new allocations each time.
   thread_local std::vector<std::string_view> parts_scratch;
@@ -187,13 +250,13 @@ void Statistics::add(StatisticInfo info, Getter get) {
   pattern_into(parts, pattern);
   const auto first = patterns_.find(pattern);
   if (first != patterns_.end()) {
-    const StatisticInfo& e = entries_[first->second].info;
-    if (e.kind != info.kind || e.unit != info.unit || e.description != info.description) {
+    const StatisticInfo& e = layout.infos[first->second];
+    if (e.kind != kind || e.unit != unit || e.description != description) {
       throw std::invalid_argument("statistic '" + name + "' differs from '" + e.name +
                                   "' in kind, unit or description");
     }
   } else {
-    patterns_.emplace(pattern, entries_.size());
+    patterns_.emplace(pattern, layout.infos.size());
   }
   end = 0;
   for (std::size_t k = 0; k + 1 < parts.size(); ++k) {
@@ -205,21 +268,30 @@ void Statistics::add(StatisticInfo info, Getter get) {
     group.array = is_index(parts[k + 1]);
     if (group.array) group.elements = std::max(group.elements, index_value(parts[k + 1]) + 1);
   }
-  index_.emplace(name, entries_.size());
-  entries_.push_back({std::move(info), std::move(get), {}, false});
+  index_.emplace(name, layout.infos.size());
+  layout.infos.push_back({name, kind, unit, description});
+  values_.push_back({std::move(get), {}, false});
 }
 
-const Statistics::Entry& Statistics::entry(const std::string& name) const {
-  const auto it = index_.find(name);
-  if (it == index_.end()) {
-    throw std::out_of_range("no statistic '" + name + "' (pp5sim stats --describe lists them)");
+std::size_t Statistics::at(const std::string& name) const {
+  settle();
+  if (layout_) {
+    const auto it = layout_->index.find(name);
+    if (it != layout_->index.end()) return it->second;
   }
-  return entries_[it->second];
+  throw std::out_of_range("no statistic '" + name + "' (pp5sim stats --describe lists them)");
 }
 
-StatValue Statistics::value(const std::string& name) const { return read(entry(name)); }
+bool Statistics::contains(const std::string& name) const {
+  settle();
+  return layout_ && layout_->index.count(name) != 0;
+}
 
-const StatisticInfo& Statistics::info(const std::string& name) const { return entry(name).info; }
+StatValue Statistics::value(const std::string& name) const { return read(values_[at(name)]); }
+
+const StatisticInfo& Statistics::info(const std::string& name) const {
+  return layout_->infos[at(name)];
+}
 
 namespace {
 
@@ -247,13 +319,17 @@ std::string Statistics::text(const std::string& name) const {
 }
 
 std::size_t Statistics::elements(const std::string& name) const {
-  const auto it = parents_.find(name);
-  if (it == parents_.end()) throw std::out_of_range("no group of statistics '" + name + "'");
-  return it->second.elements;
+  settle();
+  if (layout_) {
+    const auto it = layout_->parents.find(name);
+    if (it != layout_->parents.end()) return it->second.elements;
+  }
+  throw std::out_of_range("no group of statistics '" + name + "'");
 }
 
 void Statistics::freeze() {
-  for (Entry& e : entries_) {
+  settle();
+  for (Value& e : values_) {
     if (e.frozen) continue;
     e.value = call(e.get);
     e.frozen = true;
@@ -262,16 +338,17 @@ void Statistics::freeze() {
 }
 
 nlohmann::json Statistics::to_json() const {
+  settle();
   nlohmann::json doc = nlohmann::json::object();
   std::vector<std::string_view> parts;
-  for (const Entry& e : entries_) {
+  for (std::size_t k = 0; k < values_.size(); ++k) {
     nlohmann::json* at = &doc;
-    components_into(e.info.name, parts);
+    components_into(layout_->infos[k].name, parts);
     for (std::string_view c : parts) {
       // Dense registration (checked by add) means an index is at most the array's size.
       at = is_index(c) ? &(*at)[index_value(c)] : &(*at)[c];
     }
-    *at = json_of(read(e));
+    *at = json_of(read(values_[k]));
   }
   return doc;
 }
@@ -307,8 +384,8 @@ Statistics Statistics::from_json(const nlohmann::json& document) {
           throw std::invalid_argument("statistic '" + escape_for_message(name) +
                                       "': not a number or text");
         }
-        s.add({name, kind_of(value), "", ""}, std::monostate{});
-        Entry& e = s.entries_.back();
+        s.add(name, kind_of(value), "", "", std::monostate{});
+        Value& e = s.values_.back();
         e.value = std::move(value);
         e.frozen = true;
       };
@@ -318,11 +395,12 @@ Statistics Statistics::from_json(const nlohmann::json& document) {
 }
 
 std::vector<StatisticInfo> Statistics::describe() const {
+  settle();
   std::vector<StatisticInfo> out;
-  for (std::size_t k = 0; k < entries_.size(); ++k) {
-    std::string pattern = stat_pattern(entries_[k].info.name);
-    if (patterns_.at(pattern) != k) continue;  // not the pattern's first statistic
-    StatisticInfo i = entries_[k].info;
+  for (std::size_t k = 0; k < values_.size(); ++k) {
+    std::string pattern = stat_pattern(layout_->infos[k].name);
+    if (layout_->patterns.at(pattern) != k) continue;  // not the pattern's first statistic
+    StatisticInfo i = layout_->infos[k];
     i.name = std::move(pattern);
     out.push_back(std::move(i));
   }
@@ -330,10 +408,9 @@ std::vector<StatisticInfo> Statistics::describe() const {
 }
 
 std::vector<StatisticInfo> Statistics::infos() const {
-  std::vector<StatisticInfo> out;
-  out.reserve(entries_.size());
-  for (const Entry& e : entries_) out.push_back(e.info);
-  return out;
+  settle();
+  if (!layout_) return {};
+  return layout_->infos;
 }
 
 }  // namespace pp5

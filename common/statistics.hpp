@@ -19,10 +19,16 @@
 //    registry is what a run hands back (FrameResult::stats).
 //  - The pattern of a name replaces each index by "N" ("renderer.N.busy_cycles"); every
 //    statistic of one pattern has the same kind, unit and description (add_* checks).
+//  - What was registered (names, kinds, units, descriptions, in order) is a Layout, shared
+//    between registries rather than copied. follow(layout) on an empty registry makes add_*
+//    take, while each statistic matches the layout's next one, only its getter; at the first
+//    that differs the registry goes on as one that never followed (the same checks, the same
+//    result). A run of frames registers each frame's statistics following the frame before's.
 #include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <unordered_map>
@@ -65,6 +71,8 @@ inline std::int64_t stat_count(std::uint64_t v) { return static_cast<std::int64_
 
 class Statistics {
  public:
+  struct Layout;  // what was registered (see the contract)
+
   void add_integer(const std::string& name, const char* unit, const char* description,
                    std::function<std::int64_t()> get);
   void add_real(const std::string& name, const char* unit, const char* description,
@@ -72,7 +80,12 @@ class Statistics {
   void add_text(const std::string& name, const char* unit, const char* description,
                 std::function<std::string()> get);
 
-  bool contains(const std::string& name) const { return index_.count(name) != 0; }
+  // This registry's layout (shared, not copied) and following one (see the contract): on an
+  // empty registry.
+  std::shared_ptr<const Layout> layout() const;
+  void follow(std::shared_ptr<const Layout> layout);
+
+  bool contains(const std::string& name) const;
   std::int64_t integer(const std::string& name) const;
   double real(const std::string& name) const;
   std::string text(const std::string& name) const;
@@ -99,29 +112,25 @@ class Statistics {
   // read from a file).
   using Getter = std::variant<std::monostate, std::function<std::int64_t()>,
                               std::function<double()>, std::function<std::string()>>;
-  struct Entry {
-    StatisticInfo info;
+  struct Value {
     Getter get;
     StatValue value;
     bool frozen = false;
   };
-  void add(StatisticInfo info, Getter get);
-  const Entry& entry(const std::string& name) const;
+  void add(const std::string& name, StatKind kind, const char* unit, const char* description,
+           Getter get);
+  std::size_t at(const std::string& name) const;  // the statistic's index
   static StatValue call(const Getter& get);
-  StatValue read(const Entry& e) const { return e.frozen ? e.value : call(e.get); }
+  StatValue read(const Value& v) const { return v.frozen ? v.value : call(v.get); }
+  // Before a read: a layout followed part of the way is cut to that part (a new layout).
+  void settle() const;
+  // Before a change: settle(), and the layout made this registry's own (copied if shared).
+  void own_layout();
 
-  std::vector<Entry> entries_;
-  std::unordered_map<std::string, std::size_t> index_;
-  // Every proper prefix of a registered name (its parents): an array (its children are
-  // indices, `elements` of them) or a group of names, to refuse a value that is also a parent
-  // or a parent that would be both, and to answer elements().
-  struct Group {
-    bool array = false;
-    std::size_t elements = 0;
-  };
-  std::map<std::string, Group, std::less<>> parents_;  // looked up by prefix (string_view)
-  // The first statistic of each pattern.
-  std::unordered_map<std::string, std::size_t> patterns_;
+  // Shared with other registries (copy on write); while following, it may hold more
+  // statistics than values_ (the part registered so far is values_.size()).
+  mutable std::shared_ptr<Layout> layout_;
+  std::vector<Value> values_;
 };
 
 // "renderer.3.busy_cycles" -> "renderer.N.busy_cycles".

@@ -1184,6 +1184,7 @@ const RunSummary& Session::run_frames(
     // buffer.
     double start = -1;
     std::vector<GpFrameRecord> grec;
+    grec.reserve(gps.size());
     for (std::size_t i = 0; i < gps.size(); ++i) {
       grec.push_back(machine.gp(gp_index[i]).release_frame(f, renderers_began));
       const GpStats& st = grec.back().stats;
@@ -1194,6 +1195,9 @@ const RunSummary& Session::run_frames(
       sum.gp_busy_clocks += st.busy.count;
     }
     double end = 0, computed = 0;
+    // Reserved: a record's move may throw (sc_time's), so growing would copy each record's
+    // regions and packet pointers.
+    p->renderers.reserve(static_cast<std::size_t>(machine.renderer_count()));
     for (int k = 0; k < machine.renderer_count(); ++k) {
       p->renderers.push_back(machine.renderer(k).release_frame(f));
       const Renderer::FrameRecord& rec = p->renderers.back();
@@ -1277,6 +1281,10 @@ const RunSummary& Session::run_frames(
   // Frame p's result once its pixels are done: its statistics from its own records (the GPs'
   // set-up and sending of that frame, the Renderers' regions of it); what the units do not
   // record per frame (the ring's channels) is the run's. Then on_frame, and the frame goes.
+  // The statistics registered for the frame before (names, kinds, units, descriptions): each
+  // frame's registry follows them (Statistics::follow), so that a frame that registers what
+  // the one before did only fills in its getters.
+  std::shared_ptr<const Statistics::Layout> stats_layout;
   auto deliver = [&] {
     std::unique_ptr<Pending> p = std::move(pending.front());
     pending.pop_front();
@@ -1297,6 +1305,7 @@ const RunSummary& Session::run_frames(
     result.triangles_per_second = result.frame_seconds > 0 ? triangles / result.frame_seconds : 0;
     namespace u = stat_unit;
     Statistics& s = result.stats;
+    s.follow(stats_layout);
     register_frame_identity(s, *scene_, *program_);
     const double frame_seconds = result.frame_seconds;
     s.add_integer("frame.index", u::index, "The frame's place in a run of frames (from 0)",
@@ -1398,6 +1407,7 @@ const RunSummary& Session::run_frames(
     s.add_integer("host.threads", u::count, "Host threads for the pixel arrays (--threads)",
                   [threads] { return std::int64_t{threads}; });
     s.freeze();
+    stats_layout = s.layout();
     result.stats_json = s.to_json();
     p.reset();  // the frame's records and packets go
     ++frames_;

@@ -2,9 +2,11 @@
 // dumps, reading back by name, and that a real run's stats.json is exactly what
 // `pp5sim stats --describe` describes.
 #include <catch2/catch.hpp>
+#include <memory>
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/statistics.hpp"
 #include "sim/scene/scene.hpp"
@@ -152,4 +154,123 @@ TEST_CASE(
   CHECK(r.stats.elements("primitives_per_region") == static_cast<std::size_t>(config.regions()));
   // stats.json is the registry's dump.
   CHECK(r.stats.to_json() == r.stats_json);
+}
+
+// A run's frames register their statistics following the frame before's
+// (Statistics::follow): the registry, its stats.json and its descriptions are those of a
+// registry that registered afresh, whether a frame registers what the one before did, more,
+// less or something else.
+namespace {
+
+struct FrameShape {
+  int gps = 3;
+  const char* busy = "Busy time over the frame time";
+  bool extra = false;
+};
+
+void register_shaped(Statistics& s, const FrameShape& shape, int frame) {
+  s.add_integer("frame.index", stat_unit::index, "The frame's place",
+                [frame] { return std::int64_t{frame}; });
+  for (int k = 0; k < shape.gps; ++k) {
+    s.add_real("gp." + std::to_string(k) + ".busy", stat_unit::ratio, shape.busy,
+               [k, frame] { return 0.25 * k + frame; });
+  }
+  if (shape.extra) s.add_text("run.note", stat_unit::name, "A note", [] { return "x"; });
+  s.add_integer("ring.words", stat_unit::ring_words, "Words of the frame",
+                [frame] { return std::int64_t{100 + frame}; });
+}
+
+void check_same(const Statistics& followed, const Statistics& fresh) {
+  CHECK(followed.to_json().dump() == fresh.to_json().dump());
+  const auto a = followed.infos(), b = fresh.infos();
+  REQUIRE(a.size() == b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    CHECK(a[k].name == b[k].name);
+    CHECK(a[k].kind == b[k].kind);
+    CHECK(a[k].unit == b[k].unit);
+    CHECK(a[k].description == b[k].description);
+  }
+  const auto da = followed.describe(), db = fresh.describe();
+  REQUIRE(da.size() == db.size());
+  for (std::size_t k = 0; k < da.size(); ++k) CHECK(da[k].name == db[k].name);
+  CHECK(followed.elements("gp") == fresh.elements("gp"));
+  for (const char* name : {"gp.2.busy", "gp.3.busy", "run.note", "ring.words"})
+    CHECK(followed.contains(name) == fresh.contains(name));
+}
+
+}  // namespace
+
+TEST_CASE("statistics: a frame registered following the frame before is as if registered afresh",
+          "[statistics]") {
+  const std::vector<FrameShape> run = {
+      {},
+      {},                                      // the same: only getters taken
+      {},                                      //
+      {5},                                     // more GPs
+      {2},                                     // fewer: a layout followed part of the way is cut
+      {2, "Busy time, described anew"},        // a different description
+      {2, "Busy time, described anew", true},  // a statistic more in the middle
+      {3},
+      {3},
+  };
+  std::shared_ptr<const Statistics::Layout> before;
+  for (std::size_t f = 0; f < run.size(); ++f) {
+    INFO("frame " << f);
+    Statistics fresh, followed;
+    followed.follow(before);
+    register_shaped(fresh, run[f], static_cast<int>(f));
+    register_shaped(followed, run[f], static_cast<int>(f));
+    followed.freeze();
+    fresh.freeze();
+    check_same(followed, fresh);
+    // Registered as the frame before: its layout is that frame's, shared, not a copy.
+    const bool same_shape = f > 0 && run[f].gps == run[f - 1].gps &&
+                            std::string(run[f].busy) == run[f - 1].busy &&
+                            run[f].extra == run[f - 1].extra;
+    CHECK((followed.layout() == before) == same_shape);
+    before = followed.layout();
+  }
+  // The checks of a registry that never followed still hold.
+  Statistics twice;
+  twice.follow(before);
+  twice.add_integer("frame.index", stat_unit::index, "The frame's place", [] { return 0; });
+  CHECK_THROWS_AS(
+      twice.add_integer("frame.index", stat_unit::index, "The frame's place", [] { return 0; }),
+      std::invalid_argument);
+  Statistics unlike;
+  unlike.follow(before);
+  unlike.add_integer("frame.index", stat_unit::index, "The frame's place", [] { return 0; });
+  unlike.add_real("gp.0.busy", stat_unit::ratio, "Busy time over the frame time", [] { return 0; });
+  CHECK_THROWS_AS(unlike.add_real("gp.1.busy", stat_unit::ratio, "Another", [] { return 0; }),
+                  std::invalid_argument);
+  // A followed layout is not changed by the registries that left it: one registering the
+  // last frame's statistics again still shares it.
+  Statistics again;
+  again.follow(before);
+  register_shaped(again, run.back(), 0);
+  CHECK(again.layout() == before);
+  CHECK(again.infos().size() == 5);
+}
+
+TEST_CASE("statistics: a run's frames' stats.json are those of registries made afresh",
+          "[statistics]") {
+  // A run of frames (Session::run_frames) registers each frame following the one before; its
+  // statistics' documents, names and descriptions are those of single frames of the same
+  // scenes (simulate_frame registers afresh). Timing only, a small screen.
+  MachineConfig c = MachineConfig::defaults();
+  c.screen.width = 256;
+  c.screen.height = 256;
+  c.set(std::vector<std::string>{"fidelity.pixels=none"});
+  const auto program = std::make_shared<const Program>(pp5::test::load_program("phong", c));
+  const auto scene = std::make_shared<const Scene>(make_builtin_scene("torus", {24, 12}));
+  Session session(c, scene, program, 1);
+  std::vector<FrameResult> frames;
+  session.run_frames(
+      3, [&](int, FrameResult& r) { frames.push_back(std::move(r)); }, false);
+  REQUIRE(frames.size() == 3);
+  for (std::size_t f = 1; f < frames.size(); ++f) {
+    INFO("frame " << f);
+    CHECK(frames[f].stats.layout() == frames[0].stats.layout());
+    CHECK(frames[f].stats.infos().size() == frames[0].stats.infos().size());
+  }
 }

@@ -111,6 +111,11 @@ class CarriedExpressions {
   const QuadraticCoefficients* data() const { return values_.data(); }
   std::size_t size() const { return values_.size(); }
   void reserve(std::size_t n) { values_.reserve(n); }
+  // Carries nothing again, keeping the storage (a reused packet's).
+  void clear() {
+    carried_ = 0;
+    values_.clear();
+  }
 
   static constexpr std::uint64_t kAll = (std::uint64_t{1} << ExpressionValues{}.size()) - 1;
   static_assert(ExpressionValues{}.size() < 64, "one bit per expression");

@@ -102,6 +102,15 @@ struct SetupResult {
   PacketExpressions values;
   int x_min = 0, x_max = -1, y_min = 0, y_max = -1;  // pixel-centre bounding box, inclusive
   bool back = false;  // a triangle facing away from the eye (ScreenTriangle::back)
+  // As a new SetupResult, keeping the coefficients' storage.
+  void clear() {
+    values.expressions.clear();
+    x_min = 0;
+    x_max = -1;
+    y_min = 0;
+    y_max = -1;
+    back = false;
+  }
 };
 
 class GeometryEngine {

@@ -127,6 +127,7 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
   // program the same packets go out once per pass.
   if (bins != nullptr) bins->reset(config.regions());
   std::vector<int> regions;
+  SetupResult result;  // one for every set-up: its coefficient storage is reused
   if (done_after != nullptr) done_after->clear();
   const std::uint64_t clocks_before = stats.geometry.count;
   for (int i = first; i < last; ++i) {
@@ -156,9 +157,11 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
       for (int piece = 0; piece < tally.pieces; ++piece) {
         ++stats.screen_triangles;
         ++tally.setups;
-        SetupResult result;
+        result.clear();
         if (!k.worker->setup(piece, k.workload.expressions, result, counts)) continue;
-        auto packet = std::make_shared<Packet>();
+        // From the bins' packet memory when there are bins (the GP's run), else its own.
+        std::shared_ptr<Packet> packet =
+            bins != nullptr ? bins->make_packet() : std::make_shared<Packet>();
         packet->procedure = k.kind->procedure();
         packet->kind = ref.kind;
         packet->primitive = i;
@@ -167,7 +170,8 @@ void geometry_pass_with(const MachinePlan& machine, int first, int last, GpStats
         packet->words = k.workload.packet_words;
         regions.clear();
         k.worker->bin(result, regions);
-        packet->values = std::move(result.values);
+        // The coefficients go in; the storage the packet's slot held comes back to `result`.
+        std::swap(packet->values, result.values);
         stats.packets += regions.size();
         tally.regions += static_cast<int>(regions.size());
         if (bins != nullptr) {

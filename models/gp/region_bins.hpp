@@ -11,12 +11,16 @@
 //    packet in ascending order, slot(r) is r's index in regions() (-1 for a region without
 //    one) and bin(r) its packets (empty for a region without one). add() after finish()
 //    needs another finish().
+//  - make_packet() gives a default packet from the bins' packet memory (models/gp/
+//    packet_pool.hpp): one arena per reset(), reused once every packet made since that
+//    reset() has been dropped, wherever it went.
 #include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <numeric>
 #include <vector>
 
+#include "models/gp/packet_pool.hpp"
 #include "models/protocol/packet.hpp"
 
 namespace pp5 {
@@ -33,7 +37,11 @@ class RegionBins {
     slot_.assign(static_cast<std::size_t>(regions), -1);
     for (std::size_t k = 0; k < regions_.size(); ++k) bins_[k].clear();
     regions_.clear();
+    arena_.reset();  // this frame's packets may go back to the pool before the next take
+    arena_ = pool_.take();
   }
+
+  std::shared_ptr<Packet> make_packet() { return arena_->make(arena_); }
 
   void add(int region, std::shared_ptr<const Packet> packet) {
     int& s = slot_[static_cast<std::size_t>(region)];
@@ -75,6 +83,8 @@ class RegionBins {
   std::vector<int> regions_;  // regions with a packet
   std::vector<Bin> bins_;     // the first regions_.size() in use, the rest empty, kept
   Bin empty_;
+  PacketPool pool_;
+  std::shared_ptr<PacketArena> arena_;
 };
 
 }  // namespace pp5
