@@ -188,7 +188,37 @@ struct RowEnabled {
   }
 };
 
+// A condition on eight signed 64-bit pairs, as three flags: (less and lt) or (equal and eq),
+// inverted when inv; and E &= it on a chunk, its span noted (qcmp's and cmp's passes).
+class ChunkCompare {
+ public:
+  explicit ChunkCompare(Compare cond) {
+    const bool lt =
+        cond == Compare::lt || cond == Compare::le || cond == Compare::ge || cond == Compare::gt;
+    const bool eq =
+        cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
+    const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
+    lt_mask_ = V8s{} - static_cast<std::int64_t>(lt);
+    eq_mask_ = V8s{} - static_cast<std::int64_t>(eq);
+    inv_mask_ = V8{} - static_cast<std::uint64_t>(inv);
+  }
+  // E's chunk at en + base ANDed with (a cond b) in the live lanes, the lanes left noted.
+  void apply(std::uint8_t* en, int base, const V8& live, const V8s& a, const V8s& b,
+             RowEnabled& row) const {
+    const V8 holds = reinterpret_cast<V8>(((a < b) & lt_mask_) | ((a == b) & eq_mask_)) ^ inv_mask_;
+    const V8 old = load_enable8(en + base);
+    const V8 left = old & holds & live;
+    row.add(base, left);
+    store_enable8(en + base, left | (old & ~live));
+  }
+
+ private:
+  V8s lt_mask_, eq_mask_;
+  V8 inv_mask_;
+};
+
 }  // namespace word_rows
+using word_rows::ChunkCompare;
 using word_rows::RowEnabled;
 
 WordBackend::WordBackend(const PixelBackendParams& params)
@@ -1127,13 +1157,7 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
   const u64 mask = low_mask(field.width);
   const u64* lane = memory_.data() + static_cast<std::size_t>(field.lo / 64) * pixels_;
   std::uint8_t* e = enable_.data();
-  const bool lt =
-      cond == Compare::lt || cond == Compare::le || cond == Compare::ge || cond == Compare::gt;
-  const bool eq =
-      cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
-  const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
-  const V8s lt_mask = V8s{} - static_cast<i64>(lt), eq_mask = V8s{} - static_cast<i64>(eq);
-  const V8 inv_mask = V8{} - static_cast<u64>(inv);
+  const ChunkCompare test(cond);
   const int width = geometry_.width;
   // Each row's part narrowed (as narrow_spans does) as soon as it is compared, skipped when
   // the pass found no pixel left.
@@ -1153,13 +1177,7 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
       } else {
         v &= mask;
       }
-      const V8s a = reinterpret_cast<V8s>(v), b = reinterpret_cast<V8s>(f);
-      // -1 where the condition holds, per lane.
-      const V8 holds = reinterpret_cast<V8>(((a < b) & lt_mask) | ((a == b) & eq_mask)) ^ inv_mask;
-      const V8 old = load_enable8(en + base);
-      const V8 left = old & holds & live;
-      row.add(base, left);
-      store_enable8(en + base, left | (old & ~live));
+      test.apply(en, base, live, reinterpret_cast<V8s>(v), reinterpret_cast<V8s>(f), row);
     });
     row.keep(kept, static_cast<int>(row_start));
   });
@@ -1219,13 +1237,7 @@ void WordBackend::compare_lane(const Field& a, Compare cond, ReadB read_b) {
   const bool is_signed = a.is_signed;
   const u64* lane = memory_.data() + static_cast<std::size_t>(a.lo / 64) * pixels_;
   std::uint8_t* e = enable_.data();
-  const bool lt =
-      cond == Compare::lt || cond == Compare::le || cond == Compare::ge || cond == Compare::gt;
-  const bool eq =
-      cond == Compare::le || cond == Compare::eq || cond == Compare::ne || cond == Compare::gt;
-  const bool inv = cond == Compare::ne || cond == Compare::ge || cond == Compare::gt;
-  const V8s lt_mask = V8s{} - static_cast<i64>(lt), eq_mask = V8s{} - static_cast<i64>(eq);
-  const V8 inv_mask = V8{} - static_cast<u64>(inv);
+  const ChunkCompare test(cond);
   const int width = geometry_.width;
   std::vector<Range>& kept = spare_spans_;
   kept.clear();
@@ -1237,12 +1249,7 @@ void WordBackend::compare_lane(const Field& a, Compare cond, ReadB read_b) {
       const int p = start + base;
       V8 f = (load8(lane + p) >> off) & mask;
       if (is_signed) f = reinterpret_cast<V8>(reinterpret_cast<V8s>(f << sw) >> sw);
-      const V8s x = reinterpret_cast<V8s>(f), y = reinterpret_cast<V8s>(read_b(p));
-      const V8 holds = reinterpret_cast<V8>(((x < y) & lt_mask) | ((x == y) & eq_mask)) ^ inv_mask;
-      const V8 old = load_enable8(en + base);
-      const V8 left = old & holds & live;
-      row.add(base, left);
-      store_enable8(en + base, left | (old & ~live));
+      test.apply(en, base, live, reinterpret_cast<V8s>(f), reinterpret_cast<V8s>(read_b(p)), row);
     });
     row.keep(kept, start);
   });
