@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_frames.hpp"
 #include "firmware/assembler/assembler.hpp"
 #include "models/gp/machine_plan.hpp"
 #include "sim/image/png_writer.hpp"
@@ -94,12 +95,7 @@ std::string png_ref_encode_zlib(const pp5::RgbImage& image) {
 }
 
 void BM_PngEncode(benchmark::State& state) {
-  pp5::MachineConfig config = pp5::MachineConfig::defaults();
-  config.set(std::vector<std::string>{"fidelity.pixels=word"});
-  const pp5::Scene scene = pp5::make_builtin_scene("torus");
-  const pp5::Program program = pp5::assemble_file(
-      std::string(PP5_SOURCE_DIR) + "/firmware/programs/phong.pp5", pp5::assembler_options(config));
-  const pp5::RgbImage image = pp5::simulate_frame(config, scene, program, 2).image.flat();
+  const pp5::RgbImage image = pp5::bench::torus_word_frame().flat();
   // The new file decodes to the frame's pixels.
   const std::string check = pp5::encode_png(image);
   const auto path = std::filesystem::temp_directory_path() / "pp5_bench_png_check.png";
@@ -113,12 +109,7 @@ void BM_PngEncode(benchmark::State& state) {
     state.SkipWithError("the new encoder's PNG does not decode to the frame");
     return;
   }
-  // This thread's processor time: the machine is shared, and the encoders are single-threaded.
-  auto cpu_seconds = [] {
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return static_cast<double>(t.tv_sec) + static_cast<double>(t.tv_nsec) * 1e-9;
-  };
+  auto cpu_seconds = pp5::bench::thread_cpu_seconds;
   double t_new = 0, t_ref = 0;
   std::size_t new_bytes = 0, ref_bytes = 0;
   for (auto _ : state) {
@@ -150,12 +141,7 @@ namespace {
 // The encoder alone on the frame buffer's frame, as `pp5sim animate` encodes each frame (for
 // perf record): `pp5_bench --benchmark_filter=PngOnly`.
 void BM_PngOnly(benchmark::State& state) {
-  pp5::MachineConfig config = pp5::MachineConfig::defaults();
-  config.set(std::vector<std::string>{"fidelity.pixels=word"});
-  const pp5::Scene scene = pp5::make_builtin_scene("torus");
-  const pp5::Program program = pp5::assemble_file(
-      std::string(PP5_SOURCE_DIR) + "/firmware/programs/phong.pp5", pp5::assembler_options(config));
-  const pp5::FrameImage frame = pp5::simulate_frame(config, scene, program, 2).image;
+  const pp5::FrameImage frame = pp5::bench::torus_word_frame();
   for (auto _ : state) benchmark::DoNotOptimize(pp5::encode_png(frame).data());
 }
 
