@@ -152,6 +152,17 @@ void and_compare(std::uint8_t* e, const u64* a, GetB b, Compare cond, int begin,
 // capture it.
 namespace word_rows {
 
+// Span [a, b) joined to the spans kept: a row enabled to its end and the next from its start
+// stay one span.
+template <class Spans>
+void keep_span(Spans& kept, int a, int b) {
+  if (!kept.empty() && kept.back().end == a) {
+    kept.back().end = b;
+  } else {
+    kept.push_back({a, b});
+  }
+}
+
 // The first and last pixels of a row's part that a compare left enabled, gathered chunk by
 // chunk as it compares (its chunks come in increasing order, and a chunk's lanes that are not
 // live are 0 in `left`): the span keep_enabled would find by reading E back, without the read.
@@ -174,17 +185,11 @@ struct RowEnabled {
     last = base + 7 - __builtin_clzll(w) / 8;
 #endif
   }
-  // Its span joined to the spans kept, as keep_enabled does: a row enabled to its end and
-  // the next from its start stay one span. `start`: the row's first pixel.
+  // Its span joined to the spans kept (keep_span), as keep_enabled does. `start`: the row's
+  // first pixel.
   template <class Spans>
   void keep(Spans& kept, int start) const {
-    if (first < 0) return;
-    const int a = start + first, b = start + last + 1;
-    if (!kept.empty() && kept.back().end == a) {
-      kept.back().end = b;
-    } else {
-      kept.push_back({a, b});
-    }
+    if (first >= 0) keep_span(kept, start + first, start + last + 1);
   }
 };
 
@@ -818,12 +823,7 @@ void WordBackend::keep_enabled(std::vector<Range>& kept, int from, int to) const
   const std::uint8_t* e = enable_.data();
   const int a = first_enabled(e, from, to);
   if (a == to) return;
-  const int b = end_of_enabled(e, a, to);
-  if (!kept.empty() && kept.back().end == a) {
-    kept.back().end = b;  // a row enabled to its end and the next from its start: one span
-  } else {
-    kept.push_back({a, b});
-  }
+  word_rows::keep_span(kept, a, end_of_enabled(e, a, to));
 }
 
 void WordBackend::narrow_spans() {
