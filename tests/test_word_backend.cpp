@@ -137,9 +137,10 @@ class Scoreboard {
   // backend's state applies what it defers (a run of linear tests), so only the second lets
   // deferred work meet the instructions after it.
   void run(int packets, int per_packet, bool each = true) {
-    const int x0 = static_cast<int>(pick(-300, 3000)), y0 = static_cast<int>(pick(-300, 3000));
-    bit_->set_origin(x0, y0);
-    word_->set_origin(x0, y0);
+    x0_ = static_cast<int>(pick(-300, 3000));
+    y0_ = static_cast<int>(pick(-300, 3000));
+    bit_->set_origin(x0_, y0_);
+    word_->set_origin(x0_, y0_);
     std::mt19937_64 fill(rng_());
     for (int px = 0; px < bit_->pixels(); ++px) {
       for (int lo = 0; lo < p_.array.memory_bits; lo += 64) {
@@ -168,6 +169,14 @@ class Scoreboard {
     }
   }
   const std::vector<int>& executed() const { return executed_; }
+  // The shares of instructions (percent) drawn as qload, as qtest and as a mov of a constant
+  // before any other draw: runs of writes that read no pixel memory, as a triangle's
+  // attributes are, with fields overlapping and across lanes, and tests between them.
+  void favour(int qload_percent, int qtest_percent, int mov_constant_percent) {
+    qload_percent_ = qload_percent;
+    qtest_percent_ = qtest_percent;
+    mov_constant_percent_ = mov_constant_percent;
+  }
 
  private:
   void same(const std::string& what) {
@@ -204,7 +213,15 @@ class Scoreboard {
     OwnedValues v;
     const int c = p_.evaluator.coefficient_bits;
     for (auto& e : v.expressions) {
-      switch (pick(0, 3)) {
+      switch (pick(0, 4)) {
+        case 4: {  // a plane whose zero crosses the region (a triangle's edge)
+          e.D = pick(-(1 << 12), 1 << 12);
+          e.E = pick(-(1 << 12), 1 << 12);
+          const std::int64_t x = x0_ + pick(0, p_.array.width - 1);
+          const std::int64_t y = y0_ + pick(0, p_.array.height - 1);
+          e.F = -(e.D * x + e.E * y) + pick(-(1 << 12), 1 << 12);
+          break;
+        }
         case 0:  // a constant
           e.F = any_bits(c);
           break;
@@ -283,6 +300,17 @@ class Scoreboard {
     const int depth = bit_->enable_depth();
     for (;;) {
       i.op = static_cast<Opcode>(pick(0, static_cast<int>(Opcode::count) - 1));
+      const auto share = pick(0, 99);
+      if (share < qload_percent_) {
+        i.op = Opcode::qload;
+      } else if (share < qload_percent_ + qtest_percent_) {
+        i.op = Opcode::qtest;
+      } else if (share < qload_percent_ + qtest_percent_ + mov_constant_percent_) {
+        i.op = Opcode::mov;
+        i.operands[0] = any_field();
+        i.operands[1] = constant();
+        return i;
+      }
       if (i.op == Opcode::epush && depth >= p_.array.enable_stack_depth) continue;
       if ((i.op == Opcode::epop || i.op == Opcode::eelse) && depth == 0) continue;
       // Keep some pixels enabled most of the time, as firmware does.
@@ -345,6 +373,8 @@ class Scoreboard {
   std::unique_ptr<PixelBackend> word_;
   std::vector<std::uint64_t> bit_planes_, word_planes_;
   std::vector<int> executed_ = std::vector<int>(static_cast<std::size_t>(Opcode::count), 0);
+  int qload_percent_ = 0, qtest_percent_ = 0, mov_constant_percent_ = 0;
+  int x0_ = 0, y0_ = 0;  // the region's origin (run)
 };
 
 }  // namespace
@@ -386,6 +416,35 @@ TEST_CASE("word and bit run random instruction streams in lockstep (scoreboard)"
   for (std::size_t op = 0; op < executed.size(); ++op) {
     INFO("opcode " << instruction_info(static_cast<Opcode>(op)).mnemonic);
     CHECK(executed[op] > 10);
+  }
+}
+
+TEST_CASE("word and bit agree on runs of qloads and constant movs (word writes a run in one walk)",
+          "[word][backend]") {
+  // Mostly qloads and movs of constants, compared only after each packet: runs longer than
+  // the word backend keeps waiting, to fields that overlap (the later write wins) and lie in
+  // different lanes, with linear and quadratic expressions, broken by tests and the other
+  // instructions that must write them first (and compared after every instruction in a
+  // second run, where each read does).
+  PixelBackendParams p;
+  p.array.width = 128;
+  p.array.height = 6;
+  p.array.memory_bits = 208;
+  p.array.enable_stack_depth = 4;
+  p.array.backing_store_bits = 512;
+  p.array.block_bits = 32;
+  p.evaluator.coefficient_bits = 40;
+  p.evaluator.result_bits = 40;
+  p.fraction_bits = 12;
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    INFO("seed " << seed);
+    Scoreboard runs(p, seed);
+    runs.favour(seed % 2 == 0 ? 70 : 50, 15, 10);
+    runs.run(10, 40, false);
+    CHECK(runs.executed()[static_cast<std::size_t>(Opcode::qload)] > 200);
+    Scoreboard each(p, seed + 100);
+    each.favour(50, 15, 10);
+    each.run(2, 40);
   }
 }
 

@@ -26,7 +26,10 @@
 //    throws std::overflow_error; popping or else-ing an empty one std::underflow_error; mul
 //    or mac with dst overlapping a source throws std::invalid_argument.
 //  - Cost is not a backend's business: the instruction table charges cycles.
-//  - Calls are per instruction; a backend does its per-pixel work inside each call.
+//  - Calls are per instruction. A backend may defer a call's per-pixel work and do it
+//    together with later calls' (the word backend writes a run of qloads in one walk), as
+//    long as every read, comparison, copy and clone of its state sees it as it would be after
+//    each call in turn.
 #include <cstdint>
 #include <memory>
 #include <vector>

@@ -10,6 +10,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #ifdef __AVX512F__
@@ -412,6 +413,7 @@ void WordBackend::expression_field(const QuadraticCoefficients& c, const Field& 
 }
 
 void WordBackend::enable_all() {
+  write_loads();
   pending_.clear();  // E becomes all 1: no earlier test matters
   ones_ = true;      // filled by materialize(), over the spans the next tests leave
   spans_.assign(1, Range{0, pixels_});
@@ -637,7 +639,7 @@ class RowBound {
 
 }  // namespace
 
-void WordBackend::materialize() const {
+void WordBackend::settle_enable() const {
   if (!pending_.empty()) apply_pending();
   if (ones_) {  // after the tests: only the spans they left are filled
     for (const Range& r : spans_) std::fill(enable_.begin() + r.begin, enable_.begin() + r.end, 1);
@@ -765,6 +767,7 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
 }
 
 void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
+  write_loads();  // before a test joins the pending ones
   if (qtest_linear(expr, cond)) return;
   materialize();
   if (qtest_quadratic(expr, cond)) return;
@@ -1043,10 +1046,10 @@ bool WordBackend::qtest_quadratic(const QuadraticCoefficients& c, Compare cond) 
 }
 
 void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
-  materialize();
   check_field(dst, "assign");
   const int off = dst.lo % 64;
   if (off + dst.width > 64) {  // the field straddles two lanes
+    materialize();
     prepare_columns(expr);
     for (const Range& r : spans_) {
       expression_field(expr, dst, r, scratch().s0.data());
@@ -1054,11 +1057,15 @@ void WordBackend::qload(const Field& dst, const QuadraticCoefficients& expr) {
     }
     return;
   }
-  if (expr.A != 0) {
-    qload_lane<true>(dst, expr);
-  } else {
-    qload_lane<false>(dst, expr);
-  }
+  queue_load({dst, expr, false});
+}
+
+void WordBackend::queue_load(const PendingLoad& load) {
+  // Waits with the ones before it (loads_): E settled now stays as it is until they are
+  // written.
+  settle_enable();
+  if (loads_.size() == kMaxLoads) apply_loads();
+  loads_.push_back(load);
 }
 
 template <class F>
@@ -1091,6 +1098,7 @@ void WordBackend::for_each_span_row(F f) const {
 // down by the fraction): the row's terms once per row, two adds and a multiply per pixel
 // (two multiplies with a square term).
 struct WordBackend::PixelValues {
+  PixelValues() = default;
   PixelValues(const QuadraticCoefficients& c, int x0, int y0, int result_bits, int fraction_bits)
       : A(static_cast<u64>(c.A)),
         B(static_cast<u64>(c.B)),
@@ -1109,41 +1117,152 @@ struct WordBackend::PixelValues {
     const u64 Y = static_cast<u64>(static_cast<i64>(y0) + y);
     return {C * Y * Y + E * Y + F, D + B * Y};
   }
-  // The value at the eight pixels base + [0, 8) of the row, lane by lane.
-  template <bool kSquare>
-  V8 at8(const Row& r, int base) const {
+  // The screen columns of the eight pixels base + [0, 8) of a row.
+  V8 columns8(int base) const {
     const V8s iota = {0, 1, 2, 3, 4, 5, 6, 7};
-    const V8 X = X0 + static_cast<u64>(base) + reinterpret_cast<V8>(iota);
+    return X0 + static_cast<u64>(base) + reinterpret_cast<V8>(iota);
+  }
+  // The value at the eight pixels of a row whose columns are X, lane by lane.
+  template <bool kSquare>
+  V8 value8(const Row& r, const V8& X) const {
     V8 v = kSquare ? (A * X + r.linear) * X + r.row : r.linear * X + r.row;
     v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << s) >> s);
     return reinterpret_cast<V8>(reinterpret_cast<V8s>(v) >> shift);
   }
-  u64 A, B, C, D, E, F, X0;
-  int y0, s, shift;
+  // The value at the eight pixels base + [0, 8) of the row.
+  template <bool kSquare>
+  V8 at8(const Row& r, int base) const {
+    return value8<kSquare>(r, columns8(base));
+  }
+  u64 A = 0, B = 0, C = 0, D = 0, E = 0, F = 0, X0 = 0;
+  int y0 = 0, s = 0, shift = 0;
 };
 
-// The value as for_each_value computes it, merged into its lane under E as it is computed
-// (store() fused in). Only the field's low width bits are written, so its signedness does
-// not matter here.
-template <bool kSquare>
-void WordBackend::qload_lane(const Field& dst, const QuadraticCoefficients& c) {
-  const PixelValues values(c, x0_, y0_, evaluator_.result_bits, fraction_bits_);
-  const int off = dst.lo % 64;
-  const u64 bits = low_mask(dst.width) << off;
-  u64* lane = memory_.data() + static_cast<std::size_t>(dst.lo / 64) * pixels_;
+// The waiting writes (loads_) in one walk over the spans: per eight pixels E is read once,
+// and each lane they write is read and stored once, the writes to it merged in their order
+// between (only a field's own bits, so its signedness does not matter here), then the lane
+// merged under E. A qload's value is as for_each_value computes it (modulo 2^64 the same
+// sum); a mov's constant is the same at every pixel, so consecutive constants into a lane
+// merge into one mask and value before the walk, and a run of constants alone walks the
+// spans as they are rather than row by row.
+void WordBackend::apply_loads() const {
+  const std::size_t n = loads_.size();
+  // Each lane's writes in their order (a later one wins where two overlap); a run of
+  // constants within a lane is one term.
+  enum class Kind { constant, linear, square };
+  struct Term {
+    Kind kind;
+    PixelValues values;
+    u64 bits;   // the field's bits in the lane
+    u64 value;  // a constant's bits in the lane (within `bits`)
+    int off;
+    PixelValues::Row row;
+  };
+  struct LaneGroup {
+    u64* lane;
+    std::size_t begin, end;  // terms[begin, end)
+  };
+  std::array<std::size_t, kMaxLoads> order;
+  for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n),
+                   [this](std::size_t a, std::size_t b) {
+                     return loads_[a].dst.lo / 64 < loads_[b].dst.lo / 64;
+                   });
+  std::array<Term, kMaxLoads> terms;
+  std::array<LaneGroup, kMaxLoads> groups;
+  std::size_t term_count = 0, group_count = 0;
+  bool all_constant = true;
+  for (std::size_t k = 0; k < n; ++k) {
+    const PendingLoad& l = loads_[order[k]];
+    const int off = l.dst.lo % 64;
+    const u64 bits = low_mask(l.dst.width) << off;
+    u64* lane = memory_.data() + static_cast<std::size_t>(l.dst.lo / 64) * pixels_;
+    if (group_count == 0 || groups[group_count - 1].lane != lane) {
+      groups[group_count++] = {lane, term_count, term_count};
+    }
+    LaneGroup& g = groups[group_count - 1];
+    if (l.constant) {
+      const u64 value = (static_cast<u64>(l.c.F) << off) & bits;
+      if (g.end > g.begin && terms[g.end - 1].kind == Kind::constant) {
+        Term& t = terms[g.end - 1];  // the constant before it in this lane: one mask and value
+        t.value = (t.value & ~bits) | value;
+        t.bits |= bits;
+        continue;
+      }
+      terms[term_count++] = {Kind::constant, PixelValues(), bits, value, off, {}};
+    } else {
+      all_constant = false;
+      terms[term_count++] = {l.c.A != 0 ? Kind::square : Kind::linear,
+                             PixelValues(l.c, x0_, y0_, evaluator_.result_bits, fraction_bits_),
+                             bits,
+                             0,
+                             off,
+                             {}};
+    }
+    ++g.end;
+  }
+  loads_.clear();
   const std::uint8_t* e = enable_.data();
+  // One lane's writes at the eight pixels from base, merged under E (k).
+  auto merge = [&](const LaneGroup& g, std::size_t base, const V8& k, auto value) {
+    u64* m = g.lane + base;
+    const V8 old = load8(m);
+    V8 word = old;
+    for (std::size_t t = g.begin; t < g.end; ++t) {
+      const Term& l = terms[t];
+      word = (word & ~l.bits) | value(l);
+    }
+    store8(m, (old & ~k) | (word & k));
+  };
+  if (all_constant) {
+    for (const Range& r : spans_) {
+      for_chunks(r.begin, r.end, pixels_, [&](int base, const V8& live) {
+        const V8 k = (V8{} - load_enable8(e + base)) & live;
+        for (std::size_t g = 0; g < group_count; ++g) {
+          merge(groups[g], static_cast<std::size_t>(base), k,
+                [](const Term& l) { return V8{} + l.value; });
+        }
+      });
+    }
+    return;
+  }
   const int width = geometry_.width;
-  for_each_span_row([=](int y, std::size_t row_start, int from, int to) {
-    const PixelValues::Row r = values.row(y);
-    u64* m = lane + row_start;
-    const std::uint8_t* en = e + row_start;
-    for_chunks(from, to, width, [&](int base, const V8& live) {
-      const V8 v = values.at8<kSquare>(r, base);
-      const V8 k = bits & (V8{} - load_enable8(en + base)) & live;
-      const V8 old = load8(m + base);
-      store8(m + base, (old & ~k) | ((v << off) & k));
+  // kOne: a single qload (a sphere's, between other instructions), whose loops and square
+  // term are compiled out; otherwise any run, each term's kind chosen per term.
+  auto walk = [&](auto one, auto one_square) {
+    constexpr bool kOne = decltype(one)::value, kOneSquare = decltype(one_square)::value;
+    const std::size_t count = kOne ? 1 : term_count, lane_groups = kOne ? 1 : group_count;
+    PixelValues columns;
+    for (std::size_t t = 0; t < count; ++t) {
+      if (terms[t].kind != Kind::constant) columns = terms[t].values;
+    }
+    for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+      for (std::size_t t = 0; t < count; ++t) terms[t].row = terms[t].values.row(y);
+      const std::uint8_t* en = e + row_start;
+      for_chunks(from, to, width, [&](int base, const V8& live) {
+        const V8 X = columns.columns8(base);
+        const V8 k = (V8{} - load_enable8(en + base)) & live;
+        for (std::size_t g = 0; g < lane_groups; ++g) {
+          merge(groups[g], row_start + static_cast<std::size_t>(base), k, [&X](const Term& l) {
+            const Kind kind = kOne ? (kOneSquare ? Kind::square : Kind::linear) : l.kind;
+            if (kind == Kind::constant) return V8{} + l.value;
+            const V8 v = kind == Kind::square ? l.values.value8<true>(l.row, X)
+                                              : l.values.value8<false>(l.row, X);
+            return (v << l.off) & l.bits;
+          });
+        }
+      });
     });
-  });
+  };
+  using yes = std::true_type;
+  using no = std::false_type;
+  if (term_count > 1) {
+    walk(no{}, no{});
+  } else if (terms[0].kind == Kind::square) {
+    walk(yes{}, yes{});
+  } else {
+    walk(yes{}, no{});
+  }
 }
 
 // E &= (value cond field), both cut to the field's width and extended by its signedness
@@ -1339,6 +1458,13 @@ bool WordBackend::compare_range(const Field& a, const Source& b, Compare cond, R
 }
 
 void WordBackend::alu(const Field& dst, const Source& src, Alu op) {
+  if (op == Alu::mov && !src.is_field && dst.lo % 64 + dst.width <= 64) {
+    // A constant into a field within one lane reads no pixel memory: it waits with the
+    // qloads (a sphere's colour after its depth, a triangle's `covered` after its attributes).
+    check_field(dst, "assign");
+    queue_load({dst, QuadraticCoefficients::constant(src.constant), true});
+    return;
+  }
   materialize();
   if (src.is_field) check_field(src.field, "operand");
   check_field(dst, op == Alu::mov   ? "assign"
@@ -1620,6 +1746,7 @@ void WordBackend::load_from_backing(const Field& field, int block) {
 }
 
 u64 WordBackend::read(int pixel, const Field& field) const {
+  write_loads();
   const int lane = field.lo / 64;
   const int off = field.lo % 64;
   const std::size_t n = static_cast<std::size_t>(pixels_);
@@ -1630,10 +1757,12 @@ u64 WordBackend::read(int pixel, const Field& field) const {
 
 void WordBackend::read_field(const Field& field, u64* out) const {
   check_field(field, "read");
+  write_loads();
   load(memory_.data(), field, Range{0, pixels_}, out, false);
 }
 
 void WordBackend::read_memory_planes(std::vector<u64>& planes) const {
+  write_loads();
   const int words = pixels_ / 64;
   const int bits = geometry_.memory_bits;
   planes.assign(static_cast<std::size_t>(bits) * words, 0);
@@ -1651,6 +1780,7 @@ void WordBackend::read_memory_planes(std::vector<u64>& planes) const {
 
 void WordBackend::write(int pixel, const Field& field, u64 value) {
   check_field(field, "write");
+  write_loads();
   const int lane = field.lo / 64;
   const int off = field.lo % 64;
   const std::size_t n = static_cast<std::size_t>(pixels_);
@@ -1705,6 +1835,7 @@ void WordBackend::copy_state_from(const PixelBackend& other) {
                                 other.name() + "' backend of another kind or geometry");
   }
   o->materialize();
+  loads_.clear();
   pending_.clear();
   ones_ = false;
   memory_ = o->memory_;

@@ -22,8 +22,9 @@
 // outside the spans are never read. A run of half-plane tests (a triangle's edges) is
 // applied together when the next operation needs E, over only the rows of the band where
 // all of them can hold (materialize()); so are E's bytes after eall, set only over what those
-// tests leave. A field within one lane is read and written eight pixels at a time
-// (word_backend.cpp: for_chunks), since a triangle's rows are a few pixels long.
+// tests leave. Likewise a run of qloads and movs of constants (a triangle's attributes) waits
+// and is written in one walk (apply_loads). A field within one lane is read and written eight
+// pixels at a time (word_backend.cpp: for_chunks), since a triangle's rows are a few pixels long.
 //
 // Contract: implements PixelBackend (firmware/isa/backend.hpp), including its one bit-serial
 // corner: an ALU source field that overlaps its destination from below (src.lo < dst.lo)
@@ -144,16 +145,14 @@ class WordBackend final : public PixelBackend {
   // row, and the walk's cost per span is what the instructions below pay per row.
   template <class F>
   void for_each_span_row(F f) const;
-  // qload's and qcmp's single pass over the spans for a field within one lane: the value
-  // (as for_each_value gives it, modulo 2^64 the same sum) computed per pixel as
-  // ((A X + (D + B Y)) X + (C Y^2 + E Y + F), no column tables: a triangle's rows are
-  // shorter than the region is wide), and merged under E, or compared with the field in
-  // place (then each row's part narrowed as narrow_spans does, in the same walk). Only a
-  // square term (kSquare: A != 0) and the field's signedness (kSigned) are compiled in; the
-  // condition is applied without a branch per pixel.
+  // qcmp's single pass over the spans for a field within one lane (and apply_loads' for
+  // qload): the value (as for_each_value gives it, modulo 2^64 the same sum) computed per
+  // pixel as ((A X + (D + B Y)) X + (C Y^2 + E Y + F), no column tables: a triangle's rows
+  // are shorter than the region is wide), and compared with the field in place (then each
+  // row's part narrowed as narrow_spans does, in the same walk). Only a square term
+  // (kSquare: A != 0) and the field's signedness (kSigned) are compiled in; the condition
+  // is applied without a branch per pixel.
   struct PixelValues;  // their per-pixel arithmetic (word_backend.cpp)
-  template <bool kSquare>
-  void qload_lane(const Field& dst, const QuadraticCoefficients& c);
   template <bool kSquare, bool kSigned>
   void qcmp_lane(const Field& field, const QuadraticCoefficients& c, Compare cond);
   template <class ReadB>
@@ -191,7 +190,8 @@ class WordBackend final : public PixelBackend {
   int lanes_;  // 64-bit lanes of pixel memory per pixel
   int x0_ = 0;
   int y0_ = 0;
-  std::vector<std::uint64_t> memory_;  // lanes_ x pixels_
+  // lanes_ x pixels_ (mutable: a read from a const backend writes the waiting qloads first)
+  mutable std::vector<std::uint64_t> memory_;
   // pixels_, valid inside spans_ (mutable: materialize() fills it after eall)
   mutable std::vector<std::uint8_t> enable_;
   // pixels_ bytes per level the stack has reached (empty above), E's at each push; a pop
@@ -219,9 +219,34 @@ class WordBackend final : public PixelBackend {
   // triangle's edge tests, so the bytes are filled (materialize()) only over what the tests
   // leave, not the whole array.
   mutable bool ones_ = false;
-  // Applies the pending tests, then fills E's bytes where ones_ says: every operation that
-  // reads or writes E calls it first.
-  void materialize() const;
+  // Writes that read no pixel memory, not yet done: qloads and movs of a constant, each to
+  // a field within one lane (a triangle's attributes, seven qloads and a mov in a row in
+  // phong.pp5; a sphere's depth and colour). A run of them is written in one walk over the
+  // spans, which reads E and each lane it writes once per eight pixels, not once per
+  // instruction; within a lane they are merged in their order, so a later one wins where two
+  // overlap. E, the spans and the origin cannot change while they wait: every other
+  // operation, and every read or write of pixel memory, writes them first (materialize(),
+  // write_loads()).
+  struct PendingLoad {
+    Field dst;
+    QuadraticCoefficients c;  // a mov's constant in F
+    bool constant;            // a mov: c.F as it is, not the evaluator's value
+  };
+  void queue_load(const PendingLoad& load);
+  static constexpr std::size_t kMaxLoads = 8;
+  mutable std::vector<PendingLoad> loads_;
+  void write_loads() const {
+    if (!loads_.empty()) apply_loads();
+  }
+  void apply_loads() const;
+  // Writes the waiting qloads, applies the pending tests, then fills E's bytes where ones_
+  // says: every operation that reads or writes E or pixel memory calls it first.
+  void materialize() const {
+    write_loads();
+    settle_enable();
+  }
+  // The pending tests and ones_ only (none is pending while qloads wait).
+  void settle_enable() const;
   void apply_pending() const;
   // Scratch of pixels_ values each: operands, results, the evaluator's row tables (width
   // entries each). Not state: a new backend allocates it, on the thread that makes it (a
