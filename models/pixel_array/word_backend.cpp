@@ -1149,7 +1149,8 @@ void WordBackend::apply_loads() const {
   const std::size_t n = loads_.size();
   // Each lane's writes in their order (a later one wins where two overlap); a run of
   // constants within a lane is one term.
-  enum class Kind { constant, linear, square };
+  // plane: A = B = 0, so that the value steps by D from pixel to pixel on every row.
+  enum class Kind { constant, plane, linear, square };
   struct Term {
     Kind kind;
     PixelValues values;
@@ -1192,7 +1193,9 @@ void WordBackend::apply_loads() const {
       terms[term_count++] = {Kind::constant, PixelValues(), bits, value, off, {}};
     } else {
       all_constant = false;
-      terms[term_count++] = {l.c.A != 0 ? Kind::square : Kind::linear,
+      terms[term_count++] = {l.c.A != 0   ? Kind::square
+                             : l.c.B != 0 ? Kind::linear
+                                          : Kind::plane,
                              PixelValues(l.c, x0_, y0_, evaluator_.result_bits, fraction_bits_),
                              bits,
                              0,
@@ -1227,42 +1230,77 @@ void WordBackend::apply_loads() const {
     return;
   }
   const int width = geometry_.width;
-  // kOne: a single qload (a sphere's, between other instructions), whose loops and square
-  // term are compiled out; otherwise any run, each term's kind chosen per term.
-  auto walk = [&](auto one, auto one_square) {
-    constexpr bool kOne = decltype(one)::value, kOneSquare = decltype(one_square)::value;
-    const std::size_t count = kOne ? 1 : term_count, lane_groups = kOne ? 1 : group_count;
-    PixelValues columns;
-    for (std::size_t t = 0; t < count; ++t) {
-      if (terms[t].kind != Kind::constant) columns = terms[t].values;
-    }
-    for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
-      for (std::size_t t = 0; t < count; ++t) terms[t].row = terms[t].values.row(y);
-      const std::uint8_t* en = e + row_start;
-      for_chunks(from, to, width, [&](int base, const V8& live) {
-        const V8 X = columns.columns8(base);
-        const V8 k = (V8{} - load_enable8(en + base)) & live;
-        for (std::size_t g = 0; g < lane_groups; ++g) {
-          merge(groups[g], row_start + static_cast<std::size_t>(base), k, [&X](const Term& l) {
-            const Kind kind = kOne ? (kOneSquare ? Kind::square : Kind::linear) : l.kind;
-            if (kind == Kind::constant) return V8{} + l.value;
-            const V8 v = kind == Kind::square ? l.values.value8<true>(l.row, X)
-                                              : l.values.value8<false>(l.row, X);
-            return (v << l.off) & l.bits;
-          });
-        }
-      });
-    });
-  };
-  using yes = std::true_type;
-  using no = std::false_type;
-  if (term_count > 1) {
-    walk(no{}, no{});
-  } else if (terms[0].kind == Kind::square) {
-    walk(yes{}, yes{});
-  } else {
-    walk(yes{}, no{});
+  PixelValues columns;  // any expression's: the columns are the region's
+  for (std::size_t t = 0; t < term_count; ++t) {
+    if (terms[t].kind != Kind::constant) columns = terms[t].values;
   }
+  if (term_count == 1) {
+    // A single qload (a sphere's, between other instructions): its square term compiled in
+    // or out, no loop over terms.
+    auto walk_one = [&](auto square) {
+      constexpr bool kSquare = decltype(square)::value;
+      const Term& l = terms[0];
+      u64* lane = groups[0].lane;
+      for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+        const PixelValues::Row r = l.values.row(y);
+        u64* m = lane + row_start;
+        const std::uint8_t* en = e + row_start;
+        for_chunks(from, to, width, [&](int base, const V8& live) {
+          const V8 v = l.values.at8<kSquare>(r, base);
+          const V8 k = l.bits & (V8{} - load_enable8(en + base)) & live;
+          const V8 old = load8(m + base);
+          store8(m + base, (old & ~k) | ((v << l.off) & k));
+        });
+      });
+    };
+    terms[0].kind == Kind::square ? walk_one(std::true_type{}) : walk_one(std::false_type{});
+    return;
+  }
+  // A run (a triangle's attributes, planes): a plane's value along a chunk is its value at the
+  // chunk's first pixel (one scalar multiply) plus D times [0, 8) (made once), not a vector
+  // multiply per chunk. Every expression shares the evaluator's width and fraction.
+  const int sign_shift = 64 - evaluator_.result_bits, shift = std::min(fraction_bits_, 63);
+  const V8s iota = {0, 1, 2, 3, 4, 5, 6, 7};
+  std::array<V8, kMaxLoads> steps;
+  for (std::size_t t = 0; t < term_count; ++t) {
+    if (terms[t].kind == Kind::plane) steps[t] = terms[t].values.D * reinterpret_cast<V8>(iota);
+  }
+  std::array<u64, kMaxLoads> at_x0;  // a plane's value at the region's column 0 on the row
+  for_each_span_row([&](int y, std::size_t row_start, int from, int to) {
+    for (std::size_t t = 0; t < term_count; ++t) {
+      Term& l = terms[t];
+      if (l.kind == Kind::constant) continue;
+      l.row = l.values.row(y);
+      at_x0[t] = l.row.row + l.row.linear * l.values.X0;
+    }
+    const std::uint8_t* en = e + row_start;
+    for_chunks(from, to, width, [&](int base, const V8& live) {
+      const V8 k = (V8{} - load_enable8(en + base)) & live;
+      const V8 X = columns.columns8(base);
+      for (std::size_t g = 0; g < group_count; ++g) {
+        merge(groups[g], row_start + static_cast<std::size_t>(base), k, [&](const Term& l) {
+          const auto t = static_cast<std::size_t>(&l - terms.data());
+          V8 v;
+          switch (l.kind) {
+            case Kind::constant:
+              return V8{} + l.value;
+            case Kind::plane:
+              v = (at_x0[t] + l.row.linear * static_cast<u64>(base)) + steps[t];
+              break;
+            case Kind::linear:
+              v = l.row.linear * X + l.row.row;
+              break;
+            default:
+              v = (l.values.A * X + l.row.linear) * X + l.row.row;
+              break;
+          }
+          v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << sign_shift) >> sign_shift);
+          v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v) >> shift);
+          return (v << l.off) & l.bits;
+        });
+      }
+    });
+  });
 }
 
 // E &= (value cond field), both cut to the field's width and extended by its signedness
