@@ -199,6 +199,19 @@ class Scoreboard {
       }
     }
     REQUIRE(word_->count_enabled() == bit_->count_enabled());
+    // The colour read-out: three whole bytes of one lane (word's one-pass shuffle), the same
+    // in the lane above, and three fields of any width and place (its generic reads).
+    const int top = (p_.array.memory_bits - 24) / 8 * 8;
+    const int lane_top = std::min(top, 40);
+    const Field bytes[3] = {
+        {lane_top, 8, false}, {lane_top - 16, 12, true}, {lane_top + 8, 8, false}};
+    const Field above[3] = {{top, 8, false}, {top + 8, 8, false}, {top + 16, 8, false}};
+    const Field any[3] = {any_field().field, any_field().field, any_field().field};
+    for (const Field* f : {bytes, above, any}) {
+      bit_->read_bytes(f, 3, bit_bytes_.data());
+      word_->read_bytes(f, 3, word_bytes_.data());
+      REQUIRE(word_bytes_ == bit_bytes_);
+    }
   }
 
   std::int64_t pick(std::int64_t lo, std::int64_t hi) {
@@ -372,6 +385,9 @@ class Scoreboard {
   std::unique_ptr<PixelBackend> bit_;
   std::unique_ptr<PixelBackend> word_;
   std::vector<std::uint64_t> bit_planes_, word_planes_;
+  std::vector<std::uint8_t> bit_bytes_ = std::vector<std::uint8_t>(
+                                static_cast<std::size_t>(p_.array.width * p_.array.height * 3)),
+                            word_bytes_ = bit_bytes_;
   std::vector<int> executed_ = std::vector<int>(static_cast<std::size_t>(Opcode::count), 0);
   int qload_percent_ = 0, qtest_percent_ = 0, mov_constant_percent_ = 0;
   int x0_ = 0, y0_ = 0;  // the region's origin (run)

@@ -9,6 +9,18 @@ std::int64_t PixelBackend::read_signed(int pixel, const Field& field) const {
   return static_cast<std::int64_t>((v ^ sign) - sign);
 }
 
+void PixelBackend::read_bytes(const Field* fields, int count, std::uint8_t* out) const {
+  const auto n = static_cast<std::size_t>(pixels());
+  std::vector<std::uint64_t> values(n);
+  const auto stride = static_cast<std::size_t>(count);
+  for (int k = 0; k < count; ++k) {
+    read_field(fields[k], values.data());
+    for (std::size_t p = 0; p < n; ++p) {
+      out[p * stride + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(values[p]);
+    }
+  }
+}
+
 // Generic: one 1-bit field at a time. A backend that holds bit-planes copies them instead.
 void PixelBackend::read_memory_planes(std::vector<std::uint64_t>& planes) const {
   const int n = pixels();

@@ -117,6 +117,10 @@ class PixelBackend {
   std::int64_t read_signed(int pixel, const Field& field) const;
   // The field's unsigned value at every pixel: out[p] for p in [0, pixels()).
   virtual void read_field(const Field& field, std::uint64_t* out) const = 0;
+  // The low 8 bits of each of `count` fields at every pixel, interleaved (a region's colour
+  // bytes): out[p * count + k] is fields[k]'s value at pixel p modulo 256. The generic one
+  // reads each field with read_field; a backend may do it in one pass.
+  virtual void read_bytes(const Field* fields, int count, std::uint8_t* out) const;
   // The whole local memory as memory_bits bit-planes: word p / 64 of plane b holds bit b of
   // pixel p at bit p % 64 (the snapshot layout, whatever the backend's own).
   virtual void read_memory_planes(std::vector<std::uint64_t>& planes) const;

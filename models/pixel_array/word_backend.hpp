@@ -72,6 +72,7 @@ class WordBackend final : public PixelBackend {
 
   std::uint64_t read(int pixel, const Field& field) const override;
   void read_field(const Field& field, std::uint64_t* out) const override;
+  void read_bytes(const Field* fields, int count, std::uint8_t* out) const override;
   void read_memory_planes(std::vector<std::uint64_t>& planes) const override;
   bool enabled(int pixel) const override;
   int count_enabled() const override;

@@ -197,15 +197,7 @@ void RendererBoard::read_outputs(const Program& program, std::vector<std::uint8_
 
 void RendererBoard::read_outputs(const Program& program, std::uint8_t* rgb) const {
   materialise();
-  const int n = array_->pixels();
-  field_values_.resize(static_cast<std::size_t>(n));
-  for (int c = 0; c < 3; ++c) {
-    array_->read_field(program.outputs[c], field_values_.data());
-    for (int p = 0; p < n; ++p) {
-      rgb[static_cast<std::size_t>(p) * 3 + c] =
-          static_cast<std::uint8_t>(field_values_[static_cast<std::size_t>(p)]);
-    }
-  }
+  array_->read_bytes(program.outputs.data(), 3, rgb);
 }
 
 ArrayCycles procedure_cost(const ProcedureCode& procedure, const TimingParams& timing,

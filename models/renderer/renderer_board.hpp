@@ -184,7 +184,6 @@ class RendererBoard {
   bool after_drawn_ = false;
   int misses_after_drawn_ = 0;
   int unchecked_after_drawn_ = 0;
-  mutable std::vector<std::uint64_t> field_values_;  // read_outputs' buffer
   BoardObserver* observer_ = nullptr;
   PacketContext packet_;
 
