@@ -395,11 +395,32 @@ class Scoreboard {
 
 }  // namespace
 
+namespace {
+
+// A scoreboard's board: its array and evaluator, the Enable stack and backing store fixed.
+struct ScoreShape {
+  int width, height, memory_bits, result_bits, coefficient_bits, fraction_bits;
+};
+
+PixelBackendParams score_params(const ScoreShape& s) {
+  PixelBackendParams p;
+  p.array.width = s.width;
+  p.array.height = s.height;
+  p.array.memory_bits = s.memory_bits;
+  p.array.enable_stack_depth = 4;
+  p.array.backing_store_bits = 512;
+  p.array.block_bits = 32;
+  p.evaluator.coefficient_bits = s.coefficient_bits;
+  p.evaluator.result_bits = s.result_bits;
+  p.fraction_bits = s.fraction_bits;
+  return p;
+}
+
+}  // namespace
+
 TEST_CASE("word and bit run random instruction streams in lockstep (scoreboard)",
           "[word][backend]") {
-  struct Shape {
-    int width, height, memory_bits, result_bits, coefficient_bits, fraction_bits;
-  };
+  using Shape = ScoreShape;
   // The real board's memory (208 bits: four 64-bit lanes, the last partial), a narrow one,
   // a 64-bit evaluator result, no fraction bits and many.
   const Shape shapes[] = {{128, 8, 208, 40, 40, 12},
@@ -412,16 +433,7 @@ TEST_CASE("word and bit run random instruction streams in lockstep (scoreboard)"
     for (int k = 0; k < 4; ++k, ++seed) {
       INFO("shape " << s.width << "x" << s.height << ", " << s.memory_bits << " bits, seed "
                     << seed);
-      PixelBackendParams p;
-      p.array.width = s.width;
-      p.array.height = s.height;
-      p.array.memory_bits = s.memory_bits;
-      p.array.enable_stack_depth = 4;
-      p.array.backing_store_bits = 512;
-      p.array.block_bits = 32;
-      p.evaluator.coefficient_bits = s.coefficient_bits;
-      p.evaluator.result_bits = s.result_bits;
-      p.fraction_bits = s.fraction_bits;
+      const PixelBackendParams p = score_params(s);
       Scoreboard board(p, seed);
       board.run(6, 80);
       for (std::size_t op = 0; op < executed.size(); ++op) executed[op] += board.executed()[op];
@@ -442,16 +454,7 @@ TEST_CASE("word and bit agree on runs of qloads and constant movs (word writes a
   // different lanes, with linear and quadratic expressions, broken by tests and the other
   // instructions that must write them first (and compared after every instruction in a
   // second run, where each read does).
-  PixelBackendParams p;
-  p.array.width = 128;
-  p.array.height = 6;
-  p.array.memory_bits = 208;
-  p.array.enable_stack_depth = 4;
-  p.array.backing_store_bits = 512;
-  p.array.block_bits = 32;
-  p.evaluator.coefficient_bits = 40;
-  p.evaluator.result_bits = 40;
-  p.fraction_bits = 12;
+  const PixelBackendParams p = score_params({128, 6, 208, 40, 40, 12});
   for (unsigned seed = 1; seed <= 6; ++seed) {
     INFO("seed " << seed);
     Scoreboard runs(p, seed);

@@ -1,5 +1,7 @@
 #include "firmware/isa/backend.hpp"
 
+#include <memory>
+
 namespace pp5 {
 
 std::int64_t PixelBackend::read_signed(int pixel, const Field& field) const {
@@ -11,10 +13,11 @@ std::int64_t PixelBackend::read_signed(int pixel, const Field& field) const {
 
 void PixelBackend::read_bytes(const Field* fields, int count, std::uint8_t* out) const {
   const auto n = static_cast<std::size_t>(pixels());
-  std::vector<std::uint64_t> values(n);
+  // Not zeroed first (read_field writes every value): a region's read-out, every region.
+  const std::unique_ptr<std::uint64_t[]> values(new std::uint64_t[n]);
   const auto stride = static_cast<std::size_t>(count);
   for (int k = 0; k < count; ++k) {
-    read_field(fields[k], values.data());
+    read_field(fields[k], values.get());
     for (std::size_t p = 0; p < n; ++p) {
       out[p * stride + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(values[p]);
     }
