@@ -769,8 +769,13 @@ bool WordBackend::qtest_linear(const QuadraticCoefficients& c, Compare cond) {
 void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
   write_loads();  // before a test joins the pending ones
   if (qtest_linear(expr, cond)) return;
-  materialize();
+  // The pending tests narrow the spans first. E's bytes after eall (ones_) wait on: a
+  // quadratic test that narrows the spans exactly reads none of them (every pixel of the
+  // spans is enabled), and they are then filled over only what it leaves (a sphere's disc,
+  // not the region).
+  if (!pending_.empty()) apply_pending();
   if (qtest_quadratic(expr, cond)) return;
+  materialize();
   prepare_columns(expr);
   u64* v = scratch().s0.data();
   // As for a linear test, the spans narrow to what the test leaves: on each row of a span,
@@ -1033,11 +1038,20 @@ bool WordBackend::qtest_quadratic(const QuadraticCoefficients& c, Compare cond) 
     left_before = left;
     right_before = right;
     const int start = static_cast<int>(row_start);
+    // Pixels [a, b) where the test holds, trimmed to E's first to last enabled pixel, or as
+    // they are while E is 1 throughout the spans (ones_).
+    auto keep = [&](int a, int b) {
+      if (!ones_) {
+        keep_enabled(kept, a, b);
+      } else if (a < b) {
+        word_rows::keep_span(kept, a, b);
+      }
+    };
     if (at_m) {
-      keep_enabled(kept, start + left + 1, start + right);
+      keep(start + left + 1, start + right);
     } else {  // the row's ends, each when not empty (most rows outside a sphere's disc: both)
-      if (left >= first) keep_enabled(kept, start + first, start + left + 1);
-      if (right <= last) keep_enabled(kept, start + right, start + last + 1);
+      if (left >= first) keep(start + first, start + left + 1);
+      if (right <= last) keep(start + right, start + last + 1);
     }
   });
   if (!exact) return false;

@@ -110,7 +110,8 @@ class WordBackend final : public PixelBackend {
   // column with a, b, k reduced to result_bits, monotone on each side of its integer
   // arg-extremum, so the columns where the condition holds are one interval or the
   // complement of one, found by binary search on exact (128-bit) values; spans_ narrowed to
-  // them (and to their first to last enabled pixel), E's bytes untouched. False (nothing
+  // them (and to their first to last enabled pixel, or as they are while E's bytes wait to
+  // be filled after eall: ones_), E's bytes untouched. False (nothing
   // done) when the condition is eq or ne or g leaves result_bits on some span's row part (at
   // its ends or its arg-extremum, the extremes of g over its integers): the value wraps
   // there, and the per-pixel evaluation decides. When the value cannot wrap anywhere in the
