@@ -211,11 +211,15 @@ class ChunkCompare {
   // E's chunk at en + base ANDed with (a cond b) in the live lanes, the lanes left noted.
   void apply(std::uint8_t* en, int base, const V8& live, const V8s& a, const V8s& b,
              RowEnabled& row) const {
+    apply(en, en, base, live, a, b, row);
+  }
+  // The same from E's bytes at from + base into to + base (another buffer).
+  void apply(const std::uint8_t* from, std::uint8_t* to, int base, const V8& live, const V8s& a,
+             const V8s& b, RowEnabled& row) const {
     const V8 holds = reinterpret_cast<V8>(((a < b) & lt_mask_) | ((a == b) & eq_mask_)) ^ inv_mask_;
-    const V8 old = load_enable8(en + base);
-    const V8 left = old & holds & live;
+    const V8 left = load_enable8(from + base) & holds & live;
     row.add(base, left);
-    store_enable8(en + base, left | (old & ~live));
+    store_enable8(to + base, left | (load_enable8(to + base) & ~live));
   }
 
  private:
@@ -425,27 +429,47 @@ void WordBackend::push_enable() {
     throw std::overflow_error("enable stack overflow: depth " +
                               std::to_string(geometry_.enable_stack_depth));
   }
-  // E outside spans_ is 0 whatever its bytes hold: only the spans are copied.
+  own_enable();  // a level below that still shares E's bytes gets its copy now
+  // The spans are saved now, the bytes when E's are first written (own_enable, or a compare
+  // that writes the new E into the level's buffer and swaps): until then they are E's own.
+  stack_spans_[static_cast<std::size_t>(stack_top_)] = spans_;
+  shared_level_ = stack_top_;
+  ++stack_top_;
+}
+
+std::uint8_t* WordBackend::level_bytes(int level) const {
   // Levels are allocated as the stack first reaches them (most programs use one or two of
   // the eight), so that a clone or kept state copies only those.
-  std::vector<std::uint8_t>& saved = stack_[static_cast<std::size_t>(stack_top_)];
+  std::vector<std::uint8_t>& saved = stack_[static_cast<std::size_t>(level)];
   if (saved.empty()) saved.resize(static_cast<std::size_t>(pixels_));
-  // Whole 8-byte words, the spans rounded out to them (the array's size is a multiple of 64):
-  // a short row is a word or two, not a library call; the bytes outside the spans are
+  return saved.data();
+}
+
+void WordBackend::own_enable() const {
+  if (shared_level_ < 0) return;
+  // E outside the saved spans is 0 whatever its bytes hold: only the spans are copied, as
+  // whole 8-byte words, the spans rounded out to them (the array's size is a multiple of
+  // 64): a short row is a word or two, not a library call; the bytes outside the spans are
   // copied too, and mean nothing there either.
-  std::uint8_t* level = saved.data();
+  std::uint8_t* level = level_bytes(shared_level_);
   const std::uint8_t* e = enable_.data();
-  for (const Range& r : spans_) {
+  for (const Range& r : stack_spans_[static_cast<std::size_t>(shared_level_)]) {
     for (int p = r.begin & ~7; p < r.end; p += 8) std::memcpy(level + p, e + p, 8);
   }
-  stack_spans_[static_cast<std::size_t>(stack_top_)] = spans_;
-  ++stack_top_;
+  shared_level_ = -1;
 }
 
 void WordBackend::pop_enable() {
   materialize();
   if (stack_top_ == 0) throw std::underflow_error("enable stack underflow");
   --stack_top_;
+  if (shared_level_ == stack_top_) {
+    // No E byte was written since the push: E's bytes are the level's, and only the spans
+    // come back.
+    shared_level_ = -1;
+    spans_.swap(stack_spans_[static_cast<std::size_t>(stack_top_)]);
+    return;
+  }
   // The saved level becomes E, bytes and spans, by a swap rather than a copy: what E held
   // goes to the level, above the top now, which nothing reads before a push overwrites its
   // spans.
@@ -456,6 +480,7 @@ void WordBackend::pop_enable() {
 void WordBackend::else_enable() {
   materialize();
   if (stack_top_ == 0) throw std::underflow_error("else without a saved enable");
+  own_enable();
   const std::uint8_t* saved = stack_[static_cast<std::size_t>(stack_top_ - 1)].data();
   std::uint8_t* e = enable_.data();
   const std::vector<Range>& keep = stack_spans_[static_cast<std::size_t>(stack_top_ - 1)];
@@ -642,6 +667,7 @@ class RowBound {
 void WordBackend::settle_enable() const {
   if (!pending_.empty()) apply_pending();
   if (ones_) {  // after the tests: only the spans they left are filled
+    own_enable();
     for (const Range& r : spans_) std::fill(enable_.begin() + r.begin, enable_.begin() + r.end, 1);
     ones_ = false;
   }
@@ -776,6 +802,7 @@ void WordBackend::qtest(const QuadraticCoefficients& expr, Compare cond) {
   if (!pending_.empty()) apply_pending();
   if (qtest_quadratic(expr, cond)) return;
   materialize();
+  own_enable();
   prepare_columns(expr);
   u64* v = scratch().s0.data();
   // As for a linear test, the spans narrow to what the test leaves: on each row of a span,
@@ -1357,6 +1384,7 @@ void WordBackend::qcmp_lane(const Field& field, const QuadraticCoefficients& c, 
 
 void WordBackend::qcmp(const Field& field, const QuadraticCoefficients& expr, Compare cond) {
   materialize();
+  own_enable();
   check_field(field, "operand");
   const bool wide = !field.is_signed && field.width == 64;
   if (!wide && field.lo % 64 + field.width <= 64) {
@@ -1407,24 +1435,35 @@ void WordBackend::compare_lane(const Field& a, Compare cond, ReadB read_b) {
   const u64 mask = low_mask(a.width);
   const bool is_signed = a.is_signed;
   const u64* lane = memory_.data() + static_cast<std::size_t>(a.lo / 64) * pixels_;
-  std::uint8_t* e = enable_.data();
+  // Right after an epush whose level still shares E's bytes (a clamp: epush, cmp, mov,
+  // epop), the new E is written into the level's buffer, read from E's, and the two
+  // swapped: the level keeps the old bytes without a copy of them.
+  const bool into_level = shared_level_ >= 0;
+  const std::uint8_t* e_from = enable_.data();
+  std::uint8_t* e_to = into_level ? level_bytes(shared_level_) : enable_.data();
   const ChunkCompare test(cond);
   const int width = geometry_.width;
   std::vector<Range>& kept = spare_spans_;
   kept.clear();
   for_each_span_row([&](int, std::size_t row_start, int from, int to) {
-    std::uint8_t* en = e + row_start;
+    const std::uint8_t* en_from = e_from + row_start;
+    std::uint8_t* en_to = e_to + row_start;
     const int start = static_cast<int>(row_start);
     RowEnabled row;
     for_chunks(from, to, width, [&](int base, const V8& live) {
       const int p = start + base;
       V8 f = (load8(lane + p) >> off) & mask;
       if (is_signed) f = reinterpret_cast<V8>(reinterpret_cast<V8s>(f << sw) >> sw);
-      test.apply(en, base, live, reinterpret_cast<V8s>(f), reinterpret_cast<V8s>(read_b(p)), row);
+      test.apply(en_from, en_to, base, live, reinterpret_cast<V8s>(f),
+                 reinterpret_cast<V8s>(read_b(p)), row);
     });
     row.keep(kept, start);
   });
   spans_.swap(kept);
+  if (into_level) {
+    enable_.swap(stack_[static_cast<std::size_t>(shared_level_)]);
+    shared_level_ = -1;
+  }
 }
 
 void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
@@ -1457,6 +1496,7 @@ void WordBackend::compare(const Field& a, const Source& b, Compare cond) {
   }
   // Row by row, each row's part narrowed (as narrow_spans does) as soon as it is compared,
   // and skipped when the comparison's own pass found no pixel left.
+  own_enable();
   std::vector<Range>& kept = spare_spans_;
   kept.clear();
   for_each_span_row([&](int, std::size_t row_start, int from, int to) {
@@ -1882,6 +1922,7 @@ void WordBackend::write(int pixel, const Field& field, u64 value) {
 
 std::unique_ptr<PixelBackend> WordBackend::clone() const {
   materialize();
+  own_enable();
   return std::make_unique<WordBackend>(*this);
 }
 
@@ -1890,6 +1931,8 @@ bool WordBackend::same_state(const PixelBackend& other) const {
   if (o == nullptr || o->geometry_ != geometry_) return false;
   materialize();
   o->materialize();
+  own_enable();
+  o->own_enable();
   if (stack_top_ != o->stack_top_ || memory_ != o->memory_) return false;
   // E and each saved level compared as values: 0 outside their spans, whatever the bytes
   // there hold. Stack levels above the top are never read before a push overwrites them.
@@ -1921,6 +1964,8 @@ void WordBackend::copy_state_from(const PixelBackend& other) {
                                 other.name() + "' backend of another kind or geometry");
   }
   o->materialize();
+  o->own_enable();
+  shared_level_ = -1;
   loads_.clear();
   pending_.clear();
   ones_ = false;

@@ -198,8 +198,18 @@ class WordBackend final : public PixelBackend {
   mutable std::vector<std::uint8_t> enable_;
   // pixels_ bytes per level the stack has reached (empty above), E's at each push; a pop
   // swaps its level with E.
-  std::vector<std::vector<std::uint8_t>> stack_;
+  // (mutable: own_enable makes a level's copy when a const read needs it)
+  mutable std::vector<std::vector<std::uint8_t>> stack_;
   int stack_top_ = 0;
+  // The level an epush saved whose bytes are still E's own (none written since), or -1: its
+  // spans are saved, its bytes copied only when E's are about to be written (own_enable),
+  // or not at all when a compare writes the new E into the level's buffer and swaps, or an
+  // epop finds them unchanged. Every writer of E's bytes, and every reader of a level's,
+  // calls own_enable first.
+  mutable int shared_level_ = -1;
+  void own_enable() const;
+  // A stack level's bytes, allocated on first use.
+  std::uint8_t* level_bytes(int level) const;
   std::vector<std::uint64_t> backing_;  // backing lanes x pixels_, allocated on first use
   // Disjoint pixel ranges, in order, outside which E is 0 (a superset of E's set pixels, at
   // most two ranges per row after a linear qtest, one from the first to the last enabled
