@@ -37,25 +37,12 @@ void BM_GifEncode(benchmark::State& state) {
     state.SkipWithError("the GIF differs from the reference encoder's");
     return;
   }
-  auto cpu_seconds = pp5::bench::thread_cpu_seconds;
-  double t_new = 0, t_ref = 0;
-  std::size_t bytes = 0;
-  for (auto _ : state) {
-    double t0 = cpu_seconds();
-    const std::string a = encode();
-    t_new += cpu_seconds() - t0;
-    t0 = cpu_seconds();
-    const std::string b = pp5::gif_textbook({&flat}, 4);
-    t_ref += cpu_seconds() - t0;
-    benchmark::DoNotOptimize(a.data());
-    benchmark::DoNotOptimize(b.data());
-    bytes = a.size();
-  }
-  const double n = static_cast<double>(state.iterations());
-  state.counters["new_ms"] = t_new / n * 1e3;
-  state.counters["ref_ms"] = t_ref / n * 1e3;
-  state.counters["ref_over_new"] = t_ref / t_new;
-  state.counters["bytes"] = static_cast<double>(bytes);
+  const pp5::bench::EncoderTimes t =
+      pp5::bench::time_encoders(state, encode, [&flat] { return pp5::gif_textbook({&flat}, 4); });
+  state.counters["new_ms"] = t.new_ms;
+  state.counters["ref_ms"] = t.ref_ms;
+  state.counters["ref_over_new"] = t.ref_ms / t.new_ms;
+  state.counters["bytes"] = static_cast<double>(t.new_bytes);
 }
 
 BENCHMARK(BM_GifEncode)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(20);

@@ -109,27 +109,14 @@ void BM_PngEncode(benchmark::State& state) {
     state.SkipWithError("the new encoder's PNG does not decode to the frame");
     return;
   }
-  auto cpu_seconds = pp5::bench::thread_cpu_seconds;
-  double t_new = 0, t_ref = 0;
-  std::size_t new_bytes = 0, ref_bytes = 0;
-  for (auto _ : state) {
-    double t0 = cpu_seconds();
-    const std::string a = pp5::encode_png(image);
-    t_new += cpu_seconds() - t0;
-    t0 = cpu_seconds();
-    const std::string b = png_ref_encode_zlib(image);
-    t_ref += cpu_seconds() - t0;
-    benchmark::DoNotOptimize(a.data());
-    benchmark::DoNotOptimize(b.data());
-    new_bytes = a.size();
-    ref_bytes = b.size();
-  }
-  const double n = static_cast<double>(state.iterations());
-  state.counters["new_ms"] = t_new / n * 1e3;
-  state.counters["zlib_ms"] = t_ref / n * 1e3;
-  state.counters["zlib_over_new"] = t_ref / t_new;
-  state.counters["new_bytes"] = static_cast<double>(new_bytes);
-  state.counters["zlib_bytes"] = static_cast<double>(ref_bytes);
+  const pp5::bench::EncoderTimes t = pp5::bench::time_encoders(
+      state, [&image] { return pp5::encode_png(image); },
+      [&image] { return png_ref_encode_zlib(image); });
+  state.counters["new_ms"] = t.new_ms;
+  state.counters["zlib_ms"] = t.ref_ms;
+  state.counters["zlib_over_new"] = t.ref_ms / t.new_ms;
+  state.counters["new_bytes"] = static_cast<double>(t.new_bytes);
+  state.counters["zlib_bytes"] = static_cast<double>(t.ref_bytes);
 }
 
 BENCHMARK(BM_PngEncode)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(20);
