@@ -1166,8 +1166,12 @@ struct WordBackend::PixelValues {
   // The value at the eight pixels of a row whose columns are X, lane by lane.
   template <bool kSquare>
   V8 value8(const Row& r, const V8& X) const {
-    V8 v = kSquare ? (A * X + r.linear) * X + r.row : r.linear * X + r.row;
-    v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << s) >> s);
+    return finish(kSquare ? (A * X + r.linear) * X + r.row : r.linear * X + r.row, s, shift);
+  }
+  // A sum modulo 2^64 as the evaluator delivers it: wrapped to result_bits (sign_shift =
+  // 64 - result_bits) and sign-extended, then shifted down by the fraction.
+  static V8 finish(V8 v, int sign_shift, int shift) {
+    v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << sign_shift) >> sign_shift);
     return reinterpret_cast<V8>(reinterpret_cast<V8s>(v) >> shift);
   }
   // The value at the eight pixels base + [0, 8) of the row.
@@ -1335,9 +1339,7 @@ void WordBackend::apply_loads() const {
               v = (l.values.A * X + l.row.linear) * X + l.row.row;
               break;
           }
-          v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v << sign_shift) >> sign_shift);
-          v = reinterpret_cast<V8>(reinterpret_cast<V8s>(v) >> shift);
-          return (v << l.off) & l.bits;
+          return (PixelValues::finish(v, sign_shift, shift) << l.off) & l.bits;
         });
       }
     });

@@ -196,8 +196,8 @@ class WordBackend final : public PixelBackend {
   mutable std::vector<std::uint64_t> memory_;
   // pixels_, valid inside spans_ (mutable: materialize() fills it after eall)
   mutable std::vector<std::uint8_t> enable_;
-  // pixels_ bytes per level the stack has reached (empty above), E's at each push; a pop
-  // swaps its level with E.
+  // pixels_ bytes per level the stack has reached (empty above), E's as of its push (copied
+  // when E is next written: shared_level_); a pop swaps its level with E.
   // (mutable: own_enable makes a level's copy when a const read needs it)
   mutable std::vector<std::vector<std::uint8_t>> stack_;
   int stack_top_ = 0;
