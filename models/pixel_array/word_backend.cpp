@@ -1855,37 +1855,32 @@ void WordBackend::read_field(const Field& field, u64* out) const {
   load(memory_.data(), field, Range{0, pixels_}, out, false);
 }
 
-// Three fields whose low 8 bits are whole bytes of one lane (phong's red, green and blue):
-// eight pixels' lane words are one 64-byte vector, from which one byte shuffle (a single
-// vpermb with AVX-512 VBMI) gathers their 24 bytes, in order. Otherwise the generic reads.
+// Fields whose low 8 bits lie in one lane (phong's red, green and blue are three bytes of
+// lane 0): each pixel's lane word is read once and its bytes shifted out, in one pass over
+// the pixels. Plain shifts, so every compiler takes it (a byte shuffle is GCC's only).
+// Otherwise the generic reads.
 void WordBackend::read_bytes(const Field* fields, int count, std::uint8_t* out) const {
   write_loads();
-  using B64 = std::uint8_t __attribute__((vector_size(64)));
-  constexpr int kCount = 3;
-  bool bytes = count == kCount;
-  for (int k = 0; bytes && k < count; ++k) {
+  constexpr int kMost = 4;
+  bool one_lane = count > 0 && count <= kMost;
+  int shift[kMost] = {};
+  for (int k = 0; one_lane && k < count; ++k) {
     check_field(fields[k], "read");
-    bytes = fields[k].lo / 64 == fields[0].lo / 64 && fields[k].lo % 8 == 0 &&
-            fields[k].width >= 8 && fields[k].lo % 64 + 8 <= 64;
+    one_lane = fields[k].lo / 64 == fields[0].lo / 64 && fields[k].width >= 8 &&
+               fields[k].lo % 64 + 8 <= 64;
+    shift[k] = fields[k].lo % 64;
   }
-  if (!bytes) {
+  if (!one_lane) {
     PixelBackend::read_bytes(fields, count, out);
     return;
   }
-  B64 pick{};
-  for (int j = 0; j < 8; ++j) {
-    for (int k = 0; k < kCount; ++k) {
-      pick[j * kCount + k] = static_cast<std::uint8_t>(j * 8 + fields[k].lo % 64 / 8);
-    }
-  }
   const u64* lane = memory_.data() + static_cast<std::size_t>(fields[0].lo / 64) * pixels_;
-  // pixels_ is a multiple of 64 (the width is): whole chunks, the last one's bytes exactly
-  // the end of out.
-  for (int p = 0; p < pixels_; p += 8) {
-    B64 in;
-    std::memcpy(&in, lane + p, sizeof in);
-    const B64 picked = __builtin_shuffle(in, pick);
-    std::memcpy(out + static_cast<std::size_t>(p) * kCount, &picked, 8 * kCount);
+  const auto stride = static_cast<std::size_t>(count);
+  for (std::size_t p = 0; p < static_cast<std::size_t>(pixels_); ++p) {
+    const u64 word = lane[p];
+    for (int k = 0; k < count; ++k) {
+      out[p * stride + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(word >> shift[k]);
+    }
   }
 }
 
