@@ -82,13 +82,6 @@ inline void store_enable8(std::uint8_t* p, const V8& v) {
 #endif
 }
 
-// v's low `width` bits read as two's complement, extended to 64 bits.
-inline u64 sign_extend(u64 v, int width) {
-  if (width >= 64) return v;
-  const int s = 64 - width;
-  return static_cast<u64>(static_cast<i64>(v << s) >> s);
-}
-
 template <class T>
 inline bool holds(Compare cond, T a, T b) {
   switch (cond) {
@@ -1855,10 +1848,40 @@ void WordBackend::read_field(const Field& field, u64* out) const {
   load(memory_.data(), field, Range{0, pixels_}, out, false);
 }
 
+namespace {
+using U32x8 = std::uint32_t __attribute__((vector_size(32)));
+using B32 = std::uint8_t __attribute__((vector_size(32)));
+
+// Picks bytes i / N * 4 + i % N of a 32-byte vector for i < 8 * N: the low N bytes of each
+// of eight 32-bit words, packed. __builtin_shufflevector takes constant indices only, and
+// both GCC (12 on) and clang have it.
+template <int N, std::size_t... I>
+B32 pack_low_bytes(B32 b, std::index_sequence<I...> /*unused*/) {
+  return __builtin_shufflevector(b, b, (I < 8 * N ? I / N * 4 + I % N : 0)...);
+}
+
+// out[p * N + k] = the byte of lane[p] at bit shift[k], for N fields; pixels is a multiple
+// of 8. Eight pixels at a time: each lane word's N bytes are shifted into one 32-bit word,
+// and one byte shuffle packs the eight words' 8 N bytes, in order.
+template <int N>
+void gather_bytes(const u64* lane, std::size_t pixels, const int* shift, std::uint8_t* out) {
+  for (std::size_t p = 0; p < pixels; p += 8) {
+    V8 word;
+    std::memcpy(&word, lane + p, sizeof word);
+    V8 packed = (word >> shift[0]) & 0xff;
+    for (int k = 1; k < N; ++k) packed |= ((word >> shift[k]) & 0xff) << (8 * k);
+    const U32x8 words = __builtin_convertvector(packed, U32x8);
+    B32 bytes;
+    std::memcpy(&bytes, &words, sizeof bytes);
+    const B32 picked = pack_low_bytes<N>(bytes, std::make_index_sequence<32>{});
+    std::memcpy(out + p * N, &picked, 8 * N);
+  }
+}
+}  // namespace
+
 // Fields whose low 8 bits lie in one lane (phong's red, green and blue are three bytes of
 // lane 0): each pixel's lane word is read once and its bytes shifted out, in one pass over
-// the pixels. Plain shifts, so every compiler takes it (a byte shuffle is GCC's only).
-// Otherwise the generic reads.
+// the pixels, eight pixels at a time (gather_bytes). Otherwise the generic reads.
 void WordBackend::read_bytes(const Field* fields, int count, std::uint8_t* out) const {
   write_loads();
   constexpr int kMost = 4;
@@ -1875,12 +1898,21 @@ void WordBackend::read_bytes(const Field* fields, int count, std::uint8_t* out) 
     return;
   }
   const u64* lane = memory_.data() + static_cast<std::size_t>(fields[0].lo / 64) * pixels_;
-  const auto stride = static_cast<std::size_t>(count);
-  for (std::size_t p = 0; p < static_cast<std::size_t>(pixels_); ++p) {
-    const u64 word = lane[p];
-    for (int k = 0; k < count; ++k) {
-      out[p * stride + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(word >> shift[k]);
-    }
+  // pixels_ is a multiple of 64 (the width is), so of gather_bytes' eight.
+  const auto n = static_cast<std::size_t>(pixels_);
+  switch (count) {
+    case 1:
+      gather_bytes<1>(lane, n, shift, out);
+      break;
+    case 2:
+      gather_bytes<2>(lane, n, shift, out);
+      break;
+    case 3:
+      gather_bytes<3>(lane, n, shift, out);
+      break;
+    default:
+      gather_bytes<4>(lane, n, shift, out);
+      break;
   }
 }
 
