@@ -1,6 +1,6 @@
 #include "firmware/isa/backend.hpp"
 
-#include <memory>
+#include <vector>
 
 namespace pp5 {
 
@@ -13,11 +13,14 @@ std::int64_t PixelBackend::read_signed(int pixel, const Field& field) const {
 
 void PixelBackend::read_bytes(const Field* fields, int count, std::uint8_t* out) const {
   const auto n = static_cast<std::size_t>(pixels());
-  // Not zeroed first (read_field writes every value): a region's read-out, every region.
-  const std::unique_ptr<std::uint64_t[]> values(new std::uint64_t[n]);
+  // A region's read-out, every region of every frame: the values' buffer is kept per host
+  // thread and reused (read_field writes every value, so it is not cleared). Allocated at
+  // each call, its 128 KiB came from fresh pages that the kernel zeroed every time.
+  thread_local std::vector<std::uint64_t> values;
+  if (values.size() < n) values.resize(n);
   const auto stride = static_cast<std::size_t>(count);
   for (int k = 0; k < count; ++k) {
-    read_field(fields[k], values.get());
+    read_field(fields[k], values.data());
     for (std::size_t p = 0; p < n; ++p) {
       out[p * stride + static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(values[p]);
     }
